@@ -1,0 +1,61 @@
+# skyfall: `make demo` and `make test` do all set-up on a fresh machine (venv, pip packages,
+# release build of the Rust extension). `make bench` writes benches/results/, `make lint` checks.
+SHELL := /bin/bash
+.DEFAULT_GOAL := help
+
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.deps-stamp
+OUT    ?= out
+# The Rust build of the extension (cargo test, clippy) uses the venv's interpreter.
+export PYO3_PYTHON := $(abspath $(PY))
+export VIRTUAL_ENV := $(abspath $(VENV))
+
+.PHONY: help setup build demo test test-rust test-python lint bench clean
+
+help:
+	@echo "make demo   build, then render the demo outputs into $(OUT)/"
+	@echo "make test   build, then cargo test, clippy, stub check and pytest (notebooks included)"
+	@echo "make bench  build, then write benches/results/"
+	@echo "make lint   cargo clippy and mypy"
+
+$(PY):
+	@command -v cargo >/dev/null || { echo "cargo not found: install Rust (https://rustup.rs) first" >&2; exit 1; }
+	@python3 -m venv $(VENV) || { \
+	  echo "python3 -m venv failed; installing python3-venv" >&2; \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && apt-get install -y -qq python3-venv && python3 -m venv $(VENV); \
+	  else echo "run: sudo apt-get install python3-venv" >&2; exit 1; fi; }
+
+$(STAMP): requirements-dev.txt | $(PY)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -r requirements-dev.txt
+	@touch $@
+
+setup: $(STAMP)
+
+build: setup
+	$(VENV)/bin/maturin develop --release --locked -q
+
+demo: build
+	$(PY) -m skyfall.demo --out $(OUT)
+
+test-rust: setup
+	cargo test --workspace --locked
+	cargo clippy --workspace --all-targets --locked -- -D warnings
+
+test-python: build
+	$(PY) -m mypy.stubtest skyfall._core
+	$(PY) -m mypy
+	$(PY) -m pytest --nbmake tests notebooks
+
+test: test-rust test-python
+
+lint: setup
+	cargo clippy --workspace --all-targets --locked -- -D warnings
+	$(PY) -m mypy
+
+bench: build
+	$(PY) benches/bench_physics.py
+
+clean:
+	rm -rf target $(VENV) $(OUT)

@@ -1,0 +1,62 @@
+"""Type stubs for the compiled ``skyfall._core`` module (checked by mypy.stubtest)."""
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "MAX_DIAMETER_MM",
+    "MAX_RAIN_RATE_MM_H",
+    "SkyfallError",
+    "TEXTURE_BUDGET_BYTES",
+    "__version__",
+    "air_density_kg_m3",
+    "air_viscosity",
+    "drops_per_m3",
+    "marshall_palmer",
+    "rain_diameter_bins",
+    "rain_extinction_per_m",
+    "rain_rate_from_dsd",
+    "rain_textures",
+    "terminal_velocity_m_s",
+]
+
+__version__: str
+TEXTURE_BUDGET_BYTES: int
+MAX_DIAMETER_MM: float
+MAX_RAIN_RATE_MM_H: float
+
+class SkyfallError(Exception): ...
+
+def air_density_kg_m3(
+    temperature_c: NDArray[np.float64], pressure_hpa: NDArray[np.float64], relative_humidity: NDArray[np.float64]
+) -> NDArray[np.float64]: ...
+def air_viscosity(temperature_c: NDArray[np.float64]) -> NDArray[np.float64]: ...
+def terminal_velocity_m_s(
+    diameter_mm: NDArray[np.float64],
+    model: str,
+    temperature_c: NDArray[np.float64],
+    pressure_hpa: NDArray[np.float64],
+    relative_humidity: NDArray[np.float64],
+) -> NDArray[np.float64]: ...
+def marshall_palmer(diameter_mm: NDArray[np.float64], rain_rate_mm_h: NDArray[np.float64]) -> NDArray[np.float64]: ...
+def drops_per_m3(
+    rain_rate_mm_h: NDArray[np.float64], d_min_mm: NDArray[np.float64], d_max_mm: NDArray[np.float64]
+) -> NDArray[np.float64]: ...
+def rain_rate_from_dsd(
+    rain_rate_mm_h: NDArray[np.float64],
+    model: str,
+    temperature_c: NDArray[np.float64],
+    pressure_hpa: NDArray[np.float64],
+    relative_humidity: NDArray[np.float64],
+    d_min_mm: NDArray[np.float64],
+    d_max_mm: NDArray[np.float64],
+) -> NDArray[np.float64]: ...
+def rain_extinction_per_m(rain_rate_mm_h: NDArray[np.float64]) -> NDArray[np.float64]: ...
+def rain_textures(
+    rain_rates_mm_h: NDArray[np.float64],
+    diameters_mm: NDArray[np.float64],
+    size_px: int,
+    exposure_s: float,
+    seed: int,
+) -> NDArray[np.float32]: ...
+def rain_diameter_bins(diameters_mm: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...

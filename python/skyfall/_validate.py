@@ -1,0 +1,83 @@
+"""Argument checks shared by the public modules: clear TypeErrors, broadcasting."""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatOrArray = float | NDArray[np.float64]
+
+
+def float_array(name: str, value: Any) -> NDArray[np.float64]:
+    """Convert ``value`` to a float64 array, raising TypeError for non-real input."""
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name} must be a real number or array of real numbers, got {type(value).__name__}")
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged lists and the like
+        raise TypeError(f"{name} must be a real number or array of real numbers: {exc}") from exc
+    if arr.dtype.kind not in "iuf":
+        raise TypeError(
+            f"{name} must be a real number or array of real numbers, got dtype {arr.dtype} "
+            f"(from {type(value).__name__})"
+        )
+    return arr.astype(np.float64, copy=False)
+
+
+def broadcast_flat(
+    arrays: Sequence[tuple[str, Any]],
+) -> tuple[list[NDArray[np.float64]], tuple[int, ...]]:
+    """Broadcast named inputs for a flat ``_core`` kernel.
+
+    Returns the inputs (size-one ones as length-1 arrays, which the kernel broadcasts; the
+    rest as contiguous flat arrays) and the broadcast shape. Raises ValueError naming the
+    shapes when they do not broadcast.
+    """
+    converted = [(name, float_array(name, v)) for name, v in arrays]
+    try:
+        shape = np.broadcast_shapes(*(a.shape for _, a in converted))
+    except ValueError:
+        shapes = ", ".join(f"{n}{a.shape}" for n, a in converted)
+        raise ValueError(f"shapes do not broadcast: {shapes}") from None
+    flat = [
+        a.reshape(1) if a.size == 1 else np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(-1)
+        for _, a in converted
+    ]
+    return flat, shape
+
+
+def shaped(out: NDArray[np.float64], shape: tuple[int, ...]) -> FloatOrArray:
+    """Reshape a kernel's flat result; a 0-d result becomes a Python float."""
+    if shape == ():
+        return float(out[0])
+    return out.reshape(shape)
+
+
+def choice(name: str, value: Any, options: Sequence[str]) -> str:
+    """Check a string option."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a str, one of {list(options)}, got {type(value).__name__}")
+    if value not in options:
+        raise ValueError(f"{name} = {value!r} is not one of {list(options)}")
+    return value
+
+
+def integer(name: str, value: Any, lo: int, hi: int) -> int:
+    """Check an integer in [lo, hi]."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} must be an int, got {type(value).__name__}")
+    v = int(value)
+    if not lo <= v <= hi:
+        raise ValueError(f"{name} = {v} is outside the valid range [{lo}, {hi}]")
+    return v
+
+
+def real(name: str, value: Any) -> float:
+    """Check a real scalar (range checks are the kernel's)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__}")
+    return float(value)

@@ -1,0 +1,158 @@
+"""Image files through OpenImageIO.
+
+Float formats (EXR) keep linear float32 values and any number of named channels exactly.
+8-bit formats (PNG, JPEG, TIFF-8) hold sRGB-encoded values: :func:`write_image` encodes
+linear input with the sRGB transfer function (IEC 61966-2-1) and :func:`read_image` decodes
+it back to linear float32. An alpha channel (named ``A``) is stored unencoded and
+unassociated (``oiio:UnassociatedAlpha``), so it round-trips without OIIO
+un-premultiplying colour.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["decode_srgb", "encode_srgb", "read_image", "read_image_with_metadata", "to_srgb8", "write_image"]
+
+_FLOAT_EXTS = {".exr", ".hdr", ".tif", ".tiff", ".pfm"}
+_DEFAULT_NAMES = {1: ["Y"], 2: ["Y", "A"], 3: ["R", "G", "B"], 4: ["R", "G", "B", "A"]}
+
+
+def encode_srgb(linear: Any) -> NDArray[np.float32]:
+    """sRGB transfer function (IEC 61966-2-1): linear [0, 1] to encoded [0, 1].
+
+    12.92 x for x <= 0.0031308, 1.055 x^(1/2.4) - 0.055 above; input is clipped to [0, 1].
+    """
+    x = np.clip(np.asarray(linear, dtype=np.float32), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055).astype(np.float32)
+
+
+def decode_srgb(encoded: Any) -> NDArray[np.float32]:
+    """Inverse sRGB transfer function: encoded [0, 1] to linear [0, 1]."""
+    v = np.clip(np.asarray(encoded, dtype=np.float32), 0.0, 1.0)
+    return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4)).astype(np.float32)
+
+
+def to_srgb8(linear: Any, *, alpha_channel: int | None = None) -> NDArray[np.uint8]:
+    """Encode linear values to 8-bit sRGB (rounded to nearest); alpha stays linear."""
+    arr = np.asarray(linear, dtype=np.float32)
+    enc = encode_srgb(arr)
+    if alpha_channel is not None:
+        enc[..., alpha_channel] = np.clip(arr[..., alpha_channel], 0.0, 1.0)
+    out: NDArray[np.uint8] = np.rint(enc * 255.0).astype(np.uint8)
+    return out
+
+
+def _as_hwc(image: Any) -> NDArray[Any]:
+    arr = np.asarray(image)
+    if arr.ndim == 2:
+        arr = arr[:, :, None]
+    if arr.ndim != 3 or arr.shape[0] == 0 or arr.shape[1] == 0 or arr.shape[2] == 0:
+        raise ValueError(f"image must have shape (H, W) or (H, W, C) with H, W, C >= 1, got {arr.shape}")
+    if arr.dtype.kind not in "fui":
+        raise TypeError(f"image must be numeric, got dtype {arr.dtype}")
+    return arr
+
+
+def write_image(
+    path: str | Path,
+    image: Any,
+    *,
+    channel_names: Sequence[str] | None = None,
+    metadata: Mapping[str, str | int | float] | None = None,
+) -> None:
+    """Write an image file; the format follows the extension.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file. ``.exr`` (and other float formats) store float32 as given; ``.png``,
+        ``.jpg`` store 8-bit sRGB (linear float input is encoded; uint8 input is written as
+        already-encoded bytes).
+    image : array_like, shape (H, W) or (H, W, C)
+        Linear-light values (float) or encoded bytes (uint8).
+    channel_names : sequence of str, optional
+        One name per channel; defaults to Y, Y/A, R/G/B, R/G/B/A, else C0, C1, ...
+    metadata : mapping, optional
+        Extra attributes stored in the file header.
+
+    Raises
+    ------
+    OSError
+        When OpenImageIO cannot create or write the file.
+    """
+    import OpenImageIO as oiio
+
+    arr = _as_hwc(image)
+    h, w, c = arr.shape
+    names = list(channel_names) if channel_names is not None else _DEFAULT_NAMES.get(c, [f"C{i}" for i in range(c)])
+    if len(names) != c:
+        raise ValueError(f"channel_names has {len(names)} names for {c} channels")
+    p = Path(path)
+    is_float = p.suffix.lower() in _FLOAT_EXTS
+    alpha = names.index("A") if "A" in names else None
+    if is_float:
+        data: NDArray[Any] = np.ascontiguousarray(arr, dtype=np.float32)
+        spec = oiio.ImageSpec(w, h, c, "float")
+        spec.attribute("compression", "zip")
+    else:
+        data = np.ascontiguousarray(arr) if arr.dtype == np.uint8 else to_srgb8(arr, alpha_channel=alpha)
+        spec = oiio.ImageSpec(w, h, c, "uint8")
+        spec.attribute("oiio:ColorSpace", "sRGB")
+        if alpha is not None:
+            spec.alpha_channel = alpha
+            spec.attribute("oiio:UnassociatedAlpha", 1)
+    spec.channelnames = tuple(names)
+    for key, value in (metadata or {}).items():
+        spec.attribute(key, value)
+    out = oiio.ImageOutput.create(str(p))
+    if out is None:
+        raise OSError(f"cannot write {p}: {oiio.geterror()}")
+    try:
+        if not out.open(str(p), spec) or not out.write_image(data):
+            raise OSError(f"cannot write {p}: {out.geterror()}")
+    finally:
+        out.close()
+
+
+def read_image_with_metadata(path: str | Path) -> tuple[NDArray[np.float32], dict[str, Any]]:
+    """Read an image as linear float32 (H, W, C) with its header attributes.
+
+    8-bit files are decoded from sRGB (alpha excepted); float files are returned as stored.
+    The attributes include ``channel_names``.
+    """
+    import OpenImageIO as oiio
+
+    p = Path(path)
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)
+    inp = oiio.ImageInput.open(str(p), config)
+    if inp is None:
+        raise OSError(f"cannot read {p}: {oiio.geterror()}")
+    try:
+        spec = inp.spec()
+        is_float = spec.format.basetype in (oiio.FLOAT, oiio.HALF, oiio.DOUBLE)
+        raw = inp.read_image("float" if is_float else "uint8")
+        if raw is None:
+            raise OSError(f"cannot read {p}: {inp.geterror()}")
+    finally:
+        inp.close()
+    arr = np.asarray(raw).reshape(spec.height, spec.width, spec.nchannels)
+    meta: dict[str, Any] = {a.name: a.value for a in spec.extra_attribs}
+    meta["channel_names"] = list(spec.channelnames)
+    if is_float:
+        return np.ascontiguousarray(arr, dtype=np.float32), meta
+    lin = decode_srgb(arr.astype(np.float32) / 255.0)
+    if spec.alpha_channel >= 0:
+        lin[..., spec.alpha_channel] = arr[..., spec.alpha_channel].astype(np.float32) / 255.0
+    return lin, meta
+
+
+def read_image(path: str | Path) -> NDArray[np.float32]:
+    """Read an image as linear float32, shape (H, W, C); see :func:`read_image_with_metadata`."""
+    return read_image_with_metadata(path)[0]

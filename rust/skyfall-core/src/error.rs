@@ -1,0 +1,147 @@
+//! Errors of the core crate: every message names the parameter, its value and the valid range.
+
+use std::fmt;
+
+/// Result with the core crate's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Where a bad value sits: a scalar parameter or one element of an array parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    /// Parameter name as the user wrote it (`diameter_mm`).
+    pub name: &'static str,
+    /// Element index for array inputs.
+    pub index: Option<usize>,
+}
+
+impl fmt::Display for Param {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.index {
+            Some(i) => write!(f, "{}[{}]", self.name, i),
+            None => write!(f, "{}", self.name),
+        }
+    }
+}
+
+/// Everything that can go wrong in the core crate.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// A number outside its valid range (NaN and infinities included).
+    #[error("{param} = {value} is outside the valid range {range}")]
+    OutOfRange {
+        /// The offending parameter.
+        param: Param,
+        /// Its value.
+        value: f64,
+        /// The valid range, with units, e.g. `[0, 8] mm`.
+        range: String,
+    },
+    /// A value that is not allowed for another reason (an unknown model name, unsorted input).
+    #[error("{param}: {message}")]
+    Invalid {
+        /// The offending parameter.
+        param: Param,
+        /// What is wrong and what is accepted.
+        message: String,
+    },
+    /// A request whose result would exceed the memory budget; refused before allocating.
+    #[error("{what} would need {bytes} bytes ({gib:.2} GiB), over the budget of {budget} bytes ({budget_gib:.2} GiB); ask for fewer or smaller items")]
+    TooLarge {
+        /// What was requested.
+        what: String,
+        /// Bytes it would need.
+        bytes: u128,
+        /// The same in GiB.
+        gib: f64,
+        /// The budget in bytes.
+        budget: u64,
+        /// The budget in GiB.
+        budget_gib: f64,
+    },
+    /// Array arguments whose lengths do not broadcast.
+    #[error("{param} has length {len}, expected 1 or {expected}")]
+    Length {
+        /// The offending parameter.
+        param: Param,
+        /// Its length.
+        len: usize,
+        /// The length of the broadcast result.
+        expected: usize,
+    },
+}
+
+impl Error {
+    /// Builds a [`Error::TooLarge`].
+    pub fn too_large(what: String, bytes: u128, budget: u64) -> Self {
+        const GIB: f64 = (1u64 << 30) as f64;
+        Error::TooLarge { what, bytes, gib: bytes as f64 / GIB, budget, budget_gib: budget as f64 / GIB }
+    }
+}
+
+/// A closed interval with units, used to validate inputs.
+#[derive(Debug, Clone, Copy)]
+pub struct Range {
+    /// Lower bound (inclusive unless `lo_open`).
+    pub lo: f64,
+    /// Upper bound (inclusive).
+    pub hi: f64,
+    /// Whether the lower bound is excluded.
+    pub lo_open: bool,
+    /// Unit shown in messages.
+    pub unit: &'static str,
+}
+
+impl Range {
+    /// `[lo, hi] unit`.
+    pub const fn closed(lo: f64, hi: f64, unit: &'static str) -> Self {
+        Range { lo, hi, lo_open: false, unit }
+    }
+    /// `(lo, hi] unit`.
+    pub const fn open_closed(lo: f64, hi: f64, unit: &'static str) -> Self {
+        Range { lo, hi, lo_open: true, unit }
+    }
+
+    /// Checks one value (NaN fails every comparison and so is rejected).
+    pub fn check(&self, name: &'static str, index: Option<usize>, value: f64) -> Result<f64> {
+        let lo_ok = if self.lo_open { value > self.lo } else { value >= self.lo };
+        if lo_ok && value <= self.hi {
+            Ok(value)
+        } else {
+            Err(Error::OutOfRange { param: Param { name, index }, value, range: self.to_string() })
+        }
+    }
+
+    /// Checks every element of a slice; indices are reported only for slices longer than one.
+    pub fn check_all(&self, name: &'static str, values: &[f64]) -> Result<()> {
+        let many = values.len() > 1;
+        for (i, &v) in values.iter().enumerate() {
+            self.check(name, many.then_some(i), v)?;
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for Range {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let open = if self.lo_open { "(" } else { "[" };
+        write!(f, "{open}{}, {}] {}", self.lo, self.hi, self.unit)?;
+        Ok(())
+    }
+}
+
+/// The length of the broadcast result of arrays that have length 1 or n.
+pub fn broadcast_len(args: &[(&'static str, usize)]) -> Result<usize> {
+    let n = args.iter().map(|&(_, l)| l).max().unwrap_or(1);
+    for &(name, len) in args {
+        if len != 1 && len != n {
+            return Err(Error::Length { param: Param { name, index: None }, len, expected: n });
+        }
+    }
+    Ok(n)
+}
+
+/// Element `i` of a slice broadcast from length 1.
+#[inline]
+pub fn at(values: &[f64], i: usize) -> f64 {
+    if values.len() == 1 { values[0] } else { values[i] }
+}

@@ -1,0 +1,15 @@
+//! Physics of falling rain: air and water properties, sphere drag, terminal velocity,
+//! the Marshall–Palmer drop-size distribution and rain extinction.
+//!
+//! Units are in every name. Diameters are millimetres and rain rates mm/h at the API;
+//! everything inside is SI.
+
+pub mod air;
+pub mod drag;
+pub mod dsd;
+pub mod extinction;
+pub mod fall_speed;
+mod quadrature;
+
+/// Standard gravity, m/s² (CGPM 1901).
+pub const GRAVITY_M_S2: f64 = 9.80665;

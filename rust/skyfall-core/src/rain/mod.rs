@@ -1,0 +1,4 @@
+//! Rain streaks from precomputed rain textures (seed 000, Yoshida, Dobashi & Yamamoto).
+
+pub mod bins;
+pub mod texture;

@@ -1,0 +1,32 @@
+//! The one place where core errors become Python exceptions.
+
+use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::PyErr;
+
+pyo3::create_exception!(
+    skyfall,
+    SkyfallError,
+    PyException,
+    "Base of skyfall's own exceptions (bad values raise ValueError, bad types TypeError)."
+);
+
+/// A core error on its way to Python.
+pub struct CoreError(pub skyfall_core::Error);
+
+impl From<skyfall_core::Error> for CoreError {
+    fn from(e: skyfall_core::Error) -> Self {
+        CoreError(e)
+    }
+}
+
+impl From<CoreError> for PyErr {
+    fn from(e: CoreError) -> PyErr {
+        use skyfall_core::Error as E;
+        match e.0 {
+            // Every core error today is about a value the caller passed.
+            err @ (E::OutOfRange { .. } | E::Invalid { .. } | E::TooLarge { .. } | E::Length { .. }) => {
+                PyValueError::new_err(err.to_string())
+            }
+        }
+    }
+}

@@ -1,0 +1,32 @@
+//! `skyfall._core`: thin pyo3 wrappers over `skyfall-core`. The public API is the Python
+//! package `skyfall`; this module's contract is `python/skyfall/_core.pyi`.
+
+mod errors;
+mod physics;
+mod rain;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+mod _core {
+    #[pymodule_export]
+    use super::errors::SkyfallError;
+    #[pymodule_export]
+    use super::physics::{
+        air_density_kg_m3, air_viscosity, drops_per_m3, marshall_palmer, rain_extinction_per_m, rain_rate_from_dsd,
+        terminal_velocity_m_s,
+    };
+    #[pymodule_export]
+    use super::rain::{rain_diameter_bins, rain_textures};
+
+    use pyo3::prelude::*;
+
+    #[pymodule_init]
+    fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
+        m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        m.add("TEXTURE_BUDGET_BYTES", skyfall_core::rain::texture::TEXTURE_BUDGET_BYTES)?;
+        m.add("MAX_DIAMETER_MM", skyfall_core::physics::fall_speed::DIAMETER_MM.hi)?;
+        m.add("MAX_RAIN_RATE_MM_H", skyfall_core::physics::dsd::RAIN_RATE_MM_H.hi)?;
+        Ok(())
+    }
+}

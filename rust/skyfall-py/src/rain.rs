@@ -1,0 +1,44 @@
+//! Wrappers of `skyfall_core::rain`.
+
+use crate::errors::CoreError;
+use numpy::ndarray::Array4;
+use numpy::{IntoPyArray, PyArray1, PyArray4, PyReadonlyArray1};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use skyfall_core::rain::bins::diameter_bins;
+use skyfall_core::rain::texture::{render_textures, TextureRequest};
+
+/// Rain textures, float32 (n_rates, n_diameters, size_px, size_px).
+#[pyfunction]
+pub fn rain_textures<'py>(
+    py: Python<'py>,
+    rain_rates_mm_h: PyReadonlyArray1<'py, f64>,
+    diameters_mm: PyReadonlyArray1<'py, f64>,
+    size_px: usize,
+    exposure_s: f64,
+    seed: u64,
+) -> PyResult<Bound<'py, PyArray4<f32>>> {
+    let req = TextureRequest { rain_rates_mm_h: rain_rates_mm_h.as_slice()?, diameters_mm: diameters_mm.as_slice()?, size_px, exposure_s, seed };
+    let shape = (req.rain_rates_mm_h.len(), req.diameters_mm.len(), size_px, size_px);
+    let data = py.detach(|| -> Result<Vec<f32>, CoreError> {
+        let n = req.validate()?;
+        let mut out = vec![0.0f32; n];
+        render_textures(&req, &mut out)?;
+        Ok(out)
+    })?;
+    let arr = Array4::from_shape_vec(shape, data).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(arr.into_pyarray(py))
+}
+
+type BinEdges<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
+/// Diameter bin edges (lower, upper), mm, for texture diameters.
+#[pyfunction]
+pub fn rain_diameter_bins<'py>(
+    py: Python<'py>,
+    diameters_mm: PyReadonlyArray1<'py, f64>,
+) -> PyResult<BinEdges<'py>> {
+    let bins = diameter_bins(diameters_mm.as_slice()?).map_err(CoreError)?;
+    let (lo, hi): (Vec<f64>, Vec<f64>) = bins.into_iter().unzip();
+    Ok((lo.into_pyarray(py), hi.into_pyarray(py)))
+}
