@@ -15,23 +15,26 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from skyfall import physics, rain
 from skyfall.reference import gunn_kinzer_1949
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-def contact_sheet(path: Path, tex: np.ndarray, rates: tuple[float, ...], diams: tuple[float, ...]) -> None:
-    """Save a labelled grid of textures; each panel is stretched to its own 99.9th percentile."""
-    import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def contact_sheet(tex: np.ndarray, rates: Sequence[float], diams: Sequence[float]) -> Figure:
+    """A labelled grid of textures; each panel is stretched to its own 99.9th percentile."""
+    from matplotlib.figure import Figure
 
     nr, nd = tex.shape[:2]
-    fig, axes = plt.subplots(nr, nd, figsize=(2.2 * nd, 2.35 * nr), squeeze=False)
+    fig = Figure(figsize=(2.2 * nd, 2.35 * nr))
+    axes = fig.subplots(nr, nd, squeeze=False)
     for i in range(nr):
         for j in range(nd):
             t = tex[i, j]
@@ -44,20 +47,17 @@ def contact_sheet(path: Path, tex: np.ndarray, rates: tuple[float, ...], diams: 
             ax.set_title(f"R={rates[i]:g} mm/h D={diams[j]:.1f} mm\nmean {t.mean():.2e}, max {t.max():.3f}", fontsize=7)
     fig.suptitle("skyfall rain textures: 1 m cube, 1/30 s exposure (each panel stretched to its own range)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    return fig
 
 
-def velocity_plot(path: Path) -> None:
-    """Save the fall-speed models against Gunn & Kinzer 1949."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def velocity_plot() -> Figure:
+    """The fall-speed models against Gunn & Kinzer 1949, with relative error."""
+    from matplotlib.figure import Figure
 
     d_gk, v_gk = gunn_kinzer_1949()
     d = np.linspace(0.0, 8.0, 801)
-    fig, (ax, ax_err) = plt.subplots(2, 1, figsize=(7, 7), sharex=True, height_ratios=(2, 1))
+    fig = Figure(figsize=(7, 7))
+    ax, ax_err = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
     ax.plot(d_gk, v_gk, "ko", ms=4, label="Gunn & Kinzer 1949 (measured)")
     for model in physics.FALL_SPEED_MODELS:
         ax.plot(d, physics.terminal_velocity(d, model=model), label=model)
@@ -73,8 +73,7 @@ def velocity_plot(path: Path) -> None:
     ax_err.set_ylabel("error vs G&K (%)")
     ax_err.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    return fig
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -91,8 +90,8 @@ def main(argv: list[str] | None = None) -> int:
     dt = time.perf_counter() - t0
     print(f"rain textures: {tex.shape[0]} x {tex.shape[1]} of 512 px in {dt * 1e3:.1f} ms (the seed paper: 164 s)")
     rain.write_atlas(out / "rain_textures.exr", tex, rates, diams)
-    contact_sheet(out / "rain_textures.png", tex, rates, diams)
-    velocity_plot(out / "terminal_velocity.png")
+    contact_sheet(tex, rates, diams).savefig(out / "rain_textures.png", dpi=110)
+    velocity_plot().savefig(out / "terminal_velocity.png", dpi=110)
     for name in ("rain_textures.exr", "rain_textures.png", "terminal_velocity.png"):
         print(f"wrote {out / name}")
     return 0

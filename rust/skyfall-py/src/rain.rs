@@ -20,12 +20,7 @@ pub fn rain_textures<'py>(
 ) -> PyResult<Bound<'py, PyArray4<f32>>> {
     let req = TextureRequest { rain_rates_mm_h: rain_rates_mm_h.as_slice()?, diameters_mm: diameters_mm.as_slice()?, size_px, exposure_s, seed };
     let shape = (req.rain_rates_mm_h.len(), req.diameters_mm.len(), size_px, size_px);
-    let data = py.detach(|| -> Result<Vec<f32>, CoreError> {
-        let n = req.validate()?;
-        let mut out = vec![0.0f32; n];
-        render_textures(&req, &mut out)?;
-        Ok(out)
-    })?;
+    let data = py.detach(|| render_textures(&req)).map_err(CoreError)?;
     let arr = Array4::from_shape_vec(shape, data).map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(arr.into_pyarray(py))
 }

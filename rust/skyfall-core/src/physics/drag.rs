@@ -16,8 +16,6 @@
 //! Newton iteration in ln Re (bisection fallback, at most [`MAX_ITERATIONS`]) in between.
 //! Where X falls in the gap of a jump the answer is the Reynolds number of the jump.
 
-use super::air::AirProps;
-use super::GRAVITY_M_S2;
 
 /// Iteration cap of the Schiller–Naumann solve.
 pub const MAX_ITERATIONS: usize = 100;
@@ -33,12 +31,6 @@ pub fn sphere_drag_coefficient(reynolds: f64) -> f64 {
     } else {
         0.44
     }
-}
-
-/// Best number X = Cd·Re² = 4 ρa (ρw − ρa) g D³ / (3 η²), dimensionless.
-pub fn best_number(diameter_m: f64, air: &AirProps) -> f64 {
-    4.0 * air.density_kg_m3 * (air.water_density_kg_m3 - air.density_kg_m3) * GRAVITY_M_S2 * diameter_m.powi(3)
-        / (3.0 * air.viscosity_pa_s * air.viscosity_pa_s)
 }
 
 /// Solves Cd(Re)·Re² = X for Re. Returns (Re, iterations used).
@@ -86,19 +78,11 @@ pub fn sphere_reynolds(best: f64) -> (f64, usize) {
     (re, MAX_ITERATIONS)
 }
 
-/// Rigid-sphere terminal velocity, m/s.
-pub fn sphere_terminal_velocity_m_s(diameter_m: f64, air: &AirProps) -> f64 {
-    if diameter_m <= 0.0 {
-        return 0.0;
-    }
-    let (re, _) = sphere_reynolds(best_number(diameter_m, air));
-    air.viscosity_pa_s * re / (air.density_kg_m3 * diameter_m)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::physics::air::Air;
+    use crate::physics::GRAVITY_M_S2;
 
     #[test]
     fn schiller_naumann_at_re_200_matches_reference() {
@@ -122,7 +106,7 @@ mod tests {
         // Stokes: v = Δρ g D² / (18 η).
         let a = Air::STANDARD.props();
         let d = 10e-6;
-        let v = sphere_terminal_velocity_m_s(d, &a);
+        let v = crate::physics::fall_speed::terminal_velocity_m_s(d * 1e3, crate::physics::fall_speed::FallSpeedModel::Sphere, &a);
         let stokes = (a.water_density_kg_m3 - a.density_kg_m3) * GRAVITY_M_S2 * d * d / (18.0 * a.viscosity_pa_s);
         assert!((v / stokes - 1.0).abs() < 1e-12);
     }

@@ -4,7 +4,7 @@
 //! Λ = 4.1 R^−0.21 mm⁻¹ (R in mm/h, D in mm). R = 0 means no drops at all.
 
 use super::air::AirProps;
-use super::fall_speed::{terminal_velocity_m_s, AirArrays, FallSpeedModel, DIAMETER_MM};
+use super::fall_speed::{AirArrays, FallSpeed, FallSpeedModel, DIAMETER_MM};
 use super::quadrature::integrate;
 use crate::error::{at, broadcast_len, Error, Param, Range, Result};
 
@@ -78,7 +78,8 @@ pub fn rain_rate_from_dsd(rain_rate_mm_h: f64, model: FallSpeedModel, air: &AirP
         return 0.0;
     }
     let lam = mp_slope_per_mm(rain_rate_mm_h);
-    let f = |d: f64| d.powi(3) * (-lam * d).exp() * terminal_velocity_m_s(d, model, air);
+    let law = FallSpeed::new(model, air);
+    let f = |d: f64| d.powi(3) * (-lam * d).exp() * law.m_s(d);
     // Beard changes regime at 19 µm and 1.07 mm; split there so every piece is smooth.
     6.0 * std::f64::consts::PI * 1e-4 * MP_N0_PER_M3_MM * integrate(f, d_min_mm, d_max_mm, &[0.019, 1.07], PANELS)
 }

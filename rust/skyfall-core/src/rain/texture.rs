@@ -19,7 +19,7 @@ use super::bins::diameter_bins;
 use crate::error::{Error, Range, Result};
 use crate::physics::air::Air;
 use crate::physics::dsd::{drops_per_m3, mp_slope_per_mm, RAIN_RATE_MM_H};
-use crate::physics::fall_speed::{terminal_velocity_m_s, FallSpeedModel};
+use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
 use crate::seed::derive;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -97,12 +97,12 @@ pub fn draw_streaks(rain_rate_mm_h: f64, lo_mm: f64, hi_mm: f64, exposure_s: f64
     let n = whole as usize + usize::from(rng.random::<f64>() < expected - whole);
     let lam = mp_slope_per_mm(rain_rate_mm_h);
     let tail = -(-lam * (hi_mm - lo_mm)).exp_m1(); // mass of the bin relative to e^(−Λ lo)
-    let air = Air::STANDARD.props();
+    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
     (0..n)
         .map(|_| {
             let u: f64 = rng.random();
             let d_mm = (lo_mm - (-u * tail).ln_1p() / lam).min(hi_mm);
-            let v = terminal_velocity_m_s(d_mm, FallSpeedModel::Beard, &air);
+            let v = law.m_s(d_mm);
             let diameter_m = d_mm * 1e-3;
             let length_m = v * exposure_s;
             let alpha = if length_m > 0.0 { (diameter_m / length_m).min(1.0) } else { 1.0 };
@@ -117,8 +117,9 @@ fn overlap(a: f64, b: f64, k: i64) -> f64 {
     (b.min(k as f64 + 1.0) - a.max(k as f64)).max(0.0)
 }
 
-/// Multiplies the streak's (1 − α c) into `transmittance` (size × size, row-major), wrapping.
-pub fn splat_streak(s: &Streak, size: usize, transmittance: &mut [f32]) {
+/// Composites the streak over `opacity` (size × size, row-major), wrapping at the edges:
+/// a ← a + c (1 − a), i.e. 1 − a = ∏ (1 − cᵢ), with c = α × the pixel's coverage.
+pub fn splat_streak(s: &Streak, size: usize, opacity: &mut [f32]) {
     let px = size as f64;
     let (x0, x1) = ((s.x_m - 0.5 * s.diameter_m) * px, (s.x_m + 0.5 * s.diameter_m) * px);
     let (y0, y1) = (s.y_m * px, (s.y_m + s.length_m) * px);
@@ -134,39 +135,42 @@ pub fn splat_streak(s: &Streak, size: usize, transmittance: &mut [f32]) {
         }
         let row = r.rem_euclid(size_i) as usize * size;
         for &(c, cx) in &cols {
-            let t = &mut transmittance[row + c];
-            *t = (f64::from(*t) * (1.0 - cy * cx)) as f32;
+            let a = &mut opacity[row + c];
+            let old = f64::from(*a);
+            *a = (old + cy * cx * (1.0 - old)) as f32;
         }
     }
 }
 
 /// Renders one texture into `out` (size × size), overwriting it.
 pub fn render_texture(rain_rate_mm_h: f64, lo_mm: f64, hi_mm: f64, size: usize, exposure_s: f64, seed: u64, out: &mut [f32]) {
-    out.fill(1.0);
+    out.fill(0.0);
+    splat_all(rain_rate_mm_h, lo_mm, hi_mm, size, exposure_s, seed, out);
+}
+
+/// Composites every streak of one texture over `out`, which must start at zero.
+fn splat_all(rain_rate_mm_h: f64, lo_mm: f64, hi_mm: f64, size: usize, exposure_s: f64, seed: u64, out: &mut [f32]) {
     for s in draw_streaks(rain_rate_mm_h, lo_mm, hi_mm, exposure_s, seed) {
         splat_streak(&s, size, out);
     }
-    for v in out.iter_mut() {
-        *v = 1.0 - *v;
-    }
 }
 
-/// Renders every (rate, diameter) texture into `out`, shape (n_rates, n_diameters, size, size),
-/// textures in parallel. `out.len()` must equal [`TextureRequest::validate`]'s count.
-pub fn render_textures(req: &TextureRequest<'_>, out: &mut [f32]) -> Result<()> {
+/// Renders every (rate, diameter) texture, shape (n_rates, n_diameters, size, size) flattened,
+/// textures in parallel. The result is allocated zeroed (fresh pages from the OS, which cost
+/// nothing until touched) and each pixel is written only where a streak covers it.
+pub fn render_textures(req: &TextureRequest<'_>) -> Result<Vec<f32>> {
     let n = req.validate()?;
-    if out.len() != n {
-        return Err(Error::Length { param: crate::error::Param { name: "out", index: None }, len: out.len(), expected: n });
-    }
     let bins = diameter_bins(req.diameters_mm)?;
     let plane = req.size_px * req.size_px;
     let nd = bins.len();
+    let mut out = vec![0.0f32; n];
     out.par_chunks_mut(plane).enumerate().for_each(|(k, tex)| {
         let rate = req.rain_rates_mm_h[k / nd];
         let (lo, hi) = bins[k % nd];
-        render_texture(rate, lo, hi, req.size_px, req.exposure_s, req.seed, tex);
+        tex.fill(0.0);
+        splat_all(rate, lo, hi, req.size_px, req.exposure_s, req.seed, tex);
     });
-    Ok(())
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -177,9 +181,9 @@ mod tests {
     fn single_streak_integral_is_alpha_times_area() {
         let s = Streak { x_m: 0.9995, y_m: 0.95, diameter_m: 1.3e-3, length_m: 0.2, alpha: 0.3 };
         let size = 256;
-        let mut t = vec![1.0f32; size * size];
+        let mut t = vec![0.0f32; size * size];
         splat_streak(&s, size, &mut t);
-        let sum: f64 = t.iter().map(|&v| 1.0 - f64::from(v)).sum();
+        let sum: f64 = t.iter().map(|&v| f64::from(v)).sum();
         let want = s.alpha * s.diameter_m * s.length_m * (size * size) as f64;
         assert!((sum / want - 1.0).abs() < 1e-5, "{sum} vs {want}");
     }
@@ -187,12 +191,15 @@ mod tests {
     #[test]
     fn deterministic_and_seed_dependent() {
         let req = TextureRequest { rain_rates_mm_h: &[10.0], diameters_mm: &[1.0, 2.0], size_px: 64, exposure_s: 1.0 / 30.0, seed: 7 };
-        let n = req.validate().unwrap_or(0);
-        let (mut a, mut b, mut c) = (vec![0.0f32; n], vec![0.0f32; n], vec![0.0f32; n]);
-        assert!(render_textures(&req, &mut a).is_ok() && render_textures(&req, &mut b).is_ok());
-        assert!(render_textures(&TextureRequest { seed: 8, ..req.clone() }, &mut c).is_ok());
+        let a = render_textures(&req).unwrap_or_default();
+        let b = render_textures(&req).unwrap_or_default();
+        let c = render_textures(&TextureRequest { seed: 8, ..req.clone() }).unwrap_or_default();
+        assert!(!a.is_empty());
         assert_eq!(a, b);
         assert_ne!(a, c);
+        let mut one = vec![1.0f32; 64 * 64];
+        render_texture(10.0, 0.5, 1.5, 64, 1.0 / 30.0, 7, &mut one);
+        assert_eq!(&one[..], &a[..64 * 64]);
     }
 
     #[test]
