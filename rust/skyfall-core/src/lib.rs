@@ -6,10 +6,18 @@
 //! - [`physics`]: air, sphere drag, terminal velocity (rigid sphere, Beard 1976, Atlas 1973),
 //!   the Marshall–Palmer drop-size distribution, rain extinction.
 //! - [`rain`]: precomputed rain-streak textures (seed 000).
+//! - [`scene`]: cameras and the procedural box scene (ray cast).
+//! - [`haze`]: rain haze along view rays (seed 002).
+//! - [`frame`]: the CPU backend's frame composition (fused passes).
+
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod error;
+pub mod frame;
+pub mod haze;
 pub mod physics;
 pub mod rain;
+pub mod scene;
 mod seed;
 
 pub use error::{Error, Result};

@@ -1,0 +1,140 @@
+//! The CPU backend's frame: every pass fused so each pixel is computed and written once.
+
+use crate::error::{Error, Param, Result};
+use crate::haze::{check_depth, Haze};
+use crate::scene::boxes::{shade_pixel, BoxScene};
+use crate::scene::camera::Camera;
+use rayon::prelude::*;
+
+/// Largest frame (rgb + depth + layers, float32) the renderers allocate: 4 GiB.
+pub const FRAME_BUDGET_BYTES: u64 = 4 << 30;
+/// float32 values per pixel a frame may hold: rgb, depth and up to four layers.
+const VALUES_PER_PIXEL: u64 = 8;
+
+/// What the frame shows.
+#[derive(Debug, Clone, Copy)]
+pub enum SceneRef<'a> {
+    /// The procedural box scene, ray cast.
+    Boxes(&'a BoxScene),
+    /// A photo (linear RGB, H·W·3) with its depth map (H·W, metres along the axis, inf = sky).
+    Photo {
+        /// Linear RGB.
+        rgb: &'a [f32],
+        /// Depth, m.
+        depth_m: &'a [f32],
+    },
+}
+
+/// A rendered frame's buffers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameBuffers {
+    /// Linear RGB, H·W·3.
+    pub rgb: Vec<f32>,
+    /// Depth along the optical axis, m (inf for sky), H·W.
+    pub depth_m: Vec<f32>,
+    /// Haze transmittance e^(−σ d), H·W, when the haze pass ran.
+    pub transmittance: Option<Vec<f32>>,
+}
+
+/// Refuses frames over [`FRAME_BUDGET_BYTES`] before allocating.
+pub fn check_frame_size(cam: &Camera) -> Result<()> {
+    let bytes = cam.pixels() as u128 * u128::from(VALUES_PER_PIXEL) * 4;
+    if bytes > u128::from(FRAME_BUDGET_BYTES) {
+        let what = format!("a {}x{} frame", cam.width, cam.height);
+        return Err(Error::too_large(what, bytes, FRAME_BUDGET_BYTES));
+    }
+    Ok(())
+}
+
+/// Checks a photo scene's arrays against the camera.
+pub fn check_photo(cam: &Camera, rgb: &[f32], depth_m: &[f32]) -> Result<()> {
+    let n = cam.pixels();
+    if rgb.len() != 3 * n {
+        return Err(Error::Length { param: Param { name: "image", index: None }, len: rgb.len(), expected: 3 * n });
+    }
+    if depth_m.len() != n {
+        return Err(Error::Length { param: Param { name: "depth_m", index: None }, len: depth_m.len(), expected: n });
+    }
+    check_depth(depth_m)
+}
+
+/// Renders a frame on the CPU: scene (ray cast or photo copy) and haze in one pass per pixel.
+pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>) -> Result<FrameBuffers> {
+    check_frame_size(cam)?;
+    if let SceneRef::Photo { rgb, depth_m } = scene {
+        check_photo(cam, rgb, depth_m)?;
+    }
+    let w = cam.width as usize;
+    let n = cam.pixels();
+    let mut rgb = vec![0.0f32; 3 * n];
+    let mut depth = vec![0.0f32; n];
+    let mut trans = haze.map(|_| vec![0.0f32; n]);
+    let mut t_rows: Vec<Option<&mut [f32]>> = match trans.as_mut() {
+        Some(t) => t.chunks_mut(w).map(Some).collect(),
+        None => (0..cam.height).map(|_| None).collect(),
+    };
+    rgb.par_chunks_mut(3 * w)
+        .zip(depth.par_chunks_mut(w))
+        .zip(t_rows.par_iter_mut())
+        .enumerate()
+        .for_each(|(y, ((rgb_row, depth_row), t_row))| {
+            for x in 0..w {
+                let (mut c, d) = match scene {
+                    SceneRef::Boxes(b) => {
+                        let (c, d) = shade_pixel(b, cam, x as u32, y as u32);
+                        (c.to_array(), d)
+                    }
+                    SceneRef::Photo { rgb, depth_m } => {
+                        let i = y * w + x;
+                        ([rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]], depth_m[i])
+                    }
+                };
+                if let (Some(h), Some(t_row)) = (haze, t_row.as_deref_mut()) {
+                    let t = h.transmittance(d * cam.distance_per_depth(x as u32, y as u32));
+                    t_row[x] = t;
+                    for (k, v) in c.iter_mut().enumerate() {
+                        *v = *v * t + h.airlight[k] * (1.0 - t);
+                    }
+                }
+                rgb_row[3 * x..3 * x + 3].copy_from_slice(&c);
+                depth_row[x] = d;
+            }
+        });
+    Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::haze;
+    use crate::scene::boxes;
+    use glam::{Mat3, Vec3};
+
+    #[test]
+    fn fused_frame_equals_the_separate_passes() {
+        let cam = Camera::new(40, 30, [30.0, 30.0, 20.0, 15.0], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY);
+        let cam = cam.unwrap();
+        let b = boxes::SceneBox { min_m: Vec3::new(-3.0, 0.0, -12.0), max_m: Vec3::new(3.0, 6.0, -8.0), albedo: Vec3::new(0.6, 0.5, 0.4) };
+        let scene = BoxScene::new(vec![b], true, Vec3::splat(0.1)).unwrap();
+        let h = Haze { extinction_per_m: 0.02, airlight: [0.43; 3] };
+        let fused = render(SceneRef::Boxes(&scene), &cam, Some(&h)).unwrap();
+        let mut rgb = vec![0.0; 3 * cam.pixels()];
+        let mut depth = vec![0.0; cam.pixels()];
+        boxes::render(&scene, &cam, &mut rgb, &mut depth);
+        let mut t = vec![0.0; cam.pixels()];
+        haze::apply(&h, &cam, &mut rgb, &depth, &mut t);
+        assert_eq!(fused.rgb, rgb);
+        assert_eq!(fused.depth_m, depth);
+        assert_eq!(fused.transmittance, Some(t));
+        // A photo of that frame rendered without haze comes back unchanged.
+        let plain = render(SceneRef::Photo { rgb: &fused.rgb, depth_m: &fused.depth_m }, &cam, None).unwrap();
+        assert_eq!(plain.rgb, fused.rgb);
+        assert!(plain.transmittance.is_none());
+    }
+
+    #[test]
+    fn huge_frames_are_refused() {
+        let cam = Camera::new(16384, 16384, [1e4, 1e4, 8192.0, 8192.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        assert!(matches!(render(SceneRef::Photo { rgb: &[], depth_m: &[] }, &cam, None), Err(Error::TooLarge { .. })));
+    }
+}

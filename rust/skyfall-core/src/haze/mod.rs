@@ -1,0 +1,113 @@
+//! Rain haze (seed 002, eq. 2): attenuation and airlight along each pixel's view ray.
+//!
+//! I = I0 e^(−σ d) + L_air (1 − e^(−σ d)), d = depth · |ray| (the distance along the view
+//! ray, not the depth), σ = σ_air + σ_rain. The seed writes the airlight as Is/σ with
+//! Is = ks·E_h; we set ks so that the airlight saturates at the horizon luminance of the CIE
+//! overcast sky ([`AIRLIGHT_RELATIVE`] = 3/7 of E/π): then distant objects fade into the
+//! horizon sky as in real haze, and the σ → 0 limit is exact (no division by σ). Sky pixels
+//! (d = ∞) become the airlight when σ > 0; with σ = 0 every pixel is returned unchanged.
+//!
+//! This file is the CPU reference of `skyfall-gpu`'s `haze.wgsl`.
+
+use crate::error::{Error, Param, Range, Result};
+use crate::scene::camera::Camera;
+use rayon::prelude::*;
+
+/// Airlight at saturation, relative to E/π: the overcast sky's horizon luminance, 3/7.
+pub const AIRLIGHT_RELATIVE: f32 = 3.0 / 7.0;
+
+/// Parameters of the haze pass.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Haze {
+    /// Total extinction σ, 1/m.
+    pub extinction_per_m: f32,
+    /// Airlight radiance at saturation, linear RGB (relative units).
+    pub airlight: [f32; 3],
+}
+
+impl Haze {
+    /// Validated haze parameters.
+    pub fn new(extinction_per_m: f32, airlight: [f32; 3]) -> Result<Self> {
+        Range::closed(0.0, 1e3, "1/m").check("extinction_per_m", None, f64::from(extinction_per_m))?;
+        for (i, a) in airlight.iter().enumerate() {
+            Range::closed(0.0, 1e6, "").check("airlight", Some(i), f64::from(*a))?;
+        }
+        Ok(Haze { extinction_per_m, airlight })
+    }
+
+    /// Transmittance e^(−σ d) along `distance_m` (1 when σ = 0, 0 for d = ∞ when σ > 0).
+    #[inline]
+    pub fn transmittance(&self, distance_m: f32) -> f32 {
+        if self.extinction_per_m <= 0.0 {
+            1.0
+        } else if distance_m.is_infinite() {
+            0.0
+        } else {
+            (-self.extinction_per_m * distance_m).exp()
+        }
+    }
+}
+
+/// Checks that a depth map holds no NaN and no negative value.
+pub fn check_depth(depth_m: &[f32]) -> Result<()> {
+    for (i, &d) in depth_m.iter().enumerate() {
+        if d.is_nan() || d < 0.0 {
+            return Err(Error::OutOfRange {
+                param: Param { name: "depth_m", index: Some(i) },
+                value: f64::from(d),
+                range: "[0, inf] m (inf for sky)".into(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Applies haze to `rgb` (H·W·3, in place) and writes `transmittance` (H·W). Rows in parallel.
+pub fn apply(haze: &Haze, cam: &Camera, rgb: &mut [f32], depth_m: &[f32], transmittance: &mut [f32]) {
+    let w = cam.width as usize;
+    rgb.par_chunks_mut(3 * w)
+        .zip(depth_m.par_chunks(w))
+        .zip(transmittance.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(y, ((rgb_row, depth_row), t_row))| {
+            for x in 0..w {
+                let t = haze.transmittance(depth_row[x] * cam.distance_per_depth(x as u32, y as u32));
+                t_row[x] = t;
+                for c in 0..3 {
+                    let v = &mut rgb_row[3 * x + c];
+                    *v = *v * t + haze.airlight[c] * (1.0 - t);
+                }
+            }
+        });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Mat3, Vec3};
+
+    #[test]
+    fn haze_limits() {
+        let h = Haze::new(0.01, [0.4; 3]).unwrap_or(Haze { extinction_per_m: 0.0, airlight: [0.0; 3] });
+        assert_eq!(h.transmittance(f32::INFINITY), 0.0);
+        assert!((h.transmittance(100.0) - (-1.0f32).exp()).abs() < 1e-7);
+        let clear = Haze { extinction_per_m: 0.0, airlight: [0.4; 3] };
+        assert_eq!(clear.transmittance(f32::INFINITY), 1.0);
+        assert!(Haze::new(f32::NAN, [0.0; 3]).is_err());
+        assert!(check_depth(&[1.0, f32::INFINITY]).is_ok() && check_depth(&[f32::NAN]).is_err() && check_depth(&[-1.0]).is_err());
+    }
+
+    #[test]
+    fn distance_uses_the_ray_not_the_depth() {
+        let cam = Camera::new(3, 1, [1.0, 1.0, 1.5, 0.5], Vec3::ZERO, Mat3::IDENTITY);
+        let cam = cam.unwrap_or(Camera { width: 3, height: 1, fx: 1.0, fy: 1.0, cx: 1.5, cy: 0.5, position_m: Vec3::ZERO, rotation: Mat3::IDENTITY });
+        let h = Haze { extinction_per_m: 0.1, airlight: [1.0; 3] };
+        let mut rgb = vec![0.0; 9];
+        let mut t = vec![0.0; 3];
+        apply(&h, &cam, &mut rgb, &[10.0; 3], &mut t);
+        // side pixels are 1 px off axis with f = 1: |ray| = sqrt(2).
+        assert!((t[0] - (-0.1f32 * 10.0 * 2f32.sqrt()).exp()).abs() < 1e-6);
+        assert!((t[1] - (-1.0f32).exp()).abs() < 1e-6);
+        assert!((rgb[3] - (1.0 - (-1.0f32).exp())).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,62 @@
+//! The GPU frame: passes chained on the device, one readback per output.
+
+use crate::context::{AdapterChoice, GpuContext, GpuError};
+use crate::haze::HazePass;
+use crate::pass::{storage, storage_init};
+use crate::readback::read_f32;
+use crate::scene_raycast::SceneRaycastPass;
+use skyfall_core::frame::{check_frame_size, check_photo, FrameBuffers, SceneRef};
+use skyfall_core::haze::Haze;
+use skyfall_core::scene::camera::Camera;
+
+/// A device with every pass compiled, reused across frames.
+#[derive(Debug)]
+pub struct GpuRenderer {
+    /// The context.
+    pub ctx: GpuContext,
+    raycast: SceneRaycastPass,
+    haze: HazePass,
+}
+
+impl GpuRenderer {
+    /// Creates the device and compiles the passes.
+    pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
+        let ctx = GpuContext::new(choice)?;
+        let (raycast, haze) = ctx.scoped(|| Ok((SceneRaycastPass::new(&ctx), HazePass::new(&ctx))))?;
+        Ok(GpuRenderer { ctx, raycast, haze })
+    }
+
+    /// Renders a frame: the scene (ray cast, or the photo uploaded), then haze, then readback.
+    pub fn render(&self, scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>) -> Result<FrameBuffers, GpuError> {
+        check_frame_size(cam)?;
+        let n = cam.pixels();
+        self.ctx.check_buffer(&format!("a {}x{} RGB frame", cam.width, cam.height), (3 * n * 4) as u64)?;
+        let ctx = &self.ctx;
+        ctx.scoped(|| {
+            let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+            let (rgb, depth) = match scene {
+                SceneRef::Boxes(b) => {
+                    let rgb = storage(ctx, "rgb", 3 * n);
+                    let depth = storage(ctx, "depth", n);
+                    self.raycast.encode(ctx, &mut enc, b, cam, &rgb, &depth);
+                    (rgb, depth)
+                }
+                SceneRef::Photo { rgb, depth_m } => {
+                    check_photo(cam, rgb, depth_m)?;
+                    (storage_init(ctx, "rgb", rgb), storage_init(ctx, "depth", depth_m))
+                }
+            };
+            let trans = haze.map(|h| {
+                let t = storage(ctx, "transmittance", n);
+                self.haze.encode(ctx, &mut enc, h, cam, [&rgb, &depth, &t]);
+                t
+            });
+            ctx.queue.submit([enc.finish()]);
+            Ok(FrameBuffers {
+                rgb: read_f32(ctx, &rgb, 3 * n)?,
+                depth_m: read_f32(ctx, &depth, n)?,
+                transmittance: trans.map(|t| read_f32(ctx, &t, n)).transpose()?,
+            })
+        })
+    }
+}

@@ -1,0 +1,28 @@
+// Shared by every pass: the camera block and its rays (see skyfall_core::scene::camera).
+struct Camera {
+    right: vec4<f32>,
+    up: vec4<f32>,
+    back: vec4<f32>,
+    pos: vec4<f32>,
+    intr: vec4<f32>,   // fx, fy, cx, cy (px)
+    size: vec4<u32>,   // width, height
+}
+
+fn pixel_uv(cam: Camera, x: u32, y: u32) -> vec2<f32> {
+    return vec2<f32>((f32(x) + 0.5 - cam.intr.z) / cam.intr.x, (f32(y) + 0.5 - cam.intr.w) / cam.intr.y);
+}
+
+// World ray through the pixel centre, camera-space z = -1: the point at t is t metres deep.
+fn ray_direction(cam: Camera, x: u32, y: u32) -> vec3<f32> {
+    let uv = pixel_uv(cam, x, y);
+    return cam.right.xyz * uv.x + cam.up.xyz * (-uv.y) - cam.back.xyz;
+}
+
+fn distance_per_depth(cam: Camera, x: u32, y: u32) -> f32 {
+    let uv = pixel_uv(cam, x, y);
+    return sqrt(uv.x * uv.x + uv.y * uv.y + 1.0);
+}
+
+fn infinity() -> f32 {
+    return bitcast<f32>(0x7f800000u);
+}

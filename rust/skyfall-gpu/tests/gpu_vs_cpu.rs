@@ -1,0 +1,60 @@
+//! GPU passes against their CPU references, on whatever Vulkan adapter exists (lavapipe in CI).
+//! `make test` installs lavapipe when it is missing, so these run everywhere it runs.
+
+use glam::{Mat3, Vec3};
+use skyfall_core::frame::{render, SceneRef};
+use skyfall_core::haze::Haze;
+use skyfall_core::scene::boxes::{BoxScene, SceneBox};
+use skyfall_core::scene::camera::Camera;
+use skyfall_gpu::frame::GpuRenderer;
+use skyfall_gpu::AdapterChoice;
+
+fn street() -> (BoxScene, Camera) {
+    let b = |min: [f32; 3], max: [f32; 3], a: [f32; 3]| SceneBox { min_m: Vec3::from(min), max_m: Vec3::from(max), albedo: Vec3::from(a) };
+    let boxes = vec![
+        b([-12.0, 0.0, -60.0], [-5.0, 14.0, -8.0], [0.55, 0.5, 0.45]),
+        b([5.0, 0.0, -50.0], [11.0, 9.0, -6.0], [0.4, 0.42, 0.5]),
+        b([-3.0, 0.0, -90.0], [3.0, 25.0, -80.0], [0.6, 0.6, 0.6]),
+    ];
+    let scene = BoxScene::new(boxes, true, Vec3::splat(0.12)).unwrap();
+    let yaw = 0.1f32;
+    let rot = Mat3::from_rotation_y(yaw) * Mat3::from_rotation_x(0.05);
+    let cam = Camera::new(96, 64, [70.0, 70.0, 48.0, 32.0], Vec3::new(0.5, 1.6, 0.0), rot).unwrap();
+    (scene, cam)
+}
+
+fn max_abs(a: &[f32], b: &[f32]) -> (f32, usize) {
+    let mut worst = 0.0f32;
+    let mut big = 0;
+    for (x, y) in a.iter().zip(b) {
+        let d = if x.is_infinite() && y.is_infinite() && x == y { 0.0 } else { (x - y).abs() };
+        if d > 1e-3 {
+            big += 1;
+        }
+        worst = worst.max(d);
+    }
+    (worst, big)
+}
+
+#[test]
+fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
+    let gpu = GpuRenderer::new(AdapterChoice::Any).expect("a Vulkan adapter (lavapipe) is required: make test installs it");
+    let (scene, cam) = street();
+    let haze = Haze::new(0.004, [3.0 / 7.0; 3]).unwrap();
+    let c = render(SceneRef::Boxes(&scene), &cam, Some(&haze)).unwrap();
+    let g = gpu.render(SceneRef::Boxes(&scene), &cam, Some(&haze)).unwrap();
+    // Silhouette pixels may pick another surface when f32 rounding differs (FMA): allow 0.5 %.
+    let (_, rgb_big) = max_abs(&c.rgb, &g.rgb);
+    let (_, depth_big) = max_abs(&c.depth_m, &g.depth_m);
+    assert!(rgb_big * 200 <= c.rgb.len(), "{rgb_big} rgb values differ");
+    assert!(depth_big * 200 <= c.depth_m.len(), "{depth_big} depths differ");
+    // Haze alone on identical inputs: exp differs by a few ulps.
+    let photo = SceneRef::Photo { rgb: &c.rgb, depth_m: &c.depth_m };
+    let c2 = render(photo, &cam, Some(&haze)).unwrap();
+    let g2 = gpu.render(photo, &cam, Some(&haze)).unwrap();
+    let (worst, _) = max_abs(&c2.rgb, &g2.rgb);
+    assert!(worst < 1e-5, "haze max abs diff {worst}");
+    let (worst_t, _) = max_abs(c2.transmittance.as_deref().unwrap(), g2.transmittance.as_deref().unwrap());
+    assert!(worst_t < 1e-5, "transmittance max abs diff {worst_t}");
+    assert_eq!(c2.depth_m, g2.depth_m);
+}
