@@ -9,9 +9,30 @@ rain
     Precomputed rain-streak textures (Yoshida, Dobashi & Yamamoto).
 io
     Image files through OpenImageIO (EXR float, PNG sRGB 8-bit).
+scenes
+    Photo scenes with depth and procedural box scenes (``scenes.street()``).
+
+Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`.
 """
 
-from skyfall import io, physics, rain
-from skyfall._core import SkyfallError, __version__
+from skyfall import io, physics, rain, scenes
+from skyfall._core import GpuUnavailableError, SkyfallError, __version__
+from skyfall.camera import Camera
+from skyfall.render import Frame, Renderer
+from skyfall.scenes import PhotoScene
+from skyfall.weather import Weather
 
-__all__ = ["SkyfallError", "__version__", "io", "physics", "rain"]
+__all__ = [
+    "Camera",
+    "Frame",
+    "GpuUnavailableError",
+    "PhotoScene",
+    "Renderer",
+    "SkyfallError",
+    "Weather",
+    "__version__",
+    "io",
+    "physics",
+    "rain",
+    "scenes",
+]

@@ -1,9 +1,17 @@
 """Type stubs for the compiled ``skyfall._core`` module (checked by mypy.stubtest)."""
 
+from typing import final
+
 import numpy as np
+from typing_extensions import disjoint_base
 from numpy.typing import NDArray
 
 __all__ = [
+    "AIRLIGHT_RELATIVE",
+    "FRAME_BUDGET_BYTES",
+    "GpuDevice",
+    "GpuUnavailableError",
+    "render_cpu",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
     "SkyfallError",
@@ -25,7 +33,46 @@ TEXTURE_BUDGET_BYTES: int
 MAX_DIAMETER_MM: float
 MAX_RAIN_RATE_MM_H: float
 
+AIRLIGHT_RELATIVE: float
+FRAME_BUDGET_BYTES: int
+
 class SkyfallError(Exception): ...
+class GpuUnavailableError(SkyfallError): ...
+
+_FrameTuple = tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32] | None]
+
+def render_cpu(
+    width: int,
+    height: int,
+    camera_params: list[float],
+    *,
+    boxes: NDArray[np.float32] | None = None,
+    ground: bool = True,
+    ground_albedo: list[float] = ...,
+    photo_rgb: NDArray[np.float32] | None = None,
+    photo_depth_m: NDArray[np.float32] | None = None,
+    haze_params: tuple[float, list[float]] | None = None,
+) -> _FrameTuple: ...
+
+@final
+@disjoint_base
+class GpuDevice:
+    def __new__(cls, *, require_hardware: bool) -> GpuDevice: ...
+    @property
+    def adapter_info(self) -> tuple[str, str, str, str]: ...
+    def render(
+        self,
+        width: int,
+        height: int,
+        camera_params: list[float],
+        *,
+        boxes: NDArray[np.float32] | None = None,
+        ground: bool = True,
+        ground_albedo: list[float] = ...,
+        photo_rgb: NDArray[np.float32] | None = None,
+        photo_depth_m: NDArray[np.float32] | None = None,
+        haze_params: tuple[float, list[float]] | None = None,
+    ) -> _FrameTuple: ...
 
 def air_density_kg_m3(
     temperature_c: NDArray[np.float64], pressure_hpa: NDArray[np.float64], relative_humidity: NDArray[np.float64]

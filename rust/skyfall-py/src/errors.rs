@@ -10,6 +10,25 @@ pyo3::create_exception!(
     "Base of skyfall's own exceptions (bad values raise ValueError, bad types TypeError)."
 );
 
+pyo3::create_exception!(
+    skyfall,
+    GpuUnavailableError,
+    SkyfallError,
+    "No usable GPU adapter (or none of the kind asked for); the message says what to install."
+);
+
+/// Maps a GPU-backend error: missing adapters to GpuUnavailableError, bad input to
+/// ValueError, device failures to SkyfallError.
+pub fn gpu_error(e: skyfall_gpu::GpuError) -> PyErr {
+    use skyfall_gpu::GpuError as G;
+    match e {
+        G::NoAdapter { .. } | G::NoHardwareAdapter { .. } | G::Device(_) => GpuUnavailableError::new_err(e.to_string()),
+        G::TooLarge { .. } => PyValueError::new_err(e.to_string()),
+        G::Core(c) => CoreError(c).into(),
+        G::Wgpu(_) | G::Readback(_) => SkyfallError::new_err(e.to_string()),
+    }
+}
+
 /// A core error on its way to Python.
 pub struct CoreError(pub skyfall_core::Error);
 

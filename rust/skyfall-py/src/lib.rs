@@ -4,13 +4,14 @@
 mod errors;
 mod physics;
 mod rain;
+mod render;
 
 use pyo3::prelude::*;
 
 #[pymodule]
 mod _core {
     #[pymodule_export]
-    use super::errors::SkyfallError;
+    use super::errors::{GpuUnavailableError, SkyfallError};
     #[pymodule_export]
     use super::physics::{
         air_density_kg_m3, air_viscosity, drops_per_m3, marshall_palmer, rain_extinction_per_m, rain_rate_from_dsd,
@@ -18,6 +19,8 @@ mod _core {
     };
     #[pymodule_export]
     use super::rain::{rain_diameter_bins, rain_textures};
+    #[pymodule_export]
+    use super::render::{render_cpu, GpuDevice};
 
     use pyo3::prelude::*;
 
@@ -27,6 +30,8 @@ mod _core {
         m.add("TEXTURE_BUDGET_BYTES", skyfall_core::rain::texture::TEXTURE_BUDGET_BYTES)?;
         m.add("MAX_DIAMETER_MM", skyfall_core::physics::fall_speed::DIAMETER_MM.hi)?;
         m.add("MAX_RAIN_RATE_MM_H", skyfall_core::physics::dsd::RAIN_RATE_MM_H.hi)?;
+        m.add("AIRLIGHT_RELATIVE", skyfall_core::haze::AIRLIGHT_RELATIVE)?;
+        m.add("FRAME_BUDGET_BYTES", skyfall_core::frame::FRAME_BUDGET_BYTES)?;
         Ok(())
     }
 }

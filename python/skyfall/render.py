@@ -1,0 +1,191 @@
+"""The frame renderer: two backends, one result.
+
+``backend="cpu"`` runs the Rust CPU backend (rayon, every pass fused so a pixel is written
+once). ``backend="gpu"`` runs the wgpu backend on any Vulkan adapter, Mesa's lavapipe
+included. ``backend="auto"`` takes a hardware GPU when there is one and the CPU backend
+otherwise: on a software-only machine the CPU backend is much faster than lavapipe.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from skyfall import _core, io
+from skyfall._validate import choice, integer, real
+from skyfall.camera import Camera
+from skyfall.scenes import BoxScene, PhotoScene
+from skyfall.weather import Weather
+
+__all__ = ["BACKENDS", "Frame", "Renderer"]
+
+BACKENDS = ("auto", "cpu", "gpu")
+
+_devices: dict[bool, _core.GpuDevice] = {}
+_devices_lock = threading.Lock()
+
+
+def _gpu_device(require_hardware: bool) -> _core.GpuDevice:
+    """One device per process and kind, created on first use and shared by every Renderer."""
+    with _devices_lock:
+        if require_hardware not in _devices:
+            if not os.environ.get("XDG_RUNTIME_DIR"):
+                # Vulkan loaders warn on stderr without one; a private 0700 folder silences them.
+                os.environ["XDG_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="skyfall-xdg-")
+            _devices[require_hardware] = _core.GpuDevice(require_hardware=require_hardware)
+        return _devices[require_hardware]
+
+
+@dataclass
+class Frame:
+    """A rendered frame.
+
+    Attributes
+    ----------
+    rgb : ndarray of float32, shape (H, W, 3)
+        Linear RGB in units of E/pi (multiply by ``luminance_scale_cd_m2`` for cd/m^2).
+    depth_m : ndarray of float32, shape (H, W)
+        Depth along the optical axis, m; ``inf`` for sky.
+    layers : dict of str to ndarray of float32, shape (H, W)
+        Ground-truth layers; the haze pass adds ``transmittance`` (e^(-sigma d)).
+    backend : str
+        ``"cpu"`` or ``"gpu"``.
+    adapter_info : dict or None
+        The GPU adapter (name, backend, device_type, driver) for GPU frames.
+    luminance_scale_cd_m2 : float
+        E/pi of the weather's sky illuminance, cd/m^2.
+    """
+
+    rgb: NDArray[np.float32]
+    depth_m: NDArray[np.float32]
+    layers: dict[str, NDArray[np.float32]] = field(default_factory=dict)
+    backend: str = "cpu"
+    adapter_info: dict[str, str] | None = None
+    luminance_scale_cd_m2: float = 10000.0 / np.pi
+
+    def save(self, path: str | Path, *, exposure: float = 1.0) -> None:
+        """Write the frame; the format follows the extension.
+
+        EXR keeps float32 ``R, G, B``, ``depth_m`` and every layer as named channels. 8-bit
+        formats (PNG, JPEG) hold ``rgb * exposure`` sRGB-encoded (clipped at 1).
+        """
+        p = Path(path)
+        if p.suffix.lower() == ".exr":
+            names = ["R", "G", "B", "depth_m", *self.layers]
+            stack = np.concatenate([self.rgb, self.depth_m[..., None], *(v[..., None] for v in self.layers.values())], axis=2)
+            io.write_image(p, stack, channel_names=names)
+        else:
+            io.write_image(p, self.rgb * np.float32(real("exposure", exposure)))
+
+
+class Renderer:
+    """Renders scenes under weather into frames.
+
+    Parameters
+    ----------
+    width, height : int
+        Frame size, px, in [1, 16384].
+    backend : {"auto", "cpu", "gpu"}
+        See the module docstring. ``"gpu"`` raises :class:`skyfall.GpuUnavailableError` when
+        no Vulkan adapter exists, with what to install.
+
+    Attributes
+    ----------
+    backend : str
+        The backend in use, ``"cpu"`` or ``"gpu"``.
+    adapter_info : dict or None
+        The GPU adapter when ``backend == "gpu"``.
+    """
+
+    def __init__(self, width: int, height: int, *, backend: str = "auto") -> None:
+        self.width = integer("width", width, 1, 16384)
+        self.height = integer("height", height, 1, 16384)
+        choice("backend", backend, BACKENDS)
+        self._device: _core.GpuDevice | None = None
+        if backend == "gpu":
+            self._device = _gpu_device(require_hardware=False)
+        elif backend == "auto":
+            try:
+                self._device = _gpu_device(require_hardware=True)
+            except _core.GpuUnavailableError:
+                self._device = None
+        self.backend = "gpu" if self._device is not None else "cpu"
+
+    @property
+    def adapter_info(self) -> dict[str, str] | None:
+        """Name, backend, device type and driver of the GPU adapter, or None on the CPU."""
+        if self._device is None:
+            return None
+        name, backend, device_type, driver = self._device.adapter_info
+        return {"name": name, "backend": backend, "device_type": device_type, "driver": driver}
+
+    def render(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        camera: Camera | None = None,
+        time_s: float = 0.0,
+        seed: int = 0,
+    ) -> Frame:
+        """Render one frame.
+
+        Parameters
+        ----------
+        scene : BoxScene or PhotoScene
+            What to show. A photo's size must equal the renderer's.
+        weather : Weather, optional
+            Default: clear (no rain, infinite visibility): the scene unchanged.
+        camera : Camera, optional
+            Overrides a box scene's camera (photos keep the camera that took them).
+        time_s : float
+            Time of the frame, s, for animated effects (rain); the haze is static.
+        seed : int
+            Seed of the random effects (rain), in [0, 2^64).
+
+        Returns
+        -------
+        Frame
+        """
+        weather = weather if weather is not None else Weather()
+        if not isinstance(weather, Weather):
+            raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
+        t = real("time_s", time_s)
+        if not np.isfinite(t):
+            raise ValueError(f"time_s = {t} must be finite")
+        integer("seed", seed, 0, 2**64 - 1)
+        kwargs: dict[str, Any] = {}
+        if isinstance(scene, PhotoScene):
+            if scene.shape != (self.height, self.width):
+                raise ValueError(f"the photo is {scene.shape[1]}x{scene.shape[0]}, the renderer {self.width}x{self.height}")
+            cam = scene.camera
+            kwargs.update(photo_rgb=scene.image, photo_depth_m=scene.depth_m)
+        elif isinstance(scene, BoxScene):
+            cam = (camera if camera is not None else scene.camera).with_resolution(self.width, self.height)
+            kwargs.update(boxes=scene.boxes, ground=scene.ground, ground_albedo=list(scene.ground_albedo))
+        else:
+            raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
+        sigma = weather.extinction_per_m
+        if sigma > 0:
+            kwargs["haze_params"] = (sigma, [_core.AIRLIGHT_RELATIVE] * 3)
+        args = (self.width, self.height, cam.core_params())
+        if self._device is not None:
+            rgb, depth, trans = self._device.render(*args, **kwargs)
+        else:
+            rgb, depth, trans = _core.render_cpu(*args, **kwargs)
+        layers = {} if trans is None else {"transmittance": trans}
+        return Frame(
+            rgb=rgb,
+            depth_m=depth,
+            layers=layers,
+            backend=self.backend,
+            adapter_info=self.adapter_info,
+            luminance_scale_cd_m2=weather.luminance_scale_cd_m2,
+        )

@@ -1,0 +1,212 @@
+"""Scenes a frame can show: photos with depth, and procedural boxes on a ground plane.
+
+Procedural scenes are lit by a uniform overcast sky (see :class:`BoxScene`); no external
+asset files are needed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from skyfall.camera import Camera
+from skyfall.io import decode_srgb
+
+__all__ = ["BoxScene", "PhotoScene", "boxes", "empty", "street"]
+
+DEFAULT_GROUND_ALBEDO = (0.12, 0.12, 0.12)
+"""Asphalt-like ground albedo, linear RGB."""
+DEFAULT_BOX_ALBEDO = (0.5, 0.48, 0.45)
+
+
+@dataclass(frozen=True)
+class BoxScene:
+    """Axis-aligned boxes on an optional ground plane (y = 0), ray cast by the renderer.
+
+    Radiance is relative: 1.0 is a white Lambertian surface lit by the whole unobstructed
+    overcast sky (E/pi for horizontal sky illuminance E). The sky is the CIE standard overcast
+    sky (zenith 9/7, horizon 3/7); surfaces see an unoccluded sky over the half-space their
+    normal faces, (1 + n_y)/2 of it (ground and roofs 1, walls 1/2); walls carry a 3 m grid of
+    dark windows. Sky-visibility shading arrives with the ambient-light map.
+
+    Attributes
+    ----------
+    boxes : ndarray of float32, shape (N, 9)
+        min xyz (m), max xyz (m), albedo rgb per box.
+    ground : bool
+        Whether the ground plane exists.
+    ground_albedo : tuple of 3 float
+        Linear RGB.
+    camera : Camera
+        The default viewpoint.
+    lamps_m : ndarray, shape (L, 3)
+        Street-lamp positions (m), for lighting effects.
+    """
+
+    boxes: NDArray[np.float32]
+    ground: bool = True
+    ground_albedo: tuple[float, float, float] = DEFAULT_GROUND_ALBEDO
+    camera: Camera = field(default_factory=Camera)
+    lamps_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+
+
+def _albedo(name: str, value: Any) -> tuple[float, float, float]:
+    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    if a.size == 1:
+        a = np.repeat(a, 3)
+    if a.size != 3 or not np.all((a >= 0) & (a <= 1)):
+        raise ValueError(f"{name} = {value!r} must be one or three numbers in [0, 1]")
+    return float(a[0]), float(a[1]), float(a[2])
+
+
+def boxes(
+    box_list: Sequence[Mapping[str, Any]],
+    *,
+    ground: bool = True,
+    ground_albedo: Any = DEFAULT_GROUND_ALBEDO,
+    camera: Camera | None = None,
+    lamps_m: Any = None,
+) -> BoxScene:
+    """Build a scene from axis-aligned boxes.
+
+    Parameters
+    ----------
+    box_list : sequence of dict
+        Each with ``min`` and ``max`` corners (3 numbers, m; max > min on every axis) and an
+        optional ``albedo`` (one or three numbers in [0, 1]; default a light concrete grey).
+    ground : bool
+        Add the ground plane y = 0.
+    ground_albedo : float or 3 floats
+        Linear albedo of the ground.
+    camera : Camera, optional
+        Default viewpoint; eye height at the origin looking along -Z when left out.
+    lamps_m : array_like, shape (L, 3), optional
+        Lamp positions, m.
+
+    Returns
+    -------
+    BoxScene
+    """
+    rows = []
+    for i, b in enumerate(box_list):
+        if not isinstance(b, Mapping) or "min" not in b or "max" not in b:
+            raise ValueError(f"boxes[{i}] must be a dict with 'min' and 'max' corners, got {b!r}")
+        lo = np.asarray(b["min"], dtype=np.float64).reshape(-1)
+        hi = np.asarray(b["max"], dtype=np.float64).reshape(-1)
+        if lo.size != 3 or hi.size != 3 or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+            raise ValueError(f"boxes[{i}]: min and max must be 3 finite numbers (m)")
+        if np.any(hi <= lo):
+            raise ValueError(f"boxes[{i}]: max {hi.tolist()} must exceed min {lo.tolist()} on every axis")
+        rows.append([*lo, *hi, *_albedo(f"boxes[{i}].albedo", b.get("albedo", DEFAULT_BOX_ALBEDO))])
+    arr = np.array(rows, dtype=np.float32).reshape(-1, 9)
+    lamps = np.zeros((0, 3)) if lamps_m is None else np.asarray(lamps_m, dtype=np.float64).reshape(-1, 3)
+    return BoxScene(
+        boxes=arr,
+        ground=bool(ground),
+        ground_albedo=_albedo("ground_albedo", ground_albedo),
+        camera=camera if camera is not None else Camera(),
+        lamps_m=lamps,
+    )
+
+
+def empty(*, ground_albedo: Any = DEFAULT_GROUND_ALBEDO, camera: Camera | None = None) -> BoxScene:
+    """The ground plane alone under the overcast sky."""
+    return boxes([], ground=True, ground_albedo=ground_albedo, camera=camera)
+
+
+def street(*, length_m: float = 120.0, width_m: float = 14.0, seed: int = 0) -> BoxScene:
+    """The bundled default scene: a street canyon seen from eye height.
+
+    Buildings of 9-24 m line both sides of a ``width_m`` street running along -Z for
+    ``length_m``, with a tall block closing the view; lamps stand every 15 m on both kerbs at
+    5 m. The camera stands at (1.5, 1.6, 0) on the street, looking down it.
+
+    Parameters
+    ----------
+    length_m : float
+        Street length, m, in [20, 1000].
+    width_m : float
+        Distance between the building fronts, m, in [4, 100].
+    seed : int
+        Seeds the building heights and shades (deterministic).
+    """
+    if not 20.0 <= float(length_m) <= 1000.0:
+        raise ValueError(f"length_m = {length_m} is outside the valid range [20, 1000] m")
+    if not 4.0 <= float(width_m) <= 100.0:
+        raise ValueError(f"width_m = {width_m} is outside the valid range [4, 100] m")
+    rng = np.random.default_rng(seed)
+    half = width_m / 2
+    box_list: list[dict[str, Any]] = []
+    for side in (-1, 1):
+        z = -4.0
+        while z > -length_m:
+            depth = float(rng.uniform(10, 22))
+            height = float(rng.uniform(9, 24))
+            shade = float(rng.uniform(0.35, 0.65))
+            tint = np.array([1.0, 0.96, 0.9]) if rng.random() < 0.5 else np.array([0.92, 0.95, 1.0])
+            x0, x1 = (half, half + 12) if side > 0 else (-half - 12, -half)
+            box_list.append({"min": (x0, 0, z - depth), "max": (x1, height, z), "albedo": np.clip(shade * tint, 0, 1)})
+            z -= depth + float(rng.uniform(0.0, 3.0))
+    box_list.append({"min": (-half - 12, 0, -length_m - 20), "max": (half + 12, 30, -length_m), "albedo": (0.55, 0.55, 0.58)})
+    lamps = [(s * (half - 1.0), 5.0, -z) for z in np.arange(8.0, length_m, 15.0) for s in (-1, 1)]
+    cam = Camera((1.5, 1.6, 0.0), yaw_deg=0.0, pitch_deg=2.0, vertical_fov_deg=55.0)
+    return boxes(box_list, ground=True, camera=cam, lamps_m=lamps)
+
+
+@dataclass(frozen=True)
+class PhotoScene:
+    """A photo with its depth map: how datasets are made from real images.
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W, 3)
+        Linear RGB float (any float dtype, stored as float32), or uint8 sRGB, which is
+        decoded to linear with the sRGB transfer function.
+    depth_m : array_like, shape (H, W)
+        Depth along the optical axis, m, >= 0; ``inf`` marks sky. From a sensor or a depth
+        estimator.
+    camera : Camera, optional
+        The camera that took the photo; by default one at the origin looking along -Z with
+        ``vertical_fov_deg``.
+    vertical_fov_deg : float
+        Vertical field of view, degrees, when no camera is given.
+    """
+
+    image: NDArray[np.float32]
+    depth_m: NDArray[np.float32]
+    camera: Camera
+
+    def __init__(self, image: Any, depth_m: Any, *, camera: Camera | None = None, vertical_fov_deg: float = 60.0) -> None:
+        img = np.asarray(image)
+        if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
+            raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
+        if img.dtype == np.uint8:
+            lin = decode_srgb(img.astype(np.float32) / 255.0)
+        elif img.dtype.kind == "f":
+            lin = np.ascontiguousarray(img, dtype=np.float32)
+            if not np.all(np.isfinite(lin)) or lin.min() < 0:
+                raise ValueError("image must hold finite, non-negative linear values")
+        else:
+            raise TypeError(f"image must be uint8 (sRGB) or float (linear), got dtype {img.dtype}")
+        d = np.asarray(depth_m)
+        if d.dtype.kind not in "fiu":
+            raise TypeError(f"depth_m must be numeric, got dtype {d.dtype}")
+        d = np.ascontiguousarray(d, dtype=np.float32)
+        if d.shape != img.shape[:2]:
+            raise ValueError(f"depth_m has shape {d.shape}, the image is {img.shape[:2]}")
+        if np.isnan(d).any() or (d < 0).any():
+            raise ValueError("depth_m must be >= 0 m everywhere (inf for sky), without NaN")
+        h, w = img.shape[:2]
+        cam = camera if camera is not None else Camera((0.0, 0.0, 0.0), vertical_fov_deg=vertical_fov_deg)
+        object.__setattr__(self, "image", lin)
+        object.__setattr__(self, "depth_m", d)
+        object.__setattr__(self, "camera", cam.with_resolution(w, h))
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(height, width) in px."""
+        return (int(self.image.shape[0]), int(self.image.shape[1]))
