@@ -10,8 +10,10 @@ OUT    ?= out
 # The Rust build of the extension (cargo test, clippy) uses the venv's interpreter.
 export PYO3_PYTHON := $(abspath $(PY))
 export VIRTUAL_ENV := $(abspath $(VENV))
+# Vulkan loaders complain on stderr without a runtime dir; give them a private one.
+export XDG_RUNTIME_DIR ?= $(abspath $(VENV))/xdg-runtime
 
-.PHONY: help setup build demo test test-rust test-python lint bench clean
+.PHONY: help setup vulkan build demo test test-rust test-python lint bench clean
 
 help:
 	@echo "make demo   build, then render the demo outputs into $(OUT)/"
@@ -32,6 +34,16 @@ $(STAMP): requirements-dev.txt | $(PY)
 	@touch $@
 
 setup: $(STAMP)
+	@mkdir -p -m 700 $(XDG_RUNTIME_DIR)
+
+# The GPU backend's tests run on any Vulkan driver; without one, install Mesa's lavapipe
+# (software Vulkan) when we are root, else say what to install.
+vulkan:
+	@if ls /usr/share/vulkan/icd.d/*.json >/dev/null 2>&1 && ldconfig -p | grep -q 'libvulkan\.so\.1'; then :; \
+	elif [ "$$(id -u)" = 0 ]; then \
+	  echo "installing Mesa's software Vulkan driver (lavapipe)"; \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null; \
+	else echo "GPU tests need a Vulkan driver: sudo apt-get install mesa-vulkan-drivers libvulkan1" >&2; exit 1; fi
 
 build: setup
 	$(VENV)/bin/maturin develop --release --locked -q
@@ -39,11 +51,11 @@ build: setup
 demo: build
 	$(PY) -m skyfall.demo --out $(OUT)
 
-test-rust: setup
+test-rust: setup vulkan
 	cargo test --workspace --locked
 	cargo clippy --workspace --all-targets --locked -- -D warnings
 
-test-python: build
+test-python: build vulkan
 	$(PY) -m mypy.stubtest skyfall._core
 	$(PY) -m mypy
 	$(PY) -m pytest --nbmake tests notebooks
@@ -54,8 +66,9 @@ lint: setup
 	cargo clippy --workspace --all-targets --locked -- -D warnings
 	$(PY) -m mypy
 
-bench: build
+bench: build vulkan
 	$(PY) benches/bench_physics.py
+	$(PY) benches/bench_render.py
 
 clean:
 	rm -rf target $(VENV) $(OUT)

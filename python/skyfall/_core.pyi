@@ -3,7 +3,6 @@
 from typing import final
 
 import numpy as np
-from typing_extensions import disjoint_base
 from numpy.typing import NDArray
 
 __all__ = [
@@ -55,7 +54,6 @@ def render_cpu(
 ) -> _FrameTuple: ...
 
 @final
-@disjoint_base
 class GpuDevice:
     def __new__(cls, *, require_hardware: bool) -> GpuDevice: ...
     @property

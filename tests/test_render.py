@@ -1,0 +1,222 @@
+"""Frames on both backends: GPU (wgpu on lavapipe here) against the CPU reference, and the
+haze pass against an independent numpy implementation of seed 002's eq. 2."""
+
+from __future__ import annotations
+
+import colour
+import numpy as np
+import pytest
+from skimage.metrics import structural_similarity
+
+import skyfall
+from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
+
+W, H = 160, 96
+
+
+@pytest.fixture(scope="module")
+def gpu() -> Renderer:
+    # make test installs Mesa's lavapipe when no Vulkan driver exists: a missing GPU fails here.
+    return Renderer(W, H, backend="gpu")
+
+
+@pytest.fixture(scope="module")
+def cpu() -> Renderer:
+    return Renderer(W, H, backend="cpu")
+
+
+def photo(seed: int = 0) -> PhotoScene:
+    rng = np.random.default_rng(seed)
+    img = rng.uniform(0, 1, (H, W, 3)).astype(np.float32)
+    depth = rng.uniform(0.5, 3000, (H, W)).astype(np.float32)
+    depth[:10] = np.inf
+    return PhotoScene(img, depth, vertical_fov_deg=50.0)
+
+
+def ssim(a: np.ndarray, b: np.ndarray) -> float:
+    rng = float(max(a.max(), b.max()) - min(a.min(), b.min())) or 1.0
+    return float(structural_similarity(a, b, data_range=rng, channel_axis=-1 if a.ndim == 3 else None))
+
+
+def numpy_haze(img, depth, cam, sigma, air):
+    """Seed 002 eq. 2 written independently: distance along each pixel's ray from the camera."""
+    fx, fy, cx, cy = cam.intrinsics()
+    y, x = np.mgrid[0 : depth.shape[0], 0 : depth.shape[1]] + 0.5
+    per_depth = np.sqrt(((x - cx) / fx) ** 2 + ((y - cy) / fy) ** 2 + 1.0)
+    with np.errstate(invalid="ignore"):
+        t = np.exp(-sigma * depth.astype(np.float64) * per_depth)
+    t = np.where(np.isinf(depth), 0.0, t)
+    return img * t[..., None] + air * (1 - t[..., None]), t
+
+
+def test_gpu_matches_cpu_on_the_street(gpu, cpu):
+    assert gpu.backend == "gpu" and cpu.backend == "cpu"
+    weather = Weather(rain_rate_mm_h=10.0, visibility_m=2000.0)
+    c = cpu.render(scenes.street(), weather)
+    g = gpu.render(scenes.street(), weather)
+    assert ssim(c.rgb, g.rgb) >= 0.99
+    assert ssim(c.layers["transmittance"], g.layers["transmittance"]) >= 0.99
+    # f32 rounding (FMA on the GPU) can move a silhouette by a pixel: at most 0.5 % of pixels
+    # differ by more than 1e-4; everywhere else they agree to 1e-4.
+    diff = np.abs(c.rgb - g.rgb).max(axis=2)
+    assert (diff > 1e-4).mean() <= 0.005
+    finite = np.isfinite(c.depth_m) & np.isfinite(g.depth_m)
+    assert (np.isfinite(c.depth_m) != np.isfinite(g.depth_m)).mean() <= 0.005
+    close = np.abs(c.depth_m[finite] - g.depth_m[finite]) <= 1e-4 * c.depth_m[finite]
+    assert close.mean() >= 0.995
+
+
+def test_gpu_matches_cpu_on_a_photo(gpu, cpu):
+    weather = Weather(rain_rate_mm_h=25.0, visibility_m=800.0)
+    c = cpu.render(photo(), weather)
+    g = gpu.render(photo(), weather)
+    # Same inputs, same formula: only exp() differs, by a few float32 ulps.
+    assert np.abs(c.rgb - g.rgb).max() <= 2e-6
+    assert np.abs(c.layers["transmittance"] - g.layers["transmittance"]).max() <= 2e-6
+    np.testing.assert_array_equal(c.depth_m, g.depth_m)
+    assert ssim(c.rgb, g.rgb) >= 0.999
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_haze_matches_independent_formula(backend, cpu, gpu):
+    r = {"cpu": cpu, "gpu": gpu}[backend]
+    scene = photo(1)
+    weather = Weather(rain_rate_mm_h=50.0, visibility_m=1500.0)
+    sigma = 3.912 / 1500.0 + float(skyfall.physics.rain_extinction_per_m(50.0))
+    assert weather.extinction_per_m == pytest.approx(sigma)
+    frame = r.render(scene, weather)
+    want, t = numpy_haze(scene.image, scene.depth_m, scene.camera, sigma, 3 / 7)
+    np.testing.assert_allclose(frame.rgb, want, atol=3e-6)
+    np.testing.assert_allclose(frame.layers["transmittance"], t, atol=3e-6)
+    # Sky pixels (depth inf) are pure airlight: the overcast sky's horizon luminance, 3/7.
+    np.testing.assert_allclose(frame.rgb[:10], 3 / 7, atol=1e-6)
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_clear_weather_returns_the_input_and_thin_haze_converges_to_it(backend, cpu, gpu):
+    r = {"cpu": cpu, "gpu": gpu}[backend]
+    scene = photo(2)
+    clear = r.render(scene, Weather())
+    assert clear.rgb.tobytes() == scene.image.tobytes()
+    assert "transmittance" not in clear.layers
+    thin = r.render(scene, Weather(visibility_m=1e12))
+    finite = np.isfinite(scene.depth_m)
+    np.testing.assert_allclose(thin.rgb[finite], scene.image[finite], atol=1e-6)
+
+
+def test_koschmieder_contrast_at_the_visibility_distance(cpu):
+    # A black object at the visibility distance on the optical axis keeps 2 % contrast.
+    cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=40.0)
+    img = np.zeros((H, W, 3), np.float32)
+    depth = np.full((H, W), 1000.0, np.float32)
+    frame = cpu.render(PhotoScene(img, depth, camera=cam), Weather(visibility_m=1000.0))
+    centre = frame.rgb[H // 2, W // 2, 0]
+    air = 3 / 7
+    # the centre pixel is half a pixel off axis: its ray is a hair longer than 1000 m.
+    assert (air - centre) / air == pytest.approx(0.02, rel=1e-3)
+
+
+def test_auto_picks_the_cpu_when_the_only_gpu_is_software(gpu):
+    auto = Renderer(W, H)
+    if gpu.adapter_info and gpu.adapter_info["device_type"] == "Cpu":
+        assert auto.backend == "cpu" and auto.adapter_info is None
+    else:
+        assert auto.backend == "gpu"
+
+
+def test_sky_and_ground_radiance_are_the_documented_overcast_values(cpu):
+    # Unobstructed white ground under the overcast sky reflects E/pi: relative 1.0. Sky pixels
+    # follow CIE overcast L/(E/pi) = (9/7)(1 + 2 sin g)/3; checked as luminance through
+    # colour-science (the sky is grey, so Y equals each channel).
+    cam = Camera((0.0, 1.6, 0.0), pitch_deg=20.0, vertical_fov_deg=60.0)
+    frame = cpu.render(scenes.empty(ground_albedo=1.0, camera=cam))
+    ground = np.isfinite(frame.depth_m)
+    np.testing.assert_allclose(frame.rgb[ground], 1.0, atol=1e-6)
+    y_lum = colour.RGB_to_XYZ(frame.rgb.astype(np.float64), "sRGB")[..., 1]
+    c = cam.with_resolution(W, H)
+    fx, fy, cx, cy = c.intrinsics()
+    rows = np.arange(H) + 0.5
+    d_cam = np.stack([np.zeros(H), -(rows - cy) / fy, -np.ones(H)], axis=1)
+    d_world = d_cam @ c.rotation.T
+    sin_g = np.clip(d_world[:, 1] / np.linalg.norm(d_world, axis=1), 0, None)
+    want = (9 / 7) * (1 + 2 * sin_g) / 3
+    col = int(cx)  # a pixel column through the principal point: x offset ~0.5 px
+    sky_rows = ~ground[:, col]
+    np.testing.assert_allclose(y_lum[sky_rows, col], want[sky_rows], rtol=2e-4)
+
+
+def test_photo_accepts_srgb_bytes_decoded_like_colour_science(cpu):
+    rng = np.random.default_rng(3)
+    img8 = rng.integers(0, 256, (H, W, 3), dtype=np.uint8)
+    scene = PhotoScene(img8, np.full((H, W), np.inf, np.float32))
+    np.testing.assert_allclose(scene.image, colour.cctf_decoding(img8 / 255.0, function="sRGB"), atol=2e-6)
+    assert cpu.render(scene).rgb.tobytes() == scene.image.tobytes()
+
+
+def test_frame_saves_exr_layers_and_png(cpu, tmp_path):
+    frame = cpu.render(scenes.street(), Weather(rain_rate_mm_h=10.0))
+    frame.save(tmp_path / "f.exr")
+    data, meta = io.read_image_with_metadata(tmp_path / "f.exr")
+    assert meta["channel_names"] == ["R", "G", "B", "depth_m", "transmittance"]
+    assert data[..., :3].tobytes() == frame.rgb.tobytes()
+    np.testing.assert_array_equal(data[..., 3], frame.depth_m)
+    np.testing.assert_array_equal(data[..., 4], frame.layers["transmittance"])
+    frame.save(tmp_path / "f.png")
+    png = io.read_image(tmp_path / "f.png")
+    np.testing.assert_allclose(io.encode_srgb(png), io.encode_srgb(np.clip(frame.rgb, 0, 1)), atol=0.5 / 255 + 1e-6)
+
+
+def test_bad_inputs_give_clear_errors(cpu):
+    with pytest.raises(ValueError, match="photo is 10x10"):
+        cpu.render(PhotoScene(np.zeros((10, 10, 3), np.float32), np.ones((10, 10))))
+    with pytest.raises(ValueError, match="depth_m"):
+        PhotoScene(np.zeros((4, 4, 3), np.float32), np.full((4, 4), np.nan))
+    with pytest.raises(ValueError, match="depth_m"):
+        PhotoScene(np.zeros((4, 4, 3), np.float32), -np.ones((4, 4)))
+    with pytest.raises(ValueError, match="depth_m has shape"):
+        PhotoScene(np.zeros((4, 4, 3), np.float32), np.ones((4, 5)))
+    with pytest.raises(ValueError, match="non-negative"):
+        PhotoScene(-np.ones((4, 4, 3), np.float32), np.ones((4, 4)))
+    with pytest.raises(TypeError, match="dtype"):
+        PhotoScene(np.zeros((4, 4, 3), np.int32), np.ones((4, 4)))
+    with pytest.raises(ValueError, match="rain_rate_mm_h"):
+        Weather(rain_rate_mm_h=-1.0)
+    with pytest.raises(ValueError, match="visibility_m"):
+        Weather(visibility_m=0.0)
+    with pytest.raises(ValueError, match="sky_illuminance_lux"):
+        Weather(sky_illuminance_lux=float("nan"))
+    with pytest.raises(TypeError, match="rain_rate_mm_h"):
+        Weather(rain_rate_mm_h="heavy")
+    with pytest.raises(ValueError, match="backend"):
+        Renderer(8, 8, backend="metal")
+    with pytest.raises(TypeError, match="scene"):
+        cpu.render("street")
+    with pytest.raises(ValueError, match="max"):
+        scenes.boxes([{"min": (0, 0, 0), "max": (1, 0, 1)}])
+    with pytest.raises(ValueError, match="albedo"):
+        scenes.boxes([{"min": (0, 0, 0), "max": (1, 1, 1), "albedo": 2.0}])
+
+
+def test_huge_frames_are_refused_before_allocating():
+    r = Renderer(16384, 16384, backend="cpu")
+    with pytest.raises(ValueError, match="16384x16384 frame.*GiB"):
+        r.render(scenes.empty())
+
+
+def test_without_vulkan_gpu_is_a_clear_error_and_auto_falls_back():
+    # Point the Vulkan loader at no driver, in a fresh process.
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import skyfall\n"
+        "assert skyfall.Renderer(8, 8).backend == 'cpu'\n"
+        "try:\n"
+        "    skyfall.Renderer(8, 8, backend='gpu')\n"
+        "except skyfall.GpuUnavailableError as e:\n"
+        "    print(e)\n"
+    )
+    env = dict(os.environ, VK_ICD_FILENAMES="/nonexistent.json", VK_DRIVER_FILES="/nonexistent.json")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert "mesa-vulkan-drivers" in out and 'backend="cpu"' in out
