@@ -1,4 +1,5 @@
-//! The CPU backend's frame: every pass fused so each pixel is computed and written once.
+//! The CPU backend's frame: passes fused row by row, so a row is produced, hazed and left
+//! while it is in cache.
 
 use crate::error::{Error, Param, Result};
 use crate::haze::{check_depth, Haze};
@@ -73,31 +74,37 @@ pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>) -> Result<
         Some(t) => t.chunks_mut(w).map(Some).collect(),
         None => (0..cam.height).map(|_| None).collect(),
     };
+    let u2 = cam.column_slopes_sq();
     rgb.par_chunks_mut(3 * w)
         .zip(depth.par_chunks_mut(w))
         .zip(t_rows.par_iter_mut())
         .enumerate()
         .for_each(|(y, ((rgb_row, depth_row), t_row))| {
-            for x in 0..w {
-                let (mut c, d) = match scene {
-                    SceneRef::Boxes(b) => {
+            // The scene: ray cast, or the photo's row copied.
+            match scene {
+                SceneRef::Boxes(b) => {
+                    for x in 0..w {
                         let (c, d) = shade_pixel(b, cam, x as u32, y as u32);
-                        (c.to_array(), d)
+                        rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
+                        depth_row[x] = d;
                     }
-                    SceneRef::Photo { rgb, depth_m } => {
-                        let i = y * w + x;
-                        ([rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]], depth_m[i])
-                    }
-                };
-                if let (Some(h), Some(t_row)) = (haze, t_row.as_deref_mut()) {
-                    let t = h.transmittance(d * cam.distance_per_depth(x as u32, y as u32));
+                }
+                SceneRef::Photo { rgb, depth_m } => {
+                    rgb_row.copy_from_slice(&rgb[3 * w * y..3 * w * (y + 1)]);
+                    depth_row.copy_from_slice(&depth_m[w * y..w * (y + 1)]);
+                }
+            }
+            // Haze over the row while it is in cache: each pixel leaves memory once.
+            if let (Some(h), Some(t_row)) = (haze, t_row.as_deref_mut()) {
+                let v2 = cam.row_slope_sq(y as u32);
+                for x in 0..w {
+                    let t = h.transmittance(depth_row[x] * (u2[x] + v2 + 1.0).sqrt());
                     t_row[x] = t;
-                    for (k, v) in c.iter_mut().enumerate() {
+                    for k in 0..3 {
+                        let v = &mut rgb_row[3 * x + k];
                         *v = *v * t + h.airlight[k] * (1.0 - t);
                     }
                 }
-                rgb_row[3 * x..3 * x + 3].copy_from_slice(&c);
-                depth_row[x] = d;
             }
         });
     Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans })

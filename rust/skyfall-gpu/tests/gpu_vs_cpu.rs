@@ -1,5 +1,6 @@
 //! GPU passes against their CPU references, on whatever Vulkan adapter exists (lavapipe in CI).
 //! `make test` installs lavapipe when it is missing, so these run everywhere it runs.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use glam::{Mat3, Vec3};
 use skyfall_core::frame::{render, SceneRef};

@@ -1,4 +1,5 @@
 //! Every pass's WGSL parses and validates with naga (no device needed).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 fn validate(name: &str, source: &str) {
     let code = format!("{}\n{}", skyfall_gpu::pass::COMMON_WGSL, source);

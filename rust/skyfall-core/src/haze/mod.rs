@@ -65,13 +65,15 @@ pub fn check_depth(depth_m: &[f32]) -> Result<()> {
 /// Applies haze to `rgb` (H·W·3, in place) and writes `transmittance` (H·W). Rows in parallel.
 pub fn apply(haze: &Haze, cam: &Camera, rgb: &mut [f32], depth_m: &[f32], transmittance: &mut [f32]) {
     let w = cam.width as usize;
+    let u2 = cam.column_slopes_sq();
     rgb.par_chunks_mut(3 * w)
         .zip(depth_m.par_chunks(w))
         .zip(transmittance.par_chunks_mut(w))
         .enumerate()
         .for_each(|(y, ((rgb_row, depth_row), t_row))| {
+            let v2 = cam.row_slope_sq(y as u32);
             for x in 0..w {
-                let t = haze.transmittance(depth_row[x] * cam.distance_per_depth(x as u32, y as u32));
+                let t = haze.transmittance(depth_row[x] * (u2[x] + v2 + 1.0).sqrt());
                 t_row[x] = t;
                 for c in 0..3 {
                     let v = &mut rgb_row[3 * x + c];
