@@ -6,6 +6,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "rain_composite",
+    "rain_drops",
     "AIRLIGHT_RELATIVE",
     "FRAME_BUDGET_BYTES",
     "GpuDevice",
@@ -105,3 +107,20 @@ def rain_textures(
     seed: int,
 ) -> NDArray[np.float32]: ...
 def rain_diameter_bins(diameters_mm: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+
+_RegionArgs = tuple[float, NDArray[np.float64], float, list[float], float, int]
+
+def rain_drops(
+    center_m: list[float], region_args: _RegionArgs, *, ground: bool
+) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
+def rain_composite(
+    width: int,
+    height: int,
+    camera_params: list[float],
+    rgb: NDArray[np.float32],
+    depth_m: NDArray[np.float32],
+    region_args: _RegionArgs,
+    *,
+    exposure_s: float,
+    ground: bool,
+) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], int, int]: ...

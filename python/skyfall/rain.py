@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,12 +18,17 @@ from numpy.typing import NDArray
 from skyfall import _core
 from skyfall._validate import float_array, integer, real
 
+if TYPE_CHECKING:
+    from skyfall.weather import Weather
+
 __all__ = [
+    "Drops",
     "SEED_DIAMETERS_MM",
     "SEED_RAIN_RATES_MM_H",
     "TEXTURE_BUDGET_BYTES",
     "atlas",
     "diameter_bins",
+    "drops",
     "read_atlas",
     "textures",
     "write_atlas",
@@ -184,3 +189,47 @@ def read_atlas(path: str | Path) -> tuple[NDArray[np.float32], NDArray[np.float6
         raise ValueError(f"{path}: image {w}x{h} does not fit {nr} x {nd} square textures")
     tex = image[:, :, 0].reshape(nr, s, nd, s).transpose(0, 2, 1, 3)
     return np.ascontiguousarray(tex, dtype=np.float32), rates, diams
+
+
+class Drops(NamedTuple):
+    """Drops of a rain region (see :func:`drops`)."""
+
+    position_m: NDArray[np.float32]
+    """(N, 3) positions at the end of the exposure, m."""
+    velocity_m_s: NDArray[np.float32]
+    """(N, 3) velocities, m/s."""
+    diameter_m: NDArray[np.float32]
+    """(N,) diameters, m."""
+    id: NDArray[np.int64]
+    """(N, 5) stable identities: voxel (ix, iy, iz), diameter bin, index."""
+
+
+def drops(center_m: Sequence[float], weather: Weather, *, time_s: float = 0.0, seed: int = 0, ground: bool = True) -> Drops:
+    """The raindrops a frame draws: every drop within ``weather.rain_near_m`` of ``center_m``.
+
+    Drops live in 1 m world voxels at integer coordinates; each voxel's drops come from a
+    generator seeded by (seed, voxel, diameter bin), with Marshall-Palmer counts and sizes and
+    Beard fall speeds, and move with (wind_x, -v, wind_z), wrapping inside their voxel. So
+    the same seed gives the same drops for any camera, frame or process: ground truth for
+    stereo and video. With ``ground`` no drops lie below y = 0.
+
+    Parameters
+    ----------
+    center_m : sequence of 3 float
+        Region centre (the camera position), m.
+    weather : Weather
+        Rain rate, diameters, wind and region radius.
+    time_s : float
+        Time, s.
+    seed : int
+        Seed in [0, 2^64).
+    ground : bool
+        Whether the ground plane y = 0 bounds the rain.
+    """
+    c = float_array("center_m", center_m).reshape(-1)
+    if c.size != 3 or not np.all(np.isfinite(c)):
+        raise ValueError(f"center_m must be 3 finite numbers (m), got {center_m!r}")
+    s = integer("seed", seed, 0, 2**64 - 1)
+    args = weather.rain_region_args(real("time_s", time_s), s)
+    pos, vel, diam, ids = _core.rain_drops([float(v) for v in c], args, ground=bool(ground))
+    return Drops(pos, vel, diam, ids)

@@ -54,13 +54,19 @@ class Frame:
     depth_m : ndarray of float32, shape (H, W)
         Depth along the optical axis, m; ``inf`` for sky.
     layers : dict of str to ndarray of float32, shape (H, W)
-        Ground-truth layers; the haze pass adds ``transmittance`` (e^(-sigma d)).
+        Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d)); rain adds
+        ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
+        nearest visible streak, inf where none). The clean frame is the same render without
+        rain.
     backend : str
         ``"cpu"`` or ``"gpu"``.
     adapter_info : dict or None
         The GPU adapter (name, backend, device_type, driver) for GPU frames.
     luminance_scale_cd_m2 : float
         E/pi of the weather's sky illuminance, cd/m^2.
+    stats : dict
+        Counters of the passes that ran: ``rain_drops`` (drops in the rain region),
+        ``rain_streaks`` (streaks on screen).
     """
 
     rgb: NDArray[np.float32]
@@ -69,6 +75,7 @@ class Frame:
     backend: str = "cpu"
     adapter_info: dict[str, str] | None = None
     luminance_scale_cd_m2: float = 10000.0 / np.pi
+    stats: dict[str, int] = field(default_factory=dict)
 
     def save(self, path: str | Path, *, exposure: float = 1.0) -> None:
         """Write the frame; the format follows the extension.
@@ -146,9 +153,11 @@ class Renderer:
         camera : Camera, optional
             Overrides a box scene's camera (photos keep the camera that took them).
         time_s : float
-            Time of the frame, s, for animated effects (rain); the haze is static.
+            Time of the frame, s: drops have fallen v * time_s (wrapping in their 1 m voxels),
+            so consecutive times give temporally coherent rain. The haze is static.
         seed : int
-            Seed of the random effects (rain), in [0, 2^64).
+            Seed of the rain, in [0, 2^64). Drops are anchored in the world: two cameras or
+            two frames with the same seed see the same drops.
 
         Returns
         -------
@@ -181,6 +190,18 @@ class Renderer:
         else:
             rgb, depth, trans = _core.render_cpu(*args, **kwargs)
         layers = {} if trans is None else {"transmittance": trans}
+        stats: dict[str, int] = {}
+        if weather.rain_rate_mm_h > 0 and weather.rain_streaks:
+            rgb, alpha, rain_depth, n_drops, n_streaks = _core.rain_composite(
+                *args,
+                rgb,
+                depth,
+                weather.rain_region_args(t, seed),
+                exposure_s=cam.exposure_s,
+                ground=isinstance(scene, BoxScene) and scene.ground,
+            )
+            layers.update(rain_alpha=alpha, rain_depth_m=rain_depth)
+            stats.update(rain_drops=n_drops, rain_streaks=n_streaks)
         return Frame(
             rgb=rgb,
             depth_m=depth,
@@ -188,4 +209,32 @@ class Renderer:
             backend=self.backend,
             adapter_info=self.adapter_info,
             luminance_scale_cd_m2=weather.luminance_scale_cd_m2,
+            stats=stats,
         )
+
+    def render_sequence(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        n_frames: int,
+        fps: float = 30.0,
+        seed: int = 0,
+        camera: Camera | None = None,
+        start_s: float = 0.0,
+        progress: bool = False,
+    ) -> list[Frame]:
+        """Render ``n_frames`` consecutive frames at ``fps``: temporally coherent rain.
+
+        Frame k is rendered at ``time_s = start_s + k / fps`` with the same seed. Streak
+        length follows the camera's ``exposure_s`` (v * T), which should not exceed 1/fps.
+        ``progress=True`` shows a tqdm progress bar.
+        """
+        n = integer("n_frames", n_frames, 1, 1_000_000)
+        rate = real("fps", fps)
+        if not 0.0 < rate <= 10000.0:
+            raise ValueError(f"fps = {rate} is outside the valid range (0, 10000]")
+        from tqdm.auto import tqdm  # type: ignore[import-untyped]
+
+        times = [real("start_s", start_s) + k / rate for k in range(n)]
+        return [self.render(scene, weather, camera=camera, time_s=t, seed=seed) for t in tqdm(times, disable=not progress, unit="frame")]

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
 
 from skyfall import _core, physics
 from skyfall._validate import real
@@ -29,11 +32,27 @@ class Weather:
         Horizontal illuminance from the overcast sky, lux, in (0, 150000]. Frames are in units
         of E/pi (a white surface under the open sky is 1.0); ``Frame.luminance_scale_cd_m2``
         converts to cd/m^2.
+    wind_m_s : sequence of 3 float
+        Wind velocity (x, y, z), m/s, each in [-60, 60]; drops move with it horizontally
+        (the vertical component is ignored: drops fall at their terminal speed), so streaks
+        slant along the drop's velocity.
+    rain_near_m : float
+        Radius of the rain region around the camera in which drops are drawn as streaks, m,
+        in (0, 50] (5 m as in seed 000); beyond it rain shows only as haze.
+    rain_diameters_mm : sequence of float
+        Strictly increasing drop diameters whose bins are drawn (see
+        :func:`skyfall.rain.diameter_bins`); the seed's 1.0-2.0 mm by default.
+    rain_streaks : bool
+        Draw the drops near the camera as streaks (default). False leaves rain as haze only.
     """
 
     rain_rate_mm_h: float = 0.0
     visibility_m: float = math.inf
     sky_illuminance_lux: float = 10000.0
+    wind_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rain_near_m: float = 5.0
+    rain_diameters_mm: tuple[float, ...] = field(default=(1.0, 1.2, 1.4, 1.6, 1.8, 2.0))
+    rain_streaks: bool = True
 
     def __post_init__(self) -> None:
         r = real("rain_rate_mm_h", self.rain_rate_mm_h)
@@ -45,6 +64,20 @@ class Weather:
         e = real("sky_illuminance_lux", self.sky_illuminance_lux)
         if not 0.0 < e <= 150000.0:
             raise ValueError(f"sky_illuminance_lux = {e} is outside the valid range (0, 150000] lx")
+        wind = np.asarray(self.wind_m_s, dtype=np.float64).reshape(-1)
+        if wind.size != 3 or not np.all(np.abs(wind) <= 60.0):
+            raise ValueError(f"wind_m_s = {self.wind_m_s!r} must be 3 components in [-60, 60] m/s")
+        near = real("rain_near_m", self.rain_near_m)
+        if not 0.0 < near <= 50.0:
+            raise ValueError(f"rain_near_m = {near} is outside the valid range (0, 50] m")
+        diams = tuple(float(d) for d in np.asarray(self.rain_diameters_mm, dtype=np.float64).reshape(-1))
+        if not diams or any(not 0.0 < d <= 8.0 for d in diams) or any(b <= a for a, b in zip(diams, diams[1:])):
+            raise ValueError(f"rain_diameters_mm = {self.rain_diameters_mm!r} must be strictly increasing, in (0, 8] mm")
+        object.__setattr__(self, "wind_m_s", (float(wind[0]), float(wind[1]), float(wind[2])))
+        object.__setattr__(self, "rain_near_m", near)
+        object.__setattr__(self, "rain_diameters_mm", diams)
+        if not isinstance(self.rain_streaks, bool):
+            raise TypeError(f"rain_streaks must be a bool, got {type(self.rain_streaks).__name__}")
         object.__setattr__(self, "rain_rate_mm_h", r)
         object.__setattr__(self, "visibility_m", v)
         object.__setattr__(self, "sky_illuminance_lux", e)
@@ -63,6 +96,17 @@ class Weather:
     def extinction_per_m(self) -> float:
         """Total extinction sigma = sigma_air + sigma_rain, 1/m."""
         return self.air_extinction_per_m + self.rain_extinction_per_m
+
+    def rain_region_args(self, time_s: float, seed: int) -> tuple[float, NDArray[np.float64], float, list[float], float, int]:
+        """The argument tuple ``_core``'s rain functions take."""
+        return (
+            self.rain_rate_mm_h,
+            np.asarray(self.rain_diameters_mm, dtype=np.float64),
+            self.rain_near_m,
+            list(self.wind_m_s),
+            float(time_s),
+            int(seed),
+        )
 
     @property
     def luminance_scale_cd_m2(self) -> float:

@@ -4,6 +4,7 @@
 mod errors;
 mod physics;
 mod rain;
+mod rain_frame;
 mod render;
 
 use pyo3::prelude::*;
@@ -19,6 +20,8 @@ mod _core {
     };
     #[pymodule_export]
     use super::rain::{rain_diameter_bins, rain_textures};
+    #[pymodule_export]
+    use super::rain_frame::{rain_composite, rain_drops};
     #[pymodule_export]
     use super::render::{render_cpu, GpuDevice};
 

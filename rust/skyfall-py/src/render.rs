@@ -18,7 +18,7 @@ type FrameTuple<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray2<f32>>, Op
 
 /// Camera from (width, height, [fx, fy, cx, cy, px, py, pz, r00, r01, …, r22]) with the
 /// world_from_camera rotation row-major.
-fn camera(width: u32, height: u32, p: [f32; 16]) -> Result<Camera, CoreError> {
+pub(crate) fn camera(width: u32, height: u32, p: [f32; 16]) -> Result<Camera, CoreError> {
     let rot = Mat3::from_cols_array(&[p[7], p[10], p[13], p[8], p[11], p[14], p[9], p[12], p[15]]);
     Ok(Camera::new(width, height, [p[0], p[1], p[2], p[3]], Vec3::new(p[4], p[5], p[6]), rot)?)
 }

@@ -1,0 +1,208 @@
+//! Drawing drops as perspective-correct, anti-aliased streaks over a frame, with a depth test.
+//!
+//! A drop of diameter D moving at velocity u during the exposure T sweeps the segment from
+//! p − u·T to p. Both ends are projected (clipped at [`NEAR_CLIP_M`]); the streak is a band
+//! whose width is the drop's projected diameter w = D·f/z, interpolated along it. A pixel on
+//! the path is covered for the fraction α = w / max(L, w) of the exposure (L: the streak's
+//! length in pixels; the screen-space form of seed 000's D / (v T)), times the pixel's
+//! coverage of the band, box-filtered: across, clamp(w/2 + ½ − dist, 0, 1) for w ≥ 1 px and
+//! w·clamp(1 − dist, 0, 1) below (a drop narrower than a pixel covers it partially); along, a
+//! one-pixel ramp at each end. Each streak so adds α·w·L = w² of opacity-area, as in the
+//! textures.
+//!
+//! Brightness (seed 002, eq. 7): a drop shows I_v = r·I_R + (1 − r)·I_T, I_T the background
+//! behind it, I_R = k·E_R its sky light. Compositing a = α·coverage of it over C gives
+//! C + a·r·(I_R − C): a blend towards I_R, so with one I_R for all drops the order does not
+//! matter and C = I_R + (C₀ − I_R)·∏(1 − aᵢ r). The `rain_alpha` layer is 1 − ∏(1 − aᵢ),
+//! the streaks' coverage; `rain_depth_m` is the nearest visible streak's depth (inf: none).
+//! Streak fragments deeper than the scene at that pixel are hidden.
+
+use super::drops::Drop;
+use crate::scene::camera::Camera;
+use glam::Vec2;
+use rayon::prelude::*;
+
+/// Streak ends nearer than this (m along the axis) are clipped.
+pub const NEAR_CLIP_M: f32 = 0.05;
+/// Rows per band processed by one task.
+const BAND_ROWS: usize = 16;
+
+/// How streaks are lit: I_v = r·I_R + (1 − r)·I_T.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RainShading {
+    /// r, the share of the drop's own (sky) light, in [0, 1].
+    pub reflectance: f32,
+    /// I_R, the drop's sky light (relative units, E/π = 1).
+    pub drop_radiance: f32,
+}
+
+impl RainShading {
+    /// Seed 002's constant r (0.5 here) and an open-sky drop light I_R = E/π (relative 1.0);
+    /// the ambient-light map will lower I_R where drops see less sky.
+    pub const OPEN_SKY: RainShading = RainShading { reflectance: 0.5, drop_radiance: 1.0 };
+}
+
+/// A streak in screen space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScreenStreak {
+    a: Vec2,
+    b: Vec2,
+    inv_za: f32,
+    inv_zb: f32,
+    wa: f32,
+    wb: f32,
+    alpha: f32,
+    min: Vec2,
+    max: Vec2,
+}
+
+fn to_camera(cam: &Camera, p: glam::Vec3) -> glam::Vec3 {
+    cam.rotation.transpose() * (p - cam.position_m)
+}
+
+fn project(cam: &Camera, pc: glam::Vec3) -> Vec2 {
+    let z = -pc.z;
+    Vec2::new(cam.cx + cam.fx * pc.x / z, cam.cy - cam.fy * pc.y / z)
+}
+
+/// Projects a drop's exposure-long path; None when it is behind the camera.
+pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32) -> Option<ScreenStreak> {
+    let mut pa = to_camera(cam, d.position_m - d.velocity_m_s * exposure_s);
+    let mut pb = to_camera(cam, d.position_m);
+    let (za, zb) = (-pa.z, -pb.z);
+    if za < NEAR_CLIP_M && zb < NEAR_CLIP_M {
+        return None;
+    }
+    if za < NEAR_CLIP_M {
+        pa = pa + (pb - pa) * ((NEAR_CLIP_M - za) / (zb - za));
+    } else if zb < NEAR_CLIP_M {
+        pb = pb + (pa - pb) * ((NEAR_CLIP_M - zb) / (za - zb));
+    }
+    let (za, zb) = (-pa.z, -pb.z);
+    let f = 0.5 * (cam.fx + cam.fy);
+    let (a, b) = (project(cam, pa), project(cam, pb));
+    let (wa, wb) = (d.diameter_m * f / za, d.diameter_m * f / zb);
+    let len = a.distance(b);
+    let w_mid = 0.5 * (wa + wb);
+    let alpha = w_mid / len.max(w_mid);
+    let r = 0.5 * wa.max(wb) + 1.0;
+    let min = a.min(b) - Vec2::splat(r);
+    let max = a.max(b) + Vec2::splat(r);
+    let on_screen = min.x < cam.width as f32 && min.y < cam.height as f32 && max.x > 0.0 && max.y > 0.0;
+    if !on_screen || !alpha.is_finite() {
+        return None;
+    }
+    Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max })
+}
+
+/// Per-pixel buffers the rain pass writes.
+pub struct RainTargets<'a> {
+    /// Linear RGB, H·W·3, composited in place.
+    pub rgb: &'a mut [f32],
+    /// Scene depth, H·W (read).
+    pub depth_m: &'a [f32],
+    /// Streak coverage 1 − ∏(1 − aᵢ), H·W.
+    pub alpha: &'a mut [f32],
+    /// Nearest visible streak depth, H·W (inf: none).
+    pub rain_depth_m: &'a mut [f32],
+}
+
+/// Composites the drops' streaks over the frame; returns how many streaks were on screen.
+pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: RainShading, t: RainTargets<'_>) -> usize {
+    let streaks: Vec<ScreenStreak> = drops.iter().filter_map(|d| screen_streak(cam, d, exposure_s)).collect();
+    let w = cam.width as usize;
+    let band = BAND_ROWS * w;
+    let r = shading.reflectance;
+    let ir = shading.drop_radiance;
+    t.rgb
+        .par_chunks_mut(3 * band)
+        .zip(t.depth_m.par_chunks(band))
+        .zip(t.alpha.par_chunks_mut(band))
+        .zip(t.rain_depth_m.par_chunks_mut(band))
+        .enumerate()
+        .for_each(|(bi, (((rgb, depth), alpha), rdepth))| {
+            let y0 = bi * BAND_ROWS;
+            let rows = depth.len() / w;
+            // Per pixel: ∏(1 − a r) in `trans`, ∏(1 − a) in `alpha`, both start at 1.
+            let mut trans = vec![1.0f32; depth.len()];
+            alpha.fill(1.0);
+            rdepth.fill(f32::INFINITY);
+            for s in &streaks {
+                if s.max.y <= y0 as f32 || s.min.y >= (y0 + rows) as f32 {
+                    continue;
+                }
+                let ab = s.b - s.a;
+                let len = ab.length();
+                let dir = if len > 1e-6 { ab / len } else { Vec2::Y };
+                let ys = (s.min.y.floor().max(y0 as f32) as usize)..(s.max.y.ceil().min((y0 + rows) as f32) as usize);
+                let xs = (s.min.x.floor().max(0.0) as usize)..(s.max.x.ceil().min(w as f32) as usize);
+                for y in ys {
+                    for x in xs.clone() {
+                        let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - s.a;
+                        // along: position on the streak (px); across: distance from its axis
+                        let along = p.dot(dir);
+                        let across = p.perp_dot(dir).abs();
+                        let k = if len > 1e-6 { (along / len).clamp(0.0, 1.0) } else { 0.0 };
+                        let width = s.wa + (s.wb - s.wa) * k;
+                        let cov_across = if width >= 1.0 { (0.5 * width + 0.5 - across).clamp(0.0, 1.0) } else { width * (1.0 - across).clamp(0.0, 1.0) };
+                        let cov_along = (along + 0.5).clamp(0.0, 1.0).min((len - along + 0.5).clamp(0.0, 1.0));
+                        let cov = cov_across * cov_along;
+                        if cov <= 0.0 {
+                            continue;
+                        }
+                        let i = (y - y0) * w + x;
+                        let z = 1.0 / (s.inv_za + (s.inv_zb - s.inv_za) * k);
+                        if z >= depth[i] {
+                            continue;
+                        }
+                        let a = s.alpha * cov;
+                        trans[i] *= 1.0 - a * r;
+                        alpha[i] *= 1.0 - a;
+                        rdepth[i] = rdepth[i].min(z);
+                    }
+                }
+            }
+            for i in 0..depth.len() {
+                alpha[i] = 1.0 - alpha[i];
+                if trans[i] < 1.0 {
+                    for c in &mut rgb[3 * i..3 * i + 3] {
+                        *c = ir + (*c - ir) * trans[i];
+                    }
+                }
+            }
+        });
+    streaks.len()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Mat3, Vec3};
+
+    #[test]
+    fn one_streak_carries_its_opacity_area() {
+        let cam = Camera::new(400, 400, [300.0, 300.0, 200.0, 200.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        // a 2 mm drop 1 m ahead falling 6.5 m/s for 1/30 s: w = 0.6 px, L = 65 px.
+        let d = Drop { position_m: Vec3::new(0.0, -0.1, -1.0), velocity_m_s: Vec3::new(0.0, -6.5, 0.0), diameter_m: 2e-3, id: [0; 5] };
+        let n = 400 * 400;
+        let mut rgb = vec![0.0; 3 * n];
+        let mut alpha = vec![0.0; n];
+        let mut rd = vec![0.0; n];
+        let depth = vec![f32::INFINITY; n];
+        let shown = composite(&cam, &[d], 1.0 / 30.0, RainShading { reflectance: 1.0, drop_radiance: 1.0 }, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rd });
+        assert_eq!(shown, 1);
+        let w = 2e-3 * 300.0;
+        let sum: f32 = alpha.iter().sum();
+        // α w L = w² (plus round caps of the capsule, ≤ w² π/4 α): within 5 %.
+        assert!((sum / (w * w) - 1.0).abs() < 0.05, "{sum} vs {}", w * w);
+        // with r = 1 and I_R = 1 on black, rgb equals the coverage
+        assert!((rgb.iter().step_by(3).sum::<f32>() - sum).abs() < 1e-3);
+        let nearest = rd.iter().cloned().fold(f32::INFINITY, f32::min);
+        assert!((nearest - 1.0).abs() < 0.01);
+        // behind a wall at 0.5 m nothing shows
+        let wall = vec![0.5f32; n];
+        let mut alpha2 = vec![0.0; n];
+        composite(&cam, &[d], 1.0 / 30.0, RainShading { reflectance: 1.0, drop_radiance: 1.0 }, RainTargets { rgb: &mut rgb, depth_m: &wall, alpha: &mut alpha2, rain_depth_m: &mut rd });
+        assert!(alpha2.iter().all(|&a| a == 0.0));
+    }
+}

@@ -1,0 +1,90 @@
+//! Rain in frames: drops near the camera, and their streaks composited over a frame.
+
+use crate::errors::CoreError;
+use crate::render::camera;
+use glam::Vec3;
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use skyfall_core::rain::drops::{drops_near, Drop, RainRegion};
+use skyfall_core::rain::splat::{composite, RainShading, RainTargets};
+
+/// (rain_rate_mm_h, diameters_mm, near_m, wind_m_s, time_s, seed) → region.
+type RegionArgs<'py> = (f64, PyReadonlyArray1<'py, f64>, f64, [f64; 3], f64, u64);
+
+fn region(args: &RegionArgs<'_>) -> PyResult<RainRegion> {
+    let (rate, diams, near, wind, time, seed) = args;
+    Ok(RainRegion::new(*rate, diams.as_slice()?, *near, *wind, *time, *seed).map_err(CoreError)?)
+}
+
+type DropArrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<f32>>, Bound<'py, PyArray2<i64>>);
+
+/// Every drop within the region around `center_m`: positions (N, 3), velocities (N, 3),
+/// diameters (N,) in m, ids (N, 5).
+#[pyfunction]
+#[pyo3(signature = (center_m, region_args, *, ground))]
+pub fn rain_drops<'py>(py: Python<'py>, center_m: [f32; 3], region_args: RegionArgs<'py>, ground: bool) -> PyResult<DropArrays<'py>> {
+    let reg = region(&region_args)?;
+    let drops: Vec<Drop> = py.detach(|| drops_near(&reg, Vec3::from(center_m), ground));
+    let n = drops.len();
+    let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
+    let pos = Array2::from_shape_vec((n, 3), drops.iter().flat_map(|d| d.position_m.to_array()).collect()).map_err(err)?;
+    let vel = Array2::from_shape_vec((n, 3), drops.iter().flat_map(|d| d.velocity_m_s.to_array()).collect()).map_err(err)?;
+    let diam: Vec<f32> = drops.iter().map(|d| d.diameter_m).collect();
+    let ids = Array2::from_shape_vec((n, 5), drops.iter().flat_map(|d| d.id).collect()).map_err(err)?;
+    Ok((pos.into_pyarray(py), vel.into_pyarray(py), diam.into_pyarray(py), ids.into_pyarray(py)))
+}
+
+type RainOut<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>, usize, usize);
+
+/// Composites the region's drops over (rgb, depth_m): returns (rgb, rain_alpha, rain_depth_m,
+/// drops in the region, streaks on screen).
+#[pyfunction]
+#[pyo3(signature = (width, height, camera_params, rgb, depth_m, region_args, *, exposure_s, ground))]
+#[allow(clippy::too_many_arguments)]
+pub fn rain_composite<'py>(
+    py: Python<'py>,
+    width: u32,
+    height: u32,
+    camera_params: [f32; 16],
+    rgb: PyReadonlyArray3<'py, f32>,
+    depth_m: PyReadonlyArray2<'py, f32>,
+    region_args: RegionArgs<'py>,
+    exposure_s: f32,
+    ground: bool,
+) -> PyResult<RainOut<'py>> {
+    let cam = camera(width, height, camera_params)?;
+    let reg = region(&region_args)?;
+    if !(exposure_s > 0.0 && exposure_s <= 0.1) {
+        return Err(PyValueError::new_err(format!("exposure_s = {exposure_s} is outside the valid range (0, 0.1] s")));
+    }
+    let n = cam.pixels();
+    let (src, depth) = (rgb.as_slice()?, depth_m.as_slice()?);
+    if src.len() != 3 * n || depth.len() != n {
+        return Err(PyValueError::new_err(format!("rgb and depth_m must be {height}x{width}")));
+    }
+    let (out, alpha, rdepth, n_drops, n_streaks) = py.detach(|| {
+        let drops = drops_near(&reg, cam.position_m, ground);
+        let mut out = src.to_vec();
+        let mut alpha = vec![0.0f32; n];
+        let mut rdepth = vec![0.0f32; n];
+        let shown = composite(
+            &cam,
+            &drops,
+            exposure_s,
+            RainShading::OPEN_SKY,
+            RainTargets { rgb: &mut out, depth_m: depth, alpha: &mut alpha, rain_depth_m: &mut rdepth },
+        );
+        (out, alpha, rdepth, drops.len(), shown)
+    });
+    let (h, w) = (height as usize, width as usize);
+    let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
+    Ok((
+        Array3::from_shape_vec((h, w, 3), out).map_err(err)?.into_pyarray(py),
+        Array2::from_shape_vec((h, w), alpha).map_err(err)?.into_pyarray(py),
+        Array2::from_shape_vec((h, w), rdepth).map_err(err)?.into_pyarray(py),
+        n_drops,
+        n_streaks,
+    ))
+}

@@ -1,0 +1,173 @@
+"""Rain streaks in frames (drawn drop by drop): physics, depth, stereo, time, ground truth."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skyfall import Camera, PhotoScene, Renderer, Weather, rain, scenes
+
+W, H = 200, 120
+
+
+@pytest.fixture(scope="module")
+def cpu() -> Renderer:
+    return Renderer(W, H, backend="cpu")
+
+
+def open_air(depth: float = np.inf) -> PhotoScene:
+    img = np.full((H, W, 3), 0.1, np.float32)
+    cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0)
+    return PhotoScene(img, np.full((H, W), depth, np.float32), camera=cam)
+
+
+def test_no_rain_is_the_haze_only_frame(cpu):
+    hazy = Weather(visibility_m=500.0)
+    a = cpu.render(scenes.street(), hazy)
+    b = cpu.render(scenes.street(), Weather(visibility_m=500.0, rain_rate_mm_h=0.0, wind_m_s=(5.0, 0.0, 0.0)))
+    assert a.rgb.tobytes() == b.rgb.tobytes()
+    assert "rain_alpha" not in b.layers and b.stats == {}
+
+
+def test_heavier_rain_covers_more(cpu):
+    means = [cpu.render(open_air(), Weather(rain_rate_mm_h=r), seed=4).layers["rain_alpha"].mean() for r in (1, 5, 20, 100)]
+    assert np.all(np.diff(means) > 0), means
+
+
+def test_opacity_area_matches_the_drops_seen(cpu):
+    # Every streak adds alpha * w * L = w^2 px^2 of coverage, w = D f / z its projected width:
+    # summed over the drops in view (computed here from the drops' positions), it is the
+    # frame's total rain_alpha, up to the capsule caps, overlaps and the frame edges (5 %).
+    weather = Weather(rain_rate_mm_h=20.0, rain_near_m=4.0)
+    scene = open_air()
+    frame = cpu.render(scene, weather, seed=2)
+    cam = scene.camera
+    d = rain.drops(cam.position_m, weather, seed=2, ground=False)
+    px, z = cam.project(d.position_m)
+    fx, fy, _, _ = cam.intrinsics()
+    inside = (z > 0.3) & (px[:, 0] > 30) & (px[:, 0] < W - 30) & (px[:, 1] > 20) & (px[:, 1] < H - 20)
+    w = d.diameter_m[inside] * 0.5 * (fx + fy) / z[inside]
+    assert inside.sum() > 500
+    got = frame.layers["rain_alpha"][20 : H - 20, 30 : W - 30].sum()
+    # streaks of drops near the window's edge spill in or out: compare with both bounds' mean
+    assert got == pytest.approx(np.sum(w**2), rel=0.1)
+
+
+def test_streaks_hide_behind_the_scene(cpu):
+    near = cpu.render(open_air(depth=0.3), Weather(rain_rate_mm_h=50.0), seed=1)
+    far = cpu.render(open_air(), Weather(rain_rate_mm_h=50.0), seed=1)
+    lit = near.layers["rain_alpha"] > 0
+    assert lit.any()
+    assert near.layers["rain_depth_m"][lit].max() < 0.3
+    assert np.isinf(near.layers["rain_depth_m"][~lit]).all()
+    assert near.layers["rain_alpha"].mean() < 0.2 * far.layers["rain_alpha"].mean()
+
+
+def test_no_rain_beyond_a_near_wall(cpu):
+    cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0)
+    wall = scenes.boxes([{"min": (-20, 0, -2.5), "max": (20, 20, -2.0)}], camera=cam)
+    f = cpu.render(wall, Weather(rain_rate_mm_h=50.0), seed=3)
+    on_wall = np.isfinite(f.depth_m)
+    lit = (f.layers["rain_alpha"] > 0) & on_wall
+    assert lit.sum() > 100
+    assert np.all(f.layers["rain_depth_m"][lit] <= f.depth_m[lit] + 1e-4)
+    assert np.all(f.layers["rain_depth_m"][lit] < 2.0 / 0.5)  # within the wall's reach (off-axis rays)
+
+
+def test_stereo_cameras_see_the_same_drops():
+    weather = Weather(rain_rate_mm_h=10.0, wind_m_s=(2.0, 0.0, -1.0))
+    left = rain.drops((0.0, 1.6, 0.0), weather, seed=7)
+    right = rain.drops((0.5, 1.6, 0.0), weather, seed=7)
+    lk = {tuple(i): k for k, i in enumerate(left.id)}
+    shared = [(lk[tuple(i)], k) for k, i in enumerate(right.id) if tuple(i) in lk]
+    assert len(shared) > 0.5 * len(right.id)
+    a, b = np.array(shared).T
+    np.testing.assert_array_equal(left.position_m[a], right.position_m[b])
+    np.testing.assert_array_equal(left.diameter_m[a], right.diameter_m[b])
+    # another seed: other drops
+    other = rain.drops((0.0, 1.6, 0.0), weather, seed=8)
+    assert not np.array_equal(other.position_m[:50], left.position_m[:50])
+
+
+def test_rain_is_coherent_in_time_and_follows_the_wind():
+    weather = Weather(rain_rate_mm_h=10.0, wind_m_s=(3.0, 0.0, 0.0))
+    t0 = rain.drops((0.0, 1.6, 0.0), weather, time_s=1.0, seed=5)
+    t1 = rain.drops((0.0, 1.6, 0.0), weather, time_s=1.0 + 1 / 120, seed=5)
+    k1 = {tuple(i): k for k, i in enumerate(t1.id)}
+    pairs = np.array([(k, k1[tuple(i)]) for k, i in enumerate(t0.id) if tuple(i) in k1])
+    step = t1.position_m[pairs[:, 1]] - t0.position_m[pairs[:, 0]]
+    want = t0.velocity_m_s[pairs[:, 0]] / 120
+    ok = np.all(np.abs(step - want) < 1e-4, axis=1)
+    assert ok.mean() > 0.9  # the rest (~6 % at up to 7.5 m/s for 1/120 s) wrapped in their voxel
+    np.testing.assert_allclose(t0.velocity_m_s[:, 0], 3.0)
+    speeds = -t0.velocity_m_s[:, 1]
+    assert np.all((speeds > 3.5) & (speeds < 7.5))  # Beard speeds of 0.9-2.1 mm drops
+
+
+def test_sequences_are_deterministic_and_move(cpu):
+    w = Weather(rain_rate_mm_h=20.0)
+    seq = cpu.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9)
+    again = cpu.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9)
+    assert len(seq) == 3
+    for a, b in zip(seq, again):
+        assert a.rgb.tobytes() == b.rgb.tobytes()
+    assert not np.array_equal(seq[0].layers["rain_alpha"], seq[1].layers["rain_alpha"])
+
+
+def test_longer_exposures_give_longer_streaks_of_the_same_opacity_area(cpu):
+    w = Weather(rain_rate_mm_h=20.0)
+    short = Camera((0.0, 1.6, 0.0), exposure_s=1 / 250)
+    long = Camera((0.0, 1.6, 0.0), exposure_s=1 / 30)
+    img = np.full((H, W, 3), 0.1, np.float32)
+    inf = np.full((H, W), np.inf, np.float32)
+    a = cpu.render(PhotoScene(img, inf, camera=short), w, seed=1).layers["rain_alpha"]
+    b = cpu.render(PhotoScene(img, inf, camera=long), w, seed=1).layers["rain_alpha"]
+
+    def vertical_correlation(x: np.ndarray, lag: int = 6) -> float:
+        x = x - x.mean()
+        return float((x[lag:] * x[:-lag]).sum() / (x * x).sum())
+
+    # streaks 8x longer: alpha stays correlated over many more rows
+    assert vertical_correlation(b) > 0.5 > vertical_correlation(a)
+    assert b.sum() == pytest.approx(a.sum(), rel=0.15)
+
+
+@pytest.mark.parametrize("background", [0.1, 2.0])
+def test_streaks_are_lit_by_the_sky(cpu, background):
+    # I_v = r I_R + (1 - r) I_T with r = 0.5, I_R = 1: rain brightens a dark background and
+    # darkens one brighter than I_R; where one streak covers a pixel with a, the change is
+    # a r (I_R - C). Background 20 m away, behind the 5 m rain region.
+    img = np.full((H, W, 3), background, np.float32)
+    scene = PhotoScene(img, np.full((H, W), 20.0, np.float32), camera=Camera((0.0, 1.6, 0.0)))
+    w = Weather(rain_rate_mm_h=50.0)
+    clear = cpu.render(scene, Weather(rain_rate_mm_h=50.0, rain_near_m=1e-3), seed=1)  # haze, (almost) no streaks
+    wet = cpu.render(scene, w, seed=1)
+    a = wet.layers["rain_alpha"]
+    c = clear.rgb[..., 0]
+    change = wet.rgb[..., 0] - c
+    assert np.all(np.sign(change[a > 1e-3]) == np.sign(1.0 - background))
+    single = (a > 1e-3) & (a < 0.02)  # mostly one streak: 1 - (1 - a r) = a r
+    np.testing.assert_allclose(change[single], 0.5 * a[single] * (1.0 - c[single]), rtol=0.05, atol=1e-6)
+
+
+def test_gpu_backend_draws_the_same_rain():
+    gpu = Renderer(W, H, backend="gpu")
+    cpu = Renderer(W, H, backend="cpu")
+    w = Weather(rain_rate_mm_h=20.0, visibility_m=1000.0)
+    g = gpu.render(scenes.street(), w, seed=3)
+    c = cpu.render(scenes.street(), w, seed=3)
+    same_bg = np.isclose(g.depth_m, c.depth_m, rtol=1e-4) | (np.isinf(g.depth_m) & np.isinf(c.depth_m))
+    assert same_bg.mean() > 0.99
+    np.testing.assert_allclose(g.layers["rain_alpha"][same_bg], c.layers["rain_alpha"][same_bg], atol=1e-6)
+    assert g.stats == c.stats
+
+
+def test_bad_rain_parameters():
+    with pytest.raises(ValueError, match="wind_m_s"):
+        Weather(wind_m_s=(100.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="rain_near_m"):
+        Weather(rain_near_m=0.0)
+    with pytest.raises(ValueError, match="rain_diameters_mm"):
+        Weather(rain_diameters_mm=(2.0, 1.0))
+    with pytest.raises(ValueError, match="n_frames"):
+        Renderer(8, 8, backend="cpu").render_sequence(open_air(), n_frames=0)
