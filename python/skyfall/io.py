@@ -17,7 +17,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["decode_srgb", "encode_srgb", "read_image", "read_image_with_metadata", "to_srgb8", "write_image"]
+__all__ = [
+    "decode_srgb",
+    "encode_srgb",
+    "read_channels",
+    "read_image",
+    "read_image_with_metadata",
+    "to_srgb8",
+    "write_image",
+]
 
 _FLOAT_EXTS = {".exr", ".hdr", ".tif", ".tiff", ".pfm"}
 _DEFAULT_NAMES = {1: ["Y"], 2: ["Y", "A"], 3: ["R", "G", "B"], 4: ["R", "G", "B", "A"]}
@@ -156,3 +164,17 @@ def read_image_with_metadata(path: str | Path) -> tuple[NDArray[np.float32], dic
 def read_image(path: str | Path) -> NDArray[np.float32]:
     """Read an image as linear float32, shape (H, W, C); see :func:`read_image_with_metadata`."""
     return read_image_with_metadata(path)[0]
+
+
+def read_channels(path: str | Path) -> dict[str, NDArray[np.float32]]:
+    """Read every channel of an image by name, e.g. a frame saved as EXR.
+
+    OpenEXR stores channels sorted by name, so look them up by name rather than position:
+    ``read_channels("frame.exr")["rain_alpha"]``.
+
+    Returns
+    -------
+    dict of str to ndarray of float32, shape (H, W)
+    """
+    data, meta = read_image_with_metadata(path)
+    return {name: np.ascontiguousarray(data[..., i]) for i, name in enumerate(meta["channel_names"])}

@@ -80,8 +80,9 @@ class Frame:
     def save(self, path: str | Path, *, exposure: float = 1.0) -> None:
         """Write the frame; the format follows the extension.
 
-        EXR keeps float32 ``R, G, B``, ``depth_m`` and every layer as named channels. 8-bit
-        formats (PNG, JPEG) hold ``rgb * exposure`` sRGB-encoded (clipped at 1).
+        EXR keeps float32 ``R, G, B``, ``depth_m`` and every layer as named channels (read them
+        back by name with :func:`skyfall.io.read_channels`; OpenEXR sorts them). 8-bit formats
+        (PNG, JPEG) hold ``rgb * exposure`` sRGB-encoded (clipped at 1).
         """
         p = Path(path)
         if p.suffix.lower() == ".exr":
