@@ -235,7 +235,7 @@ class Renderer:
         rate = real("fps", fps)
         if not 0.0 < rate <= 10000.0:
             raise ValueError(f"fps = {rate} is outside the valid range (0, 10000]")
-        from tqdm.auto import tqdm  # type: ignore[import-untyped]
+        from tqdm import tqdm  # type: ignore[import-untyped]
 
         times = [real("start_s", start_s) + k / rate for k in range(n)]
         return [self.render(scene, weather, camera=camera, time_s=t, seed=seed) for t in tqdm(times, disable=not progress, unit="frame")]
