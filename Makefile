@@ -67,8 +67,10 @@ lint: setup
 	$(PY) -m mypy
 
 bench: build vulkan
+	$(PY) -m pip install -q -r requirements-bench.txt
 	$(PY) benches/bench_physics.py
 	$(PY) benches/bench_render.py
+	$(PY) benches/bench_rain.py
 
 clean:
 	rm -rf target $(VENV) $(OUT)

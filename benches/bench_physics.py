@@ -8,12 +8,11 @@ from __future__ import annotations
 import json
 import os
 import platform
-import statistics
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from timing import median_s
 
 from skyfall import physics, rain
 from skyfall.reference import gunn_kinzer_1949
@@ -22,15 +21,6 @@ RESULTS = Path(__file__).parent / "results"
 G = 9.80665
 
 
-def timed(fn: Callable[[], object], repeat: int = 5) -> float:
-    """Median wall time of `repeat` calls after one warm-up, seconds."""
-    fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 # --- numpy references of the same formulas (written here, independently of the Rust core) ---
@@ -86,8 +76,8 @@ def velocity_section(n: int) -> list[dict[str, object]]:
     rows = []
     for model in physics.FALL_SPEED_MODELS:
         err = (np.asarray(physics.terminal_velocity(d_gk, model=model)) - v_gk) / v_gk
-        t_sky = timed(lambda m=model: physics.terminal_velocity(d, model=m))
-        t_np = timed(lambda m=model: refs[m](d), repeat=3)
+        t_sky = median_s(lambda m=model: physics.terminal_velocity(d, model=m))
+        t_np = median_s(lambda m=model: refs[m](d), repeat=3)
         ours, theirs = np.asarray(physics.terminal_velocity(d, model=model)), refs[model](d)
         rel = np.abs(ours - theirs) / np.maximum(theirs, 1e-9)
         ok = _fixed_point(d, 60)[1] if model == "sphere" else np.ones(d.size, dtype=bool)
@@ -135,9 +125,9 @@ def texture_section() -> list[dict[str, object]]:
     rows = []
     for size in (512, 1024, 2048):
         repeat = 7 if size <= 1024 else 3
-        t = timed(lambda s=size: rain.textures(rates, diams, size_px=s, seed=0), repeat=repeat)
+        t = median_s(lambda s=size: rain.textures(rates, diams, size_px=s, seed=0), repeat=repeat)
         nbytes = len(rates) * len(diams) * size * size * 4
-        t_fill = timed(lambda b=nbytes: np.ones(b // 4, dtype=np.float32), repeat=repeat)
+        t_fill = median_s(lambda b=nbytes: np.ones(b // 4, dtype=np.float32), repeat=repeat)
         bias, rms = opacity_error(size, 16, rates, diams)
         rows.append(
             {

@@ -8,12 +8,11 @@ from __future__ import annotations
 import json
 import os
 import platform
-import statistics
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from timing import median_s
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, _core, scenes
 
@@ -21,14 +20,6 @@ RESULTS = Path(__file__).parent / "results"
 W, H = 1920, 1080
 
 
-def timed(fn: Callable[[], object], repeat: int = 7) -> float:
-    fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def numpy_haze(img: np.ndarray, depth: np.ndarray, per_depth: np.ndarray, sigma: float, air: float) -> np.ndarray:
@@ -42,22 +33,22 @@ def main() -> None:
     depth = rng.uniform(1, 2000, (H, W)).astype(np.float32)
     cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=50.0)
     photo = PhotoScene(img, depth, camera=cam)
-    weather = Weather(rain_rate_mm_h=10.0, visibility_m=2000.0)
+    weather = Weather(rain_rate_mm_h=10.0, visibility_m=2000.0, rain_streaks=False)  # the haze alone
     fx, fy, cx, cy = photo.camera.intrinsics()
     y, x = np.mgrid[0:H, 0:W].astype(np.float32) + np.float32(0.5)
     per_depth = np.sqrt(((x - cx) / fx) ** 2 + ((y - cy) / fy) ** 2 + 1).astype(np.float32)
 
     rows: list[dict[str, object]] = []
     dst = np.empty_like(img)
-    floor = timed(lambda: np.copyto(dst, img))
+    floor = median_s(lambda: np.copyto(dst, img))
     rows.append({"what": "haze", "impl": "memory floor: one read+write of the RGB frame (numpy copyto)", "s": floor})
     cpu = Renderer(W, H, backend="cpu")
-    rows.append({"what": "haze", "impl": "skyfall CPU backend (fused, rayon)", "s": timed(lambda: cpu.render(photo, weather))})
+    rows.append({"what": "haze", "impl": "skyfall CPU backend (fused, rayon)", "s": median_s(lambda: cpu.render(photo, weather))})
     sigma = weather.extinction_per_m
-    rows.append({"what": "haze", "impl": "numpy, same formula (precomputed ray lengths)", "s": timed(lambda: numpy_haze(img, depth, per_depth, sigma, 3 / 7))})
+    rows.append({"what": "haze", "impl": "numpy, same formula (precomputed ray lengths)", "s": median_s(lambda: numpy_haze(img, depth, per_depth, sigma, 3 / 7))})
 
     street = scenes.street()
-    rows.append({"what": "street", "impl": "skyfall CPU backend: ray cast + haze", "s": timed(lambda: cpu.render(street, weather))})
+    rows.append({"what": "street", "impl": "skyfall CPU backend: ray cast + haze", "s": median_s(lambda: cpu.render(street, weather))})
 
     gpu_info = None
     startup = first = None
@@ -70,8 +61,8 @@ def main() -> None:
         t0 = time.perf_counter()
         gpu.render(photo, weather)
         first = time.perf_counter() - t0
-        rows.append({"what": "haze", "impl": f"skyfall GPU backend ({gpu_info[0]}), incl. upload + readback", "s": timed(lambda: gpu.render(photo, weather), 3)})
-        rows.append({"what": "street", "impl": f"skyfall GPU backend ({gpu_info[0]}): ray cast + haze + readback", "s": timed(lambda: gpu.render(street, weather), 3)})
+        rows.append({"what": "haze", "impl": f"skyfall GPU backend ({gpu_info[0]}), incl. upload + readback", "s": median_s(lambda: gpu.render(photo, weather), 3)})
+        rows.append({"what": "street", "impl": f"skyfall GPU backend ({gpu_info[0]}): ray cast + haze + readback", "s": median_s(lambda: gpu.render(street, weather), 3)})
     except _core.GpuUnavailableError as exc:
         gpu_info = (f"unavailable: {exc}", "", "", "")
 

@@ -6,6 +6,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "encode_srgb8",
     "rain_composite",
     "rain_drops",
     "AIRLIGHT_RELATIVE",
@@ -124,3 +125,5 @@ def rain_composite(
     exposure_s: float,
     ground: bool,
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], int, int]: ...
+
+def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...

@@ -17,8 +17,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from skyfall import _core
+
 __all__ = [
     "decode_srgb",
+    "decode_srgb8",
     "encode_srgb",
     "read_channels",
     "read_image",
@@ -46,13 +49,26 @@ def decode_srgb(encoded: Any) -> NDArray[np.float32]:
     return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4)).astype(np.float32)
 
 
+_SRGB8_TO_LINEAR = None
+
+
+def decode_srgb8(encoded: Any) -> NDArray[np.float32]:
+    """Decode 8-bit sRGB to linear float32 through a 256-entry table (same values as
+    :func:`decode_srgb` of ``encoded / 255``)."""
+    global _SRGB8_TO_LINEAR
+    if _SRGB8_TO_LINEAR is None:
+        _SRGB8_TO_LINEAR = decode_srgb(np.arange(256, dtype=np.float32) / np.float32(255.0))
+    table: NDArray[np.float32] = _SRGB8_TO_LINEAR
+    return table[np.asarray(encoded, dtype=np.uint8)]
+
+
 def to_srgb8(linear: Any, *, alpha_channel: int | None = None) -> NDArray[np.uint8]:
-    """Encode linear values to 8-bit sRGB (rounded to nearest); alpha stays linear."""
-    arr = np.asarray(linear, dtype=np.float32)
-    enc = encode_srgb(arr)
+    """Encode linear values to 8-bit sRGB (rounded to nearest, in Rust, in parallel);
+    values are clipped to [0, 1]; an alpha channel stays linear."""
+    arr = np.ascontiguousarray(linear, dtype=np.float32)
+    out: NDArray[np.uint8] = _core.encode_srgb8(arr)
     if alpha_channel is not None:
-        enc[..., alpha_channel] = np.clip(arr[..., alpha_channel], 0.0, 1.0)
-    out: NDArray[np.uint8] = np.rint(enc * 255.0).astype(np.uint8)
+        out[..., alpha_channel] = np.rint(np.clip(arr[..., alpha_channel], 0.0, 1.0) * 255.0).astype(np.uint8)
     return out
 
 
@@ -155,7 +171,7 @@ def read_image_with_metadata(path: str | Path) -> tuple[NDArray[np.float32], dic
     meta["channel_names"] = list(spec.channelnames)
     if is_float:
         return np.ascontiguousarray(arr, dtype=np.float32), meta
-    lin = decode_srgb(arr.astype(np.float32) / 255.0)
+    lin = decode_srgb8(arr)
     if spec.alpha_channel >= 0:
         lin[..., spec.alpha_channel] = arr[..., spec.alpha_channel].astype(np.float32) / 255.0
     return lin, meta

@@ -65,8 +65,9 @@ class Frame:
     luminance_scale_cd_m2 : float
         E/pi of the weather's sky illuminance, cd/m^2.
     stats : dict
-        Counters of the passes that ran: ``rain_drops`` (drops in the rain region),
-        ``rain_streaks`` (streaks on screen).
+        Counters of the passes that ran: ``rain_drops`` (drops of the rain region in the voxels
+        whose streaks can reach the view; the others are never generated), ``rain_streaks``
+        (streaks on screen).
     """
 
     rgb: NDArray[np.float32]

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall.camera import Camera
-from skyfall.io import decode_srgb
+from skyfall.io import decode_srgb8
 
 __all__ = ["BoxScene", "PhotoScene", "boxes", "empty", "street"]
 
@@ -185,7 +185,7 @@ class PhotoScene:
         if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
             raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
         if img.dtype == np.uint8:
-            lin = decode_srgb(img.astype(np.float32) / 255.0)
+            lin = decode_srgb8(img)
         elif img.dtype.kind == "f":
             lin = np.ascontiguousarray(img, dtype=np.float32)
             if not np.all(np.isfinite(lin)) or lin.min() < 0:

@@ -2,7 +2,7 @@
 //! while it is in cache.
 
 use crate::error::{Error, Param, Result};
-use crate::haze::{check_depth, Haze};
+use crate::haze::{apply_row, check_depth, Haze};
 use crate::scene::boxes::{shade_pixel, BoxScene};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
@@ -96,15 +96,7 @@ pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>) -> Result<
             }
             // Haze over the row while it is in cache: each pixel leaves memory once.
             if let (Some(h), Some(t_row)) = (haze, t_row.as_deref_mut()) {
-                let v2 = cam.row_slope_sq(y as u32);
-                for x in 0..w {
-                    let t = h.transmittance(depth_row[x] * (u2[x] + v2 + 1.0).sqrt());
-                    t_row[x] = t;
-                    for k in 0..3 {
-                        let v = &mut rgb_row[3 * x + k];
-                        *v = *v * t + h.airlight[k] * (1.0 - t);
-                    }
-                }
+                apply_row(h, &u2, cam.row_slope_sq(y as u32), rgb_row, depth_row, t_row);
             }
         });
     Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans })

@@ -12,6 +12,7 @@
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod color;
 pub mod error;
 pub mod frame;
 pub mod haze;

@@ -1,6 +1,7 @@
 //! `skyfall._core`: thin pyo3 wrappers over `skyfall-core`. The public API is the Python
 //! package `skyfall`; this module's contract is `python/skyfall/_core.pyi`.
 
+mod color;
 mod errors;
 mod physics;
 mod rain;
@@ -11,6 +12,8 @@ use pyo3::prelude::*;
 
 #[pymodule]
 mod _core {
+    #[pymodule_export]
+    use super::color::encode_srgb8;
     #[pymodule_export]
     use super::errors::{GpuUnavailableError, SkyfallError};
     #[pymodule_export]

@@ -7,7 +7,7 @@ use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use skyfall_core::rain::drops::{drops_near, Drop, RainRegion};
+use skyfall_core::rain::drops::{drops_in_view, drops_near, Drop, RainRegion};
 use skyfall_core::rain::splat::{composite, RainShading, RainTargets};
 
 /// (rain_rate_mm_h, diameters_mm, near_m, wind_m_s, time_s, seed) → region.
@@ -39,7 +39,7 @@ pub fn rain_drops<'py>(py: Python<'py>, center_m: [f32; 3], region_args: RegionA
 type RainOut<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>, usize, usize);
 
 /// Composites the region's drops over (rgb, depth_m): returns (rgb, rain_alpha, rain_depth_m,
-/// drops in the region, streaks on screen).
+/// drops in the voxels that reach the view, streaks on screen).
 #[pyfunction]
 #[pyo3(signature = (width, height, camera_params, rgb, depth_m, region_args, *, exposure_s, ground))]
 #[allow(clippy::too_many_arguments)]
@@ -65,7 +65,7 @@ pub fn rain_composite<'py>(
         return Err(PyValueError::new_err(format!("rgb and depth_m must be {height}x{width}")));
     }
     let (out, alpha, rdepth, n_drops, n_streaks) = py.detach(|| {
-        let drops = drops_near(&reg, cam.position_m, ground);
+        let drops = drops_in_view(&reg, &cam, f64::from(exposure_s), ground);
         let mut out = src.to_vec();
         let mut alpha = vec![0.0f32; n];
         let mut rdepth = vec![0.0f32; n];

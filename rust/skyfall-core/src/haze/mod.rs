@@ -62,6 +62,20 @@ pub fn check_depth(depth_m: &[f32]) -> Result<()> {
     Ok(())
 }
 
+/// Applies haze to one row: `rgb_row` (W·3, in place), `t_row` (W) written, from
+/// `depth_row` (W); `u2` are the camera's squared column slopes and `v2` the row's
+/// (see [`Camera::column_slopes_sq`]), so the ray length per unit depth is √(u² + v² + 1).
+#[inline]
+pub fn apply_row(haze: &Haze, u2: &[f32], v2: f32, rgb_row: &mut [f32], depth_row: &[f32], t_row: &mut [f32]) {
+    for (x, (&d, t_out)) in depth_row.iter().zip(t_row.iter_mut()).enumerate() {
+        let t = haze.transmittance(d * (u2[x] + v2 + 1.0).sqrt());
+        *t_out = t;
+        for (c, v) in rgb_row[3 * x..3 * x + 3].iter_mut().enumerate() {
+            *v = *v * t + haze.airlight[c] * (1.0 - t);
+        }
+    }
+}
+
 /// Applies haze to `rgb` (H·W·3, in place) and writes `transmittance` (H·W). Rows in parallel.
 pub fn apply(haze: &Haze, cam: &Camera, rgb: &mut [f32], depth_m: &[f32], transmittance: &mut [f32]) {
     let w = cam.width as usize;
@@ -70,17 +84,7 @@ pub fn apply(haze: &Haze, cam: &Camera, rgb: &mut [f32], depth_m: &[f32], transm
         .zip(depth_m.par_chunks(w))
         .zip(transmittance.par_chunks_mut(w))
         .enumerate()
-        .for_each(|(y, ((rgb_row, depth_row), t_row))| {
-            let v2 = cam.row_slope_sq(y as u32);
-            for x in 0..w {
-                let t = haze.transmittance(depth_row[x] * (u2[x] + v2 + 1.0).sqrt());
-                t_row[x] = t;
-                for c in 0..3 {
-                    let v = &mut rgb_row[3 * x + c];
-                    *v = *v * t + haze.airlight[c] * (1.0 - t);
-                }
-            }
-        });
+        .for_each(|(y, ((rgb_row, depth_row), t_row))| apply_row(haze, &u2, cam.row_slope_sq(y as u32), rgb_row, depth_row, t_row));
 }
 
 #[cfg(test)]

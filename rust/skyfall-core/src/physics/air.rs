@@ -3,7 +3,7 @@
 //! Formulas as used with Beard (1976, 1977): Beard 1977 viscosity, Kell 1975 water density,
 //! Pruppacher & Klett surface tension, Wexler/Hardy (ITS-90) saturation vapour pressure.
 
-use crate::error::{Range, Result};
+use crate::error::{Error, Param, Range, Result};
 
 /// Valid air temperature, °C (Beard's viscosity law and the supercooled-water formulas).
 pub const TEMPERATURE_C: Range = Range::closed(-40.0, 50.0, "°C");
@@ -52,12 +52,25 @@ impl Air {
     }
 
     /// Validated air state; `index` names the array element in messages.
+    /// Besides the ranges, the water-vapour pressure RH·e_s(T) must stay below the total
+    /// pressure (warm saturated air at high altitude does not exist: water boils).
     pub fn checked(temperature_c: f64, pressure_hpa: f64, relative_humidity: f64, index: Option<usize>) -> Result<Self> {
-        Ok(Air {
+        let air = Air {
             temperature_c: TEMPERATURE_C.check("temperature_c", index, temperature_c)?,
             pressure_hpa: PRESSURE_HPA.check("pressure_hpa", index, pressure_hpa)?,
             relative_humidity: RELATIVE_HUMIDITY.check("relative_humidity", index, relative_humidity)?,
-        })
+        };
+        let e_hpa = relative_humidity * saturation_vapour_pressure_pa(temperature_c) / 100.0;
+        if e_hpa >= pressure_hpa {
+            return Err(Error::Invalid {
+                param: Param { name: "relative_humidity", index },
+                message: format!(
+                    "relative_humidity = {relative_humidity} at {temperature_c} °C means a vapour pressure of {e_hpa:.1} hPa, \
+                     not below pressure_hpa = {pressure_hpa}: no such air"
+                ),
+            });
+        }
+        Ok(air)
     }
 
     /// Moist-air density, kg/m³: ρ = (p − 0.378 e) / (R_d T), e = RH · e_s(T).
@@ -159,5 +172,7 @@ mod tests {
         assert!(Air::new(f64::NAN, 1000.0, 0.5).is_err());
         assert!(Air::new(20.0, 0.0, 0.5).is_err());
         assert!(Air::new(20.0, 1000.0, 1.5).is_err());
+        // 50 °C saturated air holds 123 hPa of vapour: impossible at 50 hPa.
+        assert!(Air::new(50.0, 50.0, 1.0).is_err() && Air::new(50.0, 150.0, 1.0).is_ok());
     }
 }

@@ -14,10 +14,12 @@ use crate::error::{Range, Result};
 use crate::physics::air::Air;
 use crate::physics::dsd::{drops_per_m3, mp_slope_per_mm, RAIN_RATE_MM_H};
 use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
+use crate::scene::camera::Camera;
 use crate::seed::derive;
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
+use rayon::prelude::*;
 
 /// Valid rain-region radii, m.
 pub const NEAR_M: Range = Range::open_closed(0.0, 50.0, "m");
@@ -104,31 +106,65 @@ fn voxel_drops(region: &RainRegion, law: &FallSpeed, voxel: [i64; 3], bin: usize
 /// Every drop within `region.near_m` of `center_m` (voxels at or above the ground only when
 /// `ground` is set), in a deterministic order.
 pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop> {
+    drops_where(region, center_m, ground, |_| true)
+}
+
+/// The drops of [`drops_near`] that can draw into `cam`'s frame during `exposure_s`: voxels
+/// whose bounding sphere, grown by the farthest a drop moves in the exposure, misses the
+/// view frustum are skipped without drawing their drops (their streaks cannot reach the
+/// frame). The drops kept are exactly those of [`drops_near`] in those voxels.
+pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, ground: bool) -> Vec<Drop> {
+    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let d_max = region.bins.last().map_or(0.0, |b| b.1);
+    let speed = (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
+    let margin = (3f64.sqrt() / 2.0 + speed * exposure_s) as f32;
+    let (w, h) = (cam.width as f32, cam.height as f32);
+    // Inward side planes of the frustum in camera space (the camera looks along −z).
+    let planes = [
+        Vec3::new(1.0, 0.0, -cam.cx / cam.fx),
+        Vec3::new(-1.0, 0.0, -(w - cam.cx) / cam.fx),
+        Vec3::new(0.0, -1.0, -cam.cy / cam.fy),
+        Vec3::new(0.0, 1.0, -(h - cam.cy) / cam.fy),
+        Vec3::new(0.0, 0.0, -1.0),
+    ]
+    .map(|n| n.normalize());
+    let to_cam = cam.rotation.transpose();
+    drops_where(region, cam.position_m, ground, |centre| {
+        let pc = to_cam * (centre - cam.position_m);
+        planes.iter().all(|n| n.dot(pc) >= -margin)
+    })
+}
+
+fn drops_where(region: &RainRegion, center_m: Vec3, ground: bool, keep_voxel: impl Fn(Vec3) -> bool + Sync) -> Vec<Drop> {
     let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
     let c = center_m.as_dvec3();
     let r = region.near_m;
     let lo = (c - DVec3::splat(r)).floor();
     let hi = (c + DVec3::splat(r)).floor();
-    let mut out = Vec::new();
-    for ix in lo.x as i64..=hi.x as i64 {
-        for iy in lo.y as i64..=hi.y as i64 {
-            if ground && iy < 0 {
-                continue;
-            }
-            for iz in lo.z as i64..=hi.z as i64 {
-                // nearest point of the voxel to the centre
-                let q = DVec3::new(c.x.clamp(ix as f64, ix as f64 + 1.0), c.y.clamp(iy as f64, iy as f64 + 1.0), c.z.clamp(iz as f64, iz as f64 + 1.0));
-                if q.distance(c) > r {
+    let columns: Vec<Vec<Drop>> = (lo.x as i64..=hi.x as i64)
+        .into_par_iter()
+        .map(|ix| {
+            let mut out = Vec::new();
+            for iy in lo.y as i64..=hi.y as i64 {
+                if ground && iy < 0 {
                     continue;
                 }
-                for bin in 0..region.bins.len() {
-                    voxel_drops(region, &law, [ix, iy, iz], bin, &mut out);
+                for iz in lo.z as i64..=hi.z as i64 {
+                    // nearest point of the voxel to the centre
+                    let q = DVec3::new(c.x.clamp(ix as f64, ix as f64 + 1.0), c.y.clamp(iy as f64, iy as f64 + 1.0), c.z.clamp(iz as f64, iz as f64 + 1.0));
+                    if q.distance(c) > r || !keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5)) {
+                        continue;
+                    }
+                    for bin in 0..region.bins.len() {
+                        voxel_drops(region, &law, [ix, iy, iz], bin, &mut out);
+                    }
                 }
             }
-        }
-    }
-    out.retain(|d| d.position_m.as_dvec3().distance(c) <= r);
-    out
+            out.retain(|d| d.position_m.as_dvec3().distance(c) <= r);
+            out
+        })
+        .collect();
+    columns.concat()
 }
 
 #[cfg(test)]
@@ -162,6 +198,30 @@ mod tests {
             }
         }
         assert!(moved as f64 > 0.9 * a.len() as f64, "{moved} of {}", a.len());
+    }
+
+    #[test]
+    fn frustum_culling_keeps_every_streak_that_reaches_the_frame() {
+        use crate::rain::splat::{composite, RainShading, RainTargets};
+        use glam::Mat3;
+        let r = RainRegion::new(30.0, &[1.0, 1.5, 2.0], 5.0, [4.0, 0.0, -2.0], 0.3, 4).unwrap();
+        let rot = Mat3::from_rotation_y(0.4) * Mat3::from_rotation_x(-0.2);
+        let cam = Camera::new(80, 60, [60.0, 60.0, 40.0, 30.0], Vec3::new(0.2, 1.6, 0.3), rot).unwrap();
+        let all = drops_near(&r, cam.position_m, true);
+        let seen = drops_in_view(&r, &cam, 1.0 / 30.0, true);
+        assert!(seen.len() * 2 < all.len(), "{} of {}", seen.len(), all.len());
+        let draw = |drops: &[Drop]| {
+            let n = cam.pixels();
+            let (mut rgb, mut a, mut z) = (vec![0.1f32; 3 * n], vec![0.0; n], vec![0.0; n]);
+            let depth = vec![f32::INFINITY; n];
+            let shown = composite(&cam, drops, 1.0 / 30.0, RainShading::OPEN_SKY, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut a, rain_depth_m: &mut z });
+            (rgb, a, shown)
+        };
+        let (rgb_all, a_all, shown_all) = draw(&all);
+        let (rgb_seen, a_seen, shown_seen) = draw(&seen);
+        assert_eq!(shown_all, shown_seen);
+        assert_eq!(a_all, a_seen);
+        assert_eq!(rgb_all, rgb_seen);
     }
 
     #[test]

@@ -135,9 +135,23 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: RainSha
                 let len = ab.length();
                 let dir = if len > 1e-6 { ab / len } else { Vec2::Y };
                 let ys = (s.min.y.floor().max(y0 as f32) as usize)..(s.max.y.ceil().min((y0 + rows) as f32) as usize);
-                let xs = (s.min.x.floor().max(0.0) as usize)..(s.max.x.ceil().min(w as f32) as usize);
+                let (bx0, bx1) = (s.min.x.floor().max(0.0), s.max.x.ceil().min(w as f32));
+                // Pixels farther than `reach` from the axis get no coverage: on a steep streak
+                // each row only needs the span around the axis, not the whole bounding box.
+                let reach = (0.5 * s.wa.max(s.wb) + 0.5).max(1.0);
+                let steep = dir.y.abs() > 0.5;
                 for y in ys {
-                    for x in xs.clone() {
+                    let (x0, x1) = if steep {
+                        let xc = s.a.x + (y as f32 + 0.5 - s.a.y) * dir.x / dir.y;
+                        let half = reach / dir.y.abs();
+                        ((xc - half).floor().max(bx0), (xc + half).ceil().min(bx1))
+                    } else {
+                        (bx0, bx1)
+                    };
+                    if x1 <= x0 {
+                        continue;
+                    }
+                    for x in x0 as usize..x1 as usize {
                         let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - s.a;
                         // along: position on the streak (px); across: distance from its axis
                         let along = p.dot(dir);
