@@ -171,3 +171,63 @@ def test_bad_rain_parameters():
         Weather(rain_diameters_mm=(2.0, 1.0))
     with pytest.raises(ValueError, match="n_frames"):
         Renderer(8, 8, backend="cpu").render_sequence(open_air(), n_frames=0)
+
+
+def dusk_scene(lights=()):
+    img = np.full((H, W, 3), 0.05, np.float32)
+    cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0)
+    return PhotoScene(img, np.full((H, W), 30.0, np.float32), camera=cam, lights=tuple(lights))
+
+
+def test_streaks_near_a_lamp_are_brighter():
+    # One 2000 cd lamp 2 m ahead and 1.5 m to the left; dusk sky of 20 lux. Rain brightens the
+    # dark background far more around the lamp's image than on the other side of the frame.
+    from skyfall import PointLight
+
+    cpu = Renderer(W, H, backend="cpu")
+    lamp = PointLight((-1.5, 1.6, -2.0), 2000.0)
+    w = Weather(rain_rate_mm_h=30.0, sky_illuminance_lux=20.0, rain_near_m=4.0)
+    lit = cpu.render(dusk_scene([lamp]), w, seed=2)
+    dark = cpu.render(dusk_scene(), w, seed=2)
+    np.testing.assert_array_equal(lit.layers["rain_alpha"], dark.layers["rain_alpha"])  # same drops
+    gain = (lit.rgb - dark.rgb)[..., 0]
+    px, _ = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0, width=W, height=H).project([lamp.position_m])
+    x = int(px[0, 0])
+    assert 0 < x < W // 2
+    near = gain[:, max(0, x - 20) : x + 20].mean()
+    far = gain[:, W - 40 :].mean()
+    assert near > 3 * far > 0
+    # the lamp's share of the drop light is linear in its intensity (inverse square in
+    # distance is checked on the light itself in the Rust tests)
+    half = cpu.render(dusk_scene([PointLight((-1.5, 1.6, -2.0), 500.0)]), w, seed=2)
+    g_half = (half.rgb - dark.rgb)[..., 0][:, max(0, x - 20) : x + 20].mean()
+    assert g_half == pytest.approx(near / 4, rel=0.15)
+
+
+def test_a_light_of_zero_intensity_changes_nothing_and_culling_counts():
+    from skyfall import PointLight, SpotLight
+
+    cpu = Renderer(W, H, backend="cpu")
+    w = Weather(rain_rate_mm_h=30.0, sky_illuminance_lux=20.0)
+    base = cpu.render(dusk_scene(), w, seed=5)
+    off = cpu.render(dusk_scene([PointLight((0.0, 2.0, -2.0), 0.0)]), w, seed=5)
+    assert off.rgb.tobytes() == base.rgb.tobytes()
+    assert base.stats["rain_culled"] == 0
+    # threshold 0 culls nothing: the same bits as no culling
+    zero = cpu.render(dusk_scene(), w, seed=5, cull_threshold=0.0)
+    assert zero.rgb.tobytes() == base.rgb.tobytes() and zero.stats == base.stats
+    # a headlight lights a cone; a threshold above the sky's 1.0 keeps only lit drops
+    head = SpotLight((0.0, 0.7, -6.0), (0.0, 0.0, 1.0), 15000.0, cone_deg=20.0)
+    lit = cpu.render(dusk_scene([head]), w, seed=5)
+    culled = cpu.render(dusk_scene([head]), w, seed=5, cull_threshold=1.5)
+    assert culled.stats["rain_culled"] > 0
+    assert culled.stats["rain_culled"] + culled.stats["rain_streaks"] == lit.stats["rain_streaks"]
+    # what culling drops is faint: the image changes far less than the rain itself
+    rain_change = np.abs(lit.rgb - cpu.render(dusk_scene([head]), Weather(sky_illuminance_lux=20.0, visibility_m=1e9, rain_rate_mm_h=30.0, rain_streaks=False), seed=5).rgb).mean()
+    assert np.abs(culled.rgb - lit.rgb).mean() < 0.5 * rain_change
+    with pytest.raises(ValueError, match="cull_threshold"):
+        cpu.render(dusk_scene(), w, cull_threshold=-1.0)
+    with pytest.raises(ValueError, match="cone_deg"):
+        SpotLight((0, 0, 0), (0, 0, 1), 1.0, cone_deg=120.0)
+    with pytest.raises(ValueError, match="intensity_cd"):
+        PointLight((0, 0, 0), -5.0)

@@ -18,6 +18,7 @@ Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :clas
 from skyfall import io, physics, rain, scenes
 from skyfall._core import GpuUnavailableError, SkyfallError, __version__
 from skyfall.camera import Camera
+from skyfall.lights import PointLight, SpotLight
 from skyfall.render import Frame, Renderer
 from skyfall.scenes import PhotoScene
 from skyfall.weather import Weather
@@ -27,8 +28,10 @@ __all__ = [
     "Frame",
     "GpuUnavailableError",
     "PhotoScene",
+    "PointLight",
     "Renderer",
     "SkyfallError",
+    "SpotLight",
     "Weather",
     "__version__",
     "io",

@@ -124,6 +124,9 @@ def rain_composite(
     *,
     exposure_s: float,
     ground: bool,
-) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], int, int]: ...
+    lights: NDArray[np.float32] | None = None,
+    sky_illuminance_lux: float = 10000.0,
+    cull_threshold: float | None = None,
+) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], int, int, int]: ...
 
 def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...

@@ -15,6 +15,9 @@ street.exr, street.png
 street_rain.exr, street_rain.png, street_rain_alpha.png
     The street in 50 mm/h rain with a 3 m/s cross wind: streaks of every drop within 5 m,
     and the rain_alpha ground-truth layer (stretched for viewing).
+street_rain_dusk.png
+    The street at dusk (30 lx of sky) in 20 mm/h rain with its lamps lit and an oncoming
+    car's headlights: lit drops shine (saved at exposure 0.25).
 """
 
 from __future__ import annotations
@@ -113,8 +116,12 @@ def main(argv: list[str] | None = None) -> int:
     wet.save(out / "street_rain.png")
     alpha = wet.layers["rain_alpha"]
     io.write_image(out / "street_rain_alpha.png", np.clip(alpha / max(float(alpha.max()), 1e-6), 0, 1))
+    dusk = renderer.render(
+        scenes.street(lamps=True, headlights=True), Weather(rain_rate_mm_h=20.0, sky_illuminance_lux=30.0), seed=0
+    )
+    dusk.save(out / "street_rain_dusk.png", exposure=0.25)
     names = ("rain_textures.exr", "rain_textures.png", "terminal_velocity.png", "street.exr", "street.png")
-    for name in (*names, "street_rain.exr", "street_rain.png", "street_rain_alpha.png"):
+    for name in (*names, "street_rain.exr", "street_rain.png", "street_rain_alpha.png", "street_rain_dusk.png"):
         print(f"wrote {out / name}")
     return 0
 

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from skyfall import _core, io
 from skyfall._validate import choice, integer, real
 from skyfall.camera import Camera
+from skyfall.lights import pack
 from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.weather import Weather
 
@@ -67,7 +68,7 @@ class Frame:
     stats : dict
         Counters of the passes that ran: ``rain_drops`` (drops of the rain region in the voxels
         whose streaks can reach the view; the others are never generated), ``rain_streaks``
-        (streaks on screen).
+        (streaks drawn), ``rain_culled`` (drops on screen skipped by ``cull_threshold``).
     """
 
     rgb: NDArray[np.float32]
@@ -143,6 +144,7 @@ class Renderer:
         camera: Camera | None = None,
         time_s: float = 0.0,
         seed: int = 0,
+        cull_threshold: float | None = None,
     ) -> Frame:
         """Render one frame.
 
@@ -160,6 +162,11 @@ class Renderer:
         seed : int
             Seed of the rain, in [0, 2^64). Drops are anchored in the world: two cameras or
             two frames with the same seed see the same drops.
+        cull_threshold : float, optional
+            Skip drops whose received light I_R (relative units; 1.0 is the open sky's) is
+            below this, as the seed does for unlit billboards: at dusk with lamps, 1.5 keeps
+            only lamp-lit drops. ``frame.stats["rain_culled"]`` counts them. None (default)
+            draws every drop.
 
         Returns
         -------
@@ -194,16 +201,23 @@ class Renderer:
         layers = {} if trans is None else {"transmittance": trans}
         stats: dict[str, int] = {}
         if weather.rain_rate_mm_h > 0 and weather.rain_streaks:
-            rgb, alpha, rain_depth, n_drops, n_streaks = _core.rain_composite(
+            if cull_threshold is not None:
+                th = real("cull_threshold", cull_threshold)
+                if not (th >= 0 and np.isfinite(th)):
+                    raise ValueError(f"cull_threshold = {th} must be a finite number >= 0")
+            rgb, alpha, rain_depth, n_drops, n_streaks, n_culled = _core.rain_composite(
                 *args,
                 rgb,
                 depth,
                 weather.rain_region_args(t, seed),
                 exposure_s=cam.exposure_s,
                 ground=isinstance(scene, BoxScene) and scene.ground,
+                lights=pack(scene.lights),
+                sky_illuminance_lux=weather.sky_illuminance_lux,
+                cull_threshold=cull_threshold,
             )
             layers.update(rain_alpha=alpha, rain_depth_m=rain_depth)
-            stats.update(rain_drops=n_drops, rain_streaks=n_streaks)
+            stats.update(rain_drops=n_drops, rain_streaks=n_streaks, rain_culled=n_culled)
         return Frame(
             rgb=rgb,
             depth_m=depth,

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from skyfall.camera import Camera
 from skyfall.io import decode_srgb8
+from skyfall.lights import PointLight, SpotLight
 
 __all__ = ["BoxScene", "PhotoScene", "boxes", "empty", "street"]
 
@@ -44,7 +45,9 @@ class BoxScene:
     camera : Camera
         The default viewpoint.
     lamps_m : ndarray, shape (L, 3)
-        Street-lamp positions (m), for lighting effects.
+        Street-lamp positions (m).
+    lights : tuple of PointLight or SpotLight
+        Lights that light the rain.
     """
 
     boxes: NDArray[np.float32]
@@ -52,6 +55,7 @@ class BoxScene:
     ground_albedo: tuple[float, float, float] = DEFAULT_GROUND_ALBEDO
     camera: Camera = field(default_factory=Camera)
     lamps_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    lights: tuple[PointLight | SpotLight, ...] = ()
 
 
 def _albedo(name: str, value: Any) -> tuple[float, float, float]:
@@ -70,6 +74,7 @@ def boxes(
     ground_albedo: Any = DEFAULT_GROUND_ALBEDO,
     camera: Camera | None = None,
     lamps_m: Any = None,
+    lights: tuple[PointLight | SpotLight, ...] = (),
 ) -> BoxScene:
     """Build a scene from axis-aligned boxes.
 
@@ -86,6 +91,8 @@ def boxes(
         Default viewpoint; eye height at the origin looking along -Z when left out.
     lamps_m : array_like, shape (L, 3), optional
         Lamp positions, m.
+    lights : tuple of PointLight or SpotLight
+        Lights that light the rain.
 
     Returns
     -------
@@ -110,6 +117,7 @@ def boxes(
         ground_albedo=_albedo("ground_albedo", ground_albedo),
         camera=camera if camera is not None else Camera(),
         lamps_m=lamps,
+        lights=tuple(lights),
     )
 
 
@@ -118,7 +126,9 @@ def empty(*, ground_albedo: Any = DEFAULT_GROUND_ALBEDO, camera: Camera | None =
     return boxes([], ground=True, ground_albedo=ground_albedo, camera=camera)
 
 
-def street(*, length_m: float = 120.0, width_m: float = 14.0, seed: int = 0) -> BoxScene:
+def street(
+    *, length_m: float = 120.0, width_m: float = 14.0, seed: int = 0, lamps: bool = False, headlights: bool = False
+) -> BoxScene:
     """The bundled default scene: a street canyon seen from eye height.
 
     Buildings of 9-24 m line both sides of a ``width_m`` street running along -Z for
@@ -133,6 +143,11 @@ def street(*, length_m: float = 120.0, width_m: float = 14.0, seed: int = 0) -> 
         Distance between the building fronts, m, in [4, 100].
     seed : int
         Seeds the building heights and shades (deterministic).
+    lamps : bool
+        Light the lamps: warm 2000 cd point lights at the lamp heads.
+    headlights : bool
+        An oncoming car 12 m ahead in the other lane: two 15000 cd spots, 1.5 m apart at
+        0.7 m, aimed along +Z (towards the camera) and slightly down.
     """
     if not 20.0 <= float(length_m) <= 1000.0:
         raise ValueError(f"length_m = {length_m} is outside the valid range [20, 1000] m")
@@ -152,9 +167,14 @@ def street(*, length_m: float = 120.0, width_m: float = 14.0, seed: int = 0) -> 
             box_list.append({"min": (x0, 0, z - depth), "max": (x1, height, z), "albedo": np.clip(shade * tint, 0, 1)})
             z -= depth + float(rng.uniform(0.0, 3.0))
     box_list.append({"min": (-half - 12, 0, -length_m - 20), "max": (half + 12, 30, -length_m), "albedo": (0.55, 0.55, 0.58)})
-    lamps = [(s * (half - 1.0), 5.0, -z) for z in np.arange(8.0, length_m, 15.0) for s in (-1, 1)]
+    lamp_positions = [(s * (half - 1.0), 5.0, -float(z)) for z in np.arange(8.0, length_m, 15.0) for s in (-1, 1)]
     cam = Camera((1.5, 1.6, 0.0), yaw_deg=0.0, pitch_deg=2.0, vertical_fov_deg=55.0)
-    return boxes(box_list, ground=True, camera=cam, lamps_m=lamps)
+    lights: list[PointLight | SpotLight] = []
+    if lamps:
+        lights += [PointLight(p, 2000.0, color=(1.0, 0.8, 0.55)) for p in lamp_positions]
+    if headlights:
+        lights += [SpotLight((x, 0.7, -12.0), (0.0, -0.05, 1.0), 15000.0, cone_deg=25.0) for x in (-4.25, -2.75)]
+    return boxes(box_list, ground=True, camera=cam, lamps_m=lamp_positions, lights=tuple(lights))
 
 
 @dataclass(frozen=True)
@@ -174,13 +194,25 @@ class PhotoScene:
         ``vertical_fov_deg``.
     vertical_fov_deg : float
         Vertical field of view, degrees, when no camera is given.
+    lights : tuple of PointLight or SpotLight
+        Lights in the photo's world (camera coordinates when no camera is given) that light
+        the rain.
     """
 
     image: NDArray[np.float32]
     depth_m: NDArray[np.float32]
     camera: Camera
+    lights: tuple[PointLight | SpotLight, ...]
 
-    def __init__(self, image: Any, depth_m: Any, *, camera: Camera | None = None, vertical_fov_deg: float = 60.0) -> None:
+    def __init__(
+        self,
+        image: Any,
+        depth_m: Any,
+        *,
+        camera: Camera | None = None,
+        vertical_fov_deg: float = 60.0,
+        lights: tuple[PointLight | SpotLight, ...] = (),
+    ) -> None:
         img = np.asarray(image)
         if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
             raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
@@ -205,6 +237,7 @@ class PhotoScene:
         object.__setattr__(self, "image", lin)
         object.__setattr__(self, "depth_m", d)
         object.__setattr__(self, "camera", cam.with_resolution(w, h))
+        object.__setattr__(self, "lights", tuple(lights))
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -214,7 +214,7 @@ mod tests {
             let n = cam.pixels();
             let (mut rgb, mut a, mut z) = (vec![0.1f32; 3 * n], vec![0.0; n], vec![0.0; n]);
             let depth = vec![f32::INFINITY; n];
-            let shown = composite(&cam, drops, 1.0 / 30.0, RainShading::OPEN_SKY, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut a, rain_depth_m: &mut z });
+            let shown = composite(&cam, drops, 1.0 / 30.0, &RainShading::open_sky(), RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut a, rain_depth_m: &mut z });
             (rgb, a, shown)
         };
         let (rgb_all, a_all, shown_all) = draw(&all);

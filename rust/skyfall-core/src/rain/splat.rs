@@ -11,15 +11,18 @@
 //! textures.
 //!
 //! Brightness (seed 002, eq. 7): a drop shows I_v = r·I_R + (1 − r)·I_T, I_T the background
-//! behind it, I_R = k·E_R its sky light. Compositing a = α·coverage of it over C gives
-//! C + a·r·(I_R − C): a blend towards I_R, so with one I_R for all drops the order does not
-//! matter and C = I_R + (C₀ − I_R)·∏(1 − aᵢ r). The `rain_alpha` layer is 1 − ∏(1 − aᵢ),
-//! the streaks' coverage; `rain_depth_m` is the nearest visible streak's depth (inf: none).
-//! Streak fragments deeper than the scene at that pixel are hidden.
+//! behind it, I_R = k·E_R the light it receives: the sky's (relative 1.0 in the open) plus, per
+//! point or spot light, k·I·cone/d² (inverse square; E in lux over the sky's E). Compositing
+//! a = α·coverage of it over C gives C + a·r·(I_R − C); streaks are composited far to near.
+//! Drops whose I_R is below an optional cull threshold are not drawn (the seed's culling).
+//! The `rain_alpha` layer is 1 − ∏(1 − aᵢ), the streaks' coverage; `rain_depth_m` is the
+//! nearest visible streak's depth (inf: none). Streak fragments deeper than the scene at that
+//! pixel are hidden.
 
 use super::drops::Drop;
 use crate::scene::camera::Camera;
-use glam::Vec2;
+use crate::scene::lights::Light;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 /// Streak ends nearer than this (m along the axis) are clipped.
@@ -28,18 +31,42 @@ pub const NEAR_CLIP_M: f32 = 0.05;
 const BAND_ROWS: usize = 16;
 
 /// How streaks are lit: I_v = r·I_R + (1 − r)·I_T.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RainShading {
-    /// r, the share of the drop's own (sky) light, in [0, 1].
+    /// r, the share of the drop's own light, in [0, 1].
     pub reflectance: f32,
-    /// I_R, the drop's sky light (relative units, E/π = 1).
+    /// I_R from the sky (relative units, E/π = 1).
     pub drop_radiance: f32,
+    /// Point and spot lights.
+    pub lights: Vec<Light>,
+    /// The sky's horizontal illuminance E, lux: a light's illuminance E_L adds
+    /// drop_radiance · E_L / E to I_R.
+    pub sky_illuminance_lux: f32,
+    /// Drops whose I_R (brightest channel) is below this are not drawn; None draws all.
+    pub cull_threshold: Option<f32>,
 }
 
 impl RainShading {
-    /// Seed 002's constant r (0.5 here) and an open-sky drop light I_R = E/π (relative 1.0);
-    /// the ambient-light map will lower I_R where drops see less sky.
-    pub const OPEN_SKY: RainShading = RainShading { reflectance: 0.5, drop_radiance: 1.0 };
+    /// Seed 002's constant r (0.5 here), an open-sky drop light I_R = E/π (relative 1.0), no
+    /// lights, no culling. The ambient-light map will lower I_R where drops see less sky.
+    pub fn open_sky() -> Self {
+        RainShading { reflectance: 0.5, drop_radiance: 1.0, lights: Vec::new(), sky_illuminance_lux: 10_000.0, cull_threshold: None }
+    }
+
+    /// I_R of a drop at `p`, per channel.
+    pub fn drop_light(&self, p: Vec3) -> Vec3 {
+        let lit = self.lights.iter().fold(Vec3::ZERO, |acc, l| acc + l.illuminance_lux(p));
+        Vec3::splat(self.drop_radiance) + lit * (self.drop_radiance / self.sky_illuminance_lux)
+    }
+}
+
+/// What the rain pass did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct RainStats {
+    /// Streaks drawn (on screen, not culled).
+    pub streaks: usize,
+    /// Drops on screen skipped by the cull threshold.
+    pub culled: usize,
 }
 
 /// A streak in screen space.
@@ -54,6 +81,7 @@ pub struct ScreenStreak {
     alpha: f32,
     min: Vec2,
     max: Vec2,
+    light: Vec3,
 }
 
 fn to_camera(cam: &Camera, p: glam::Vec3) -> glam::Vec3 {
@@ -92,7 +120,7 @@ pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32) -> Option<ScreenSt
     if !on_screen || !alpha.is_finite() {
         return None;
     }
-    Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max })
+    Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max, light: Vec3::ONE })
 }
 
 /// Per-pixel buffers the rain pass writes.
@@ -107,13 +135,25 @@ pub struct RainTargets<'a> {
     pub rain_depth_m: &'a mut [f32],
 }
 
-/// Composites the drops' streaks over the frame; returns how many streaks were on screen.
-pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: RainShading, t: RainTargets<'_>) -> usize {
-    let streaks: Vec<ScreenStreak> = drops.iter().filter_map(|d| screen_streak(cam, d, exposure_s)).collect();
+/// Composites the drops' streaks over the frame, far to near.
+pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainShading, t: RainTargets<'_>) -> RainStats {
+    let mut stats = RainStats::default();
+    let mut streaks: Vec<ScreenStreak> = Vec::with_capacity(drops.len() / 4);
+    for d in drops {
+        let Some(mut s) = screen_streak(cam, d, exposure_s) else { continue };
+        s.light = shading.drop_light(d.position_m);
+        if shading.cull_threshold.is_some_and(|th| s.light.max_element() < th) {
+            stats.culled += 1;
+            continue;
+        }
+        streaks.push(s);
+    }
+    // Far to near (stable: ties keep the drops' deterministic order).
+    streaks.sort_by(|p, q| (p.inv_za + p.inv_zb).total_cmp(&(q.inv_za + q.inv_zb)));
+    stats.streaks = streaks.len();
     let w = cam.width as usize;
     let band = BAND_ROWS * w;
     let r = shading.reflectance;
-    let ir = shading.drop_radiance;
     t.rgb
         .par_chunks_mut(3 * band)
         .zip(t.depth_m.par_chunks(band))
@@ -123,8 +163,7 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: RainSha
         .for_each(|(bi, (((rgb, depth), alpha), rdepth))| {
             let y0 = bi * BAND_ROWS;
             let rows = depth.len() / w;
-            // Per pixel: ∏(1 − a r) in `trans`, ∏(1 − a) in `alpha`, both start at 1.
-            let mut trans = vec![1.0f32; depth.len()];
+            // ∏(1 − a) per pixel in `alpha` (1 − it at the end); colour composited in place.
             alpha.fill(1.0);
             rdepth.fill(f32::INFINITY);
             for s in &streaks {
@@ -170,22 +209,20 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: RainSha
                             continue;
                         }
                         let a = s.alpha * cov;
-                        trans[i] *= 1.0 - a * r;
+                        let ar = a * r;
+                        for (c, l) in rgb[3 * i..3 * i + 3].iter_mut().zip(s.light.to_array()) {
+                            *c += ar * (l - *c);
+                        }
                         alpha[i] *= 1.0 - a;
                         rdepth[i] = rdepth[i].min(z);
                     }
                 }
             }
-            for i in 0..depth.len() {
-                alpha[i] = 1.0 - alpha[i];
-                if trans[i] < 1.0 {
-                    for c in &mut rgb[3 * i..3 * i + 3] {
-                        *c = ir + (*c - ir) * trans[i];
-                    }
-                }
+            for a in alpha.iter_mut() {
+                *a = 1.0 - *a;
             }
         });
-    streaks.len()
+    stats
 }
 
 #[cfg(test)]
@@ -203,8 +240,9 @@ mod tests {
         let mut alpha = vec![0.0; n];
         let mut rd = vec![0.0; n];
         let depth = vec![f32::INFINITY; n];
-        let shown = composite(&cam, &[d], 1.0 / 30.0, RainShading { reflectance: 1.0, drop_radiance: 1.0 }, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rd });
-        assert_eq!(shown, 1);
+        let white = RainShading { reflectance: 1.0, ..RainShading::open_sky() };
+        let shown = composite(&cam, &[d], 1.0 / 30.0, &white, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rd });
+        assert_eq!(shown, RainStats { streaks: 1, culled: 0 });
         let w = 2e-3 * 300.0;
         let sum: f32 = alpha.iter().sum();
         // α w L = w² (plus round caps of the capsule, ≤ w² π/4 α): within 5 %.
@@ -216,7 +254,11 @@ mod tests {
         // behind a wall at 0.5 m nothing shows
         let wall = vec![0.5f32; n];
         let mut alpha2 = vec![0.0; n];
-        composite(&cam, &[d], 1.0 / 30.0, RainShading { reflectance: 1.0, drop_radiance: 1.0 }, RainTargets { rgb: &mut rgb, depth_m: &wall, alpha: &mut alpha2, rain_depth_m: &mut rd });
+        composite(&cam, &[d], 1.0 / 30.0, &white, RainTargets { rgb: &mut rgb, depth_m: &wall, alpha: &mut alpha2, rain_depth_m: &mut rd });
         assert!(alpha2.iter().all(|&a| a == 0.0));
+        // culled when its light is below the threshold
+        let culling = RainShading { cull_threshold: Some(1.5), ..white.clone() };
+        let stats = composite(&cam, &[d], 1.0 / 30.0, &culling, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha2, rain_depth_m: &mut rd });
+        assert_eq!(stats, RainStats { streaks: 0, culled: 1 });
     }
 }

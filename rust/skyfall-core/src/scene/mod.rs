@@ -5,3 +5,4 @@
 
 pub mod boxes;
 pub mod camera;
+pub mod lights;

@@ -1,0 +1,126 @@
+"""Point and spot lights: street lamps and headlights that light rain streaks.
+
+A light at distance d gives a drop the illuminance I * cone / d^2 (lux, per colour channel);
+the drop's light I_R grows by that over the sky's illuminance (see :class:`skyfall.Weather`),
+so at dusk (low ``sky_illuminance_lux``) drops near lamps shine. Lights light streaks only;
+lit surfaces come later.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["PointLight", "SpotLight", "pack"]
+
+
+def _vec3(name: str, value: Any) -> tuple[float, float, float]:
+    v = np.asarray(value, dtype=np.float64).reshape(-1)
+    if v.size != 3 or not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} must be 3 finite numbers, got {value!r}")
+    return float(v[0]), float(v[1]), float(v[2])
+
+
+@dataclass(frozen=True)
+class PointLight:
+    """A light shining equally in all directions.
+
+    Parameters
+    ----------
+    position_m : 3 floats
+        Position, m.
+    intensity_cd : float
+        Luminous intensity, cd, in [0, 1e9] (a street lamp: about 1000-3000 cd).
+    color : 3 floats
+        Linear RGB multiplier of the intensity, each in [0, 1000].
+    """
+
+    position_m: tuple[float, float, float]
+    intensity_cd: float
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "position_m", _vec3("position_m", self.position_m))
+        object.__setattr__(self, "color", _vec3("color", self.color))
+        if not 0.0 <= float(self.intensity_cd) <= 1e9:
+            raise ValueError(f"intensity_cd = {self.intensity_cd} is outside the valid range [0, 1e9] cd")
+        if not all(0.0 <= c <= 1000.0 for c in self.color):
+            raise ValueError(f"color = {self.color} must be in [0, 1000] per channel")
+
+    def row(self) -> list[float]:
+        """The packed row `_core` takes."""
+        return [*self.position_m, *self.color, float(self.intensity_cd), 0.0, 0.0, 0.0, -1.0, -1.0]
+
+
+@dataclass(frozen=True)
+class SpotLight:
+    """A light shining in a cone (a headlight).
+
+    Parameters
+    ----------
+    position_m : 3 floats
+        Position, m.
+    direction : 3 floats
+        Axis of the cone (normalised here).
+    intensity_cd : float
+        Luminous intensity on the axis, cd (a low-beam headlight: about 10000-20000 cd).
+    cone_deg : float
+        Outer half-angle, degrees in (0, 90]: no light beyond it.
+    inner_cone_deg : float, optional
+        Half-angle of full intensity (default 0.75 * cone_deg); smooth falloff between.
+    color : 3 floats
+        Linear RGB multiplier.
+    """
+
+    position_m: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    intensity_cd: float
+    cone_deg: float = 30.0
+    inner_cone_deg: float | None = None
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "position_m", _vec3("position_m", self.position_m))
+        d = np.asarray(_vec3("direction", self.direction))
+        if np.linalg.norm(d) == 0:
+            raise ValueError("direction must not be zero")
+        object.__setattr__(self, "direction", tuple(float(x) for x in d / np.linalg.norm(d)))
+        object.__setattr__(self, "color", _vec3("color", self.color))
+        if not 0.0 <= float(self.intensity_cd) <= 1e9:
+            raise ValueError(f"intensity_cd = {self.intensity_cd} is outside the valid range [0, 1e9] cd")
+        if not 0.0 < float(self.cone_deg) <= 90.0:
+            raise ValueError(f"cone_deg = {self.cone_deg} is outside the valid range (0, 90] degrees")
+        inner = 0.75 * float(self.cone_deg) if self.inner_cone_deg is None else float(self.inner_cone_deg)
+        if not 0.0 <= inner <= float(self.cone_deg):
+            raise ValueError(f"inner_cone_deg = {inner} must be in [0, cone_deg = {self.cone_deg}]")
+        object.__setattr__(self, "inner_cone_deg", inner)
+
+    def row(self) -> list[float]:
+        """The packed row `_core` takes."""
+        inner = float(self.inner_cone_deg if self.inner_cone_deg is not None else 0.75 * self.cone_deg)
+        return [
+            *self.position_m,
+            *self.color,
+            float(self.intensity_cd),
+            *self.direction,
+            math.cos(math.radians(self.cone_deg)),
+            math.cos(math.radians(inner)),
+        ]
+
+
+Light = PointLight | SpotLight
+
+
+def pack(lights: Sequence[Light]) -> NDArray[np.float32] | None:
+    """Lights as the (N, 12) float32 array ``_core`` takes, or None for no lights."""
+    if not lights:
+        return None
+    for i, light in enumerate(lights):
+        if not isinstance(light, (PointLight, SpotLight)):
+            raise TypeError(f"lights[{i}] must be a PointLight or SpotLight, got {type(light).__name__}")
+    return np.array([light.row() for light in lights], dtype=np.float32)
