@@ -46,9 +46,16 @@ def main() -> None:
     scene_f = PhotoScene(photo8, depth, camera=street.camera)
     t_u8 = median_s(skyfall_uint8, 5)
     t_f = median_s(lambda: cpu.render(scene_f, weather), 5)
-    stats = cpu.render(scene_f, weather).stats
     rows.append({"impl": "skyfall CPU, drops method + haze, with sRGB decode/encode (uint8 in, uint8 out)", "s": t_u8})
     rows.append({"impl": "skyfall CPU, drops method + haze, linear float32 in and out", "s": t_f})
+    stats = cpu.render(scene_f, weather).stats
+    try:
+        gpu = Renderer(W, H, backend="gpu")
+        t_gpu = median_s(lambda: gpu.render(scene_f, weather), 3)
+        name = (gpu.adapter_info or {}).get("name", "?")
+        rows.append({"impl": f"skyfall GPU backend ({name}), drops method + haze, float32, incl. upload + readback", "s": t_gpu})
+    except Exception as exc:  # noqa: BLE001 - a machine without Vulkan still gets the CPU rows
+        print(f"GPU row skipped: {exc}")
 
     RESULTS.mkdir(parents=True, exist_ok=True)
     env = {"cpus": os.cpu_count(), "machine": platform.machine(), "date": time.strftime("%Y-%m-%d")}

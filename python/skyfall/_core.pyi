@@ -7,7 +7,6 @@ from numpy.typing import NDArray
 
 __all__ = [
     "encode_srgb8",
-    "rain_composite",
     "rain_drops",
     "AIRLIGHT_RELATIVE",
     "FRAME_BUDGET_BYTES",
@@ -41,7 +40,9 @@ FRAME_BUDGET_BYTES: int
 class SkyfallError(Exception): ...
 class GpuUnavailableError(SkyfallError): ...
 
-_FrameTuple = tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32] | None]
+_RegionArgs = tuple[float, NDArray[np.float64], float, list[float], float, int]
+_RainTuple = tuple[NDArray[np.float32], NDArray[np.float32], int, int, int]
+_FrameTuple = tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32] | None, _RainTuple | None]
 
 def render_cpu(
     width: int,
@@ -54,6 +55,12 @@ def render_cpu(
     photo_rgb: NDArray[np.float32] | None = None,
     photo_depth_m: NDArray[np.float32] | None = None,
     haze_params: tuple[float, list[float]] | None = None,
+    rain_region: _RegionArgs | None = None,
+    exposure_s: float = ...,
+    rain_ground: bool = True,
+    lights: NDArray[np.float32] | None = None,
+    sky_illuminance_lux: float = 10000.0,
+    cull_threshold: float | None = None,
 ) -> _FrameTuple: ...
 
 @final
@@ -73,6 +80,12 @@ class GpuDevice:
         photo_rgb: NDArray[np.float32] | None = None,
         photo_depth_m: NDArray[np.float32] | None = None,
         haze_params: tuple[float, list[float]] | None = None,
+        rain_region: _RegionArgs | None = None,
+        exposure_s: float = ...,
+        rain_ground: bool = True,
+        lights: NDArray[np.float32] | None = None,
+        sky_illuminance_lux: float = 10000.0,
+        cull_threshold: float | None = None,
     ) -> _FrameTuple: ...
 
 def air_density_kg_m3(
@@ -109,24 +122,9 @@ def rain_textures(
 ) -> NDArray[np.float32]: ...
 def rain_diameter_bins(diameters_mm: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
 
-_RegionArgs = tuple[float, NDArray[np.float64], float, list[float], float, int]
 
 def rain_drops(
     center_m: list[float], region_args: _RegionArgs, *, ground: bool
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
-def rain_composite(
-    width: int,
-    height: int,
-    camera_params: list[float],
-    rgb: NDArray[np.float32],
-    depth_m: NDArray[np.float32],
-    region_args: _RegionArgs,
-    *,
-    exposure_s: float,
-    ground: bool,
-    lights: NDArray[np.float32] | None = None,
-    sky_illuminance_lux: float = 10000.0,
-    cull_threshold: float | None = None,
-) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], int, int, int]: ...
 
 def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...

@@ -193,29 +193,28 @@ class Renderer:
         sigma = weather.extinction_per_m
         if sigma > 0:
             kwargs["haze_params"] = (sigma, [_core.AIRLIGHT_RELATIVE] * 3)
-        args = (self.width, self.height, cam.core_params())
-        if self._device is not None:
-            rgb, depth, trans = self._device.render(*args, **kwargs)
-        else:
-            rgb, depth, trans = _core.render_cpu(*args, **kwargs)
-        layers = {} if trans is None else {"transmittance": trans}
-        stats: dict[str, int] = {}
+        if cull_threshold is not None:
+            th = real("cull_threshold", cull_threshold)
+            if not (th >= 0 and np.isfinite(th)):
+                raise ValueError(f"cull_threshold = {th} must be a finite number >= 0")
         if weather.rain_rate_mm_h > 0 and weather.rain_streaks:
-            if cull_threshold is not None:
-                th = real("cull_threshold", cull_threshold)
-                if not (th >= 0 and np.isfinite(th)):
-                    raise ValueError(f"cull_threshold = {th} must be a finite number >= 0")
-            rgb, alpha, rain_depth, n_drops, n_streaks, n_culled = _core.rain_composite(
-                *args,
-                rgb,
-                depth,
-                weather.rain_region_args(t, seed),
+            kwargs.update(
+                rain_region=weather.rain_region_args(t, seed),
                 exposure_s=cam.exposure_s,
-                ground=isinstance(scene, BoxScene) and scene.ground,
+                rain_ground=isinstance(scene, BoxScene) and scene.ground,
                 lights=pack(scene.lights),
                 sky_illuminance_lux=weather.sky_illuminance_lux,
                 cull_threshold=cull_threshold,
             )
+        args = (self.width, self.height, cam.core_params())
+        if self._device is not None:
+            rgb, depth, trans, rain = self._device.render(*args, **kwargs)
+        else:
+            rgb, depth, trans, rain = _core.render_cpu(*args, **kwargs)
+        layers = {} if trans is None else {"transmittance": trans}
+        stats: dict[str, int] = {}
+        if rain is not None:
+            alpha, rain_depth, n_drops, n_streaks, n_culled = rain
             layers.update(rain_alpha=alpha, rain_depth_m=rain_depth)
             stats.update(rain_drops=n_drops, rain_streaks=n_streaks, rain_culled=n_culled)
         return Frame(

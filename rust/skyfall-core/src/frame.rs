@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Param, Result};
 use crate::haze::{apply_row, check_depth, Haze};
+use crate::rain::splat::{composite_streaks, RainFrame, RainStats, RainTargets};
 use crate::scene::boxes::{shade_pixel, BoxScene};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
@@ -26,6 +27,19 @@ pub enum SceneRef<'a> {
     },
 }
 
+/// What the rain pass wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RainBuffers {
+    /// Streak coverage 1 − ∏(1 − aᵢ), H·W.
+    pub alpha: Vec<f32>,
+    /// Nearest visible streak depth, m (inf: none), H·W.
+    pub depth_m: Vec<f32>,
+    /// Streaks drawn and culled.
+    pub stats: RainStats,
+    /// Drops generated (in the voxels that can reach the view).
+    pub drops: usize,
+}
+
 /// A rendered frame's buffers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameBuffers {
@@ -35,6 +49,8 @@ pub struct FrameBuffers {
     pub depth_m: Vec<f32>,
     /// Haze transmittance e^(−σ d), H·W, when the haze pass ran.
     pub transmittance: Option<Vec<f32>>,
+    /// Rain layers, when the rain pass ran.
+    pub rain: Option<RainBuffers>,
 }
 
 /// Refuses frames over [`FRAME_BUDGET_BYTES`] before allocating.
@@ -59,8 +75,9 @@ pub fn check_photo(cam: &Camera, rgb: &[f32], depth_m: &[f32]) -> Result<()> {
     check_depth(depth_m)
 }
 
-/// Renders a frame on the CPU: scene (ray cast or photo copy) and haze in one pass per pixel.
-pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>) -> Result<FrameBuffers> {
+/// Renders a frame on the CPU: scene (ray cast or photo copy) and haze fused row by row, then
+/// the rain streaks over the result.
+pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers> {
     check_frame_size(cam)?;
     if let SceneRef::Photo { rgb, depth_m } = scene {
         check_photo(cam, rgb, depth_m)?;
@@ -99,7 +116,19 @@ pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>) -> Result<
                 apply_row(h, &u2, cam.row_slope_sq(y as u32), rgb_row, depth_row, t_row);
             }
         });
-    Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans })
+    let rain = rain.map(|rf| {
+        let (streaks, stats, drops) = rf.streaks(cam);
+        let mut alpha = vec![0.0f32; n];
+        let mut rain_depth = vec![0.0f32; n];
+        composite_streaks(
+            cam,
+            &streaks,
+            rf.shading.reflectance,
+            RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rain_depth },
+        );
+        RainBuffers { alpha, depth_m: rain_depth, stats, drops }
+    });
+    Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans, rain })
 }
 
 #[cfg(test)]
@@ -116,7 +145,7 @@ mod tests {
         let b = boxes::SceneBox { min_m: Vec3::new(-3.0, 0.0, -12.0), max_m: Vec3::new(3.0, 6.0, -8.0), albedo: Vec3::new(0.6, 0.5, 0.4) };
         let scene = BoxScene::new(vec![b], true, Vec3::splat(0.1)).unwrap();
         let h = Haze { extinction_per_m: 0.02, airlight: [0.43; 3] };
-        let fused = render(SceneRef::Boxes(&scene), &cam, Some(&h)).unwrap();
+        let fused = render(SceneRef::Boxes(&scene), &cam, Some(&h), None).unwrap();
         let mut rgb = vec![0.0; 3 * cam.pixels()];
         let mut depth = vec![0.0; cam.pixels()];
         boxes::render(&scene, &cam, &mut rgb, &mut depth);
@@ -126,7 +155,7 @@ mod tests {
         assert_eq!(fused.depth_m, depth);
         assert_eq!(fused.transmittance, Some(t));
         // A photo of that frame rendered without haze comes back unchanged.
-        let plain = render(SceneRef::Photo { rgb: &fused.rgb, depth_m: &fused.depth_m }, &cam, None).unwrap();
+        let plain = render(SceneRef::Photo { rgb: &fused.rgb, depth_m: &fused.depth_m }, &cam, None, None).unwrap();
         assert_eq!(plain.rgb, fused.rgb);
         assert!(plain.transmittance.is_none());
     }
@@ -134,6 +163,6 @@ mod tests {
     #[test]
     fn huge_frames_are_refused() {
         let cam = Camera::new(16384, 16384, [1e4, 1e4, 8192.0, 8192.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
-        assert!(matches!(render(SceneRef::Photo { rgb: &[], depth_m: &[] }, &cam, None), Err(Error::TooLarge { .. })));
+        assert!(matches!(render(SceneRef::Photo { rgb: &[], depth_m: &[] }, &cam, None, None), Err(Error::TooLarge { .. })));
     }
 }

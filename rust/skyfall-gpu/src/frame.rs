@@ -2,10 +2,12 @@
 
 use crate::context::{AdapterChoice, GpuContext, GpuError};
 use crate::haze::HazePass;
+use crate::rain::{RainPass, RainTargets};
 use crate::pass::{storage, storage_init};
 use crate::readback::read_f32;
 use crate::scene_raycast::SceneRaycastPass;
-use skyfall_core::frame::{check_frame_size, check_photo, FrameBuffers, SceneRef};
+use skyfall_core::frame::{check_frame_size, check_photo, FrameBuffers, RainBuffers, SceneRef};
+use skyfall_core::rain::splat::RainFrame;
 use skyfall_core::haze::Haze;
 use skyfall_core::scene::camera::Camera;
 
@@ -16,18 +18,19 @@ pub struct GpuRenderer {
     pub ctx: GpuContext,
     raycast: SceneRaycastPass,
     haze: HazePass,
+    rain: RainPass,
 }
 
 impl GpuRenderer {
     /// Creates the device and compiles the passes.
     pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
         let ctx = GpuContext::new(choice)?;
-        let (raycast, haze) = ctx.scoped(|| Ok((SceneRaycastPass::new(&ctx), HazePass::new(&ctx))))?;
-        Ok(GpuRenderer { ctx, raycast, haze })
+        let (raycast, haze, rain) = ctx.scoped(|| Ok((SceneRaycastPass::new(&ctx), HazePass::new(&ctx), RainPass::new(&ctx))))?;
+        Ok(GpuRenderer { ctx, raycast, haze, rain })
     }
 
-    /// Renders a frame: the scene (ray cast, or the photo uploaded), then haze, then readback.
-    pub fn render(&self, scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>) -> Result<FrameBuffers, GpuError> {
+    /// Renders a frame: the scene (ray cast, or the photo uploaded), haze, rain, then readback.
+    pub fn render(&self, scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers, GpuError> {
         check_frame_size(cam)?;
         let n = cam.pixels();
         self.ctx.check_buffer(&format!("a {}x{} RGB frame", cam.width, cam.height), (3 * n * 4) as u64)?;
@@ -51,11 +54,24 @@ impl GpuRenderer {
                 self.haze.encode(ctx, &mut enc, h, cam, [&rgb, &depth, &t]);
                 t
             });
+            let rain_out = rain.map(|rf| {
+                let (streaks, stats, drops) = rf.streaks(cam);
+                let alpha = storage(ctx, "rain_alpha", n);
+                let rain_depth = storage(ctx, "rain_depth", n);
+                let targets = RainTargets { rgb: &rgb, depth: &depth, alpha: &alpha, rain_depth: &rain_depth };
+                self.rain.encode(ctx, &mut enc, cam, &streaks, rf.shading.reflectance, targets);
+                (alpha, rain_depth, stats, drops)
+            });
             ctx.queue.submit([enc.finish()]);
             Ok(FrameBuffers {
                 rgb: read_f32(ctx, &rgb, 3 * n)?,
                 depth_m: read_f32(ctx, &depth, n)?,
                 transmittance: trans.map(|t| read_f32(ctx, &t, n)).transpose()?,
+                rain: rain_out
+                    .map(|(alpha, rd, stats, drops)| -> Result<RainBuffers, GpuError> {
+                        Ok(RainBuffers { alpha: read_f32(ctx, &alpha, n)?, depth_m: read_f32(ctx, &rd, n)?, stats, drops })
+                    })
+                    .transpose()?,
             })
         })
     }

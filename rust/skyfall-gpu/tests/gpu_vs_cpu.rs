@@ -5,6 +5,9 @@
 use glam::{Mat3, Vec3};
 use skyfall_core::frame::{render, SceneRef};
 use skyfall_core::haze::Haze;
+use skyfall_core::rain::drops::RainRegion;
+use skyfall_core::rain::splat::{RainFrame, RainShading};
+use skyfall_core::scene::lights::Light;
 use skyfall_core::scene::boxes::{BoxScene, SceneBox};
 use skyfall_core::scene::camera::Camera;
 use skyfall_gpu::frame::GpuRenderer;
@@ -42,8 +45,8 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     let gpu = GpuRenderer::new(AdapterChoice::Any).expect("a Vulkan adapter (lavapipe) is required: make test installs it");
     let (scene, cam) = street();
     let haze = Haze::new(0.004, [3.0 / 7.0; 3]).unwrap();
-    let c = render(SceneRef::Boxes(&scene), &cam, Some(&haze)).unwrap();
-    let g = gpu.render(SceneRef::Boxes(&scene), &cam, Some(&haze)).unwrap();
+    let c = render(SceneRef::Boxes(&scene), &cam, Some(&haze), None).unwrap();
+    let g = gpu.render(SceneRef::Boxes(&scene), &cam, Some(&haze), None).unwrap();
     // Silhouette pixels may pick another surface when f32 rounding differs (FMA): allow 0.5 %.
     let (_, rgb_big) = max_abs(&c.rgb, &g.rgb);
     let (_, depth_big) = max_abs(&c.depth_m, &g.depth_m);
@@ -51,11 +54,35 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     assert!(depth_big * 200 <= c.depth_m.len(), "{depth_big} depths differ");
     // Haze alone on identical inputs: exp differs by a few ulps.
     let photo = SceneRef::Photo { rgb: &c.rgb, depth_m: &c.depth_m };
-    let c2 = render(photo, &cam, Some(&haze)).unwrap();
-    let g2 = gpu.render(photo, &cam, Some(&haze)).unwrap();
+    let c2 = render(photo, &cam, Some(&haze), None).unwrap();
+    let g2 = gpu.render(photo, &cam, Some(&haze), None).unwrap();
     let (worst, _) = max_abs(&c2.rgb, &g2.rgb);
     assert!(worst < 1e-5, "haze max abs diff {worst}");
     let (worst_t, _) = max_abs(c2.transmittance.as_deref().unwrap(), g2.transmittance.as_deref().unwrap());
     assert!(worst_t < 1e-5, "transmittance max abs diff {worst_t}");
     assert_eq!(c2.depth_m, g2.depth_m);
+}
+
+#[test]
+fn gpu_rain_matches_cpu_rain() {
+    let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let (scene, cam) = street();
+    let region = RainRegion::new(40.0, &[1.0, 1.4, 2.0], 4.0, [2.0, 0.0, 0.0], 0.7, 11).unwrap();
+    let lamp = Light::from_row(&[-1.0, 2.5, -3.0, 1.0, 0.8, 0.6, 800.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0).unwrap();
+    let shading = RainShading { lights: vec![lamp], sky_illuminance_lux: 50.0, ..RainShading::open_sky() };
+    let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, ground: true, shading: &shading };
+    // Rain over identical backgrounds: a photo of the CPU's box frame.
+    let bg = render(SceneRef::Boxes(&scene), &cam, None, None).unwrap();
+    let photo = SceneRef::Photo { rgb: &bg.rgb, depth_m: &bg.depth_m };
+    let c = render(photo, &cam, None, Some(&rf)).unwrap();
+    let g = gpu.render(photo, &cam, None, Some(&rf)).unwrap();
+    let (cr, gr) = (c.rain.unwrap(), g.rain.unwrap());
+    assert_eq!(cr.stats, gr.stats);
+    assert!(cr.stats.streaks > 100);
+    let (worst_a, _) = max_abs(&cr.alpha, &gr.alpha);
+    let (worst_rgb, _) = max_abs(&c.rgb, &g.rgb);
+    assert!(worst_a < 1e-4, "rain alpha max abs diff {worst_a}");
+    assert!(worst_rgb < 1e-4, "rgb max abs diff {worst_rgb}");
+    let (worst_z, _) = max_abs(&cr.depth_m, &gr.depth_m);
+    assert!(worst_z < 1e-3, "rain depth max abs diff {worst_z}");
 }

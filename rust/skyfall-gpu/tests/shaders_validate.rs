@@ -18,3 +18,8 @@ fn scene_raycast_wgsl_is_valid() {
 fn haze_wgsl_is_valid() {
     validate("haze", include_str!("../src/shaders/haze.wgsl"));
 }
+
+#[test]
+fn rain_wgsl_is_valid() {
+    validate("rain", include_str!("../src/shaders/rain.wgsl"));
+}

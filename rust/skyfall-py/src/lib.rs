@@ -24,7 +24,7 @@ mod _core {
     #[pymodule_export]
     use super::rain::{rain_diameter_bins, rain_textures};
     #[pymodule_export]
-    use super::rain_frame::{rain_composite, rain_drops};
+    use super::rain_frame::rain_drops;
     #[pymodule_export]
     use super::render::{render_cpu, GpuDevice};
 

@@ -1,26 +1,41 @@
-//! Frame rendering: the CPU backend as a function, the GPU backend as a device object.
+//! Frame rendering: the CPU backend as a function, the GPU backend as a device object. Both
+//! take the same arguments, parsed once into a [`Request`].
 
 use crate::errors::{gpu_error, CoreError};
 use glam::{Mat3, Vec3};
 use numpy::ndarray::{Array2, Array3};
-use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3};
+use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use skyfall_core::frame::{render, FrameBuffers, SceneRef};
 use skyfall_core::haze::Haze;
+use skyfall_core::rain::drops::RainRegion;
+use skyfall_core::rain::splat::{RainFrame, RainShading};
 use skyfall_core::scene::boxes::{BoxScene, SceneBox};
 use skyfall_core::scene::camera::Camera;
+use skyfall_core::scene::lights::Light;
 use skyfall_gpu::frame::GpuRenderer;
 use skyfall_gpu::AdapterChoice;
 
-/// (rgb (H, W, 3), depth_m (H, W), transmittance (H, W) or None).
-type FrameTuple<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray2<f32>>>);
+type F2<'py> = Bound<'py, PyArray2<f32>>;
+/// (rain_alpha, rain_depth_m, drops generated, streaks drawn, drops culled).
+type RainTuple<'py> = (F2<'py>, F2<'py>, usize, usize, usize);
+/// (rgb (H, W, 3), depth_m (H, W), transmittance or None, rain or None).
+type FrameTuple<'py> = (Bound<'py, PyArray3<f32>>, F2<'py>, Option<F2<'py>>, Option<RainTuple<'py>>);
+/// (rain_rate_mm_h, diameters_mm, near_m, wind_m_s, time_s, seed).
+pub(crate) type RegionArgs<'py> = (f64, PyReadonlyArray1<'py, f64>, f64, [f64; 3], f64, u64);
 
 /// Camera from (width, height, [fx, fy, cx, cy, px, py, pz, r00, r01, …, r22]) with the
 /// world_from_camera rotation row-major.
 pub(crate) fn camera(width: u32, height: u32, p: [f32; 16]) -> Result<Camera, CoreError> {
     let rot = Mat3::from_cols_array(&[p[7], p[10], p[13], p[8], p[11], p[14], p[9], p[12], p[15]]);
     Ok(Camera::new(width, height, [p[0], p[1], p[2], p[3]], Vec3::new(p[4], p[5], p[6]), rot)?)
+}
+
+/// A rain region from Python's argument tuple.
+pub(crate) fn region(args: &RegionArgs<'_>) -> PyResult<RainRegion> {
+    let (rate, diams, near, wind, time, seed) = args;
+    Ok(RainRegion::new(*rate, diams.as_slice()?, *near, *wind, *time, *seed).map_err(CoreError)?)
 }
 
 /// Box scene from an (N, 9) array: min xyz, max xyz, albedo rgb per row.
@@ -37,54 +52,114 @@ fn box_scene(boxes: &PyReadonlyArray2<'_, f32>, ground: bool, ground_albedo: [f3
     Ok(BoxScene::new(rows, ground, Vec3::from(ground_albedo)).map_err(CoreError)?)
 }
 
-fn haze(h: Option<(f32, [f32; 3])>) -> Result<Option<Haze>, CoreError> {
-    Ok(h.map(|(sigma, air)| Haze::new(sigma, air)).transpose()?)
+/// Every input of a frame, validated.
+struct Request<'a> {
+    cam: Camera,
+    boxes: Option<BoxScene>,
+    photo: Option<(&'a [f32], &'a [f32])>,
+    haze: Option<Haze>,
+    rain: Option<(RainRegion, f32, bool, RainShading)>,
+}
+
+/// The rain arguments as received from Python.
+struct RainArgs<'a, 'py> {
+    region: Option<&'a RegionArgs<'py>>,
+    exposure_s: f32,
+    ground: bool,
+    lights: Option<&'a PyReadonlyArray2<'py, f32>>,
+    sky_illuminance_lux: f32,
+    cull_threshold: Option<f32>,
+}
+
+impl<'a> Request<'a> {
+    #[allow(clippy::too_many_arguments)]
+    fn parse<'py>(
+        width: u32,
+        height: u32,
+        camera_params: [f32; 16],
+        boxes: Option<&PyReadonlyArray2<'py, f32>>,
+        ground: bool,
+        ground_albedo: [f32; 3],
+        photo: Option<(&'a PyReadonlyArray3<'py, f32>, &'a PyReadonlyArray2<'py, f32>)>,
+        haze_params: Option<(f32, [f32; 3])>,
+        rain: RainArgs<'_, 'py>,
+    ) -> PyResult<Self> {
+        let cam = camera(width, height, camera_params)?;
+        let (boxes, photo) = match (boxes, photo) {
+            (Some(b), None) => (Some(box_scene(b, ground, ground_albedo)?), None),
+            (None, Some((rgb, depth))) => (None, Some((rgb.as_slice()?, depth.as_slice()?))),
+            _ => return Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m")),
+        };
+        let haze = haze_params.map(|(sigma, air)| Haze::new(sigma, air)).transpose().map_err(CoreError)?;
+        let rain = match rain.region {
+            None => None,
+            Some(args) => {
+                if !(rain.exposure_s > 0.0 && rain.exposure_s <= 0.1) {
+                    return Err(PyValueError::new_err(format!("exposure_s = {} is outside the valid range (0, 0.1] s", rain.exposure_s)));
+                }
+                if !(rain.sky_illuminance_lux > 0.0 && rain.sky_illuminance_lux.is_finite()) {
+                    return Err(PyValueError::new_err(format!("sky_illuminance_lux = {} must be positive and finite", rain.sky_illuminance_lux)));
+                }
+                if rain.cull_threshold.is_some_and(|t| !(t >= 0.0 && t.is_finite())) {
+                    return Err(PyValueError::new_err("cull_threshold must be a finite number >= 0, or None"));
+                }
+                let lights = match rain.lights {
+                    None => Vec::new(),
+                    Some(a) => a
+                        .as_array()
+                        .rows()
+                        .into_iter()
+                        .enumerate()
+                        .map(|(i, row)| Light::from_row(&row.to_vec(), i))
+                        .collect::<Result<Vec<_>, _>>()
+                        .map_err(CoreError)?,
+                };
+                let shading = RainShading {
+                    lights,
+                    sky_illuminance_lux: rain.sky_illuminance_lux,
+                    cull_threshold: rain.cull_threshold,
+                    ..RainShading::open_sky()
+                };
+                Some((region(args)?, rain.exposure_s, rain.ground, shading))
+            }
+        };
+        Ok(Request { cam, boxes, photo, haze, rain })
+    }
+
+    fn scene(&self) -> SceneRef<'_> {
+        match (&self.boxes, self.photo) {
+            (Some(b), _) => SceneRef::Boxes(b),
+            (None, Some((rgb, depth_m))) => SceneRef::Photo { rgb, depth_m },
+            (None, None) => SceneRef::Photo { rgb: &[], depth_m: &[] },
+        }
+    }
+
+    fn rain_frame(&self) -> Option<RainFrame<'_>> {
+        self.rain.as_ref().map(|(region, exposure_s, ground, shading)| RainFrame { region, exposure_s: *exposure_s, ground: *ground, shading })
+    }
 }
 
 fn to_py<'py>(py: Python<'py>, cam: &Camera, f: FrameBuffers) -> PyResult<FrameTuple<'py>> {
     let (h, w) = (cam.height as usize, cam.width as usize);
     let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
+    let plane = |v: Vec<f32>| Array2::from_shape_vec((h, w), v).map(|a| a.into_pyarray(py)).map_err(err);
     let rgb = Array3::from_shape_vec((h, w, 3), f.rgb).map_err(err)?.into_pyarray(py);
-    let depth = Array2::from_shape_vec((h, w), f.depth_m).map_err(err)?.into_pyarray(py);
-    let t = f.transmittance.map(|t| Array2::from_shape_vec((h, w), t).map(|a| a.into_pyarray(py))).transpose().map_err(err)?;
-    Ok((rgb, depth, t))
-}
-
-/// Scene arguments as received from Python.
-struct SceneArgs<'a, 'py> {
-    boxes: Option<&'a PyReadonlyArray2<'py, f32>>,
-    ground: bool,
-    ground_albedo: [f32; 3],
-    photo_rgb: Option<&'a PyReadonlyArray3<'py, f32>>,
-    photo_depth_m: Option<&'a PyReadonlyArray2<'py, f32>>,
-}
-
-/// Either an owned box scene or the photo's slices.
-enum Scene<'a> {
-    Boxes(BoxScene),
-    Photo(&'a [f32], &'a [f32]),
-}
-
-impl<'a> Scene<'a> {
-    fn parse(args: &'a SceneArgs<'a, '_>) -> PyResult<Self> {
-        match (args.boxes, args.photo_rgb, args.photo_depth_m) {
-            (Some(b), None, None) => Ok(Scene::Boxes(box_scene(b, args.ground, args.ground_albedo)?)),
-            (None, Some(rgb), Some(depth)) => Ok(Scene::Photo(rgb.as_slice()?, depth.as_slice()?)),
-            _ => Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m")),
-        }
-    }
-
-    fn as_ref(&self) -> SceneRef<'_> {
-        match self {
-            Scene::Boxes(b) => SceneRef::Boxes(b),
-            Scene::Photo(rgb, depth_m) => SceneRef::Photo { rgb, depth_m },
-        }
-    }
+    let depth = plane(f.depth_m)?;
+    let t = f.transmittance.map(plane).transpose()?;
+    let rain = match f.rain {
+        None => None,
+        Some(r) => Some((plane(r.alpha)?, plane(r.depth_m)?, r.drops, r.stats.streaks, r.stats.culled)),
+    };
+    Ok((rgb, depth, t, rain))
 }
 
 /// Renders a frame on the CPU backend.
 #[pyfunction]
-#[pyo3(signature = (width, height, camera_params, *, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None, photo_depth_m=None, haze_params=None))]
+#[pyo3(signature = (
+    width, height, camera_params, *, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
+    photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, rain_ground=true,
+    lights=None, sky_illuminance_lux=10000.0, cull_threshold=None
+))]
 #[allow(clippy::too_many_arguments)]
 pub fn render_cpu<'py>(
     py: Python<'py>,
@@ -97,13 +172,18 @@ pub fn render_cpu<'py>(
     photo_rgb: Option<PyReadonlyArray3<'py, f32>>,
     photo_depth_m: Option<PyReadonlyArray2<'py, f32>>,
     haze_params: Option<(f32, [f32; 3])>,
+    rain_region: Option<RegionArgs<'py>>,
+    exposure_s: f32,
+    rain_ground: bool,
+    lights: Option<PyReadonlyArray2<'py, f32>>,
+    sky_illuminance_lux: f32,
+    cull_threshold: Option<f32>,
 ) -> PyResult<FrameTuple<'py>> {
-    let cam = camera(width, height, camera_params)?;
-    let args = SceneArgs { boxes: boxes.as_ref(), ground, ground_albedo, photo_rgb: photo_rgb.as_ref(), photo_depth_m: photo_depth_m.as_ref() };
-    let scene = Scene::parse(&args)?;
-    let h = haze(haze_params)?;
-    let frame = py.detach(|| render(scene.as_ref(), &cam, h.as_ref())).map_err(CoreError)?;
-    to_py(py, &cam, frame)
+    let rain = RainArgs { region: rain_region.as_ref(), exposure_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
+    let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
+    let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
+    let frame = py.detach(|| render(req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame().as_ref())).map_err(CoreError)?;
+    to_py(py, &req.cam, frame)
 }
 
 /// A wgpu device with every pass compiled, reused across frames.
@@ -131,7 +211,11 @@ impl GpuDevice {
     }
 
     /// Renders a frame on this device (same arguments as `render_cpu`).
-    #[pyo3(signature = (width, height, camera_params, *, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None, photo_depth_m=None, haze_params=None))]
+    #[pyo3(signature = (
+        width, height, camera_params, *, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
+        photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, rain_ground=true,
+        lights=None, sky_illuminance_lux=10000.0, cull_threshold=None
+    ))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
@@ -145,12 +229,17 @@ impl GpuDevice {
         photo_rgb: Option<PyReadonlyArray3<'py, f32>>,
         photo_depth_m: Option<PyReadonlyArray2<'py, f32>>,
         haze_params: Option<(f32, [f32; 3])>,
+        rain_region: Option<RegionArgs<'py>>,
+        exposure_s: f32,
+        rain_ground: bool,
+        lights: Option<PyReadonlyArray2<'py, f32>>,
+        sky_illuminance_lux: f32,
+        cull_threshold: Option<f32>,
     ) -> PyResult<FrameTuple<'py>> {
-        let cam = camera(width, height, camera_params)?;
-        let args = SceneArgs { boxes: boxes.as_ref(), ground, ground_albedo, photo_rgb: photo_rgb.as_ref(), photo_depth_m: photo_depth_m.as_ref() };
-        let scene = Scene::parse(&args)?;
-        let h = haze(haze_params)?;
-        let frame = py.detach(|| self.inner.render(scene.as_ref(), &cam, h.as_ref())).map_err(gpu_error)?;
-        to_py(py, &cam, frame)
+        let rain = RainArgs { region: rain_region.as_ref(), exposure_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
+        let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
+        let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
+        let frame = py.detach(|| self.inner.render(req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame().as_ref())).map_err(gpu_error)?;
+        to_py(py, &req.cam, frame)
     }
 }

@@ -135,8 +135,9 @@ pub struct RainTargets<'a> {
     pub rain_depth_m: &'a mut [f32],
 }
 
-/// Composites the drops' streaks over the frame, far to near.
-pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainShading, t: RainTargets<'_>) -> RainStats {
+/// Projects, lights and culls the drops, sorted far to near (stable: ties keep the drops'
+/// deterministic order). The GPU backend draws the same list.
+pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainShading) -> (Vec<ScreenStreak>, RainStats) {
     let mut stats = RainStats::default();
     let mut streaks: Vec<ScreenStreak> = Vec::with_capacity(drops.len() / 4);
     for d in drops {
@@ -148,12 +149,117 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainSh
         }
         streaks.push(s);
     }
-    // Far to near (stable: ties keep the drops' deterministic order).
     streaks.sort_by(|p, q| (p.inv_za + p.inv_zb).total_cmp(&(q.inv_za + q.inv_zb)));
     stats.streaks = streaks.len();
+    (streaks, stats)
+}
+
+impl ScreenStreak {
+    /// The streak as 12 floats: a.xy, b.xy | 1/z_a, 1/z_b, w_a, w_b | α, light rgb.
+    pub fn packed(&self) -> [f32; 12] {
+        [
+            self.a.x, self.a.y, self.b.x, self.b.y, self.inv_za, self.inv_zb, self.wa, self.wb, self.alpha, self.light.x,
+            self.light.y, self.light.z,
+        ]
+    }
+
+    /// Pixel rows and columns the streak may touch: (x0, x1, y0, y1), end-exclusive, clipped
+    /// to a `width` × `height` frame.
+    pub fn pixel_bounds(&self, width: u32, height: u32) -> (u32, u32, u32, u32) {
+        let c = |v: f32, hi: u32| v.clamp(0.0, hi as f32) as u32;
+        (c(self.min.x.floor(), width), c(self.max.x.ceil(), width), c(self.min.y.floor(), height), c(self.max.y.ceil(), height))
+    }
+
+    /// Coverage of the pixel centred at `p` and the depth there: (α·coverage, depth m), or
+    /// None when the pixel is off the streak. Mirrored line for line in `rain.wgsl`.
+    #[inline]
+    pub fn fragment(&self, p: Vec2) -> Option<(f32, f32)> {
+        let ab = self.b - self.a;
+        let len = ab.length();
+        let dir = if len > 1e-6 { ab / len } else { Vec2::Y };
+        let q = p - self.a;
+        let along = q.dot(dir);
+        let across = q.perp_dot(dir).abs();
+        let k = if len > 1e-6 { (along / len).clamp(0.0, 1.0) } else { 0.0 };
+        let width = self.wa + (self.wb - self.wa) * k;
+        let cov_across = if width >= 1.0 { (0.5 * width + 0.5 - across).clamp(0.0, 1.0) } else { width * (1.0 - across).clamp(0.0, 1.0) };
+        let cov_along = (along + 0.5).clamp(0.0, 1.0).min((len - along + 0.5).clamp(0.0, 1.0));
+        let cov = cov_across * cov_along;
+        if cov <= 0.0 {
+            return None;
+        }
+        Some((self.alpha * cov, 1.0 / (self.inv_za + (self.inv_zb - self.inv_za) * k)))
+    }
+}
+
+/// Streak indices per `tile` × `tile` pixel tile, in list order: (offsets, indices) with the
+/// tile t's streaks at indices[offsets[t]..offsets[t + 1]]. For the GPU pass.
+pub fn bin_by_tile(streaks: &[ScreenStreak], width: u32, height: u32, tile: u32) -> (Vec<u32>, Vec<u32>) {
+    let (tx, ty) = (width.div_ceil(tile), height.div_ceil(tile));
+    let mut counts = vec![0u32; (tx * ty) as usize + 1];
+    let mut ranges = Vec::with_capacity(streaks.len());
+    for s in streaks {
+        let (x0, x1, y0, y1) = s.pixel_bounds(width, height);
+        let r = (x0 / tile, x1.div_ceil(tile), y0 / tile, y1.div_ceil(tile));
+        for j in r.2..r.3 {
+            for i in r.0..r.1 {
+                counts[(j * tx + i) as usize + 1] += 1;
+            }
+        }
+        ranges.push(r);
+    }
+    for t in 1..counts.len() {
+        counts[t] += counts[t - 1];
+    }
+    let mut fill = counts.clone();
+    let mut indices = vec![0u32; counts[counts.len() - 1] as usize];
+    for (k, r) in ranges.iter().enumerate() {
+        for j in r.2..r.3 {
+            for i in r.0..r.1 {
+                let t = (j * tx + i) as usize;
+                indices[fill[t] as usize] = k as u32;
+                fill[t] += 1;
+            }
+        }
+    }
+    (counts, indices)
+}
+
+/// The rain a frame draws.
+#[derive(Debug, Clone, Copy)]
+pub struct RainFrame<'a> {
+    /// Which drops.
+    pub region: &'a super::drops::RainRegion,
+    /// The camera's exposure, s.
+    pub exposure_s: f32,
+    /// Whether the ground bounds the rain.
+    pub ground: bool,
+    /// How drops are lit and culled.
+    pub shading: &'a RainShading,
+}
+
+impl RainFrame<'_> {
+    /// The frame's streaks (see [`prepare`]), its stats, and how many drops were generated
+    /// (those of the voxels that can reach the view).
+    pub fn streaks(&self, cam: &Camera) -> (Vec<ScreenStreak>, RainStats, usize) {
+        let drops = super::drops::drops_in_view(self.region, cam, f64::from(self.exposure_s), self.ground);
+        let (streaks, stats) = prepare(cam, &drops, self.exposure_s, self.shading);
+        (streaks, stats, drops.len())
+    }
+}
+
+/// Composites the drops' streaks over the frame, far to near.
+pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainShading, t: RainTargets<'_>) -> RainStats {
+    let (streaks, stats) = prepare(cam, drops, exposure_s, shading);
+    composite_streaks(cam, &streaks, shading.reflectance, t);
+    stats
+}
+
+/// Composites prepared streaks (see [`prepare`]) over the frame, rows in parallel bands.
+pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], reflectance: f32, t: RainTargets<'_>) {
     let w = cam.width as usize;
     let band = BAND_ROWS * w;
-    let r = shading.reflectance;
+    let r = reflectance;
     t.rgb
         .par_chunks_mut(3 * band)
         .zip(t.depth_m.par_chunks(band))
@@ -166,7 +272,7 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainSh
             // ∏(1 − a) per pixel in `alpha` (1 − it at the end); colour composited in place.
             alpha.fill(1.0);
             rdepth.fill(f32::INFINITY);
-            for s in &streaks {
+            for s in streaks {
                 if s.max.y <= y0 as f32 || s.min.y >= (y0 + rows) as f32 {
                     continue;
                 }
@@ -191,24 +297,11 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainSh
                         continue;
                     }
                     for x in x0 as usize..x1 as usize {
-                        let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - s.a;
-                        // along: position on the streak (px); across: distance from its axis
-                        let along = p.dot(dir);
-                        let across = p.perp_dot(dir).abs();
-                        let k = if len > 1e-6 { (along / len).clamp(0.0, 1.0) } else { 0.0 };
-                        let width = s.wa + (s.wb - s.wa) * k;
-                        let cov_across = if width >= 1.0 { (0.5 * width + 0.5 - across).clamp(0.0, 1.0) } else { width * (1.0 - across).clamp(0.0, 1.0) };
-                        let cov_along = (along + 0.5).clamp(0.0, 1.0).min((len - along + 0.5).clamp(0.0, 1.0));
-                        let cov = cov_across * cov_along;
-                        if cov <= 0.0 {
-                            continue;
-                        }
+                        let Some((a, z)) = s.fragment(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)) else { continue };
                         let i = (y - y0) * w + x;
-                        let z = 1.0 / (s.inv_za + (s.inv_zb - s.inv_za) * k);
                         if z >= depth[i] {
                             continue;
                         }
-                        let a = s.alpha * cov;
                         let ar = a * r;
                         for (c, l) in rgb[3 * i..3 * i + 3].iter_mut().zip(s.light.to_array()) {
                             *c += ar * (l - *c);
@@ -222,7 +315,6 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainSh
                 *a = 1.0 - *a;
             }
         });
-    stats
 }
 
 #[cfg(test)]

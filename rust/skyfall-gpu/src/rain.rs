@@ -1,0 +1,69 @@
+//! The rain pass: streaks composited over the frame (`shaders/rain.wgsl`). Streaks are
+//! projected, lit, culled, sorted and binned into 16 × 16 tiles on the CPU
+//! (`skyfall_core::rain::splat`); each pixel walks its tile's list.
+
+use crate::camera::camera_words;
+use crate::context::GpuContext;
+use crate::pass::{storage_init, uniform, Binding, ComputePass};
+use skyfall_core::rain::splat::{bin_by_tile, ScreenStreak};
+use skyfall_core::scene::camera::Camera;
+
+const SOURCE: &str = include_str!("shaders/rain.wgsl");
+/// Tile side, px.
+pub const TILE: u32 = 16;
+
+/// The compiled pass.
+#[derive(Debug)]
+pub struct RainPass(ComputePass);
+
+/// The frame buffers the pass reads and writes: rgb (in place), depth (read), alpha and
+/// rain depth (written).
+pub struct RainTargets<'a> {
+    /// Linear RGB.
+    pub rgb: &'a wgpu::Buffer,
+    /// Scene depth.
+    pub depth: &'a wgpu::Buffer,
+    /// Streak coverage.
+    pub alpha: &'a wgpu::Buffer,
+    /// Nearest streak depth.
+    pub rain_depth: &'a wgpu::Buffer,
+}
+
+impl RainPass {
+    /// Compiles the pass.
+    pub fn new(ctx: &GpuContext) -> Self {
+        use Binding::*;
+        RainPass(ComputePass::new(
+            ctx,
+            "rain",
+            SOURCE,
+            &[Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadOnly, ReadWrite, ReadWrite],
+        ))
+    }
+
+    /// Records the pass over prepared `streaks` (far to near).
+    pub fn encode(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, cam: &Camera, streaks: &[ScreenStreak], reflectance: f32, t: RainTargets<'_>) {
+        let (offsets, mut indices) = bin_by_tile(streaks, cam.width, cam.height, TILE);
+        let mut packed: Vec<f32> = streaks.iter().flat_map(|s| s.packed()).collect();
+        // Bindings may not be empty; the offsets keep padding unread.
+        if packed.is_empty() {
+            packed.resize(12, 0.0);
+        }
+        if indices.is_empty() {
+            indices.push(0);
+        }
+        let params = [reflectance.to_bits(), cam.width.div_ceil(TILE), TILE, 0];
+        let cam_buf = uniform(ctx, "camera", &camera_words(cam));
+        let params_buf = uniform(ctx, "rain", &params);
+        let streak_buf = storage_init(ctx, "streaks", &packed);
+        let offsets_buf = storage_init(ctx, "tile offsets", bytemuck::cast_slice(&offsets));
+        let indices_buf = storage_init(ctx, "tile indices", bytemuck::cast_slice(&indices));
+        self.0.encode(
+            ctx,
+            enc,
+            &[&cam_buf, &params_buf, &streak_buf, &offsets_buf, &indices_buf, t.rgb, t.depth, t.alpha, t.rain_depth],
+            cam.width,
+            cam.height,
+        );
+    }
+}

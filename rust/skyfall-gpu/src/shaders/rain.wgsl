@@ -1,0 +1,81 @@
+// Rain streaks over the frame, per pixel over its tile's streaks (sorted far to near on the
+// CPU). CPU reference: skyfall_core::rain::splat (ScreenStreak::fragment, composite_streaks),
+// kept line for line comparable. Prepended with common.wgsl.
+
+struct RainParams {
+    reflectance: f32,
+    tiles_x: u32,
+    tile: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> cam: Camera;
+@group(0) @binding(1) var<uniform> params: RainParams;
+@group(0) @binding(2) var<storage, read> streaks: array<vec4<f32>>;  // 3 per streak
+@group(0) @binding(3) var<storage, read> offsets: array<u32>;
+@group(0) @binding(4) var<storage, read> indices: array<u32>;
+@group(0) @binding(5) var<storage, read_write> rgb: array<f32>;
+@group(0) @binding(6) var<storage, read> depth: array<f32>;
+@group(0) @binding(7) var<storage, read_write> alpha: array<f32>;
+@group(0) @binding(8) var<storage, read_write> rain_depth: array<f32>;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = cam.size.x;
+    if gid.x >= w || gid.y >= cam.size.y {
+        return;
+    }
+    let i = gid.y * w + gid.x;
+    let p = vec2<f32>(f32(gid.x) + 0.5, f32(gid.y) + 0.5);
+    let t = (gid.y / params.tile) * params.tiles_x + gid.x / params.tile;
+    var c = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);
+    var keep = 1.0;
+    var z_min = infinity();
+    let scene_depth = depth[i];
+    for (var j = offsets[t]; j < offsets[t + 1u]; j++) {
+        let k = indices[j];
+        let s0 = streaks[3u * k];
+        let s1 = streaks[3u * k + 1u];
+        let s2 = streaks[3u * k + 2u];
+        let a = s0.xy;
+        let ab = s0.zw - a;
+        let len = length(ab);
+        var dir = vec2<f32>(0.0, 1.0);
+        if len > 1e-6 {
+            dir = ab / len;
+        }
+        let q = p - a;
+        let along = dot(q, dir);
+        let across = abs(q.x * dir.y - q.y * dir.x);
+        var kk = 0.0;
+        if len > 1e-6 {
+            kk = clamp(along / len, 0.0, 1.0);
+        }
+        let width = s1.z + (s1.w - s1.z) * kk;
+        var cov_across: f32;
+        if width >= 1.0 {
+            cov_across = clamp(0.5 * width + 0.5 - across, 0.0, 1.0);
+        } else {
+            cov_across = width * clamp(1.0 - across, 0.0, 1.0);
+        }
+        let cov_along = min(clamp(along + 0.5, 0.0, 1.0), clamp(len - along + 0.5, 0.0, 1.0));
+        let cov = cov_across * cov_along;
+        if cov <= 0.0 {
+            continue;
+        }
+        let z = 1.0 / (s1.x + (s1.y - s1.x) * kk);
+        if z >= scene_depth {
+            continue;
+        }
+        let fa = s2.x * cov;
+        let ar = fa * params.reflectance;
+        c += ar * (s2.yzw - c);
+        keep *= 1.0 - fa;
+        z_min = min(z_min, z);
+    }
+    rgb[3u * i] = c.x;
+    rgb[3u * i + 1u] = c.y;
+    rgb[3u * i + 2u] = c.z;
+    alpha[i] = 1.0 - keep;
+    rain_depth[i] = z_min;
+}
