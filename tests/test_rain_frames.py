@@ -231,3 +231,24 @@ def test_a_light_of_zero_intensity_changes_nothing_and_culling_counts():
         SpotLight((0, 0, 0), (0, 0, 1), 1.0, cone_deg=120.0)
     with pytest.raises(ValueError, match="intensity_cd"):
         PointLight((0, 0, 0), -5.0)
+
+
+def test_a_moving_camera_sees_the_drops_relative_motion(cpu):
+    # Drops fall at 4-7 m/s; a camera moving sideways at 25 m/s sees them sweep across the
+    # frame: streaks turn from vertical to nearly horizontal.
+    def lag_corr(x: np.ndarray, axis: int, lag: int = 4) -> float:
+        x = x - x.mean()
+        a = np.take(x, range(lag, x.shape[axis]), axis=axis)
+        b = np.take(x, range(0, x.shape[axis] - lag), axis=axis)
+        return float((a * b).sum() / (x * x).sum())
+
+    img = np.full((H, W, 3), 0.1, np.float32)
+    inf = np.full((H, W), np.inf, np.float32)
+    w = Weather(rain_rate_mm_h=30.0, rain_near_m=3.0)
+    still = cpu.render(PhotoScene(img, inf, camera=Camera((0.0, 1.6, 0.0))), w, seed=6).layers["rain_alpha"]
+    moving_cam = Camera((0.0, 1.6, 0.0), velocity_m_s=(25.0, 0.0, 0.0))
+    moving = cpu.render(PhotoScene(img, inf, camera=moving_cam), w, seed=6).layers["rain_alpha"]
+    assert lag_corr(still, 0) > lag_corr(still, 1)
+    assert lag_corr(moving, 1) > lag_corr(moving, 0)
+    with pytest.raises(ValueError, match="velocity_m_s"):
+        Camera(velocity_m_s=(2000.0, 0.0, 0.0))

@@ -58,6 +58,9 @@ class Camera:
         field of view, principal point at the image centre.
     exposure_s : float
         Shutter time, s, in (0, 0.1]: streak length of moving drops (rain frames).
+    velocity_m_s : sequence of 3 float
+        The camera's own velocity, m/s (at most 1000 m/s): streaks follow the drops' motion
+        relative to the camera, e.g. a car driving into the rain.
     """
 
     def __init__(
@@ -75,8 +78,12 @@ class Camera:
         cx: float | None = None,
         cy: float | None = None,
         exposure_s: float = 1.0 / 30.0,
+        velocity_m_s: Sequence[float] = (0.0, 0.0, 0.0),
     ) -> None:
         self.position_m = _finite_vec3("position_m", position_m)
+        self.velocity_m_s = _finite_vec3("velocity_m_s", velocity_m_s)
+        if float(np.linalg.norm(self.velocity_m_s)) > 1000.0:
+            raise ValueError(f"velocity_m_s = {self.velocity_m_s.tolist()} is faster than 1000 m/s")
         fov = real("vertical_fov_deg", vertical_fov_deg)
         if not 0.0 < fov < 179.0:
             raise ValueError(f"vertical_fov_deg = {fov} is outside the valid range (0, 179) degrees")
@@ -129,6 +136,7 @@ class Camera:
             width=width,
             height=height,
             exposure_s=self.exposure_s,
+            velocity_m_s=tuple(self.velocity_m_s),
         )
 
     def intrinsics(self) -> tuple[float, float, float, float]:

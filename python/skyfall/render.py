@@ -201,6 +201,7 @@ class Renderer:
             kwargs.update(
                 rain_region=weather.rain_region_args(t, seed),
                 exposure_s=cam.exposure_s,
+                camera_velocity_m_s=cam.velocity_m_s.tolist(),
                 rain_ground=isinstance(scene, BoxScene) and scene.ground,
                 lights=pack(scene.lights),
                 sky_illuminance_lux=weather.sky_illuminance_lux,

@@ -58,13 +58,14 @@ struct Request<'a> {
     boxes: Option<BoxScene>,
     photo: Option<(&'a [f32], &'a [f32])>,
     haze: Option<Haze>,
-    rain: Option<(RainRegion, f32, bool, RainShading)>,
+    rain: Option<(RainRegion, f32, Vec3, bool, RainShading)>,
 }
 
 /// The rain arguments as received from Python.
 struct RainArgs<'a, 'py> {
     region: Option<&'a RegionArgs<'py>>,
     exposure_s: f32,
+    camera_velocity_m_s: [f32; 3],
     ground: bool,
     lights: Option<&'a PyReadonlyArray2<'py, f32>>,
     sky_illuminance_lux: f32,
@@ -120,7 +121,11 @@ impl<'a> Request<'a> {
                     cull_threshold: rain.cull_threshold,
                     ..RainShading::open_sky()
                 };
-                Some((region(args)?, rain.exposure_s, rain.ground, shading))
+                let v = Vec3::from(rain.camera_velocity_m_s);
+                if !v.is_finite() || v.length() > 1000.0 {
+                    return Err(PyValueError::new_err(format!("camera velocity_m_s = {v} must be finite and at most 1000 m/s")));
+                }
+                Some((region(args)?, rain.exposure_s, v, rain.ground, shading))
             }
         };
         Ok(Request { cam, boxes, photo, haze, rain })
@@ -135,7 +140,13 @@ impl<'a> Request<'a> {
     }
 
     fn rain_frame(&self) -> Option<RainFrame<'_>> {
-        self.rain.as_ref().map(|(region, exposure_s, ground, shading)| RainFrame { region, exposure_s: *exposure_s, ground: *ground, shading })
+        self.rain.as_ref().map(|(region, exposure_s, camera_velocity_m_s, ground, shading)| RainFrame {
+            region,
+            exposure_s: *exposure_s,
+            camera_velocity_m_s: *camera_velocity_m_s,
+            ground: *ground,
+            shading,
+        })
     }
 }
 
@@ -157,7 +168,7 @@ fn to_py<'py>(py: Python<'py>, cam: &Camera, f: FrameBuffers) -> PyResult<FrameT
 #[pyfunction]
 #[pyo3(signature = (
     width, height, camera_params, *, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
-    photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, rain_ground=true,
+    photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3], rain_ground=true,
     lights=None, sky_illuminance_lux=10000.0, cull_threshold=None
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -174,12 +185,13 @@ pub fn render_cpu<'py>(
     haze_params: Option<(f32, [f32; 3])>,
     rain_region: Option<RegionArgs<'py>>,
     exposure_s: f32,
+    camera_velocity_m_s: [f32; 3],
     rain_ground: bool,
     lights: Option<PyReadonlyArray2<'py, f32>>,
     sky_illuminance_lux: f32,
     cull_threshold: Option<f32>,
 ) -> PyResult<FrameTuple<'py>> {
-    let rain = RainArgs { region: rain_region.as_ref(), exposure_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
+    let rain = RainArgs { region: rain_region.as_ref(), exposure_s, camera_velocity_m_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
     let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
     let frame = py.detach(|| render(req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame().as_ref())).map_err(CoreError)?;
@@ -213,7 +225,7 @@ impl GpuDevice {
     /// Renders a frame on this device (same arguments as `render_cpu`).
     #[pyo3(signature = (
         width, height, camera_params, *, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
-        photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, rain_ground=true,
+        photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3], rain_ground=true,
         lights=None, sky_illuminance_lux=10000.0, cull_threshold=None
     ))]
     #[allow(clippy::too_many_arguments)]
@@ -231,12 +243,13 @@ impl GpuDevice {
         haze_params: Option<(f32, [f32; 3])>,
         rain_region: Option<RegionArgs<'py>>,
         exposure_s: f32,
+        camera_velocity_m_s: [f32; 3],
         rain_ground: bool,
         lights: Option<PyReadonlyArray2<'py, f32>>,
         sky_illuminance_lux: f32,
         cull_threshold: Option<f32>,
     ) -> PyResult<FrameTuple<'py>> {
-        let rain = RainArgs { region: rain_region.as_ref(), exposure_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
+        let rain = RainArgs { region: rain_region.as_ref(), exposure_s, camera_velocity_m_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
         let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
         let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
         let frame = py.detach(|| self.inner.render(req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame().as_ref())).map_err(gpu_error)?;

@@ -110,14 +110,14 @@ pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop
 }
 
 /// The drops of [`drops_near`] that can draw into `cam`'s frame during `exposure_s`: voxels
-/// whose bounding sphere, grown by the farthest a drop moves in the exposure, misses the
-/// view frustum are skipped without drawing their drops (their streaks cannot reach the
-/// frame). The drops kept are exactly those of [`drops_near`] in those voxels.
-pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, ground: bool) -> Vec<Drop> {
+/// whose bounding sphere, grown by the farthest a drop moves relative to the camera (which
+/// moves at `camera_speed_m_s`) in the exposure, misses the view frustum are skipped without
+/// drawing their drops. The drops kept are exactly those of [`drops_near`] in those voxels.
+pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64, ground: bool) -> Vec<Drop> {
     let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
     let d_max = region.bins.last().map_or(0.0, |b| b.1);
     let speed = (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
-    let margin = (3f64.sqrt() / 2.0 + speed * exposure_s) as f32;
+    let margin = (3f64.sqrt() / 2.0 + (speed + camera_speed_m_s) * exposure_s) as f32;
     let (w, h) = (cam.width as f32, cam.height as f32);
     // Inward side planes of the frustum in camera space (the camera looks along −z).
     let planes = [
@@ -208,7 +208,7 @@ mod tests {
         let rot = Mat3::from_rotation_y(0.4) * Mat3::from_rotation_x(-0.2);
         let cam = Camera::new(80, 60, [60.0, 60.0, 40.0, 30.0], Vec3::new(0.2, 1.6, 0.3), rot).unwrap();
         let all = drops_near(&r, cam.position_m, true);
-        let seen = drops_in_view(&r, &cam, 1.0 / 30.0, true);
+        let seen = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true);
         assert!(seen.len() * 2 < all.len(), "{} of {}", seen.len(), all.len());
         let draw = |drops: &[Drop]| {
             let n = cam.pixels();

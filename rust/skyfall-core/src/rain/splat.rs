@@ -93,9 +93,10 @@ fn project(cam: &Camera, pc: glam::Vec3) -> Vec2 {
     Vec2::new(cam.cx + cam.fx * pc.x / z, cam.cy - cam.fy * pc.y / z)
 }
 
-/// Projects a drop's exposure-long path; None when it is behind the camera.
-pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32) -> Option<ScreenStreak> {
-    let mut pa = to_camera(cam, d.position_m - d.velocity_m_s * exposure_s);
+/// Projects a drop's exposure-long path relative to a camera moving at `camera_velocity_m_s`
+/// (the camera's pose is the one at the end of the exposure); None when it is behind.
+pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_s: Vec3) -> Option<ScreenStreak> {
+    let mut pa = to_camera(cam, d.position_m - (d.velocity_m_s - camera_velocity_m_s) * exposure_s);
     let mut pb = to_camera(cam, d.position_m);
     let (za, zb) = (-pa.z, -pb.z);
     if za < NEAR_CLIP_M && zb < NEAR_CLIP_M {
@@ -137,11 +138,11 @@ pub struct RainTargets<'a> {
 
 /// Projects, lights and culls the drops, sorted far to near (stable: ties keep the drops'
 /// deterministic order). The GPU backend draws the same list.
-pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainShading) -> (Vec<ScreenStreak>, RainStats) {
+pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_s: Vec3, shading: &RainShading) -> (Vec<ScreenStreak>, RainStats) {
     let mut stats = RainStats::default();
     let mut streaks: Vec<ScreenStreak> = Vec::with_capacity(drops.len() / 4);
     for d in drops {
-        let Some(mut s) = screen_streak(cam, d, exposure_s) else { continue };
+        let Some(mut s) = screen_streak(cam, d, exposure_s, camera_velocity_m_s) else { continue };
         s.light = shading.drop_light(d.position_m);
         if shading.cull_threshold.is_some_and(|th| s.light.max_element() < th) {
             stats.culled += 1;
@@ -232,6 +233,8 @@ pub struct RainFrame<'a> {
     pub region: &'a super::drops::RainRegion,
     /// The camera's exposure, s.
     pub exposure_s: f32,
+    /// The camera's velocity, m/s: streaks follow the drops' motion relative to it.
+    pub camera_velocity_m_s: Vec3,
     /// Whether the ground bounds the rain.
     pub ground: bool,
     /// How drops are lit and culled.
@@ -242,15 +245,15 @@ impl RainFrame<'_> {
     /// The frame's streaks (see [`prepare`]), its stats, and how many drops were generated
     /// (those of the voxels that can reach the view).
     pub fn streaks(&self, cam: &Camera) -> (Vec<ScreenStreak>, RainStats, usize) {
-        let drops = super::drops::drops_in_view(self.region, cam, f64::from(self.exposure_s), self.ground);
-        let (streaks, stats) = prepare(cam, &drops, self.exposure_s, self.shading);
+        let drops = super::drops::drops_in_view(self.region, cam, f64::from(self.exposure_s), f64::from(self.camera_velocity_m_s.length()), self.ground);
+        let (streaks, stats) = prepare(cam, &drops, self.exposure_s, self.camera_velocity_m_s, self.shading);
         (streaks, stats, drops.len())
     }
 }
 
-/// Composites the drops' streaks over the frame, far to near.
+/// Composites the drops' streaks over the frame, far to near, for a camera at rest.
 pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainShading, t: RainTargets<'_>) -> RainStats {
-    let (streaks, stats) = prepare(cam, drops, exposure_s, shading);
+    let (streaks, stats) = prepare(cam, drops, exposure_s, Vec3::ZERO, shading);
     composite_streaks(cam, &streaks, shading.reflectance, t);
     stats
 }
@@ -352,5 +355,12 @@ mod tests {
         let culling = RainShading { cull_threshold: Some(1.5), ..white.clone() };
         let stats = composite(&cam, &[d], 1.0 / 30.0, &culling, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha2, rain_depth_m: &mut rd });
         assert_eq!(stats, RainStats { streaks: 0, culled: 1 });
+        // a camera moving with the drop sees a dot (the drop's disc), not a streak
+        let s = screen_streak(&cam, &d, 1.0 / 30.0, d.velocity_m_s).unwrap();
+        assert!(s.a.distance(s.b) < 1e-4 && s.alpha == 1.0);
+        // a camera moving up at 6.5 m/s doubles the streak
+        let still = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO).unwrap();
+        let up = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::new(0.0, 6.5, 0.0)).unwrap();
+        assert!((up.a.distance(up.b) / still.a.distance(still.b) - 2.0).abs() < 1e-3);
     }
 }
