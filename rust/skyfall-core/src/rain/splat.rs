@@ -82,6 +82,9 @@ pub struct ScreenStreak {
     min: Vec2,
     max: Vec2,
     light: Vec3,
+    /// Unit direction a → b (+y for a dot) and length, px: per streak, not per pixel.
+    dir: Vec2,
+    len: f32,
 }
 
 fn to_camera(cam: &Camera, p: glam::Vec3) -> glam::Vec3 {
@@ -121,7 +124,8 @@ pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_
     if !on_screen || !alpha.is_finite() {
         return None;
     }
-    Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max, light: Vec3::ONE })
+    let dir = if len > 1e-6 { (b - a) / len } else { Vec2::Y };
+    Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max, light: Vec3::ONE, dir, len })
 }
 
 /// Per-pixel buffers the rain pass writes.
@@ -175,9 +179,7 @@ impl ScreenStreak {
     /// None when the pixel is off the streak. Mirrored line for line in `rain.wgsl`.
     #[inline]
     pub fn fragment(&self, p: Vec2) -> Option<(f32, f32)> {
-        let ab = self.b - self.a;
-        let len = ab.length();
-        let dir = if len > 1e-6 { ab / len } else { Vec2::Y };
+        let (dir, len) = (self.dir, self.len);
         let q = p - self.a;
         let along = q.dot(dir);
         let across = q.perp_dot(dir).abs();
@@ -279,9 +281,7 @@ pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], reflectance: f3
                 if s.max.y <= y0 as f32 || s.min.y >= (y0 + rows) as f32 {
                     continue;
                 }
-                let ab = s.b - s.a;
-                let len = ab.length();
-                let dir = if len > 1e-6 { ab / len } else { Vec2::Y };
+                let dir = s.dir;
                 let ys = (s.min.y.floor().max(y0 as f32) as usize)..(s.max.y.ceil().min((y0 + rows) as f32) as usize);
                 let (bx0, bx1) = (s.min.x.floor().max(0.0), s.max.x.ceil().min(w as f32));
                 // Pixels farther than `reach` from the axis get no coverage: on a steep streak
