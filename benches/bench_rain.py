@@ -57,9 +57,22 @@ def main() -> None:
     except GpuUnavailableError as exc:  # a machine without Vulkan still gets the CPU rows
         print(f"GPU row skipped: {exc}")
 
+    # Billboards (seed 000) against the per-drop reference: mean-opacity bias over 6 seeds and
+    # time, on a 640x360 frame looking into open rain, for several rain-region radii.
+    small = Renderer(640, 360, backend="cpu")
+    open_rain = PhotoScene(np.full((360, 640, 3), 0.1, np.float32), np.full((360, 640), np.inf, np.float32))
+    methods: list[dict[str, object]] = []
+    for near in (3.0, 5.0, 8.0):
+        row: dict[str, object] = {"rain_near_m": near}
+        for m in ("drops", "billboards"):
+            w = Weather(rain_rate_mm_h=20.0, rain_near_m=near, rain_method=m)
+            row[f"{m}_alpha"] = float(np.mean([small.render(open_rain, w, seed=s).layers["rain_alpha"].mean() for s in range(6)]))
+            row[f"{m}_s"] = median_s(lambda w=w: small.render(open_rain, w, seed=0), 5)
+        methods.append(row)
+
     RESULTS.mkdir(parents=True, exist_ok=True)
     env = {"cpus": os.cpu_count(), "machine": platform.machine(), "date": time.strftime("%Y-%m-%d")}
-    (RESULTS / "rain.json").write_text(json.dumps({"env": env, "frame": [W, H], "stats": stats, "rows": rows}, indent=2))
+    (RESULTS / "rain.json").write_text(json.dumps({"env": env, "frame": [W, H], "stats": stats, "rows": rows, "methods": methods}, indent=2))
     lines = [
         "# Rain benchmark: a 1920x1080 photo with depth, 10 mm/h",
         "",
@@ -75,8 +88,25 @@ def main() -> None:
         lines.append(f"| {r['impl']} | {s * 1e3:.1f} ms | {1 / s:.1f} | {t_alb / s:.2f}× |")
     lines += [
         "",
-        "The per-drop method is the reference, not the fast path: the billboard method of seed 000",
-        "(sparse streak lists, fused passes) is what the 2× throughput goal is set for.",
+        "## Billboards (seed 000) against the per-drop reference",
+        "",
+        "640x360, open rain at 20 mm/h, mean rain_alpha over 6 seeds; times are medians of one frame.",
+        "Billboards draw a voxel's streaks at its centre's depth; opacity-area goes as 1/z², so they come",
+        "out under the reference (Jensen), most for small regions where near drops dominate.",
+        "",
+        "| rain_near_m | drops: mean alpha | billboards: mean alpha | bias | drops time | billboards time |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in methods:
+        da, ba = float(r["drops_alpha"]), float(r["billboards_alpha"])  # type: ignore[arg-type]
+        lines.append(
+            f"| {r['rain_near_m']:g} | {da:.5f} | {ba:.5f} | {ba / da - 1:+.1%} | "
+            f"{float(r['drops_s']) * 1e3:.0f} ms | {float(r['billboards_s']) * 1e3:.0f} ms |"  # type: ignore[arg-type]
+        )
+    lines += [
+        "",
+        "Drawn sparsely (streak lists, not textured quads) both methods cost about the same: the",
+        "billboard's saving is only in generating drops. Neither reaches the 2× albumentations goal yet.",
     ]
     (RESULTS / "rain.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -40,7 +40,7 @@ FRAME_BUDGET_BYTES: int
 class SkyfallError(Exception): ...
 class GpuUnavailableError(SkyfallError): ...
 
-_RegionArgs = tuple[float, NDArray[np.float64], float, list[float], float, int]
+_RegionArgs = tuple[float, NDArray[np.float64], float, list[float], float, int, str]
 _RainTuple = tuple[NDArray[np.float32], NDArray[np.float32], int, int, int]
 _FrameTuple = tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32] | None, _RainTuple | None]
 

@@ -211,7 +211,8 @@ def drops(center_m: Sequence[float], weather: Weather, *, time_s: float = 0.0, s
     generator seeded by (seed, voxel, diameter bin), with Marshall-Palmer counts and sizes and
     Beard fall speeds, and move with (wind_x, -v, wind_z), wrapping inside their voxel. So
     the same seed gives the same drops for any camera, frame or process: ground truth for
-    stereo and video. With ``ground`` no drops lie below y = 0.
+    stereo and video. With ``ground`` no drops lie below y = 0. These are always the
+    individual drops (``weather.rain_method`` only changes how frames draw them).
 
     Parameters
     ----------
@@ -230,6 +231,6 @@ def drops(center_m: Sequence[float], weather: Weather, *, time_s: float = 0.0, s
     if c.size != 3 or not np.all(np.isfinite(c)):
         raise ValueError(f"center_m must be 3 finite numbers (m), got {center_m!r}")
     s = integer("seed", seed, 0, 2**64 - 1)
-    args = weather.rain_region_args(real("time_s", time_s), s)
+    args = weather.rain_region_args(real("time_s", time_s), s)[:6] + ("drops",)
     pos, vel, diam, ids = _core.rain_drops([float(v) for v in c], args, ground=bool(ground))
     return Drops(pos, vel, diam, ids)

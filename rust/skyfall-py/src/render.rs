@@ -9,7 +9,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use skyfall_core::frame::{render, FrameBuffers, SceneRef};
 use skyfall_core::haze::Haze;
-use skyfall_core::rain::drops::RainRegion;
+use skyfall_core::rain::drops::{RainMethod, RainRegion};
 use skyfall_core::rain::splat::{RainFrame, RainShading};
 use skyfall_core::scene::boxes::{BoxScene, SceneBox};
 use skyfall_core::scene::camera::Camera;
@@ -22,8 +22,8 @@ type F2<'py> = Bound<'py, PyArray2<f32>>;
 type RainTuple<'py> = (F2<'py>, F2<'py>, usize, usize, usize);
 /// (rgb (H, W, 3), depth_m (H, W), transmittance or None, rain or None).
 type FrameTuple<'py> = (Bound<'py, PyArray3<f32>>, F2<'py>, Option<F2<'py>>, Option<RainTuple<'py>>);
-/// (rain_rate_mm_h, diameters_mm, near_m, wind_m_s, time_s, seed).
-pub(crate) type RegionArgs<'py> = (f64, PyReadonlyArray1<'py, f64>, f64, [f64; 3], f64, u64);
+/// (rain_rate_mm_h, diameters_mm, near_m, wind_m_s, time_s, seed, method).
+pub(crate) type RegionArgs<'py> = (f64, PyReadonlyArray1<'py, f64>, f64, [f64; 3], f64, u64, String);
 
 /// Camera from (width, height, [fx, fy, cx, cy, px, py, pz, r00, r01, …, r22]) with the
 /// world_from_camera rotation row-major.
@@ -34,8 +34,10 @@ pub(crate) fn camera(width: u32, height: u32, p: [f32; 16]) -> Result<Camera, Co
 
 /// A rain region from Python's argument tuple.
 pub(crate) fn region(args: &RegionArgs<'_>) -> PyResult<RainRegion> {
-    let (rate, diams, near, wind, time, seed) = args;
-    Ok(RainRegion::new(*rate, diams.as_slice()?, *near, *wind, *time, *seed).map_err(CoreError)?)
+    let (rate, diams, near, wind, time, seed, method) = args;
+    let mut region = RainRegion::new(*rate, diams.as_slice()?, *near, *wind, *time, *seed).map_err(CoreError)?;
+    region.method = RainMethod::parse(method).map_err(CoreError)?;
+    Ok(region)
 }
 
 /// Box scene from an (N, 9) array: min xyz, max xyz, albedo rgb per row.

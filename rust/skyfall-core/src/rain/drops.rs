@@ -41,6 +41,8 @@ pub struct RainRegion {
     pub time_s: f64,
     /// Seed.
     pub seed: u64,
+    /// Drops or billboards.
+    pub method: RainMethod,
 }
 
 impl RainRegion {
@@ -52,7 +54,15 @@ impl RainRegion {
             WIND_M_S.check("wind_m_s", Some(i), *w)?;
         }
         Range::closed(-1e7, 1e7, "s").check("time_s", None, time_s)?;
-        Ok(RainRegion { rain_rate_mm_h, bins: diameter_bins(diameters_mm)?, near_m, wind_m_s: DVec3::from(wind_m_s), time_s, seed })
+        Ok(RainRegion {
+            rain_rate_mm_h,
+            bins: diameter_bins(diameters_mm)?,
+            near_m,
+            wind_m_s: DVec3::from(wind_m_s),
+            time_s,
+            seed,
+            method: RainMethod::Drops,
+        })
     }
 }
 
@@ -103,17 +113,45 @@ fn voxel_drops(region: &RainRegion, law: &FallSpeed, voxel: [i64; 3], bin: usize
     }
 }
 
+/// How the rain region is filled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RainMethod {
+    /// Every drop individually (the reference).
+    Drops,
+    /// Seed 000's billboards: per voxel and diameter bin, the bin's rain texture on a 1 m
+    /// billboard through the voxel centre, facing the camera horizontally, scrolling down.
+    Billboards,
+}
+
+impl RainMethod {
+    /// Parses `"drops"` or `"billboards"`.
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "drops" => Ok(Self::Drops),
+            "billboards" => Ok(Self::Billboards),
+            other => Err(crate::error::Error::Invalid {
+                param: crate::error::Param { name: "rain_method", index: None },
+                message: format!("unknown rain method {other:?}; expected \"drops\" or \"billboards\""),
+            }),
+        }
+    }
+}
+
 /// Every drop within `region.near_m` of `center_m` (voxels at or above the ground only when
 /// `ground` is set), in a deterministic order.
 pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop> {
-    drops_where(region, center_m, ground, |_| true)
+    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    voxels_where(region, center_m, ground, |_| true, |voxel, out| {
+        for bin in 0..region.bins.len() {
+            voxel_drops(region, &law, voxel, bin, out);
+        }
+    })
 }
 
-/// The drops of [`drops_near`] that can draw into `cam`'s frame during `exposure_s`: voxels
-/// whose bounding sphere, grown by the farthest a drop moves relative to the camera (which
-/// moves at `camera_speed_m_s`) in the exposure, misses the view frustum are skipped without
-/// drawing their drops. The drops kept are exactly those of [`drops_near`] in those voxels.
-pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64, ground: bool) -> Vec<Drop> {
+/// Whether a voxel (by its centre) can draw into `cam`'s frame during `exposure_s`: its
+/// bounding sphere, grown by the farthest a drop moves relative to the camera (moving at
+/// `camera_speed_m_s`) in the exposure, meets the view frustum.
+pub fn voxel_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64) -> impl Fn(Vec3) -> bool + Sync + use<> {
     let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
     let d_max = region.bins.last().map_or(0.0, |b| b.1);
     let speed = (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
@@ -129,14 +167,35 @@ pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_
     ]
     .map(|n| n.normalize());
     let to_cam = cam.rotation.transpose();
-    drops_where(region, cam.position_m, ground, |centre| {
-        let pc = to_cam * (centre - cam.position_m);
+    let position = cam.position_m;
+    move |centre: Vec3| {
+        let pc = to_cam * (centre - position);
         planes.iter().all(|n| n.dot(pc) >= -margin)
+    }
+}
+
+/// The drops of [`drops_near`] that can draw into `cam`'s frame (see [`voxel_in_view`]): the
+/// voxels that cannot are skipped without drawing their drops. The drops kept are exactly
+/// those of [`drops_near`] in those voxels.
+pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64, ground: bool) -> Vec<Drop> {
+    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    voxels_where(region, cam.position_m, ground, voxel_in_view(region, cam, exposure_s, camera_speed_m_s), |voxel, out| {
+        for bin in 0..region.bins.len() {
+            voxel_drops(region, &law, voxel, bin, out);
+        }
     })
 }
 
-fn drops_where(region: &RainRegion, center_m: Vec3, ground: bool, keep_voxel: impl Fn(Vec3) -> bool + Sync) -> Vec<Drop> {
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+/// Runs `fill` for every voxel within the region around `center_m` that `keep_voxel` accepts
+/// (by its centre), columns in parallel, and keeps the drops within the region, in a
+/// deterministic order.
+pub(crate) fn voxels_where(
+    region: &RainRegion,
+    center_m: Vec3,
+    ground: bool,
+    keep_voxel: impl Fn(Vec3) -> bool + Sync,
+    fill: impl Fn([i64; 3], &mut Vec<Drop>) + Sync,
+) -> Vec<Drop> {
     let c = center_m.as_dvec3();
     let r = region.near_m;
     let lo = (c - DVec3::splat(r)).floor();
@@ -155,9 +214,7 @@ fn drops_where(region: &RainRegion, center_m: Vec3, ground: bool, keep_voxel: im
                     if q.distance(c) > r || !keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5)) {
                         continue;
                     }
-                    for bin in 0..region.bins.len() {
-                        voxel_drops(region, &law, [ix, iy, iz], bin, &mut out);
-                    }
+                    fill([ix, iy, iz], &mut out);
                 }
             }
             out.retain(|d| d.position_m.as_dvec3().distance(c) <= r);

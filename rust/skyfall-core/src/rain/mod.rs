@@ -1,5 +1,6 @@
 //! Rain streaks from precomputed rain textures (seed 000, Yoshida, Dobashi & Yamamoto).
 
+pub mod billboards;
 pub mod bins;
 pub mod drops;
 pub mod splat;

@@ -247,7 +247,11 @@ impl RainFrame<'_> {
     /// The frame's streaks (see [`prepare`]), its stats, and how many drops were generated
     /// (those of the voxels that can reach the view).
     pub fn streaks(&self, cam: &Camera) -> (Vec<ScreenStreak>, RainStats, usize) {
-        let drops = super::drops::drops_in_view(self.region, cam, f64::from(self.exposure_s), f64::from(self.camera_velocity_m_s.length()), self.ground);
+        let (t, v) = (f64::from(self.exposure_s), f64::from(self.camera_velocity_m_s.length()));
+        let drops = match self.region.method {
+            super::drops::RainMethod::Drops => super::drops::drops_in_view(self.region, cam, t, v, self.ground),
+            super::drops::RainMethod::Billboards => super::billboards::billboards_in_view(self.region, cam, t, v, self.ground),
+        };
         let (streaks, stats) = prepare(cam, &drops, self.exposure_s, self.camera_velocity_m_s, self.shading);
         (streaks, stats, drops.len())
     }
