@@ -7,11 +7,10 @@
 //! horizon sky as in real haze, and the σ → 0 limit is exact (no division by σ). Sky pixels
 //! (d = ∞) become the airlight when σ > 0; with σ = 0 every pixel is returned unchanged.
 //!
-//! This file is the CPU reference of `skyfall-gpu`'s `haze.wgsl`.
+//! [`apply_row`] is the CPU reference of `skyfall-gpu`'s `haze.wgsl`; the CPU frame
+//! (`crate::frame`) calls it row by row.
 
 use crate::error::{Error, Param, Range, Result};
-use crate::scene::camera::Camera;
-use rayon::prelude::*;
 
 /// Airlight at saturation, relative to E/π: the overcast sky's horizon luminance, 3/7.
 pub const AIRLIGHT_RELATIVE: f32 = 3.0 / 7.0;
@@ -64,7 +63,7 @@ pub fn check_depth(depth_m: &[f32]) -> Result<()> {
 
 /// Applies haze to one row: `rgb_row` (W·3, in place), `t_row` (W) written, from
 /// `depth_row` (W); `u2` are the camera's squared column slopes and `v2` the row's
-/// (see [`Camera::column_slopes_sq`]), so the ray length per unit depth is √(u² + v² + 1).
+/// (see [`crate::scene::camera::Camera::column_slopes_sq`]), so the ray length per unit depth is √(u² + v² + 1).
 #[inline]
 pub fn apply_row(haze: &Haze, u2: &[f32], v2: f32, rgb_row: &mut [f32], depth_row: &[f32], t_row: &mut [f32]) {
     for (x, (&d, t_out)) in depth_row.iter().zip(t_row.iter_mut()).enumerate() {
@@ -76,20 +75,10 @@ pub fn apply_row(haze: &Haze, u2: &[f32], v2: f32, rgb_row: &mut [f32], depth_ro
     }
 }
 
-/// Applies haze to `rgb` (H·W·3, in place) and writes `transmittance` (H·W). Rows in parallel.
-pub fn apply(haze: &Haze, cam: &Camera, rgb: &mut [f32], depth_m: &[f32], transmittance: &mut [f32]) {
-    let w = cam.width as usize;
-    let u2 = cam.column_slopes_sq();
-    rgb.par_chunks_mut(3 * w)
-        .zip(depth_m.par_chunks(w))
-        .zip(transmittance.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(y, ((rgb_row, depth_row), t_row))| apply_row(haze, &u2, cam.row_slope_sq(y as u32), rgb_row, depth_row, t_row));
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::camera::Camera;
     use glam::{Mat3, Vec3};
 
     #[test]
@@ -110,7 +99,7 @@ mod tests {
         let h = Haze { extinction_per_m: 0.1, airlight: [1.0; 3] };
         let mut rgb = vec![0.0; 9];
         let mut t = vec![0.0; 3];
-        apply(&h, &cam, &mut rgb, &[10.0; 3], &mut t);
+        apply_row(&h, &cam.column_slopes_sq(), cam.row_slope_sq(0), &mut rgb, &[10.0; 3], &mut t);
         // side pixels are 1 px off axis with f = 1: |ray| = sqrt(2).
         assert!((t[0] - (-0.1f32 * 10.0 * 2f32.sqrt()).exp()).abs() < 1e-6);
         assert!((t[1] - (-1.0f32).exp()).abs() < 1e-6);

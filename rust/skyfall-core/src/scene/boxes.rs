@@ -16,7 +16,6 @@
 use super::camera::Camera;
 use crate::error::{Error, Param, Range, Result};
 use glam::Vec3;
-use rayon::prelude::*;
 
 /// Pane albedo relative to the wall's.
 pub const WINDOW_ALBEDO_FACTOR: f32 = 0.2;
@@ -151,18 +150,6 @@ pub fn shade_pixel(scene: &BoxScene, cam: &Camera, x: u32, y: u32) -> (Vec3, f32
         }
         None => (Vec3::splat(sky_radiance(dir.normalize())), f32::INFINITY),
     }
-}
-
-/// Ray casts the whole frame: `rgb` (H·W·3) and `depth` (H·W), rows in parallel.
-pub fn render(scene: &BoxScene, cam: &Camera, rgb: &mut [f32], depth: &mut [f32]) {
-    let w = cam.width as usize;
-    rgb.par_chunks_mut(3 * w).zip(depth.par_chunks_mut(w)).enumerate().for_each(|(y, (rgb_row, depth_row))| {
-        for x in 0..w {
-            let (c, d) = shade_pixel(scene, cam, x as u32, y as u32);
-            rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
-            depth_row[x] = d;
-        }
-    });
 }
 
 #[cfg(test)]
