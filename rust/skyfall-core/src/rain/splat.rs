@@ -196,7 +196,7 @@ impl ScreenStreak {
 }
 
 /// Streak indices per `tile` × `tile` pixel tile, in list order: (offsets, indices) with the
-/// tile t's streaks at indices[offsets[t]..offsets[t + 1]]. For the GPU pass.
+/// tile t's streaks at `indices[offsets[t]..offsets[t + 1]]`. For the GPU pass.
 pub fn bin_by_tile(streaks: &[ScreenStreak], width: u32, height: u32, tile: u32) -> (Vec<u32>, Vec<u32>) {
     let (tx, ty) = (width.div_ceil(tile), height.div_ceil(tile));
     let mut counts = vec![0u32; (tx * ty) as usize + 1];

@@ -71,7 +71,7 @@ impl Camera {
     }
 
     /// Squared horizontal ray slopes ((x + 0.5 − cx) / fx)² of every column, so a frame can
-    /// compute [`Camera::distance_per_depth`] as √(u²[x] + v² + 1) without divisions.
+    /// compute [`Camera::distance_per_depth`] as `√(u²[x] + v² + 1)` without divisions.
     pub fn column_slopes_sq(&self) -> Vec<f32> {
         (0..self.width)
             .map(|x| {
