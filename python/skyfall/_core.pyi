@@ -12,7 +12,7 @@ __all__ = [
     "FRAME_BUDGET_BYTES",
     "GpuDevice",
     "GpuUnavailableError",
-    "render_cpu",
+    "render_frame",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
     "SkyfallError",
@@ -44,11 +44,12 @@ _RegionArgs = tuple[float, NDArray[np.float64], float, list[float], float, int, 
 _RainTuple = tuple[NDArray[np.float32], NDArray[np.float32], int, int, int]
 _FrameTuple = tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32] | None, _RainTuple | None]
 
-def render_cpu(
+def render_frame(
     width: int,
     height: int,
     camera_params: list[float],
     *,
+    device: GpuDevice | None = None,
     boxes: NDArray[np.float32] | None = None,
     ground: bool = True,
     ground_albedo: list[float] = ...,
@@ -69,26 +70,7 @@ class GpuDevice:
     def __new__(cls, *, require_hardware: bool) -> GpuDevice: ...
     @property
     def adapter_info(self) -> tuple[str, str, str, str]: ...
-    def render(
-        self,
-        width: int,
-        height: int,
-        camera_params: list[float],
-        *,
-        boxes: NDArray[np.float32] | None = None,
-        ground: bool = True,
-        ground_albedo: list[float] = ...,
-        photo_rgb: NDArray[np.float32] | None = None,
-        photo_depth_m: NDArray[np.float32] | None = None,
-        haze_params: tuple[float, list[float]] | None = None,
-        rain_region: _RegionArgs | None = None,
-        exposure_s: float = ...,
-        camera_velocity_m_s: list[float] = ...,
-        rain_ground: bool = True,
-        lights: NDArray[np.float32] | None = None,
-        sky_illuminance_lux: float = 10000.0,
-        cull_threshold: float | None = None,
-    ) -> _FrameTuple: ...
+
 
 def air_density_kg_m3(
     temperature_c: NDArray[np.float64], pressure_hpa: NDArray[np.float64], relative_humidity: NDArray[np.float64]

@@ -208,10 +208,7 @@ class Renderer:
                 cull_threshold=cull_threshold,
             )
         args = (self.width, self.height, cam.core_params())
-        if self._device is not None:
-            rgb, depth, trans, rain = self._device.render(*args, **kwargs)
-        else:
-            rgb, depth, trans, rain = _core.render_cpu(*args, **kwargs)
+        rgb, depth, trans, rain = _core.render_frame(*args, device=self._device, **kwargs)
         layers = {} if trans is None else {"transmittance": trans}
         stats: dict[str, int] = {}
         if rain is not None:

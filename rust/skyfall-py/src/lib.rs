@@ -26,7 +26,7 @@ mod _core {
     #[pymodule_export]
     use super::rain_frame::rain_drops;
     #[pymodule_export]
-    use super::render::{render_cpu, GpuDevice};
+    use super::render::{render_frame, GpuDevice};
 
     use pyo3::prelude::*;
 

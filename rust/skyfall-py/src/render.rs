@@ -166,19 +166,20 @@ fn to_py<'py>(py: Python<'py>, cam: &Camera, f: FrameBuffers) -> PyResult<FrameT
     Ok((rgb, depth, t, rain))
 }
 
-/// Renders a frame on the CPU backend.
+/// Renders a frame on `device` (the GPU backend), or on the CPU backend when it is None.
 #[pyfunction]
 #[pyo3(signature = (
-    width, height, camera_params, *, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
-    photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3], rain_ground=true,
-    lights=None, sky_illuminance_lux=10000.0, cull_threshold=None
+    width, height, camera_params, *, device=None, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
+    photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3],
+    rain_ground=true, lights=None, sky_illuminance_lux=10000.0, cull_threshold=None
 ))]
 #[allow(clippy::too_many_arguments)]
-pub fn render_cpu<'py>(
+pub fn render_frame<'py>(
     py: Python<'py>,
     width: u32,
     height: u32,
     camera_params: [f32; 16],
+    device: Option<Bound<'py, GpuDevice>>,
     boxes: Option<PyReadonlyArray2<'py, f32>>,
     ground: bool,
     ground_albedo: [f32; 3],
@@ -196,8 +197,12 @@ pub fn render_cpu<'py>(
     let rain = RainArgs { region: rain_region.as_ref(), exposure_s, camera_velocity_m_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
     let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
-    let frame = py.detach(|| render(req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame().as_ref())).map_err(CoreError)?;
-    to_py(py, &req.cam, frame)
+    let (scene, cam, haze, rain) = (req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame());
+    let frame = match device.as_ref().map(|d| &d.get().inner) {
+        Some(gpu) => py.detach(|| gpu.render(scene, cam, haze, rain.as_ref())).map_err(gpu_error)?,
+        None => py.detach(|| render(scene, cam, haze, rain.as_ref())).map_err(CoreError)?,
+    };
+    to_py(py, cam, frame)
 }
 
 /// A wgpu device with every pass compiled, reused across frames.
@@ -222,39 +227,5 @@ impl GpuDevice {
     fn adapter_info(&self) -> (String, String, String, String) {
         let a = &self.inner.ctx.adapter;
         (a.name.clone(), a.backend.clone(), a.device_type.clone(), a.driver.clone())
-    }
-
-    /// Renders a frame on this device (same arguments as `render_cpu`).
-    #[pyo3(signature = (
-        width, height, camera_params, *, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
-        photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3], rain_ground=true,
-        lights=None, sky_illuminance_lux=10000.0, cull_threshold=None
-    ))]
-    #[allow(clippy::too_many_arguments)]
-    fn render<'py>(
-        &self,
-        py: Python<'py>,
-        width: u32,
-        height: u32,
-        camera_params: [f32; 16],
-        boxes: Option<PyReadonlyArray2<'py, f32>>,
-        ground: bool,
-        ground_albedo: [f32; 3],
-        photo_rgb: Option<PyReadonlyArray3<'py, f32>>,
-        photo_depth_m: Option<PyReadonlyArray2<'py, f32>>,
-        haze_params: Option<(f32, [f32; 3])>,
-        rain_region: Option<RegionArgs<'py>>,
-        exposure_s: f32,
-        camera_velocity_m_s: [f32; 3],
-        rain_ground: bool,
-        lights: Option<PyReadonlyArray2<'py, f32>>,
-        sky_illuminance_lux: f32,
-        cull_threshold: Option<f32>,
-    ) -> PyResult<FrameTuple<'py>> {
-        let rain = RainArgs { region: rain_region.as_ref(), exposure_s, camera_velocity_m_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
-        let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
-        let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
-        let frame = py.detach(|| self.inner.render(req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame().as_ref())).map_err(gpu_error)?;
-        to_py(py, &req.cam, frame)
     }
 }
