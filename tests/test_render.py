@@ -131,7 +131,7 @@ def test_sky_and_ground_radiance_are_the_documented_overcast_values(cpu):
     cam = Camera((0.0, 1.6, 0.0), pitch_deg=20.0, vertical_fov_deg=60.0)
     frame = cpu.render(scenes.empty(ground_albedo=1.0, camera=cam))
     ground = np.isfinite(frame.depth_m)
-    np.testing.assert_allclose(frame.rgb[ground], 1.0, atol=1e-6)
+    np.testing.assert_allclose(frame.rgb[ground], 1.0, atol=5e-6)  # the open-sky map sums 256 f32 weights
     y_lum = colour.RGB_to_XYZ(frame.rgb.astype(np.float64), "sRGB")[..., 1]
     c = cam.with_resolution(W, H)
     fx, fy, cx, cy = c.intrinsics()

@@ -11,11 +11,13 @@ io
     Image files through OpenImageIO (EXR float, PNG sRGB 8-bit).
 scenes
     Photo scenes with depth and procedural box scenes (``scenes.street()``).
+sky
+    CIE skies, sky illuminance with occlusion and the ambient-light map (seed 002).
 
 Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`.
 """
 
-from skyfall import io, physics, rain, scenes
+from skyfall import io, physics, rain, scenes, sky
 from skyfall._core import GpuUnavailableError, SkyfallError, __version__
 from skyfall.camera import Camera
 from skyfall.lights import PointLight, SpotLight
@@ -38,4 +40,5 @@ __all__ = [
     "physics",
     "rain",
     "scenes",
+    "sky",
 ]

@@ -10,16 +10,19 @@ __all__ = [
     "rain_drops",
     "AIRLIGHT_RELATIVE",
     "FRAME_BUDGET_BYTES",
+    "AmbientLightMap",
     "GpuDevice",
     "GpuUnavailableError",
     "render_frame",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
+    "SkyModel",
     "SkyfallError",
     "TEXTURE_BUDGET_BYTES",
     "__version__",
     "air_density_kg_m3",
     "air_viscosity",
+    "cloud_base_m",
     "drops_per_m3",
     "marshall_palmer",
     "rain_diameter_bins",
@@ -63,7 +66,46 @@ def render_frame(
     lights: NDArray[np.float32] | None = None,
     sky_illuminance_lux: float = 10000.0,
     cull_threshold: float | None = None,
+    sky: SkyModel | None = None,
+    ambient: AmbientLightMap | None = None,
 ) -> _FrameTuple: ...
+
+def cloud_base_m(rain_rate_mm_h: float) -> float: ...
+@final
+class SkyModel:
+    def __new__(
+        cls,
+        sky_type: int,
+        sun_elevation_deg: float | None,
+        sun_azimuth_deg: float | None,
+        extinction_per_m: float,
+        cloud_base_m: float,
+    ) -> SkyModel: ...
+    @property
+    def scale(self) -> float: ...
+    def luminance_relative(self, dirs: NDArray[np.float32], *, received: bool) -> NDArray[np.float64]: ...
+    def illuminance(self, points_m: NDArray[np.float32], boxes: NDArray[np.float32], *, samples: int) -> NDArray[np.float32]: ...
+    def ambient_map(
+        self,
+        boxes: NDArray[np.float32],
+        *,
+        bounds_min_m: list[float],
+        bounds_max_m: list[float],
+        spacing_m: float,
+        samples: int,
+    ) -> AmbientLightMap: ...
+
+@final
+class AmbientLightMap:
+    @property
+    def origin_m(self) -> list[float]: ...
+    @property
+    def spacing_m(self) -> float: ...
+    @property
+    def dims(self) -> list[int]: ...
+    @property
+    def values(self) -> NDArray[np.float32]: ...
+    def sample(self, points_m: NDArray[np.float32]) -> NDArray[np.float32]: ...
 
 @final
 class GpuDevice:

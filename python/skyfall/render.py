@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skyfall import _core, io
+from skyfall import _core, io, sky
 from skyfall._validate import choice, integer, real
 from skyfall.camera import Camera
 from skyfall.lights import pack
@@ -145,6 +145,8 @@ class Renderer:
         time_s: float = 0.0,
         seed: int = 0,
         cull_threshold: float | None = None,
+        ambient_spacing_m: float = 1.0,
+        ambient_samples: int = 256,
     ) -> Frame:
         """Render one frame.
 
@@ -167,6 +169,12 @@ class Renderer:
             below this, as the seed does for unlit billboards: at dusk with lamps, 1.5 keeps
             only lamp-lit drops. ``frame.stats["rain_culled"]`` counts them. None (default)
             draws every drop.
+        ambient_spacing_m : float
+            Node spacing of the ambient-light map (:func:`skyfall.sky.ambient_light_map`), m, in
+            [0.05, 100]. A box scene's surfaces, every drop's I_R and the haze's airlight read
+            the sky light from it; it is built once per scene, sky and spacing and cached.
+        ambient_samples : int
+            Sky directions per map node, in [4, 1048576] (rounded to 4 x rings^2).
 
         Returns
         -------
@@ -190,9 +198,13 @@ class Renderer:
             kwargs.update(boxes=scene.boxes, ground=scene.ground, ground_albedo=list(scene.ground_albedo))
         else:
             raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
+        ambient = self._ambient(scene, weather, cam, ambient_spacing_m, ambient_samples)
+        kwargs.update(sky=weather.sky_model(), ambient=ambient)
         sigma = weather.extinction_per_m
         if sigma > 0:
-            kwargs["haze_params"] = (sigma, [_core.AIRLIGHT_RELATIVE] * 3)
+            # Seed 002: Is = ks E_hv, the sky illuminance at the viewpoint (1 in the open).
+            e_view = 1.0 if ambient is None else float(ambient.sample(cam.position_m.reshape(1, 3).astype(np.float32))[0, 0])
+            kwargs["haze_params"] = (sigma, [_core.AIRLIGHT_RELATIVE * e_view] * 3)
         if cull_threshold is not None:
             th = real("cull_threshold", cull_threshold)
             if not (th >= 0 and np.isfinite(th)):
@@ -224,6 +236,22 @@ class Renderer:
             luminance_scale_cd_m2=weather.luminance_scale_cd_m2,
             stats=stats,
         )
+
+    @staticmethod
+    def _ambient(
+        scene: BoxScene | PhotoScene, weather: Weather, cam: Camera, spacing_m: float, samples: int
+    ) -> _core.AmbientLightMap | None:
+        """The frame's ambient-light map, or None where nothing hides the sky (the open sky)."""
+        s = real("ambient_spacing_m", spacing_m)
+        if not 0.05 <= s <= 100.0:
+            raise ValueError(f"ambient_spacing_m = {s} is outside the valid range [0.05, 100] m")
+        n = integer("ambient_samples", samples, 4, 1_048_576)
+        occluders = scene.boxes if isinstance(scene, BoxScene) else scene.occluders
+        if len(occluders) == 0:
+            return None
+        reach = weather.rain_near_m + 1.0 if weather.rain_rate_mm_h > 0 and weather.rain_streaks else 1.0
+        lo, hi = sky.default_bounds(scene, s, around_m=cam.position_m, radius_m=reach)
+        return sky.cached_core_map(np.ascontiguousarray(occluders, dtype=np.float32), weather, lo, hi, s, n)
 
     def render_sequence(
         self,

@@ -1,7 +1,7 @@
 """Scenes a frame can show: photos with depth, and procedural boxes on a ground plane.
 
-Procedural scenes are lit by a uniform overcast sky (see :class:`BoxScene`); no external
-asset files are needed.
+Procedural scenes are lit by the weather's sky through the ambient-light map (see
+:class:`BoxScene` and :mod:`skyfall.sky`); no external asset files are needed.
 """
 
 from __future__ import annotations
@@ -28,11 +28,13 @@ DEFAULT_BOX_ALBEDO = (0.5, 0.48, 0.45)
 class BoxScene:
     """Axis-aligned boxes on an optional ground plane (y = 0), ray cast by the renderer.
 
-    Radiance is relative: 1.0 is a white Lambertian surface lit by the whole unobstructed
-    overcast sky (E/pi for horizontal sky illuminance E). The sky is the CIE standard overcast
-    sky (zenith 9/7, horizon 3/7); surfaces see an unoccluded sky over the half-space their
-    normal faces, (1 + n_y)/2 of it (ground and roofs 1, walls 1/2); walls carry a 3 m grid of
-    dark windows. Sky-visibility shading arrives with the ambient-light map.
+    Radiance is relative: 1.0 is a white Lambertian surface lit by the whole unobstructed sky
+    (E/pi for horizontal sky illuminance E). Sky pixels show the weather's sky (by default the
+    CIE standard overcast sky: zenith 9/7, horizon 3/7). Surfaces are lit by the sky they see:
+    albedo times the illuminance on their normal over E, read from the ambient-light map
+    (:func:`skyfall.sky.ambient_light_map`; open ground 1, an open wall 0.396 under the
+    overcast sky, less in a street canyon or under an awning, faces looking down 0). Walls
+    carry a 3 m grid of dark windows.
 
     Attributes
     ----------
@@ -98,18 +100,7 @@ def boxes(
     -------
     BoxScene
     """
-    rows = []
-    for i, b in enumerate(box_list):
-        if not isinstance(b, Mapping) or "min" not in b or "max" not in b:
-            raise ValueError(f"boxes[{i}] must be a dict with 'min' and 'max' corners, got {b!r}")
-        lo = np.asarray(b["min"], dtype=np.float64).reshape(-1)
-        hi = np.asarray(b["max"], dtype=np.float64).reshape(-1)
-        if lo.size != 3 or hi.size != 3 or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-            raise ValueError(f"boxes[{i}]: min and max must be 3 finite numbers (m)")
-        if np.any(hi <= lo):
-            raise ValueError(f"boxes[{i}]: max {hi.tolist()} must exceed min {lo.tolist()} on every axis")
-        rows.append([*lo, *hi, *_albedo(f"boxes[{i}].albedo", b.get("albedo", DEFAULT_BOX_ALBEDO))])
-    arr = np.array(rows, dtype=np.float32).reshape(-1, 9)
+    arr = _box_rows(box_list, "boxes")
     lamps = np.zeros((0, 3)) if lamps_m is None else np.asarray(lamps_m, dtype=np.float64).reshape(-1, 3)
     return BoxScene(
         boxes=arr,
@@ -121,19 +112,44 @@ def boxes(
     )
 
 
+def _box_rows(box_list: Sequence[Mapping[str, Any]], name: str) -> NDArray[np.float32]:
+    """(N, 9) rows (min xyz, max xyz, albedo rgb) from dicts with ``min``, ``max``, ``albedo``."""
+    if isinstance(box_list, (str, bytes)) or not isinstance(box_list, Sequence):
+        raise TypeError(f"{name} must be a sequence of dicts, got {type(box_list).__name__}")
+    rows = []
+    for i, b in enumerate(box_list):
+        if not isinstance(b, Mapping) or "min" not in b or "max" not in b:
+            raise ValueError(f"{name}[{i}] must be a dict with 'min' and 'max' corners, got {b!r}")
+        lo = np.asarray(b["min"], dtype=np.float64).reshape(-1)
+        hi = np.asarray(b["max"], dtype=np.float64).reshape(-1)
+        if lo.size != 3 or hi.size != 3 or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+            raise ValueError(f"{name}[{i}]: min and max must be 3 finite numbers (m)")
+        if np.any(hi <= lo):
+            raise ValueError(f"{name}[{i}]: max {hi.tolist()} must exceed min {lo.tolist()} on every axis")
+        rows.append([*lo, *hi, *_albedo(f"{name}[{i}].albedo", b.get("albedo", DEFAULT_BOX_ALBEDO))])
+    return np.array(rows, dtype=np.float32).reshape(-1, 9)
+
+
 def empty(*, ground_albedo: Any = DEFAULT_GROUND_ALBEDO, camera: Camera | None = None) -> BoxScene:
     """The ground plane alone under the overcast sky."""
     return boxes([], ground=True, ground_albedo=ground_albedo, camera=camera)
 
 
 def street(
-    *, length_m: float = 120.0, width_m: float = 14.0, seed: int = 0, lamps: bool = False, headlights: bool = False
+    *,
+    length_m: float = 120.0,
+    width_m: float = 14.0,
+    seed: int = 0,
+    lamps: bool = False,
+    headlights: bool = False,
+    awning: bool = True,
 ) -> BoxScene:
     """The bundled default scene: a street canyon seen from eye height.
 
     Buildings of 9-24 m line both sides of a ``width_m`` street running along -Z for
     ``length_m``, with a tall block closing the view; lamps stand every 15 m on both kerbs at
-    5 m. The camera stands at (1.5, 1.6, 0) on the street, looking down it.
+    5 m. The camera stands at (1.5, 1.6, 0) on the street, looking down it. An awning over
+    the right-hand pavement shades the rain beneath it from the sky.
 
     Parameters
     ----------
@@ -148,6 +164,9 @@ def street(
     headlights : bool
         An oncoming car 12 m ahead in the other lane: two 15000 cd spots, 1.5 m apart at
         0.7 m, aimed along +Z (towards the camera) and slightly down.
+    awning : bool
+        A 0.25 m thick awning 3.5 m deep over the right-hand pavement, 3 m up, from 1 m to
+        40 m ahead: drops beneath it see less sky (:mod:`skyfall.sky`).
     """
     if not 20.0 <= float(length_m) <= 1000.0:
         raise ValueError(f"length_m = {length_m} is outside the valid range [20, 1000] m")
@@ -167,6 +186,8 @@ def street(
             box_list.append({"min": (x0, 0, z - depth), "max": (x1, height, z), "albedo": np.clip(shade * tint, 0, 1)})
             z -= depth + float(rng.uniform(0.0, 3.0))
     box_list.append({"min": (-half - 12, 0, -length_m - 20), "max": (half + 12, 30, -length_m), "albedo": (0.55, 0.55, 0.58)})
+    if awning:
+        box_list.append({"min": (half - 3.5, 3.0, -min(40.0, length_m)), "max": (half, 3.25, -1.0), "albedo": (0.45, 0.12, 0.1)})
     lamp_positions = [(s * (half - 1.0), 5.0, -float(z)) for z in np.arange(8.0, length_m, 15.0) for s in (-1, 1)]
     cam = Camera((1.5, 1.6, 0.0), yaw_deg=0.0, pitch_deg=2.0, vertical_fov_deg=55.0)
     lights: list[PointLight | SpotLight] = []
@@ -197,12 +218,19 @@ class PhotoScene:
     lights : tuple of PointLight or SpotLight
         Lights in the photo's world (camera coordinates when no camera is given) that light
         the rain.
+    occluders : sequence of dict, optional
+        Axis-aligned boxes (``min``, ``max`` corners in m, as for :func:`boxes`) in the
+        photo's world that hide the sky from the drops: an awning, a bridge, a roof over the
+        camera. Drops beneath them receive less sky light (:mod:`skyfall.sky`). The depth map
+        is not turned into occluders: seen from one viewpoint it says nothing of what hangs
+        over a drop.
     """
 
     image: NDArray[np.float32]
     depth_m: NDArray[np.float32]
     camera: Camera
     lights: tuple[PointLight | SpotLight, ...]
+    occluders: NDArray[np.float32]
 
     def __init__(
         self,
@@ -212,6 +240,7 @@ class PhotoScene:
         camera: Camera | None = None,
         vertical_fov_deg: float = 60.0,
         lights: tuple[PointLight | SpotLight, ...] = (),
+        occluders: Sequence[Mapping[str, Any]] = (),
     ) -> None:
         img = np.asarray(image)
         if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
@@ -238,6 +267,7 @@ class PhotoScene:
         object.__setattr__(self, "depth_m", d)
         object.__setattr__(self, "camera", cam.with_resolution(w, h))
         object.__setattr__(self, "lights", tuple(lights))
+        object.__setattr__(self, "occluders", _box_rows(occluders, "occluders"))
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,9 +30,19 @@ class Weather:
         Meteorological visibility of the air without rain, m, > 0 (``inf``: perfectly clear).
         Enters as Koschmieder extinction 3.912 / visibility_m.
     sky_illuminance_lux : float
-        Horizontal illuminance from the overcast sky, lux, in (0, 150000]. Frames are in units
-        of E/pi (a white surface under the open sky is 1.0); ``Frame.luminance_scale_cd_m2``
-        converts to cd/m^2.
+        Horizontal illuminance E of the open sky at the ground, lux, in (0, 150000] (what a
+        lux meter reads, rain included). Frames are in units of E/pi (a white surface under
+        the open sky is 1.0); ``Frame.luminance_scale_cd_m2`` converts to cd/m^2.
+    sky : "overcast" or int
+        The sky's luminance distribution: ``"overcast"`` (default) is seed 002's CIE standard
+        overcast sky, (1 + 2 sin(elevation)) / 3 of the zenith; 1-15 the CIE S 011 general
+        sky types (:data:`skyfall.sky.SKY_TYPES`).
+    sun_elevation_deg, sun_azimuth_deg : float, optional
+        The sun, for the CIE types that depend on it (2, 4, 6-15): elevation in [0, 90] deg,
+        azimuth from -Z (north, where a default camera looks) towards +X (east), deg.
+    cloud_base_m : float, optional
+        Cloud base height, m, in [1, 20000]; sky light crosses H / sin(elevation) of the
+        hazy air below it. Default: :func:`skyfall.sky.cloud_base_m` of the rain rate.
     wind_m_s : sequence of 3 float
         Wind velocity (x, y, z), m/s, each in [-60, 60]; drops move with it horizontally
         (the vertical component is ignored: drops fall at their terminal speed), so streaks
@@ -59,6 +70,10 @@ class Weather:
     rain_diameters_mm: tuple[float, ...] = field(default=(1.0, 1.2, 1.4, 1.6, 1.8, 2.0))
     rain_streaks: bool = True
     rain_method: str = "drops"
+    sky: str | int = "overcast"
+    sun_elevation_deg: float | None = None
+    sun_azimuth_deg: float | None = None
+    cloud_base_m: float | None = None
 
     def __post_init__(self) -> None:
         r = real("rain_rate_mm_h", self.rain_rate_mm_h)
@@ -88,6 +103,27 @@ class Weather:
         object.__setattr__(self, "rain_rate_mm_h", r)
         object.__setattr__(self, "visibility_m", v)
         object.__setattr__(self, "sky_illuminance_lux", e)
+        if isinstance(self.sky, str):
+            if self.sky != "overcast":
+                raise ValueError(f"sky = {self.sky!r} must be \"overcast\" or a CIE general sky type 1-15")
+        elif isinstance(self.sky, (int, np.integer)) and not isinstance(self.sky, bool):
+            if not 1 <= int(self.sky) <= 15:
+                raise ValueError(f"sky = {self.sky} is outside the valid range 1-15 (CIE general sky types)")
+            object.__setattr__(self, "sky", int(self.sky))
+        else:
+            raise TypeError(f"sky must be \"overcast\" or an int 1-15, got {type(self.sky).__name__}")
+        for name in ("sun_elevation_deg", "sun_azimuth_deg", "cloud_base_m"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, real(name, getattr(self, name)))
+        if (self.sun_elevation_deg is None) != (self.sun_azimuth_deg is None):
+            raise ValueError("give both sun_elevation_deg and sun_azimuth_deg, or neither")
+        if self.sun_elevation_deg is not None and not 0.0 <= self.sun_elevation_deg <= 90.0:
+            raise ValueError(f"sun_elevation_deg = {self.sun_elevation_deg} is outside the valid range [0, 90] deg")
+        if self.sun_azimuth_deg is not None and not math.isfinite(self.sun_azimuth_deg):
+            raise ValueError(f"sun_azimuth_deg = {self.sun_azimuth_deg} must be finite")
+        if self.cloud_base_m is not None and not 1.0 <= self.cloud_base_m <= 20000.0:
+            raise ValueError(f"cloud_base_m = {self.cloud_base_m} is outside the valid range [1, 20000] m")
+        self.sky_model()  # the sky's own checks (a sun for the types that need one)
 
     @property
     def air_extinction_per_m(self) -> float:
@@ -117,6 +153,23 @@ class Weather:
         )
 
     @property
+    def cloud_base_height_m(self) -> float:
+        """The cloud base H in use, m: ``cloud_base_m`` or :func:`skyfall.sky.cloud_base_m` of the rain rate."""
+        if self.cloud_base_m is not None:
+            return self.cloud_base_m
+        return float(_core.cloud_base_m(self.rain_rate_mm_h))
+
+    def sky_model(self) -> _core.SkyModel:
+        """The normalised sky with the rain's attenuation, as ``_core`` uses it (cached)."""
+        sky_type = 0 if self.sky == "overcast" else int(self.sky)
+        return _sky_model(sky_type, self.sun_elevation_deg, self.sun_azimuth_deg, self.extinction_per_m, self.cloud_base_height_m)
+
+    @property
     def luminance_scale_cd_m2(self) -> float:
         """E/pi, cd/m^2: multiply a frame's relative values by this to get luminance."""
         return self.sky_illuminance_lux / math.pi
+
+
+@lru_cache(maxsize=64)
+def _sky_model(sky_type: int, sun_el: float | None, sun_az: float | None, sigma: float, cloud_base: float) -> _core.SkyModel:
+    return _core.SkyModel(sky_type, sun_el, sun_az, sigma, cloud_base)

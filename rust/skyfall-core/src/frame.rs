@@ -4,7 +4,7 @@
 use crate::error::{Error, Param, Result};
 use crate::haze::{apply_row, check_depth, Haze};
 use crate::rain::splat::{composite_streaks, RainFrame, RainStats, RainTargets};
-use crate::scene::boxes::{shade_pixel, BoxScene};
+use crate::scene::boxes::{shade_pixel, BoxScene, SceneLight};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
 
@@ -75,9 +75,9 @@ pub fn check_photo(cam: &Camera, rgb: &[f32], depth_m: &[f32]) -> Result<()> {
     check_depth(depth_m)
 }
 
-/// Renders a frame on the CPU: scene (ray cast or photo copy) and haze fused row by row, then
-/// the rain streaks over the result.
-pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers> {
+/// Renders a frame on the CPU: scene (ray cast under `light`, or photo copy) and haze fused
+/// row by row, then the rain streaks over the result.
+pub fn render(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers> {
     check_frame_size(cam)?;
     if let SceneRef::Photo { rgb, depth_m } = scene {
         check_photo(cam, rgb, depth_m)?;
@@ -101,7 +101,7 @@ pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>, rain: Opti
             match scene {
                 SceneRef::Boxes(b) => {
                     for x in 0..w {
-                        let (c, d) = shade_pixel(b, cam, x as u32, y as u32);
+                        let (c, d) = shade_pixel(b, cam, light, x as u32, y as u32);
                         rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
                         depth_row[x] = d;
                     }
@@ -135,6 +135,8 @@ pub fn render(scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>, rain: Opti
 mod tests {
     use super::*;
     use crate::scene::boxes;
+    use crate::sky::ambient::AmbientMap;
+    use crate::sky::{cie::SkyKind, Sky};
     use glam::{Mat3, Vec3};
 
     #[test]
@@ -143,12 +145,15 @@ mod tests {
         let b = boxes::SceneBox { min_m: Vec3::new(-3.0, 0.0, -12.0), max_m: Vec3::new(3.0, 6.0, -8.0), albedo: Vec3::new(0.6, 0.5, 0.4) };
         let scene = BoxScene::new(vec![b], true, Vec3::splat(0.1)).unwrap();
         let h = Haze { extinction_per_m: 0.02, airlight: [0.43; 3] };
-        let fused = render(SceneRef::Boxes(&scene), &cam, Some(&h), None).unwrap();
+        let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+        let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
+        let light = SceneLight { sky: &sky, ambient: &amb };
+        let fused = render(SceneRef::Boxes(&scene), &cam, &light, Some(&h), None).unwrap();
         let t_layer = fused.transmittance.clone().unwrap();
         for y in 0..30u32 {
             for x in 0..40u32 {
                 let i = (y * 40 + x) as usize;
-                let (c, d) = boxes::shade_pixel(&scene, &cam, x, y);
+                let (c, d) = boxes::shade_pixel(&scene, &cam, &light, x, y);
                 let t = if d.is_infinite() { 0.0 } else { (-0.02 * d * cam.distance_per_depth(x, y)).exp() };
                 assert_eq!(fused.depth_m[i], d);
                 assert!((t_layer[i] - t).abs() <= 1e-6, "{x},{y}");
@@ -158,7 +163,7 @@ mod tests {
             }
         }
         // A photo of that frame rendered without haze comes back unchanged.
-        let plain = render(SceneRef::Photo { rgb: &fused.rgb, depth_m: &fused.depth_m }, &cam, None, None).unwrap();
+        let plain = render(SceneRef::Photo { rgb: &fused.rgb, depth_m: &fused.depth_m }, &cam, &light, None, None).unwrap();
         assert_eq!(plain.rgb, fused.rgb);
         assert!(plain.transmittance.is_none());
     }
@@ -166,6 +171,9 @@ mod tests {
     #[test]
     fn huge_frames_are_refused() {
         let cam = Camera::new(16384, 16384, [1e4, 1e4, 8192.0, 8192.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
-        assert!(matches!(render(SceneRef::Photo { rgb: &[], depth_m: &[] }, &cam, None, None), Err(Error::TooLarge { .. })));
+        let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+        let amb = AmbientMap::uniform([1.0; 5]);
+        let light = SceneLight { sky: &sky, ambient: &amb };
+        assert!(matches!(render(SceneRef::Photo { rgb: &[], depth_m: &[] }, &cam, &light, None, None), Err(Error::TooLarge { .. })));
     }
 }

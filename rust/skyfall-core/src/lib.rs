@@ -8,6 +8,7 @@
 //! - [`rain`]: precomputed rain-streak textures (seed 000).
 //! - [`scene`]: cameras and the procedural box scene (ray cast).
 //! - [`haze`]: rain haze along view rays (seed 002).
+//! - [`sky`]: CIE skies, sky illuminance with occlusion, the ambient-light map (seed 002).
 //! - [`frame`]: the CPU backend's frame composition (fused passes).
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
@@ -19,6 +20,7 @@ pub mod haze;
 pub mod physics;
 pub mod rain;
 pub mod scene;
+pub mod sky;
 mod seed;
 
 pub use error::{Error, Result};

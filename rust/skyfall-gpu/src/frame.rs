@@ -9,6 +9,7 @@ use crate::scene_raycast::SceneRaycastPass;
 use skyfall_core::frame::{check_frame_size, check_photo, FrameBuffers, RainBuffers, SceneRef};
 use skyfall_core::rain::splat::RainFrame;
 use skyfall_core::haze::Haze;
+use skyfall_core::scene::boxes::SceneLight;
 use skyfall_core::scene::camera::Camera;
 
 /// A device with every pass compiled, reused across frames.
@@ -29,8 +30,9 @@ impl GpuRenderer {
         Ok(GpuRenderer { ctx, raycast, haze, rain })
     }
 
-    /// Renders a frame: the scene (ray cast, or the photo uploaded), haze, rain, then readback.
-    pub fn render(&self, scene: SceneRef<'_>, cam: &Camera, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers, GpuError> {
+    /// Renders a frame: the scene (ray cast under `light`, or the photo uploaded), haze, rain,
+    /// then readback.
+    pub fn render(&self, scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers, GpuError> {
         check_frame_size(cam)?;
         let n = cam.pixels();
         self.ctx.check_buffer(&format!("a {}x{} RGB frame", cam.width, cam.height), (3 * n * 4) as u64)?;
@@ -39,9 +41,10 @@ impl GpuRenderer {
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
             let (rgb, depth) = match scene {
                 SceneRef::Boxes(b) => {
+                    ctx.check_buffer("the ambient-light map", (light.ambient.values.len() * 4) as u64)?;
                     let rgb = storage(ctx, "rgb", 3 * n);
                     let depth = storage(ctx, "depth", n);
-                    self.raycast.encode(ctx, &mut enc, b, cam, &rgb, &depth);
+                    self.raycast.encode(ctx, &mut enc, b, cam, light, &rgb, &depth);
                     (rgb, depth)
                 }
                 SceneRef::Photo { rgb, depth_m } => {

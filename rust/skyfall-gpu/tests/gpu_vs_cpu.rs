@@ -8,7 +8,11 @@ use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
 use skyfall_core::rain::splat::{RainFrame, RainShading};
 use skyfall_core::scene::lights::Light;
-use skyfall_core::scene::boxes::{BoxScene, SceneBox};
+use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
+use skyfall_core::sky::ambient::{scene_bounds, AmbientMap};
+use skyfall_core::sky::cie::SkyKind;
+use skyfall_core::sky::illuminance::SkySamples;
+use skyfall_core::sky::{sun_direction, Sky};
 use skyfall_core::scene::camera::Camera;
 use skyfall_gpu::frame::GpuRenderer;
 use skyfall_gpu::AdapterChoice;
@@ -25,6 +29,13 @@ fn street() -> (BoxScene, Camera) {
     let rot = Mat3::from_rotation_y(yaw) * Mat3::from_rotation_x(0.05);
     let cam = Camera::new(96, 64, [70.0, 70.0, 48.0, 32.0], Vec3::new(0.5, 1.6, 0.0), rot).unwrap();
     (scene, cam)
+}
+
+/// The scene's ambient-light map under `sky`, 2 m spacing.
+fn lit(scene: &BoxScene, cam: &Camera, sky: &Sky) -> AmbientMap {
+    let s = SkySamples::new(sky, 144).unwrap();
+    let (lo, hi) = scene_bounds(scene, &[cam.position_m], 2.0);
+    AmbientMap::build(scene, &s, lo, hi, 2.0).unwrap()
 }
 
 fn max_abs(a: &[f32], b: &[f32]) -> (f32, usize) {
@@ -45,8 +56,11 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     let gpu = GpuRenderer::new(AdapterChoice::Any).expect("a Vulkan adapter (lavapipe) is required: make test installs it");
     let (scene, cam) = street();
     let haze = Haze::new(0.004, [3.0 / 7.0; 3]).unwrap();
-    let c = render(SceneRef::Boxes(&scene), &cam, Some(&haze), None).unwrap();
-    let g = gpu.render(SceneRef::Boxes(&scene), &cam, Some(&haze), None).unwrap();
+    let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let light = SceneLight { sky: &sky, ambient: &amb };
+    let c = render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None).unwrap();
+    let g = gpu.render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None).unwrap();
     // Silhouette pixels may pick another surface when f32 rounding differs (FMA): allow 0.5 %.
     let (_, rgb_big) = max_abs(&c.rgb, &g.rgb);
     let (_, depth_big) = max_abs(&c.depth_m, &g.depth_m);
@@ -54,8 +68,8 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     assert!(depth_big * 200 <= c.depth_m.len(), "{depth_big} depths differ");
     // Haze alone on identical inputs: exp differs by a few ulps.
     let photo = SceneRef::Photo { rgb: &c.rgb, depth_m: &c.depth_m };
-    let c2 = render(photo, &cam, Some(&haze), None).unwrap();
-    let g2 = gpu.render(photo, &cam, Some(&haze), None).unwrap();
+    let c2 = render(photo, &cam, &light, Some(&haze), None).unwrap();
+    let g2 = gpu.render(photo, &cam, &light, Some(&haze), None).unwrap();
     let (worst, _) = max_abs(&c2.rgb, &g2.rgb);
     assert!(worst < 1e-5, "haze max abs diff {worst}");
     let (worst_t, _) = max_abs(c2.transmittance.as_deref().unwrap(), g2.transmittance.as_deref().unwrap());
@@ -72,10 +86,13 @@ fn gpu_rain_matches_cpu_rain() {
     let shading = RainShading { lights: vec![lamp], sky_illuminance_lux: 50.0, ..RainShading::open_sky() };
     let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::new(0.0, 0.0, -8.0), ground: true, shading: &shading };
     // Rain over identical backgrounds: a photo of the CPU's box frame.
-    let bg = render(SceneRef::Boxes(&scene), &cam, None, None).unwrap();
+    let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let light = SceneLight { sky: &sky, ambient: &amb };
+    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
     let photo = SceneRef::Photo { rgb: &bg.rgb, depth_m: &bg.depth_m };
-    let c = render(photo, &cam, None, Some(&rf)).unwrap();
-    let g = gpu.render(photo, &cam, None, Some(&rf)).unwrap();
+    let c = render(photo, &cam, &light, None, Some(&rf)).unwrap();
+    let g = gpu.render(photo, &cam, &light, None, Some(&rf)).unwrap();
     let (cr, gr) = (c.rain.unwrap(), g.rain.unwrap());
     assert_eq!(cr.stats, gr.stats);
     assert!(cr.stats.streaks > 100);
@@ -85,4 +102,24 @@ fn gpu_rain_matches_cpu_rain() {
     assert!(worst_rgb < 1e-4, "rgb max abs diff {worst_rgb}");
     let (worst_z, _) = max_abs(&cr.depth_m, &gr.depth_m);
     assert!(worst_z < 1e-3, "rain depth max abs diff {worst_z}");
+}
+
+#[test]
+fn gpu_matches_cpu_under_a_cie_sky_with_sky_visibility() {
+    let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let (scene, cam) = street();
+    // CIE type 12 (clear sky) with the sun low in the south-west, and rain reshaping it.
+    let kind = SkyKind::general(12, Some(sun_direction(25.0, 220.0))).unwrap();
+    let sky = Sky::new(kind, 2e-3, 900.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let light = SceneLight { sky: &sky, ambient: &amb };
+    let c = render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
+    let g = gpu.render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
+    // Relative: the clear sky reaches 12 E/π and the WGSL evaluates it in f32 (the CPU in f64).
+    let rel = |tol: f32| c.rgb.iter().zip(&g.rgb).filter(|(x, y)| (*x - *y).abs() > tol * x.abs().max(1.0)).count();
+    assert!(rel(1e-3) * 200 <= c.rgb.len(), "{} rgb values differ by > 0.1 %", rel(1e-3));
+    // Away from silhouettes the sky and the map's trilinear sample agree to f32 rounding.
+    assert!(rel(2e-4) * 100 <= c.rgb.len(), "{} rgb values differ by > 0.02 %", rel(2e-4));
+    // The map really shades: a wall's pixel differs from the open-sky vertical value somewhere.
+    assert!(amb.values.chunks(5).any(|v| v[0] < 0.9));
 }

@@ -7,6 +7,7 @@ mod physics;
 mod rain;
 mod rain_frame;
 mod render;
+mod sky;
 
 use pyo3::prelude::*;
 
@@ -27,6 +28,8 @@ mod _core {
     use super::rain_frame::rain_drops;
     #[pymodule_export]
     use super::render::{render_frame, GpuDevice};
+    #[pymodule_export]
+    use super::sky::{cloud_base_m, AmbientLightMap, SkyModel};
 
     use pyo3::prelude::*;
 

@@ -11,7 +11,13 @@ use skyfall_core::frame::{render, FrameBuffers, SceneRef};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::{RainMethod, RainRegion};
 use skyfall_core::rain::splat::{RainFrame, RainShading};
-use skyfall_core::scene::boxes::{BoxScene, SceneBox};
+use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
+use skyfall_core::sky::ambient::AmbientMap;
+use skyfall_core::sky::cie::SkyKind;
+use skyfall_core::sky::illuminance::{irradiance, SkySamples};
+use skyfall_core::sky::Sky;
+use crate::sky::{AmbientLightMap, SkyModel};
+use std::sync::Arc;
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;
 use skyfall_gpu::frame::GpuRenderer;
@@ -41,7 +47,7 @@ pub(crate) fn region(args: &RegionArgs<'_>) -> PyResult<RainRegion> {
 }
 
 /// Box scene from an (N, 9) array: min xyz, max xyz, albedo rgb per row.
-fn box_scene(boxes: &PyReadonlyArray2<'_, f32>, ground: bool, ground_albedo: [f32; 3]) -> PyResult<BoxScene> {
+pub(crate) fn box_scene(boxes: &PyReadonlyArray2<'_, f32>, ground: bool, ground_albedo: [f32; 3]) -> PyResult<BoxScene> {
     let a = boxes.as_array();
     if a.ncols() != 9 {
         return Err(PyValueError::new_err(format!("boxes must have shape (N, 9), got {:?}", a.shape())));
@@ -72,6 +78,7 @@ struct RainArgs<'a, 'py> {
     lights: Option<&'a PyReadonlyArray2<'py, f32>>,
     sky_illuminance_lux: f32,
     cull_threshold: Option<f32>,
+    ambient: Option<Arc<AmbientMap>>,
 }
 
 impl<'a> Request<'a> {
@@ -121,6 +128,7 @@ impl<'a> Request<'a> {
                     lights,
                     sky_illuminance_lux: rain.sky_illuminance_lux,
                     cull_threshold: rain.cull_threshold,
+                    ambient: rain.ambient.clone(),
                     ..RainShading::open_sky()
                 };
                 let v = Vec3::from(rain.camera_velocity_m_s);
@@ -171,7 +179,7 @@ fn to_py<'py>(py: Python<'py>, cam: &Camera, f: FrameBuffers) -> PyResult<FrameT
 #[pyo3(signature = (
     width, height, camera_params, *, device=None, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
     photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3],
-    rain_ground=true, lights=None, sky_illuminance_lux=10000.0, cull_threshold=None
+    rain_ground=true, lights=None, sky_illuminance_lux=10000.0, cull_threshold=None, sky=None, ambient=None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn render_frame<'py>(
@@ -193,14 +201,35 @@ pub fn render_frame<'py>(
     lights: Option<PyReadonlyArray2<'py, f32>>,
     sky_illuminance_lux: f32,
     cull_threshold: Option<f32>,
+    sky: Option<Bound<'py, SkyModel>>,
+    ambient: Option<Bound<'py, AmbientLightMap>>,
 ) -> PyResult<FrameTuple<'py>> {
-    let rain = RainArgs { region: rain_region.as_ref(), exposure_s, camera_velocity_m_s, ground: rain_ground, lights: lights.as_ref(), sky_illuminance_lux, cull_threshold };
+    // Without a sky: the overcast sky; without a map: its open-sky light everywhere.
+    let sky: Sky = match &sky {
+        Some(s) => s.get().sky,
+        None => Sky::new(SkyKind::Overcast, 0.0, 1000.0).map_err(CoreError)?,
+    };
+    let ambient: Arc<AmbientMap> = match &ambient {
+        Some(a) => Arc::clone(&a.get().map),
+        None => Arc::new(AmbientMap::uniform(irradiance(&[], &SkySamples::new(&sky, 256).map_err(CoreError)?, Vec3::ZERO))),
+    };
+    let rain = RainArgs {
+        region: rain_region.as_ref(),
+        exposure_s,
+        camera_velocity_m_s,
+        ground: rain_ground,
+        lights: lights.as_ref(),
+        sky_illuminance_lux,
+        cull_threshold,
+        ambient: Some(Arc::clone(&ambient)),
+    };
+    let light = SceneLight { sky: &sky, ambient: &ambient };
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
     let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
     let (scene, cam, haze, rain) = (req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame());
     let frame = match device.as_ref().map(|d| &d.get().inner) {
-        Some(gpu) => py.detach(|| gpu.render(scene, cam, haze, rain.as_ref())).map_err(gpu_error)?,
-        None => py.detach(|| render(scene, cam, haze, rain.as_ref())).map_err(CoreError)?,
+        Some(gpu) => py.detach(|| gpu.render(scene, cam, &light, haze, rain.as_ref())).map_err(gpu_error)?,
+        None => py.detach(|| render(scene, cam, &light, haze, rain.as_ref())).map_err(CoreError)?,
     };
     to_py(py, cam, frame)
 }

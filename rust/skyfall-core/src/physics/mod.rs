@@ -9,7 +9,7 @@ pub mod drag;
 pub mod dsd;
 pub mod extinction;
 pub mod fall_speed;
-mod quadrature;
+pub(crate) mod quadrature;
 
 /// Standard gravity, m/s² (CGPM 1901).
 pub const GRAVITY_M_S2: f64 = 9.80665;

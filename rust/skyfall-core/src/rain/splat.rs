@@ -11,8 +11,10 @@
 //! textures.
 //!
 //! Brightness (seed 002, eq. 7): a drop shows I_v = r·I_R + (1 − r)·I_T, I_T the background
-//! behind it, I_R = k·E_R the light it receives: the sky's (relative 1.0 in the open) plus, per
-//! point or spot light, k·I·cone/d² (inverse square; E in lux over the sky's E). Compositing
+//! behind it, I_R = k·E_R the light it receives: the sky's horizontal illuminance at the drop
+//! (relative 1.0 in the open; read from the ambient-light map when there is one, so drops
+//! under a roof are dimmer) plus, per point or spot light, k·I·cone/d² (inverse square; E in
+//! lux over the sky's E). Compositing
 //! a = α·coverage of it over C gives C + a·r·(I_R − C); streaks are composited far to near.
 //! Drops whose I_R is below an optional cull threshold are not drawn (the seed's culling).
 //! The `rain_alpha` layer is 1 − ∏(1 − aᵢ), the streaks' coverage; `rain_depth_m` is the
@@ -22,6 +24,8 @@
 use super::drops::Drop;
 use crate::scene::camera::Camera;
 use crate::scene::lights::Light;
+use crate::sky::ambient::AmbientMap;
+use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -44,19 +48,22 @@ pub struct RainShading {
     pub sky_illuminance_lux: f32,
     /// Drops whose I_R (brightest channel) is below this are not drawn; None draws all.
     pub cull_threshold: Option<f32>,
+    /// Sky illuminance relative to E per position (its "up" channel); None: the open sky, 1.
+    pub ambient: Option<Arc<AmbientMap>>,
 }
 
 impl RainShading {
     /// Seed 002's constant r (0.5 here), an open-sky drop light I_R = E/π (relative 1.0), no
     /// lights, no culling. The ambient-light map will lower I_R where drops see less sky.
     pub fn open_sky() -> Self {
-        RainShading { reflectance: 0.5, drop_radiance: 1.0, lights: Vec::new(), sky_illuminance_lux: 10_000.0, cull_threshold: None }
+        RainShading { reflectance: 0.5, drop_radiance: 1.0, lights: Vec::new(), sky_illuminance_lux: 10_000.0, cull_threshold: None, ambient: None }
     }
 
     /// I_R of a drop at `p`, per channel.
     pub fn drop_light(&self, p: Vec3) -> Vec3 {
         let lit = self.lights.iter().fold(Vec3::ZERO, |acc, l| acc + l.illuminance_lux(p));
-        Vec3::splat(self.drop_radiance) + lit * (self.drop_radiance / self.sky_illuminance_lux)
+        let sky = self.ambient.as_ref().map_or(1.0, |m| m.sample(p)[0]);
+        Vec3::splat(self.drop_radiance * sky) + lit * (self.drop_radiance / self.sky_illuminance_lux)
     }
 }
 

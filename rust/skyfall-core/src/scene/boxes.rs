@@ -5,15 +5,18 @@
 //! Radiance is relative: 1.0 is the luminance of a white Lambertian surface lit by the whole
 //! unobstructed sky, E/π for horizontal sky illuminance E. Multiply by E/π to get cd/m².
 //!
-//! - Sky: the CIE standard overcast sky, L(γ)/(E/π) = (9/7)(1 + 2 sin γ)/3 (γ: elevation,
-//!   clamped at 0 below the horizon), so its horizon is 3/7 and its zenith 9/7.
-//! - Surfaces: Lambertian, lit by an unoccluded uniform sky over the half-space their normal
-//!   sees: E_n/E = (1 + n_y)/2 (1 for the ground and roofs, ½ for walls). Occlusion by other
-//!   geometry (sky visibility) arrives with the ambient-light map.
+//! - Sky: the frame's [`Sky`] seen along the ray (the CIE standard overcast sky by default,
+//!   L(γ)/(E/π) = (9/7)(1 + 2 sin γ)/3: horizon 3/7, zenith 9/7).
+//! - Surfaces: Lambertian, lit by the sky they see: radiance = albedo · E_n/E with E_n the
+//!   illuminance on the face's normal read from the ambient-light map (occlusion by the other
+//!   boxes included; 1 for open ground, 0.396 for an open wall under the overcast sky, 0 for
+//!   faces looking down).
 //! - Windows: on walls, a 3 m × 3 m grid of dark panes (1.5 m wide, 1.5 m tall, from 1 m up)
 //!   reflecting [`WINDOW_ALBEDO_FACTOR`] of the wall albedo.
 
 use super::camera::Camera;
+use crate::sky::ambient::AmbientMap;
+use crate::sky::Sky;
 use crate::error::{Error, Param, Range, Result};
 use glam::Vec3;
 
@@ -77,11 +80,13 @@ impl BoxScene {
     }
 }
 
-/// Relative sky radiance of the CIE overcast sky seen along unit direction `dir`.
-#[inline]
-pub fn sky_radiance(dir_unit: Vec3) -> f32 {
-    let s = dir_unit.y.max(0.0);
-    (9.0 / 7.0) * (1.0 + 2.0 * s) / 3.0
+/// How a frame's scene is lit: the sky seen by sky pixels and the map surfaces read.
+#[derive(Debug, Clone, Copy)]
+pub struct SceneLight<'a> {
+    /// The sky.
+    pub sky: &'a Sky,
+    /// Illuminance relative to E on the five normals.
+    pub ambient: &'a AmbientMap,
 }
 
 #[inline]
@@ -140,22 +145,32 @@ pub fn trace(scene: &BoxScene, origin: Vec3, dir: Vec3) -> Option<(f32, Vec3, Ve
 
 /// Radiance (relative) and depth (m along the optical axis, inf for sky) of one pixel.
 #[inline]
-pub fn shade_pixel(scene: &BoxScene, cam: &Camera, x: u32, y: u32) -> (Vec3, f32) {
+pub fn shade_pixel(scene: &BoxScene, cam: &Camera, light: &SceneLight<'_>, x: u32, y: u32) -> (Vec3, f32) {
     let dir = cam.ray_direction(x, y);
     match trace(scene, cam.position_m, dir) {
         Some((t, n, albedo)) => {
             let p = cam.position_m + dir * t;
             let a = surface_albedo(albedo, n, p);
-            (a * (0.5 * (1.0 + n.y)), t)
+            let e = AmbientMap::channel(n).map_or(0.0, |c| light.ambient.sample(p)[c]);
+            (a * e, t)
         }
-        None => (Vec3::splat(sky_radiance(dir.normalize())), f32::INFINITY),
+        None => (Vec3::splat(light.sky.emitted(dir.normalize()) as f32), f32::INFINITY),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sky::cie::SkyKind;
+    use crate::sky::illuminance::{irradiance, SkySamples};
     use glam::Mat3;
+
+    /// The overcast sky and its open-sky light (no occluders).
+    fn open() -> (Sky, AmbientMap) {
+        let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+        let e = irradiance(&[], &SkySamples::new(&sky, 1024).unwrap(), Vec3::ZERO);
+        (sky, AmbientMap::uniform(e))
+    }
 
     fn cam() -> Camera {
         Camera::new(64, 48, [40.0, 40.0, 32.0, 24.0], Vec3::new(0.0, 1.5, 0.0), Mat3::IDENTITY)
@@ -165,11 +180,12 @@ mod tests {
     #[test]
     fn overcast_sky_integrates_to_its_illuminance() {
         // ∫ L cos θ dω over the hemisphere = E, i.e. ∫ (L/(E/π)) cos θ dω = π.
+        let (sky, _) = open();
         let n = 2000;
         let mut sum = 0.0f64;
         for i in 0..n {
             let el = (i as f64 + 0.5) / n as f64 * std::f64::consts::FRAC_PI_2;
-            let l = f64::from(sky_radiance(Vec3::new(0.0, el.sin() as f32, el.cos() as f32)));
+            let l = sky.emitted(Vec3::new(0.0, el.sin() as f32, el.cos() as f32));
             sum += l * el.sin() * el.cos() * (std::f64::consts::FRAC_PI_2 / n as f64) * 2.0 * std::f64::consts::PI;
         }
         assert!((sum / std::f64::consts::PI - 1.0).abs() < 1e-4, "{sum}");
@@ -179,11 +195,13 @@ mod tests {
     fn ground_depth_is_analytic() {
         let scene = BoxScene::new(vec![], true, Vec3::splat(0.2)).unwrap_or(BoxScene { boxes: vec![], ground: true, ground_albedo: Vec3::ONE });
         let c = cam();
+        let (sky, amb) = open();
+        let light = SceneLight { sky: &sky, ambient: &amb };
         // bottom row centre: ray dir y = -(47.5 - 24)/40, so t = 1.5 / ((47.5 - 24) / 40)
-        let (rad, t) = shade_pixel(&scene, &c, 32, 47);
+        let (rad, t) = shade_pixel(&scene, &c, &light, 32, 47);
         assert!((t - 1.5 * 40.0 / 23.5).abs() < 1e-4, "{t}");
-        assert!((rad - Vec3::splat(0.2)).length() < 1e-6);
-        let (_, t_sky) = shade_pixel(&scene, &c, 32, 0);
+        assert!((rad - Vec3::splat(0.2)).length() < 1e-5);
+        let (_, t_sky) = shade_pixel(&scene, &c, &light, 32, 0);
         assert!(t_sky.is_infinite());
     }
 
@@ -192,13 +210,17 @@ mod tests {
         let wall = SceneBox { min_m: Vec3::new(-5.0, 0.0, -10.0), max_m: Vec3::new(5.0, 3.0, -9.0), albedo: Vec3::splat(0.5) };
         let scene = BoxScene::new(vec![wall], false, Vec3::ZERO).unwrap_or(BoxScene { boxes: vec![], ground: false, ground_albedo: Vec3::ZERO });
         let c = cam();
-        // Row 23 looks 0.5/40 up: the front face z = -9 at depth 9, p.y = 1.61, p.x = 0.1125 (a wall, lit by half the sky).
-        let (rad, t) = shade_pixel(&scene, &c, 32, 23);
+        let (sky, amb) = open();
+        let light = SceneLight { sky: &sky, ambient: &amb };
+        let wall_e = amb.sample(Vec3::ZERO)[3];
+        assert!((f64::from(wall_e) - (3.0 / 14.0 + 4.0 / (7.0 * std::f64::consts::PI))).abs() < 2e-3);
+        // Row 23 looks 0.5/40 up: the front face z = -9 at depth 9, p.y = 1.61, p.x = 0.1125 (a wall facing +Z, lit by the open sky's vertical illuminance).
+        let (rad, t) = shade_pixel(&scene, &c, &light, 32, 23);
         assert!((t - 9.0).abs() < 1e-4, "{t}");
-        assert!((rad - Vec3::splat(0.25)).length() < 1e-6, "{rad}");
+        assert!((rad - Vec3::splat(0.5 * wall_e)).length() < 1e-6, "{rad}");
         // Column 38: p.x = 1.4625, inside a pane.
-        let (pane, _) = shade_pixel(&scene, &c, 38, 23);
-        assert!((pane - Vec3::splat(0.5 * WINDOW_ALBEDO_FACTOR * 0.5)).length() < 1e-6, "{pane}");
+        let (pane, _) = shade_pixel(&scene, &c, &light, 38, 23);
+        assert!((pane - Vec3::splat(0.5 * WINDOW_ALBEDO_FACTOR * wall_e)).length() < 1e-6, "{pane}");
         assert!(BoxScene::new(vec![SceneBox { min_m: Vec3::ONE, max_m: Vec3::ZERO, albedo: Vec3::ZERO }], true, Vec3::ZERO).is_err());
     }
 }

@@ -1,5 +1,7 @@
-// Procedural box scene, ray cast per pixel. CPU reference: skyfall_core::scene::boxes
-// (kept line-for-line comparable). Prepended with common.wgsl.
+// Procedural box scene, ray cast per pixel, lit by the sky through the ambient-light map.
+// CPU references: skyfall_core::scene::boxes (shade_pixel), skyfall_core::sky::cie
+// (relative_to_zenith) and skyfall_core::sky::ambient (AmbientMap::sample), kept
+// line-for-line comparable. Prepended with common.wgsl.
 
 struct SceneInfo {
     ground_albedo: vec4<f32>,
@@ -17,14 +19,99 @@ struct SceneBox {
 @group(0) @binding(2) var<storage, read> boxes: array<SceneBox>;
 @group(0) @binding(3) var<storage, read_write> rgb: array<f32>;
 @group(0) @binding(4) var<storage, read_write> depth: array<f32>;
+@group(0) @binding(5) var<uniform> sky: SkyInfo;
+@group(0) @binding(6) var<uniform> amb: AmbientInfo;
+@group(0) @binding(7) var<storage, read> amb_values: array<f32>;
+
+struct SkyInfo {
+    abcd: vec4<f32>,      // CIE a, b, c, d
+    e_scale: vec4<f32>,   // CIE e, scale (pi / normalisation), kind (0 overcast, 1 general)
+    sun: vec4<f32>,       // unit vector towards the sun
+}
+
+struct AmbientInfo {
+    origin_spacing: vec4<f32>,   // node (0,0,0) in m, spacing in m
+    dims: vec4<u32>,             // nodes along x, y, z
+}
+
+const CHANNELS: u32 = 5u;
+const HALF_PI: f32 = 1.5707963267948966;
+
+// L/Lz of the sky along unit `dir` (skyfall_core::sky::cie::SkyKind::relative_to_zenith).
+fn relative_to_zenith(dir: vec3<f32>) -> f32 {
+    let cz = dir.y;
+    if cz < 0.0 {
+        return 0.0;
+    }
+    if sky.e_scale.z == 0.0 {
+        return (1.0 + 2.0 * cz) / 3.0;
+    }
+    let a = sky.abcd.x;
+    let b = sky.abcd.y;
+    let c = sky.abcd.z;
+    let d = sky.abcd.w;
+    let e = sky.e_scale.x;
+    var phi = 1.0;
+    if cz > 0.0 {
+        phi = 1.0 + a * exp(b / cz);
+    }
+    let phi0 = 1.0 + a * exp(b);
+    let chi = acos(clamp(dot(dir, sky.sun.xyz), -1.0, 1.0));
+    let zs = acos(clamp(sky.sun.y, -1.0, 1.0));
+    let f_chi = 1.0 + c * (exp(d * chi) - exp(d * HALF_PI)) + e * cos(chi) * cos(chi);
+    let f_zs = 1.0 + c * (exp(d * zs) - exp(d * HALF_PI)) + e * cos(zs) * cos(zs);
+    return phi * f_chi / (phi0 * f_zs);
+}
+
+fn amb_node(i: u32, j: u32, k: u32, ch: u32) -> f32 {
+    return amb_values[((i * amb.dims.y + j) * amb.dims.z + k) * CHANNELS + ch];
+}
+
+// Lower node and fraction along one axis of `n` nodes, clamped to the grid.
+fn amb_axis(coord: f32, origin: f32, n: u32) -> vec2<f32> {
+    let g = clamp((coord - origin) / amb.origin_spacing.w, 0.0, f32(n - 1u));
+    let i0 = min(floor(g), f32(max(n, 2u) - 2u));
+    return vec2<f32>(i0, select(0.0, g - i0, n > 1u));
+}
+
+// Trilinear sample of one channel, clamped to the grid (skyfall_core::sky::ambient::AmbientMap::sample).
+fn ambient_sample(p: vec3<f32>, ch: u32) -> f32 {
+    let ax = amb_axis(p.x, amb.origin_spacing.x, amb.dims.x);
+    let ay = amb_axis(p.y, amb.origin_spacing.y, amb.dims.y);
+    let az = amb_axis(p.z, amb.origin_spacing.z, amb.dims.z);
+    let i0 = u32(ax.x);
+    let j0 = u32(ay.x);
+    let k0 = u32(az.x);
+    let i1 = min(i0 + 1u, amb.dims.x - 1u);
+    let j1 = min(j0 + 1u, amb.dims.y - 1u);
+    let k1 = min(k0 + 1u, amb.dims.z - 1u);
+    let fx = ax.y;
+    let fy = ay.y;
+    let fz = az.y;
+    var out = 0.0;
+    out += (1.0 - fx) * (1.0 - fy) * (1.0 - fz) * amb_node(i0, j0, k0, ch);
+    out += fx * (1.0 - fy) * (1.0 - fz) * amb_node(i1, j0, k0, ch);
+    out += (1.0 - fx) * fy * (1.0 - fz) * amb_node(i0, j1, k0, ch);
+    out += fx * fy * (1.0 - fz) * amb_node(i1, j1, k0, ch);
+    out += (1.0 - fx) * (1.0 - fy) * fz * amb_node(i0, j0, k1, ch);
+    out += fx * (1.0 - fy) * fz * amb_node(i1, j0, k1, ch);
+    out += (1.0 - fx) * fy * fz * amb_node(i0, j1, k1, ch);
+    out += fx * fy * fz * amb_node(i1, j1, k1, ch);
+    return out;
+}
+
+// Channel of an axis-aligned normal: 0 up, 1 +X, 2 -X, 3 +Z, 4 -Z; 5 for faces looking down.
+fn ambient_channel(n: vec3<f32>) -> u32 {
+    if n.y > 0.5 { return 0u; }
+    if n.y < -0.5 { return 5u; }
+    if n.x > 0.5 { return 1u; }
+    if n.x < -0.5 { return 2u; }
+    if n.z > 0.5 { return 3u; }
+    return 4u;
+}
 
 const WINDOW_ALBEDO_FACTOR: f32 = 0.2;
 const T_MIN: f32 = 1e-4;
-
-fn sky_radiance(dir_unit: vec3<f32>) -> f32 {
-    let s = max(dir_unit.y, 0.0);
-    return (9.0 / 7.0) * (1.0 + 2.0 * s) / 3.0;
-}
 
 fn surface_albedo(albedo: vec3<f32>, n: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
     if abs(n.y) < 0.5 {
@@ -91,10 +178,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if hit {
         let p = origin + dir * best_t;
         let a = surface_albedo(best_a, best_n, p);
-        c = a * (0.5 * (1.0 + best_n.y));
+        let ch = ambient_channel(best_n);
+        var e = 0.0;
+        if ch < CHANNELS {
+            e = ambient_sample(p, ch);
+        }
+        c = a * e;
         d = best_t;
     } else {
-        c = vec3<f32>(sky_radiance(normalize(dir)));
+        c = vec3<f32>(sky.e_scale.y * relative_to_zenith(normalize(dir)));
         d = infinity();
     }
     let i = gid.y * w + gid.x;

@@ -1,0 +1,369 @@
+"""Sky light (seed 002): CIE skies, sky illuminance with occlusion, the ambient-light map.
+
+Coordinates: world metres, +Y up; azimuth is measured from -Z (north, where a default camera
+looks) towards +X (east). Every sky is normalised so that the open, unobstructed ground
+receives ``horizontal_illuminance_lux`` (what a lux meter reads, rain included): rain
+attenuates each direction by tau = exp(-sigma H / sin(elevation)) on the way down from the
+cloud base H, so heavier rain makes the low sky relatively darker and a point that sees only
+the low sky (a street canyon, under an awning) darker still.
+
+Illuminance is the integral of L tau H cos(theta) over the hemisphere, H = 1 where the sky is
+visible. It is evaluated on a product rule (Gauss-Legendre rings in sin(elevation) times
+4 x rings azimuths): exact for the open overcast sky, spectrally convergent for every open
+sky, and O(1/rings) where occluders cut the sky (``benches/results/sky.md`` tabulates the
+error against sample count).
+
+Occluders: the boxes of a :class:`~skyfall.scenes.BoxScene`, or the ``occluders`` a
+:class:`~skyfall.PhotoScene` was given (a photo's depth map is not turned into geometry:
+a depth map seen from one viewpoint says nothing of what hangs above a drop behind it).
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from skyfall import _core
+from skyfall._validate import float_array, integer, real
+from skyfall.scenes import BoxScene, PhotoScene
+from skyfall.weather import Weather
+
+__all__ = [
+    "CHANNELS",
+    "SKY_TYPES",
+    "AmbientLightMap",
+    "ambient_light_map",
+    "cloud_base_m",
+    "horizontal_illuminance",
+    "luminance",
+]
+
+CHANNELS = ("up", "+x", "-x", "+z", "-z")
+"""The normals an ambient map holds illuminance for: a horizontal surface facing up, and
+vertical surfaces facing +X, -X, +Z, -Z (every face of a box scene is one of them)."""
+
+SKY_TYPES: dict[int | str, str] = {
+    "overcast": "CIE standard overcast sky (Moon & Spencer), seed 002",
+    1: "Overcast, steep gradation, azimuthal uniformity",
+    2: "Overcast, steep gradation, slight brightening towards sun",
+    3: "Overcast, gentle gradation, azimuthal uniformity",
+    4: "Overcast, gentle gradation, slight brightening towards sun",
+    5: "Uniform luminance",
+    6: "Partly cloudy, no gradation, slight brightening towards sun",
+    7: "Partly cloudy, no gradation, brighter circumsolar region",
+    8: "Partly cloudy, no gradation, distinct solar corona",
+    9: "Partly cloudy, obscured sun",
+    10: "Partly cloudy, brighter circumsolar region",
+    11: "White-blue sky, distinct solar corona",
+    12: "CIE standard clear sky, low turbidity",
+    13: "CIE standard clear sky, polluted atmosphere",
+    14: "Cloudless turbid sky, broad solar corona",
+    15: "White-blue turbid sky, broad solar corona",
+}
+"""The skies ``sky=`` accepts (CIE S 011/E:2003 general skies 1-15)."""
+
+DEFAULT_SAMPLES = 1024
+"""Sample directions for :func:`horizontal_illuminance` (16 rings of 64 azimuths)."""
+
+
+def cloud_base_m(rain_rate_mm_h: float) -> float:
+    """Cloud base height for a rain rate, m: 1500 - 250 ln(1 + R / (1 mm/h)), in [300, 1500] m.
+
+    Seed 002 makes the cloud height a function of the rain rate (after Shibata 1999) without
+    printing the relation; this is skyfall's own smooth stand-in: 1500 m dry, 900 m at
+    10 mm/h, 520 m at 50 mm/h, 350 m at 100 mm/h. Override it with ``Weather.cloud_base_m``.
+    """
+    return float(_core.cloud_base_m(real("rain_rate_mm_h", rain_rate_mm_h)))
+
+
+def _weather(
+    weather: Weather | None,
+    sky: str | int | None,
+    horizontal_illuminance_lux: float | None,
+    sun_elevation_deg: float | None,
+    sun_azimuth_deg: float | None,
+) -> Weather:
+    """The sky settings as a Weather: the given one, or one built from the keywords."""
+    given = {
+        "sky": sky,
+        "horizontal_illuminance_lux": horizontal_illuminance_lux,
+        "sun_elevation_deg": sun_elevation_deg,
+        "sun_azimuth_deg": sun_azimuth_deg,
+    }
+    if weather is not None:
+        if not isinstance(weather, Weather):
+            raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
+        clash = [k for k, v in given.items() if v is not None]
+        if clash:
+            raise ValueError(f"give the sky either through weather or through keywords, not both ({', '.join(clash)})")
+        return weather
+    return Weather(
+        sky=sky if sky is not None else "overcast",
+        sky_illuminance_lux=horizontal_illuminance_lux if horizontal_illuminance_lux is not None else 10000.0,
+        sun_elevation_deg=sun_elevation_deg,
+        sun_azimuth_deg=sun_azimuth_deg,
+    )
+
+
+def _directions(elevation_deg: Any, azimuth_deg: Any) -> tuple[NDArray[np.float32], tuple[int, ...]]:
+    el = float_array("elevation_deg", elevation_deg)
+    az = float_array("azimuth_deg", azimuth_deg)
+    try:
+        el, az = np.broadcast_arrays(el, az)
+    except ValueError:
+        raise ValueError(f"shapes do not broadcast: elevation_deg{el.shape}, azimuth_deg{az.shape}") from None
+    if not (np.all(np.isfinite(el)) and np.all(np.isfinite(az))):
+        raise ValueError("elevation_deg and azimuth_deg must be finite")
+    if np.any(np.abs(el) > 90.0):
+        raise ValueError("elevation_deg must lie in [-90, 90] deg")
+    e, a = np.radians(el), np.radians(az)
+    dirs = np.stack([np.sin(a) * np.cos(e), np.sin(e), -np.cos(a) * np.cos(e)], axis=-1)
+    return np.ascontiguousarray(dirs.reshape(-1, 3), dtype=np.float32), el.shape
+
+
+def luminance(
+    elevation_deg: Any,
+    azimuth_deg: Any,
+    *,
+    sky: str | int | None = None,
+    horizontal_illuminance_lux: float | None = None,
+    sun_elevation_deg: float | None = None,
+    sun_azimuth_deg: float | None = None,
+    weather: Weather | None = None,
+) -> Any:
+    """Sky luminance seen from the ground, cd/m^2.
+
+    Parameters
+    ----------
+    elevation_deg, azimuth_deg : float or array_like
+        Direction: elevation above the horizon in [-90, 90] deg (0 below the horizon) and
+        azimuth from -Z towards +X, deg. Broadcast together.
+    sky : "overcast" or int, optional
+        ``"overcast"`` (default): L/Lz = (1 + 2 sin(elevation)) / 3 with Lz = 9E / (7 pi);
+        1-15: the CIE general skies (:data:`SKY_TYPES`).
+    horizontal_illuminance_lux : float, optional
+        E, lux (default 10000): the sky is scaled so the open ground receives it.
+    sun_elevation_deg, sun_azimuth_deg : float, optional
+        The sun, required by the CIE types that depend on it (2, 4, 6-15).
+    weather : Weather, optional
+        Take the sky, E, sun and the rain's attenuation (tau = exp(-sigma H / sin(elevation)))
+        from a weather instead of the keywords. Without it there is no rain: tau = 1.
+
+    Returns
+    -------
+    float or ndarray
+        Luminance, cd/m^2, with the broadcast shape of the directions.
+    """
+    w = _weather(weather, sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg)
+    dirs, shape = _directions(elevation_deg, azimuth_deg)
+    rel = w.sky_model().luminance_relative(dirs, received=True) * w.luminance_scale_cd_m2
+    return float(rel[0]) if shape == () else rel.reshape(shape)
+
+
+def _occluders(scene: BoxScene | PhotoScene | None) -> NDArray[np.float32]:
+    if scene is None:
+        return np.zeros((0, 9), dtype=np.float32)
+    if isinstance(scene, BoxScene):
+        return np.ascontiguousarray(scene.boxes, dtype=np.float32)
+    if isinstance(scene, PhotoScene):
+        return np.ascontiguousarray(scene.occluders, dtype=np.float32)
+    raise TypeError(f"scene must be a BoxScene, a PhotoScene or None, got {type(scene).__name__}")
+
+
+def _points(points_m: Any) -> NDArray[np.float32]:
+    p = float_array("points_m", points_m)
+    if p.ndim == 1 and p.size == 3:
+        p = p.reshape(1, 3)
+    if p.ndim != 2 or p.shape[1] != 3:
+        raise ValueError(f"points_m must have shape (N, 3), got {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError("points_m must be finite")
+    return np.ascontiguousarray(p, dtype=np.float32)
+
+
+def horizontal_illuminance(
+    points_m: Any,
+    scene: BoxScene | PhotoScene | None = None,
+    *,
+    sky: str | int | None = None,
+    horizontal_illuminance_lux: float | None = None,
+    sun_elevation_deg: float | None = None,
+    sun_azimuth_deg: float | None = None,
+    weather: Weather | None = None,
+    samples: int = DEFAULT_SAMPLES,
+    normal: str = "up",
+) -> NDArray[np.float64]:
+    """Sky illuminance at points, with the scene's occluders, lux.
+
+    E(P) = integral over the hemisphere of L(w) tau(w) H(P, w) max(0, n.w) dw, H = 0 where a
+    box hides the sky. The ground never hides the upper hemisphere.
+
+    Parameters
+    ----------
+    points_m : array_like, shape (N, 3) or (3,)
+        Points, m.
+    scene : BoxScene or PhotoScene, optional
+        Occluders: a box scene's boxes, a photo scene's ``occluders``; None: the open sky.
+    sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg, weather
+        As for :func:`luminance`.
+    samples : int
+        Sample directions, in [4, 1048576], rounded to 4 x rings^2 (default 1024: 16 rings).
+    normal : {"up", "+x", "-x", "+z", "-z"}
+        The surface's normal: "up" (default) is the horizontal illuminance of seed 002.
+
+    Returns
+    -------
+    ndarray of float64, shape (N,)
+        Illuminance, lux.
+    """
+    w = _weather(weather, sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg)
+    if normal not in CHANNELS:
+        raise ValueError(f"normal = {normal!r} must be one of {CHANNELS}")
+    n = integer("samples", samples, 4, 1_048_576)
+    rel = w.sky_model().illuminance(_points(points_m), _occluders(scene), samples=n)
+    return rel[:, CHANNELS.index(normal)].astype(np.float64) * w.sky_illuminance_lux
+
+
+@dataclass(frozen=True)
+class AmbientLightMap:
+    """Sky illuminance on a uniform grid, interpolated trilinearly (seed 002 section 4.3).
+
+    Nodes inside boxes carry the light just outside them, so that points on walls interpolate
+    the light in front of the wall. Points outside the grid take the nearest boundary value.
+
+    Attributes
+    ----------
+    grid : ndarray of float32, shape (nx, ny, nz, 5)
+        Illuminance at the nodes, lux, on the :data:`CHANNELS` normals; node (i, j, k) sits at
+        ``origin_m + spacing_m * (i, j, k)``.
+    origin_m : ndarray of float64, shape (3,)
+        Position of node (0, 0, 0), m.
+    spacing_m : float
+        Node spacing, m.
+    illuminance_lux : float
+        E, the open ground's illuminance the values are scaled by.
+    """
+
+    grid: NDArray[np.float32]
+    origin_m: NDArray[np.float64]
+    spacing_m: float
+    illuminance_lux: float
+    core: _core.AmbientLightMap
+
+    def sample(self, points_m: Any, normal: str = "up") -> NDArray[np.float64]:
+        """Trilinear illuminance at points (N, 3), lux, on ``normal`` (one of :data:`CHANNELS`)."""
+        if normal not in CHANNELS:
+            raise ValueError(f"normal = {normal!r} must be one of {CHANNELS}")
+        rel = self.core.sample(_points(points_m))
+        return rel[:, CHANNELS.index(normal)].astype(np.float64) * self.illuminance_lux
+
+
+_cache: OrderedDict[tuple[Any, ...], _core.AmbientLightMap] = OrderedDict()
+_cache_lock = threading.Lock()
+_CACHE_SIZE = 8
+
+
+def cached_core_map(
+    boxes: NDArray[np.float32], w: Weather, lo: NDArray[np.float64], hi: NDArray[np.float64], spacing: float, samples: int
+) -> _core.AmbientLightMap:
+    """The core map, built once per (geometry, sky, bounds, spacing, samples) in a process."""
+    model = w.sky_model()
+    sky_key = (w.sky, w.sun_elevation_deg, w.sun_azimuth_deg, w.extinction_per_m, w.cloud_base_height_m)
+    key = (boxes.tobytes(), boxes.shape, sky_key, tuple(lo), tuple(hi), spacing, samples)
+    with _cache_lock:
+        if key in _cache:
+            _cache.move_to_end(key)
+            return _cache[key]
+    built = model.ambient_map(boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=spacing, samples=samples)
+    with _cache_lock:
+        _cache[key] = built
+        while len(_cache) > _CACHE_SIZE:
+            _cache.popitem(last=False)
+    return built
+
+
+def default_bounds(
+    scene: BoxScene | PhotoScene | None, spacing_m: float, around_m: Any = None, radius_m: float = 0.0
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The map's default extent: a box scene's boxes, from the ground (y = 0) to a spacing above
+    the tallest roof, plus a ``radius_m`` cube around ``around_m`` (a camera's rain region).
+    A photo scene's occluders only count within that cube: its map serves the drops."""
+    boxes = _occluders(scene).astype(np.float64)
+    corners = [boxes[:, 0:3], boxes[:, 3:6]] if not isinstance(scene, PhotoScene) or around_m is None else []
+    if around_m is not None:
+        c = np.asarray(around_m, dtype=np.float64).reshape(1, 3)
+        corners += [c - radius_m, c + radius_m]
+    pts = np.concatenate(corners, axis=0) if corners else np.zeros((0, 3))
+    if pts.size == 0:
+        return np.zeros(3), np.zeros(3)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    if isinstance(scene, BoxScene) and scene.ground:
+        lo[1] = max(lo[1], 0.0)
+        hi[1] = max(hi[1], lo[1])
+    if boxes.size and not isinstance(scene, PhotoScene):
+        hi[1] += spacing_m
+    return lo, hi
+
+
+def ambient_light_map(
+    scene: BoxScene | PhotoScene | None = None,
+    *,
+    spacing_m: float = 1.0,
+    bounds: Any = None,
+    sky: str | int | None = None,
+    horizontal_illuminance_lux: float | None = None,
+    sun_elevation_deg: float | None = None,
+    sun_azimuth_deg: float | None = None,
+    weather: Weather | None = None,
+    samples: int = 256,
+) -> AmbientLightMap:
+    """Build (or fetch from the per-process cache) the ambient-light map of a scene.
+
+    Parameters
+    ----------
+    scene : BoxScene or PhotoScene, optional
+        The occluders (see :func:`horizontal_illuminance`). A scene without occluders gets a
+        single-node map: the open sky everywhere.
+    spacing_m : float
+        Node spacing, m, in [0.05, 100].
+    bounds : array_like, shape (2, 3), optional
+        Min and max corners, m. Default: the boxes' extent from the ground to a spacing above
+        the tallest roof.
+    sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg, weather
+        As for :func:`luminance`.
+    samples : int
+        Sample directions per node (default 256: 8 rings of 32 azimuths).
+
+    Returns
+    -------
+    AmbientLightMap
+    """
+    w = _weather(weather, sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg)
+    s = real("spacing_m", spacing_m)
+    if not 0.05 <= s <= 100.0:
+        raise ValueError(f"spacing_m = {s} is outside the valid range [0.05, 100] m")
+    n = integer("samples", samples, 4, 1_048_576)
+    if bounds is None:
+        lo, hi = default_bounds(scene, s)
+    else:
+        b = float_array("bounds", bounds)
+        if b.shape != (2, 3) or not np.all(np.isfinite(b)) or np.any(b[1] < b[0]):
+            raise ValueError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]] with max >= min, got {np.asarray(bounds).tolist()}")
+        lo, hi = b[0], b[1]
+    return wrap(cached_core_map(_occluders(scene), w, lo, hi, s, n), w.sky_illuminance_lux)
+
+
+def wrap(core: _core.AmbientLightMap, illuminance_lux: float) -> AmbientLightMap:
+    """The public map around a core one."""
+    return AmbientLightMap(
+        grid=core.values * np.float32(illuminance_lux),
+        origin_m=np.asarray(core.origin_m, dtype=np.float64),
+        spacing_m=float(core.spacing_m),
+        illuminance_lux=float(illuminance_lux),
+        core=core,
+    )

@@ -1,0 +1,276 @@
+//! The ambient-light map (seed 002 §4.3): sky illuminance on the five normals at the nodes of
+//! a uniform 3D grid, interpolated trilinearly.
+//!
+//! Nodes inside a box (strictly inside in X and Z, from its base up to below its roof) hold no
+//! meaningful light; they are filled from their outside neighbours (repeated 6-neighbour
+//! averaging), so that a point on a wall interpolates the light just outside it instead of
+//! the darkness inside. Points outside the grid take the nearest boundary value.
+//!
+//! [`AmbientMap::sample`] is the CPU reference of the WGSL `ambient_sample` in
+//! `skyfall-gpu`'s `common.wgsl`.
+
+use super::illuminance::{boxes_above, irradiance, SkySamples, CHANNELS};
+use crate::error::{Error, Param, Range, Result};
+use crate::scene::boxes::BoxScene;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Most nodes a map may have (16 M: 320 MB of float32).
+pub const MAX_NODES: usize = 16 << 20;
+/// Valid grid spacings.
+pub const SPACING_M: Range = Range::closed(0.05, 100.0, "m");
+
+/// Illuminance relative to E on five normals over a grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AmbientMap {
+    /// Position of node (0, 0, 0), m.
+    pub origin_m: Vec3,
+    /// Node spacing, m.
+    pub spacing_m: f32,
+    /// Nodes along X, Y, Z.
+    pub dims: [usize; 3],
+    /// Values, [`CHANNELS`] per node, node (i, j, k) at ((i·ny + j)·nz + k)·5.
+    pub values: Vec<f32>,
+}
+
+/// Whether a node is inside a box (and so filled from outside).
+fn solid(scene: &BoxScene, p: Vec3) -> bool {
+    scene.boxes.iter().any(|b| {
+        p.x > b.min_m.x && p.x < b.max_m.x && p.z > b.min_m.z && p.z < b.max_m.z && p.y >= b.min_m.y && p.y < b.max_m.y
+    })
+}
+
+impl AmbientMap {
+    /// A map of one node: the same light everywhere (a scene without occluders).
+    pub fn uniform(values: [f32; CHANNELS]) -> Self {
+        AmbientMap { origin_m: Vec3::ZERO, spacing_m: 1.0, dims: [1, 1, 1], values: values.to_vec() }
+    }
+
+    /// Node count for a box `min_m`..`max_m` at `spacing_m`, validated.
+    pub fn grid_dims(min_m: Vec3, max_m: Vec3, spacing_m: f64) -> Result<[usize; 3]> {
+        SPACING_M.check("spacing_m", None, spacing_m)?;
+        let coord = Range::closed(-1e6, 1e6, "m");
+        for k in 0..3 {
+            coord.check("bounds.min", Some(k), f64::from(min_m[k]))?;
+            coord.check("bounds.max", Some(k), f64::from(max_m[k]))?;
+            if max_m[k] < min_m[k] {
+                return Err(Error::Invalid { param: Param { name: "bounds", index: Some(k) }, message: format!("max {} is below min {}", max_m[k], min_m[k]) });
+            }
+        }
+        let dims = [0, 1, 2].map(|k| (f64::from(max_m[k] - min_m[k]) / spacing_m).ceil() as usize + 1);
+        let nodes = dims.iter().map(|&d| d as u128).product::<u128>();
+        if nodes > MAX_NODES as u128 {
+            return Err(Error::Invalid {
+                param: Param { name: "spacing_m", index: None },
+                message: format!("{}x{}x{} = {nodes} nodes exceed the {MAX_NODES} a map may have; use a larger spacing or smaller bounds", dims[0], dims[1], dims[2]),
+            });
+        }
+        Ok(dims)
+    }
+
+    /// Builds the map over `min_m`..`max_m` (the last node may overshoot `max_m` by less than
+    /// a spacing), nodes in parallel.
+    pub fn build(scene: &BoxScene, samples: &SkySamples, min_m: Vec3, max_m: Vec3, spacing_m: f64) -> Result<Self> {
+        let dims = Self::grid_dims(min_m, max_m, spacing_m)?;
+        let [nx, ny, nz] = dims;
+        let s = spacing_m as f32;
+        let mut values = vec![0.0f32; nx * ny * nz * CHANNELS];
+        let mut is_solid = vec![false; nx * ny * nz];
+        values
+            .par_chunks_mut(nz * CHANNELS)
+            .zip(is_solid.par_chunks_mut(nz))
+            .enumerate()
+            .for_each(|(ij, (column, solid_col))| {
+                let (i, j) = (ij / ny, ij % ny);
+                let y = min_m.y + j as f32 * s;
+                let above = boxes_above(scene, y);
+                for k in 0..nz {
+                    let p = min_m + Vec3::new(i as f32 * s, j as f32 * s, k as f32 * s);
+                    if solid(scene, p) {
+                        solid_col[k] = true;
+                    } else {
+                        column[k * CHANNELS..(k + 1) * CHANNELS].copy_from_slice(&irradiance(&above, samples, p));
+                    }
+                }
+            });
+        let mut map = AmbientMap { origin_m: min_m, spacing_m: s, dims, values };
+        map.fill_solid(is_solid);
+        Ok(map)
+    }
+
+    /// Replaces solid nodes by the mean of their filled 6-neighbours, layer by layer inward.
+    fn fill_solid(&mut self, mut pending: Vec<bool>) {
+        let [nx, ny, nz] = self.dims;
+        let idx = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
+        while pending.iter().any(|&p| p) {
+            let mut next = pending.clone();
+            let mut progress = false;
+            for i in 0..nx {
+                for j in 0..ny {
+                    for k in 0..nz {
+                        let n = idx(i, j, k);
+                        if !pending[n] {
+                            continue;
+                        }
+                        let mut acc = [0.0f32; CHANNELS];
+                        let mut count = 0;
+                        let nbrs = [
+                            (i > 0).then(|| idx(i - 1, j, k)),
+                            (i + 1 < nx).then(|| idx(i + 1, j, k)),
+                            (j > 0).then(|| idx(i, j - 1, k)),
+                            (j + 1 < ny).then(|| idx(i, j + 1, k)),
+                            (k > 0).then(|| idx(i, j, k - 1)),
+                            (k + 1 < nz).then(|| idx(i, j, k + 1)),
+                        ];
+                        for m in nbrs.into_iter().flatten() {
+                            if !pending[m] {
+                                for (a, v) in acc.iter_mut().zip(&self.values[m * CHANNELS..(m + 1) * CHANNELS]) {
+                                    *a += v;
+                                }
+                                count += 1;
+                            }
+                        }
+                        if count > 0 {
+                            for (c, a) in acc.iter().enumerate() {
+                                self.values[n * CHANNELS + c] = a / count as f32;
+                            }
+                            next[n] = false;
+                            progress = true;
+                        }
+                    }
+                }
+            }
+            pending = next;
+            if !progress {
+                break; // every node solid: they stay 0
+            }
+        }
+    }
+
+    /// Trilinear interpolation of the five channels at `p` (clamped to the grid).
+    #[inline]
+    pub fn sample(&self, p: Vec3) -> [f32; CHANNELS] {
+        let mut base = [0usize; 3];
+        let mut frac = [0.0f32; 3];
+        for a in 0..3 {
+            let n = self.dims[a];
+            let g = ((p[a] - self.origin_m[a]) / self.spacing_m).clamp(0.0, (n - 1) as f32);
+            let i0 = (g.floor() as usize).min(n.saturating_sub(2));
+            base[a] = i0;
+            frac[a] = if n > 1 { g - i0 as f32 } else { 0.0 };
+        }
+        let [_, ny, nz] = self.dims;
+        let mut out = [0.0f32; CHANNELS];
+        for corner in 0..8usize {
+            let off = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
+            let mut w = 1.0;
+            let mut ijk = [0usize; 3];
+            for a in 0..3 {
+                w *= if off[a] == 1 { frac[a] } else { 1.0 - frac[a] };
+                ijk[a] = (base[a] + off[a]).min(self.dims[a] - 1);
+            }
+            if w == 0.0 {
+                continue;
+            }
+            let n = (ijk[0] * ny + ijk[1]) * nz + ijk[2];
+            for (o, v) in out.iter_mut().zip(&self.values[n * CHANNELS..(n + 1) * CHANNELS]) {
+                *o += w * v;
+            }
+        }
+        out
+    }
+
+    /// The channel a surface with unit axis-aligned normal `n` reads: 0 up, 1 +X, 2 −X, 3 +Z,
+    /// 4 −Z, None for a face looking down (no sky).
+    #[inline]
+    pub fn channel(n: Vec3) -> Option<usize> {
+        if n.y > 0.5 {
+            Some(0)
+        } else if n.y < -0.5 {
+            None
+        } else if n.x > 0.5 {
+            Some(1)
+        } else if n.x < -0.5 {
+            Some(2)
+        } else if n.z > 0.5 {
+            Some(3)
+        } else {
+            Some(4)
+        }
+    }
+}
+
+/// Default bounds of a scene's map: the boxes' extent and `extra` points (the camera, the rain
+/// region), from the ground to a spacing above the tallest roof.
+pub fn scene_bounds(scene: &BoxScene, extra: &[Vec3], spacing_m: f32) -> (Vec3, Vec3) {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for b in &scene.boxes {
+        lo = lo.min(b.min_m);
+        hi = hi.max(b.max_m);
+    }
+    for p in extra {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    if !lo.is_finite() {
+        return (Vec3::ZERO, Vec3::ZERO);
+    }
+    if scene.ground {
+        lo.y = lo.y.max(0.0);
+    }
+    (lo, hi + Vec3::new(0.0, spacing_m, 0.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::boxes::SceneBox;
+    use crate::sky::{cie::SkyKind, Sky};
+
+    #[test]
+    fn trilinear_is_exact_for_linear_fields_and_clamps() {
+        let (nx, ny, nz) = (4, 3, 5);
+        let f = |p: Vec3, c: usize| 0.5 + 0.1 * p.x - 0.2 * p.y + 0.05 * p.z + c as f32;
+        let origin = Vec3::new(-1.0, 0.0, 2.0);
+        let mut values = Vec::new();
+        for i in 0..nx {
+            for j in 0..ny {
+                for k in 0..nz {
+                    let p = origin + 0.5 * Vec3::new(i as f32, j as f32, k as f32);
+                    values.extend((0..CHANNELS).map(|c| f(p, c)));
+                }
+            }
+        }
+        let m = AmbientMap { origin_m: origin, spacing_m: 0.5, dims: [nx, ny, nz], values };
+        for p in [Vec3::new(-0.3, 0.7, 2.9), Vec3::new(0.5, 1.0, 4.0), origin] {
+            for (c, v) in m.sample(p).iter().enumerate() {
+                assert!((v - f(p, c)).abs() < 1e-5, "{p} {c}");
+            }
+        }
+        // beyond the grid: the boundary value
+        assert!((m.sample(Vec3::new(-9.0, 0.0, 2.0))[0] - f(origin, 0)).abs() < 1e-6);
+        assert_eq!(AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]).sample(Vec3::splat(7.0)), [1.0, 0.4, 0.4, 0.4, 0.4]);
+    }
+
+    #[test]
+    fn nodes_inside_boxes_take_the_light_outside() {
+        let wall = SceneBox { min_m: Vec3::new(2.0, 0.0, -50.0), max_m: Vec3::new(4.0, 10.0, 50.0), albedo: Vec3::ONE };
+        let scene = BoxScene::new(vec![wall], true, Vec3::ONE).unwrap();
+        let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+        let s = SkySamples::new(&sky, 256).unwrap();
+        let m = AmbientMap::build(&scene, &s, Vec3::new(0.0, 0.0, 0.0), Vec3::new(6.0, 4.0, 0.0), 1.0).unwrap();
+        assert_eq!(m.dims, [7, 5, 1]);
+        let at = |i: usize, j: usize| &m.values[(i * 5 + j) * CHANNELS..(i * 5 + j + 1) * CHANNELS];
+        // node x = 3 is inside: filled from x = 2 and x = 4 (both on the wall's faces)
+        for c in 0..CHANNELS {
+            assert!((at(3, 2)[c] - 0.5 * (at(2, 2)[c] + at(4, 2)[c])).abs() < 1e-6);
+        }
+        // on the wall face x = 2, the -X channel sees open sky, the +X channel none
+        assert!(at(2, 2)[2] > 0.35 && at(2, 2)[1] == 0.0);
+        // direct evaluation agrees at the nodes
+        let direct = irradiance(&boxes_above(&scene, 1.0), &s, Vec3::new(1.0, 1.0, 0.0));
+        assert_eq!(m.sample(Vec3::new(1.0, 1.0, 0.0)), direct);
+        assert!(AmbientMap::build(&scene, &s, Vec3::ZERO, Vec3::splat(1e5), 0.1).is_err());
+    }
+}

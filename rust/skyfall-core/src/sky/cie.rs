@@ -1,0 +1,100 @@
+//! Sky luminance distributions, as L/Lz (relative to the zenith luminance).
+//!
+//! - Overcast (seed 002, eq. 4): the CIE standard overcast sky of Moon & Spencer,
+//!   L/Lz = (1 + 2 sin γ)/3, γ the elevation.
+//! - General sky, CIE S 011/E:2003 (ISO 15469), types 1–15: L/Lz = φ(Z) f(χ) / (φ(0) f(Z_s)),
+//!   φ(Z) = 1 + a·exp(b / cos Z) (1 at the horizon), f(χ) = 1 + c·(exp(dχ) − exp(dπ/2)) + e·cos²χ,
+//!   Z the zenith angle, χ the angle to the sun, Z_s the sun's zenith angle.
+
+use crate::error::{Error, Param, Result};
+use glam::Vec3;
+use std::f64::consts::FRAC_PI_2;
+
+/// Parameters a–e of the 15 CIE general skies (CIE S 011/E:2003, table 1; copied into
+/// `tests/data/cie_general_sky_15_types.csv` with its source).
+pub const CIE_TYPES: [[f64; 5]; 15] = [
+    [4.0, -0.7, 0.0, -1.0, 0.0],
+    [4.0, -0.7, 2.0, -1.5, 0.15],
+    [1.1, -0.8, 0.0, -1.0, 0.0],
+    [1.1, -0.8, 2.0, -1.5, 0.15],
+    [0.0, -1.0, 0.0, -1.0, 0.0],
+    [0.0, -1.0, 2.0, -1.5, 0.15],
+    [0.0, -1.0, 5.0, -2.5, 0.3],
+    [0.0, -1.0, 10.0, -3.0, 0.45],
+    [-1.0, -0.55, 2.0, -1.5, 0.15],
+    [-1.0, -0.55, 5.0, -2.5, 0.3],
+    [-1.0, -0.55, 10.0, -3.0, 0.45],
+    [-1.0, -0.32, 10.0, -3.0, 0.45],
+    [-1.0, -0.32, 16.0, -3.0, 0.3],
+    [-1.0, -0.15, 16.0, -3.0, 0.3],
+    [-1.0, -0.15, 24.0, -2.8, 0.15],
+];
+
+/// A sky luminance distribution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SkyKind {
+    /// The seed's CIE standard overcast sky (Moon & Spencer).
+    Overcast,
+    /// CIE general sky type 1–15 with the sun's unit direction.
+    General {
+        /// The type, 1–15.
+        sky_type: u8,
+        /// Unit vector towards the sun (may be below the horizon for the azimuthally uniform types).
+        sun: Vec3,
+    },
+}
+
+impl SkyKind {
+    /// Validated general sky. Types whose indicatrix depends on the sun (c ≠ 0 or e ≠ 0)
+    /// need a sun direction; the others ignore it.
+    pub fn general(sky_type: i64, sun: Option<Vec3>) -> Result<Self> {
+        if !(1..=15).contains(&sky_type) {
+            return Err(Error::OutOfRange { param: Param { name: "sky", index: None }, value: sky_type as f64, range: "1..15 (CIE general sky type) or \"overcast\"".into() });
+        }
+        let p = CIE_TYPES[(sky_type - 1) as usize];
+        let needs_sun = p[2] != 0.0 || p[4] != 0.0;
+        let sun = match sun {
+            Some(s) if s.is_finite() && s.length() > 0.0 => s.normalize(),
+            Some(_) => return Err(Error::Invalid { param: Param { name: "sun", index: None }, message: "the sun direction must be finite and non-zero".into() }),
+            None if needs_sun => {
+                return Err(Error::Invalid {
+                    param: Param { name: "sun_elevation_deg", index: None },
+                    message: format!("CIE sky type {sky_type} depends on the sun: give sun_elevation_deg and sun_azimuth_deg"),
+                })
+            }
+            None => Vec3::Y,
+        };
+        if needs_sun && sun.y < 0.0 {
+            return Err(Error::OutOfRange { param: Param { name: "sun_elevation_deg", index: None }, value: f64::from(sun.y.asin().to_degrees()), range: "[0, 90] deg".into() });
+        }
+        Ok(SkyKind::General { sky_type: sky_type as u8, sun })
+    }
+
+    /// The five parameters a–e, and the sun (for the GPU uniform); the overcast sky is
+    /// encoded as a = NaN.
+    pub fn params(&self) -> ([f32; 5], Vec3) {
+        match *self {
+            SkyKind::Overcast => ([f32::NAN, 0.0, 0.0, 0.0, 0.0], Vec3::Y),
+            SkyKind::General { sky_type, sun } => (CIE_TYPES[usize::from(sky_type) - 1].map(|v| v as f32), sun),
+        }
+    }
+
+    /// L/Lz along unit direction `dir` (0 below the horizon).
+    pub fn relative_to_zenith(&self, dir: Vec3) -> f64 {
+        let cz = f64::from(dir.y);
+        if cz < 0.0 {
+            return 0.0;
+        }
+        match *self {
+            SkyKind::Overcast => (1.0 + 2.0 * cz) / 3.0,
+            SkyKind::General { sky_type, sun } => {
+                let [a, b, c, d, e] = CIE_TYPES[usize::from(sky_type) - 1];
+                let phi = |cos_z: f64| if cos_z <= 0.0 { 1.0 } else { 1.0 + a * (b / cos_z).exp() };
+                let f = |chi: f64| 1.0 + c * ((d * chi).exp() - (d * FRAC_PI_2).exp()) + e * chi.cos().powi(2);
+                let chi = f64::from(dir.dot(sun)).clamp(-1.0, 1.0).acos();
+                let zs = f64::from(sun.y).clamp(-1.0, 1.0).acos();
+                phi(cz) * f(chi) / (phi(1.0) * f(zs))
+            }
+        }
+    }
+}

@@ -1,0 +1,309 @@
+"""Sky light (seed 002): CIE skies against an independent implementation of the published
+formula and scipy integrals, illuminance with occlusion against high-resolution numerical
+integrals, the ambient map against direct evaluation, and its use in frames on both backends."""
+
+from __future__ import annotations
+
+import csv
+
+import colour
+import numpy as np
+import pytest
+from scipy import integrate
+
+from skyfall import Camera, PhotoScene, Renderer, Weather, scenes, sky
+from conftest import DATA
+
+E = 10000.0
+
+
+def cie_table() -> dict[int, tuple[float, float, float, float, float]]:
+    """a-e per CIE type from tests/data (CIE S 011/E:2003, source line in the file)."""
+    lines = [ln for ln in (DATA / "cie_general_sky_15_types.csv").read_text().splitlines() if not ln.startswith("#")]
+    rows = list(csv.DictReader(lines))
+    return {int(r["type"]): tuple(float(r[k]) for k in "abcde") for r in rows}  # type: ignore[misc]
+
+
+def cie_relative(el_deg: np.ndarray, az_deg: np.ndarray, t: int, sun_el: float, sun_az: float) -> np.ndarray:
+    """L/Lz of CIE type t written from the standard, independently of skyfall."""
+    a, b, c, d, e = cie_table()[t]
+    z = np.radians(90.0 - np.asarray(el_deg))
+    zs = np.radians(90.0 - sun_el)
+    daz = np.radians(np.asarray(az_deg) - sun_az)
+    chi = np.arccos(np.clip(np.cos(zs) * np.cos(z) + np.sin(zs) * np.sin(z) * np.cos(daz), -1, 1))
+    with np.errstate(divide="ignore", over="ignore"):
+        phi = np.where(np.cos(z) > 1e-12, 1 + a * np.exp(b / np.maximum(np.cos(z), 1e-12)), 1.0)
+    f = lambda x: 1 + c * (np.exp(d * x) - np.exp(d * np.pi / 2)) + e * np.cos(x) ** 2  # noqa: E731
+    return phi * f(chi) / ((1 + a * np.exp(b)) * f(zs))
+
+
+def hemisphere_integral(fn, n_el: int = 400, n_az: int = 800) -> float:
+    """Integral of fn(el_deg, az_deg) cos(theta) d(omega) by a fine midpoint grid in (el, az)."""
+    el = (np.arange(n_el) + 0.5) / n_el * 90.0
+    az = (np.arange(n_az) + 0.5) / n_az * 360.0
+    ee, aa = np.meshgrid(el, az, indexing="ij")
+    w = np.sin(np.radians(ee)) * np.cos(np.radians(ee)) * (np.pi / 2 / n_el) * (2 * np.pi / n_az)
+    return float(np.sum(fn(ee, aa) * w))
+
+
+# ---- luminance --------------------------------------------------------------------------
+
+
+def test_overcast_luminance_is_the_seed_formula():
+    el = np.array([0.0, 10.0, 45.0, 90.0])
+    lz = 9 * E / (7 * np.pi)
+    np.testing.assert_allclose(sky.luminance(el, 0.0), lz * (1 + 2 * np.sin(np.radians(el))) / 3, rtol=1e-6)
+    assert sky.luminance(-5.0, 0.0) == 0.0
+    # CIE type 1 is the general-sky version of the overcast sky: within 5 % of Moon-Spencer
+    # from 30 deg up (it is darker near the horizon: -20 % at 10 deg).
+    el = np.linspace(30, 90, 7)
+    np.testing.assert_allclose(sky.luminance(el, 0.0, sky=1), sky.luminance(el, 0.0), rtol=0.05)
+
+
+@pytest.mark.parametrize("t", range(1, 16))
+def test_cie_types_follow_the_standard_and_give_e(t):
+    sun = (35.0, 140.0)
+    el = np.array([5.0, 20.0, 40.0, 60.0, 85.0])
+    az = np.array([0.0, 100.0, 140.0, 200.0, 300.0])
+    got = sky.luminance(el, az, sky=t, sun_elevation_deg=sun[0], sun_azimuth_deg=sun[1])
+    want_shape = cie_relative(el, az, t, *sun)
+    # The shape is the standard's (independent numpy implementation from the CSV).
+    np.testing.assert_allclose(got / got[-1], want_shape / want_shape[-1], rtol=2e-5)
+    # Normalised: the open sky's horizontal illuminance (a fine numerical integral here) is E.
+    total = hemisphere_integral(lambda e_, a_: sky.luminance(e_, a_, sky=t, sun_elevation_deg=sun[0], sun_azimuth_deg=sun[1]))
+    assert total == pytest.approx(E, rel=1e-3)
+    # And skyfall's own sampler agrees within 0.1 %.
+    e_h = sky.horizontal_illuminance([0, 0, 0], sky=t, sun_elevation_deg=sun[0], sun_azimuth_deg=sun[1])
+    assert e_h[0] == pytest.approx(E, rel=1e-3)
+
+
+def test_sky_inputs_are_checked():
+    with pytest.raises(ValueError, match="sun_elevation_deg"):
+        sky.luminance(30.0, 0.0, sky=12)
+    with pytest.raises(ValueError, match="1-15"):
+        Weather(sky=16)
+    with pytest.raises(ValueError, match="overcast"):
+        Weather(sky="clear")
+    with pytest.raises(TypeError):
+        Weather(sky=2.5)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="both"):
+        Weather(sun_elevation_deg=10.0)
+    with pytest.raises(ValueError, match="sun_elevation_deg"):
+        Weather(sky=12, sun_elevation_deg=-3.0, sun_azimuth_deg=0.0)
+    with pytest.raises(ValueError, match="not both"):
+        sky.luminance(30.0, 0.0, sky=3, weather=Weather())
+    with pytest.raises(ValueError, match="elevation_deg"):
+        sky.luminance(95.0, 0.0)
+    with pytest.raises(ValueError, match="samples"):
+        sky.horizontal_illuminance([0, 0, 0], samples=2)
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        sky.horizontal_illuminance([[0, 0]])
+    with pytest.raises(ValueError, match="spacing_m"):
+        sky.ambient_light_map(scenes.street(), spacing_m=0.0)
+    with pytest.raises(ValueError, match="nodes"):
+        sky.ambient_light_map(scenes.street(), spacing_m=0.05)
+
+
+def test_rain_darkens_the_low_sky_but_keeps_e():
+    wet = Weather(rain_rate_mm_h=50.0)
+    assert wet.cloud_base_height_m == pytest.approx(1500 - 250 * np.log1p(50.0))
+    el = np.array([5.0, 30.0, 90.0])
+    ratio = sky.luminance(el, 0.0, weather=wet) / sky.luminance(el, 0.0)
+    assert ratio[0] < ratio[1] < ratio[2]
+    # tau = exp(-sigma H / sin(el)) relative between directions, as documented.
+    sigma, h = wet.extinction_per_m, wet.cloud_base_height_m
+    tau = np.exp(-sigma * h / np.sin(np.radians(el)))
+    np.testing.assert_allclose(ratio / ratio[-1], tau / tau[-1], rtol=1e-5)
+    assert sky.horizontal_illuminance([0, 0, 0], weather=wet)[0] == pytest.approx(wet.sky_illuminance_lux, rel=1e-3)
+
+
+# ---- illuminance with occlusion -------------------------------------------------------
+
+
+def canyon(height: float, width: float) -> scenes.BoxScene:
+    """An (effectively) infinitely long canyon along Z: two 2 km walls."""
+    return scenes.boxes(
+        [
+            {"min": (-width / 2 - 10, 0, -1000), "max": (-width / 2, height, 1000)},
+            {"min": (width / 2, 0, -1000), "max": (width / 2 + 10, height, 1000)},
+        ]
+    )
+
+
+def canyon_reference(x: float, height: float, width: float, weather: Weather | None = None) -> float:
+    """E_h at (x, 0, 0) in the canyon by scipy: over azimuth, the visible elevations are those
+    above the wall the azimuth meets; L from the seed's formula (with rain: tau)."""
+    lz = 9 * E / (7 * np.pi)
+    sigma, hb = (0.0, 1.0) if weather is None else (weather.extinction_per_m, weather.cloud_base_height_m)
+
+    def l_cos_sin(g: float) -> float:
+        tau = np.exp(-sigma * hb / np.sin(g)) if sigma > 0 else 1.0
+        return lz * (1 + 2 * np.sin(g)) / 3 * tau * np.sin(g) * np.cos(g)
+
+    def over_elevation(phi: float) -> float:
+        sx = np.sin(phi)  # horizontal direction (sin phi, ., -cos phi): phi from -Z towards +X
+        if abs(sx) < 1e-12:
+            g0 = 0.0
+        else:
+            dist = (width / 2 - x) / sx if sx > 0 else (-width / 2 - x) / sx
+            g0 = np.arctan2(height, dist)
+        return integrate.quad(l_cos_sin, g0, np.pi / 2, epsabs=1e-10, epsrel=1e-10)[0]
+
+    return integrate.quad(over_elevation, 0, 2 * np.pi, points=[np.pi / 2, np.pi, 3 * np.pi / 2], limit=400, epsrel=1e-9)[0]
+
+
+@pytest.mark.parametrize(("x", "height", "width"), [(0.0, 10.0, 10.0), (0.0, 20.0, 8.0), (3.999, 10.0, 8.0)])
+def test_canyon_illuminance_matches_a_numerical_integral(x, height, width):
+    ref = canyon_reference(x, height, width)
+    got = sky.horizontal_illuminance([x, 0.0, 0.0], canyon(height, width), samples=16384)[0]
+    assert got == pytest.approx(ref, rel=0.01)
+    assert got < 0.8 * E
+
+
+def test_rain_attenuation_enters_the_occluded_integral():
+    wet = Weather(rain_rate_mm_h=30.0)
+    ref = canyon_reference(0.0, 12.0, 10.0, wet)
+    got = sky.horizontal_illuminance([0.0, 0.0, 0.0], canyon(12.0, 10.0), weather=wet, samples=16384)[0]
+    # The reference's L is unnormalised for rain: rescale it by the open-sky integral.
+    open_ref = canyon_reference(0.0, 0.0001, 10.0, wet)
+    assert got / E == pytest.approx(ref / open_ref, rel=0.01)
+
+
+def test_points_inside_boxes_see_no_sky_and_roofs_see_all():
+    s = scenes.boxes([{"min": (-2, 0, -2), "max": (2, 5, 2)}])
+    e = sky.horizontal_illuminance([[0, 2, 0], [0, 5, 0], [0, 9, 0]], s)
+    assert e[0] == 0.0
+    np.testing.assert_allclose(e[1:], E, rtol=1e-3)
+    # A wall facing +X at its foot sees the open vertical sky: E (3/14 + 4/(7 pi)).
+    v = sky.horizontal_illuminance([2.0, 0.0, 0.0], s, normal="+x")[0]
+    assert v == pytest.approx(E * (3 / 14 + 4 / (7 * np.pi)), rel=2e-2)
+
+
+# ---- the ambient map ------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def street_map() -> sky.AmbientLightMap:
+    return sky.ambient_light_map(scenes.street(length_m=40.0), spacing_m=2.0, samples=256)
+
+
+def test_map_nodes_equal_direct_evaluation(street_map):
+    m = street_map
+    nx, ny, nz, _ = m.grid.shape
+    rng = np.random.default_rng(0)
+    idx = rng.integers(0, [nx, ny, nz], size=(40, 3))
+    pts = m.origin_m + m.spacing_m * idx
+    boxes = scenes.street(length_m=40.0).boxes
+    inside = np.array(
+        [np.any((p[0] > boxes[:, 0]) & (p[0] < boxes[:, 3]) & (p[2] > boxes[:, 2]) & (p[2] < boxes[:, 5]) & (p[1] >= boxes[:, 1]) & (p[1] < boxes[:, 4])) for p in pts]
+    )
+    direct = sky.horizontal_illuminance(pts[~inside], scenes.street(length_m=40.0), samples=256)
+    node_vals = m.grid[idx[~inside, 0], idx[~inside, 1], idx[~inside, 2], 0]
+    np.testing.assert_allclose(node_vals, direct, rtol=1e-5, atol=1e-3)
+    np.testing.assert_allclose(m.sample(pts[~inside]), direct, rtol=1e-5, atol=1e-3)
+
+
+def test_map_sampling_is_trilinear(street_map):
+    m = street_map
+    g = m.grid[..., 0].astype(np.float64)
+    rng = np.random.default_rng(1)
+    base = rng.integers(0, np.array(g.shape) - 1, size=(50, 3))
+    f = rng.uniform(0, 1, size=(50, 3))
+    want = np.zeros(50)
+    for corner in range(8):
+        off = np.array([(corner >> k) & 1 for k in range(3)])
+        w = np.prod(np.where(off == 1, f, 1 - f), axis=1)
+        ijk = base + off
+        want += w * g[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    got = m.sample(m.origin_m + m.spacing_m * (base + f))
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-2)
+    # Outside the grid: the nearest boundary value.
+    far = m.sample(m.origin_m - 100.0)
+    assert far[0] == pytest.approx(g[0, 0, 0], rel=1e-6)
+
+
+def test_map_is_cached_and_open_scenes_are_uniform():
+    a = sky.ambient_light_map(scenes.street(length_m=40.0), spacing_m=2.0, samples=256)
+    b = sky.ambient_light_map(scenes.street(length_m=40.0), spacing_m=2.0, samples=256)
+    assert a.core is b.core
+    open_map = sky.ambient_light_map(scenes.empty())
+    assert open_map.grid.shape == (1, 1, 1, 5)
+    assert open_map.grid[0, 0, 0, 0] == pytest.approx(E, rel=1e-4)
+
+
+# ---- frames ---------------------------------------------------------------------------
+
+
+W, H = 96, 64
+
+
+@pytest.fixture(scope="module", params=["cpu", "gpu"])
+def renderer(request) -> Renderer:
+    return Renderer(W, H, backend=request.param)
+
+
+def roofed_photo(roof: bool) -> PhotoScene:
+    """A black photo (so a streak shows r I_R alone) under a roof over the left half (x < 0)."""
+    occ = [{"min": (-30.0, 1.5, -30.0), "max": (0.0, 1.8, 30.0)}] if roof else []
+    return PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), vertical_fov_deg=60.0, occluders=occ)
+
+
+def test_streaks_under_a_roof_are_darker(renderer):
+    w = Weather(rain_rate_mm_h=40.0, rain_near_m=4.0)
+    dry = Weather(rain_rate_mm_h=40.0, rain_near_m=4.0, rain_streaks=False)
+    light = {}
+    for roof in (False, True):
+        f = renderer.render(roofed_photo(roof), w, seed=5)
+        bg = renderer.render(roofed_photo(roof), dry).rgb  # the hazed background, uniform
+        a = f.layers["rain_alpha"]
+        # A streak of coverage a moves C towards I_R by a r (I_R - C), r = 0.5: estimate the
+        # coverage-weighted drop light I_R on each side of the image.
+        left, right = np.s_[:, : W // 2 - 4], np.s_[:, W // 2 + 4 :]
+        light[roof] = [bg[s][..., 0].mean() + (f.rgb[s] - bg[s])[..., 0].sum() / (0.5 * a[s].sum()) for s in (left, right)]
+    # Open sky: both sides see I_R = 1 (E/pi units).
+    np.testing.assert_allclose(light[False], 1.0, rtol=0.02)
+    # Under the roof the left side is much darker, the right side (open, beside it) a little.
+    assert light[True][0] < 0.6 * light[False][0]
+    assert 0.6 * light[False][1] < light[True][1] < 0.98 * light[False][1]
+
+
+def test_cpu_and_gpu_agree_under_a_cie_sky_with_rain():
+    w = Weather(rain_rate_mm_h=20.0, sky=10, sun_elevation_deg=30.0, sun_azimuth_deg=200.0)
+    cam = Camera((1.5, 1.6, 0.0), pitch_deg=8.0, vertical_fov_deg=55.0)
+    frames = [Renderer(W, H, backend=b).render(scenes.street(length_m=40.0), w, camera=cam, seed=2, ambient_spacing_m=2.0) for b in ("cpu", "gpu")]
+    c, g = frames
+    close = np.abs(c.rgb - g.rgb) <= 1e-3 * np.maximum(np.abs(c.rgb), 1.0)
+    assert close.mean() > 0.99
+    np.testing.assert_allclose(c.layers["rain_alpha"].mean(), g.layers["rain_alpha"].mean(), rtol=1e-3)
+
+
+def test_rendered_sky_is_the_cie_luminance_through_colour_science():
+    # Sky pixels of an empty scene under CIE type 12: their luminance Y (colour-science,
+    # sRGB primaries) times E/pi is skyfall.sky.luminance along the pixel's ray.
+    w = Weather(sky=12, sun_elevation_deg=40.0, sun_azimuth_deg=30.0)
+    cam = Camera((0.0, 1.6, 0.0), yaw_deg=20.0, pitch_deg=25.0, vertical_fov_deg=60.0).with_resolution(W, H)
+    f = Renderer(W, H, backend="cpu").render(scenes.empty(camera=cam), w)
+    y = colour.RGB_to_XYZ(f.rgb.astype(np.float64), "sRGB")[..., 1] * w.luminance_scale_cd_m2
+    fx, fy, cx, cy = cam.intrinsics()
+    xs, ys = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    d = np.stack([(xs - cx) / fx, -(ys - cy) / fy, -np.ones_like(xs)], axis=-1) @ cam.rotation.T
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    el = np.degrees(np.arcsin(d[..., 1]))
+    az = np.degrees(np.arctan2(d[..., 0], -d[..., 2]))
+    sky_px = ~np.isfinite(f.depth_m)
+    want = sky.luminance(el[sky_px], az[sky_px], weather=w)
+    np.testing.assert_allclose(y[sky_px], want, rtol=2e-4)
+
+
+def test_haze_airlight_follows_the_viewpoint_illuminance():
+    # Seed 002: Is = ks E_hv. Under a roof the camera's airlight is dimmer than in the open.
+    w = Weather(rain_rate_mm_h=20.0, rain_streaks=False)
+    r = Renderer(W, H, backend="cpu")
+    open_sky = r.render(roofed_photo(False), w).rgb[0, 0, 0]
+    occ = [{"min": (-30.0, 0.5, -30.0), "max": (30.0, 0.8, 30.0)}]
+    under = PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), occluders=occ)
+    roofed = r.render(under, w).rgb[0, 0, 0]
+    assert open_sky == pytest.approx(3 / 7, rel=1e-3)
+    e_view = sky.horizontal_illuminance([0, 0, 0], under, weather=w, samples=256)[0] / w.sky_illuminance_lux
+    assert roofed == pytest.approx(3 / 7 * e_view, rel=0.02)
+    assert e_view < 0.2
