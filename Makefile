@@ -71,6 +71,7 @@ bench: build vulkan
 	$(PY) benches/bench_physics.py
 	$(PY) benches/bench_render.py
 	$(PY) benches/bench_rain.py
+	$(PY) benches/bench_sky.py
 
 clean:
 	rm -rf target $(VENV) $(OUT)

@@ -14,7 +14,11 @@ street.exr, street.png
     transmittance layer; PNG: 8-bit sRGB).
 street_rain.exr, street_rain.png, street_rain_alpha.png
     The street in 50 mm/h rain with a 3 m/s cross wind: streaks of every drop within 5 m,
-    and the rain_alpha ground-truth layer (stretched for viewing).
+    and the rain_alpha ground-truth layer (stretched for viewing). Drops under the awning
+    on the right see less sky and are dimmer (the ambient-light map, seed 002).
+ambient_light.png
+    The street's ambient-light map in that rain: horizontal sky illuminance 1.5 m up, and a
+    section across the street 20 m ahead showing the awning's shade.
 street_rain_dusk.png
     The street at dusk (30 lx of sky) in 20 mm/h rain with its lamps lit and an oncoming
     car's headlights: lit drops shine (saved at exposure 0.25).
@@ -30,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from skyfall import Renderer, Weather, io, physics, rain, scenes
+from skyfall import Renderer, Weather, io, physics, rain, scenes, sky
 from skyfall.reference import gunn_kinzer_1949
 
 if TYPE_CHECKING:
@@ -85,6 +89,25 @@ def velocity_plot() -> Figure:
     return fig
 
 
+def ambient_plot(weather: Weather) -> Figure:
+    """The street's ambient-light map: a plan at 1.5 m and a section across the street."""
+    from matplotlib.figure import Figure
+
+    amb = sky.ambient_light_map(scenes.street(), spacing_m=1.0, weather=weather)
+    g, o, s = amb.grid[..., 0], amb.origin_m, amb.spacing_m
+    fig = Figure(figsize=(10, 4.2), layout="constrained")
+    ax1, ax2 = fig.subplots(1, 2, width_ratios=[2.2, 1])
+    j = int(round((1.5 - o[1]) / s))
+    x_ext = (o[0], o[0] + s * (g.shape[0] - 1))
+    im = ax1.imshow(g[:, j, :], origin="lower", aspect="auto", extent=(o[2], o[2] + s * (g.shape[2] - 1), *x_ext), vmin=0, vmax=weather.sky_illuminance_lux)
+    ax1.set(xlabel="z, m (the camera at 0 looks towards -z)", ylabel="x, m", title="sky illuminance on a horizontal surface 1.5 m up", ylim=(-9, 9))
+    k = int(round((-20.0 - o[2]) / s))
+    ax2.imshow(g[:, :, k].T, origin="lower", aspect="auto", extent=(*x_ext, o[1], o[1] + s * (g.shape[1] - 1)), vmin=0, vmax=weather.sky_illuminance_lux)
+    ax2.set(xlabel="x, m", ylabel="y, m", title="section across the street, z = -20 m", xlim=(-9, 9), ylim=(0, 12))
+    fig.colorbar(im, ax=[ax1, ax2], label="lux")
+    return fig
+
+
 def main(argv: list[str] | None = None) -> int:
     """Render the demo outputs into ``--out``."""
     parser = argparse.ArgumentParser(prog="python -m skyfall.demo", description=__doc__.splitlines()[0])
@@ -109,9 +132,13 @@ def main(argv: list[str] | None = None) -> int:
     frame.save(out / "street.exr")
     frame.save(out / "street.png")
     t0 = time.perf_counter()
-    wet = renderer.render(scenes.street(), Weather(rain_rate_mm_h=50.0, wind_m_s=(3.0, 0.0, 0.0)), seed=0)
+    wet_weather = Weather(rain_rate_mm_h=50.0, wind_m_s=(3.0, 0.0, 0.0))
+    wet = renderer.render(scenes.street(), wet_weather, seed=0)
     dt = time.perf_counter() - t0
     print(f"street, 50 mm/h rain: {wet.stats['rain_streaks']} streaks of {wet.stats['rain_drops']} drops in {dt * 1e3:.1f} ms")
+    e = sky.ambient_light_map(scenes.street(), weather=wet_weather).sample([[5.5, 1.5, -3.0], [0.0, 1.5, -3.0]])
+    print(f"sky light on a drop under the awning: {e[0] / e[1]:.0%} of one in the middle of the street")
+    ambient_plot(wet_weather).savefig(out / "ambient_light.png", dpi=100)
     wet.save(out / "street_rain.exr")
     wet.save(out / "street_rain.png")
     alpha = wet.layers["rain_alpha"]
@@ -121,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     dusk.save(out / "street_rain_dusk.png", exposure=0.25)
     names = ("rain_textures.exr", "rain_textures.png", "terminal_velocity.png", "street.exr", "street.png")
-    for name in (*names, "street_rain.exr", "street_rain.png", "street_rain_alpha.png", "street_rain_dusk.png"):
+    for name in (*names, "street_rain.exr", "street_rain.png", "street_rain_alpha.png", "street_rain_dusk.png", "ambient_light.png"):
         print(f"wrote {out / name}")
     return 0
 

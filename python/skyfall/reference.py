@@ -7,7 +7,7 @@ from importlib import resources
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["gunn_kinzer_1949"]
+__all__ = ["canyon_illuminance", "gunn_kinzer_1949"]
 
 
 def gunn_kinzer_1949() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -21,3 +21,40 @@ def gunn_kinzer_1949() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     text = resources.files("skyfall").joinpath("data/gunn_kinzer_1949.csv").read_text()
     rows = [line.split(",") for line in text.splitlines() if line and not line.startswith("#")][1:]
     return np.array([float(r[0]) for r in rows]), np.array([float(r[1]) for r in rows])
+
+
+def canyon_illuminance(
+    x_m: float, height_m: float, width_m: float, *, extinction_per_m: float = 0.0, cloud_base_m: float = 1000.0
+) -> float:
+    """Horizontal illuminance on the floor of an infinitely long street canyon, over E.
+
+    An independent reference for :func:`skyfall.sky.horizontal_illuminance` (adaptive scipy
+    quadrature, not skyfall's sampler): the CIE standard overcast sky,
+    L = Lz (1 + 2 sin g) / 3, attenuated by tau = exp(-sigma H / sin g), over the directions
+    that clear walls of height ``height_m`` at x = +-width_m / 2 (the canyon runs along Z),
+    seen from the point (``x_m``, 0, z); divided by the same integral over the open sky.
+    Needs scipy.
+    """
+    try:
+        from scipy import integrate
+    except ImportError as exc:  # pragma: no cover - scipy is a test and bench dependency
+        raise ImportError("skyfall.reference.canyon_illuminance needs scipy: pip install scipy") from exc
+
+    def radiance(g: float) -> float:
+        tau = float(np.exp(-extinction_per_m * cloud_base_m / np.sin(g))) if extinction_per_m > 0 else 1.0
+        return (1 + 2 * np.sin(g)) / 3 * tau * np.sin(g) * np.cos(g)
+
+    def over_elevation(phi: float, h: float) -> float:
+        sx = np.sin(phi)  # horizontal direction (sin phi, 0, -cos phi)
+        if abs(sx) < 1e-12 or h <= 0:
+            g0 = 0.0
+        else:
+            dist = (width_m / 2 - x_m) / sx if sx > 0 else (-width_m / 2 - x_m) / sx
+            g0 = float(np.arctan2(h, dist))
+        return float(integrate.quad(radiance, g0, np.pi / 2, epsabs=1e-12, epsrel=1e-10)[0])
+
+    def total(h: float) -> float:
+        pts = [np.pi / 2, np.pi, 3 * np.pi / 2]
+        return float(integrate.quad(over_elevation, 0, 2 * np.pi, args=(h,), points=pts, limit=400, epsrel=1e-9)[0])
+
+    return total(height_m) / total(0.0)
