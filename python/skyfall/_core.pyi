@@ -68,6 +68,8 @@ def render_frame(
     cull_threshold: float | None = None,
     sky: SkyModel | None = None,
     ambient: AmbientLightMap | None = None,
+    occluders: NDArray[np.float32] | None = None,
+    rain_shelter: bool = True,
 ) -> _FrameTuple: ...
 
 def cloud_base_m(rain_rate_mm_h: float) -> float: ...
@@ -150,7 +152,7 @@ def rain_diameter_bins(diameters_mm: NDArray[np.float64]) -> tuple[NDArray[np.fl
 
 
 def rain_drops(
-    center_m: list[float], region_args: _RegionArgs, *, ground: bool
+    center_m: list[float], region_args: _RegionArgs, *, ground: bool, shelter: NDArray[np.float32] | None = None
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
 
 def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...

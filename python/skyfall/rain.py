@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from skyfall import _core
 from skyfall._validate import float_array, integer, real
+from skyfall.scenes import BoxScene, PhotoScene
 
 if TYPE_CHECKING:
     from skyfall.weather import Weather
@@ -204,7 +205,15 @@ class Drops(NamedTuple):
     """(N, 5) stable identities: voxel (ix, iy, iz), diameter bin, index."""
 
 
-def drops(center_m: Sequence[float], weather: Weather, *, time_s: float = 0.0, seed: int = 0, ground: bool = True) -> Drops:
+def drops(
+    center_m: Sequence[float],
+    weather: Weather,
+    *,
+    time_s: float = 0.0,
+    seed: int = 0,
+    ground: bool = True,
+    scene: BoxScene | PhotoScene | None = None,
+) -> Drops:
     """The raindrops a frame draws: every drop within ``weather.rain_near_m`` of ``center_m``.
 
     Drops live in 1 m world voxels at integer coordinates; each voxel's drops come from a
@@ -226,11 +235,22 @@ def drops(center_m: Sequence[float], weather: Weather, *, time_s: float = 0.0, s
         Seed in [0, 2^64).
     ground : bool
         Whether the ground plane y = 0 bounds the rain.
+    scene : BoxScene or PhotoScene, optional
+        With ``weather.rain_sheltered``, its boxes (or a photo's ``occluders``) keep the rain
+        off what they cover, as in the frames.
     """
     c = float_array("center_m", center_m).reshape(-1)
     if c.size != 3 or not np.all(np.isfinite(c)):
         raise ValueError(f"center_m must be 3 finite numbers (m), got {center_m!r}")
     s = integer("seed", seed, 0, 2**64 - 1)
     args = weather.rain_region_args(real("time_s", time_s), s)[:6] + ("drops",)
-    pos, vel, diam, ids = _core.rain_drops([float(v) for v in c], args, ground=bool(ground))
+    shelter = None
+    if scene is not None and weather.rain_sheltered:
+        if isinstance(scene, BoxScene):
+            shelter = np.ascontiguousarray(scene.boxes, dtype=np.float32)
+        elif isinstance(scene, PhotoScene):
+            shelter = scene.occluders
+        else:
+            raise TypeError(f"scene must be a BoxScene, a PhotoScene or None, got {type(scene).__name__}")
+    pos, vel, diam, ids = _core.rain_drops([float(v) for v in c], args, ground=bool(ground), shelter=shelter)
     return Drops(pos, vel, diam, ids)

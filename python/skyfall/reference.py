@@ -36,13 +36,13 @@ def canyon_illuminance(
     Needs scipy.
     """
     try:
-        from scipy import integrate
+        from scipy import integrate  # type: ignore[import-untyped]
     except ImportError as exc:  # pragma: no cover - scipy is a test and bench dependency
         raise ImportError("skyfall.reference.canyon_illuminance needs scipy: pip install scipy") from exc
 
     def radiance(g: float) -> float:
         tau = float(np.exp(-extinction_per_m * cloud_base_m / np.sin(g))) if extinction_per_m > 0 else 1.0
-        return (1 + 2 * np.sin(g)) / 3 * tau * np.sin(g) * np.cos(g)
+        return float((1 + 2 * np.sin(g)) / 3 * tau * np.sin(g) * np.cos(g))
 
     def over_elevation(phi: float, h: float) -> float:
         sx = np.sin(phi)  # horizontal direction (sin phi, 0, -cos phi)

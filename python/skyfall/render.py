@@ -218,7 +218,10 @@ class Renderer:
                 lights=pack(scene.lights),
                 sky_illuminance_lux=weather.sky_illuminance_lux,
                 cull_threshold=cull_threshold,
+                rain_shelter=weather.rain_sheltered,
             )
+            if isinstance(scene, PhotoScene) and len(scene.occluders):
+                kwargs["occluders"] = scene.occluders
         args = (self.width, self.height, cam.core_params())
         rgb, depth, trans, rain = _core.render_frame(*args, device=self._device, **kwargs)
         layers = {} if trans is None else {"transmittance": trans}

@@ -33,6 +33,10 @@ class Weather:
         Horizontal illuminance E of the open sky at the ground, lux, in (0, 150000] (what a
         lux meter reads, rain included). Frames are in units of E/pi (a white surface under
         the open sky is 1.0); ``Frame.luminance_scale_cd_m2`` converts to cd/m^2.
+    rain_sheltered : bool
+        Boxes (a box scene's, a photo's ``occluders``) keep the rain off what they cover: a
+        drop whose path back up along its velocity meets a box is not drawn (default True).
+        Under an awning only what the wind blows in remains.
     sky : "overcast" or int
         The sky's luminance distribution: ``"overcast"`` (default) is seed 002's CIE standard
         overcast sky, (1 + 2 sin(elevation)) / 3 of the zenith; 1-15 the CIE S 011 general
@@ -70,6 +74,7 @@ class Weather:
     rain_diameters_mm: tuple[float, ...] = field(default=(1.0, 1.2, 1.4, 1.6, 1.8, 2.0))
     rain_streaks: bool = True
     rain_method: str = "drops"
+    rain_sheltered: bool = True
     sky: str | int = "overcast"
     sun_elevation_deg: float | None = None
     sun_azimuth_deg: float | None = None
@@ -98,8 +103,9 @@ class Weather:
         object.__setattr__(self, "rain_near_m", near)
         object.__setattr__(self, "rain_diameters_mm", diams)
         choice("rain_method", self.rain_method, ("drops", "billboards"))
-        if not isinstance(self.rain_streaks, bool):
-            raise TypeError(f"rain_streaks must be a bool, got {type(self.rain_streaks).__name__}")
+        for flag in ("rain_streaks", "rain_sheltered"):
+            if not isinstance(getattr(self, flag), bool):
+                raise TypeError(f"{flag} must be a bool, got {type(getattr(self, flag)).__name__}")
         object.__setattr__(self, "rain_rate_mm_h", r)
         object.__setattr__(self, "visibility_m", v)
         object.__setattr__(self, "sky_illuminance_lux", e)

@@ -84,7 +84,7 @@ fn gpu_rain_matches_cpu_rain() {
     let region = RainRegion::new(40.0, &[1.0, 1.4, 2.0], 4.0, [2.0, 0.0, 0.0], 0.7, 11).unwrap();
     let lamp = Light::from_row(&[-1.0, 2.5, -3.0, 1.0, 0.8, 0.6, 800.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0).unwrap();
     let shading = RainShading { lights: vec![lamp], sky_illuminance_lux: 50.0, ..RainShading::open_sky() };
-    let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::new(0.0, 0.0, -8.0), ground: true, shading: &shading };
+    let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::new(0.0, 0.0, -8.0), ground: true, shelter: &scene.boxes, shading: &shading };
     // Rain over identical backgrounds: a photo of the CPU's box frame.
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);

@@ -1,22 +1,38 @@
 //! The drops near a camera, as arrays: ground truth for stereo and video.
 
-use crate::render::{region, RegionArgs};
+use crate::render::{box_scene, region, RegionArgs};
 use glam::Vec3;
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use skyfall_core::rain::drops::{drops_near, Drop};
+use skyfall_core::rain::shelter::remove_sheltered;
 
 type DropArrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<f32>>, Bound<'py, PyArray2<i64>>);
 
-/// Every drop within the region around `center_m`: positions (N, 3), velocities (N, 3),
-/// diameters (N,) in m, ids (N, 5).
+/// Every drop within the region around `center_m`, less those `shelter` boxes (N, 9) keep
+/// dry: positions (N, 3), velocities (N, 3), diameters (N,) in m, ids (N, 5).
 #[pyfunction]
-#[pyo3(signature = (center_m, region_args, *, ground))]
-pub fn rain_drops<'py>(py: Python<'py>, center_m: [f32; 3], region_args: RegionArgs<'py>, ground: bool) -> PyResult<DropArrays<'py>> {
+#[pyo3(signature = (center_m, region_args, *, ground, shelter=None))]
+pub fn rain_drops<'py>(
+    py: Python<'py>,
+    center_m: [f32; 3],
+    region_args: RegionArgs<'py>,
+    ground: bool,
+    shelter: Option<PyReadonlyArray2<'py, f32>>,
+) -> PyResult<DropArrays<'py>> {
     let reg = region(&region_args)?;
-    let drops: Vec<Drop> = py.detach(|| drops_near(&reg, Vec3::from(center_m), ground));
+    let boxes = match &shelter {
+        Some(b) => box_scene(b, false, [0.0; 3])?.boxes,
+        None => Vec::new(),
+    };
+    let c = Vec3::from(center_m);
+    let drops: Vec<Drop> = py.detach(|| {
+        let mut d = drops_near(&reg, c, ground);
+        remove_sheltered(&mut d, &boxes, c, reg.near_m as f32);
+        d
+    });
     let n = drops.len();
     let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
     let pos = Array2::from_shape_vec((n, 3), drops.iter().flat_map(|d| d.position_m.to_array()).collect()).map_err(err)?;

@@ -67,6 +67,7 @@ struct Request<'a> {
     photo: Option<(&'a [f32], &'a [f32])>,
     haze: Option<Haze>,
     rain: Option<(RainRegion, f32, Vec3, bool, RainShading)>,
+    shelter: Vec<SceneBox>,
 }
 
 /// The rain arguments as received from Python.
@@ -79,6 +80,10 @@ struct RainArgs<'a, 'py> {
     sky_illuminance_lux: f32,
     cull_threshold: Option<f32>,
     ambient: Option<Arc<AmbientMap>>,
+    /// Boxes that shelter the rain besides a box scene's own (a photo's occluders), and
+    /// whether boxes shelter it at all.
+    occluders: Option<&'a PyReadonlyArray2<'py, f32>>,
+    shelter: bool,
 }
 
 impl<'a> Request<'a> {
@@ -101,6 +106,7 @@ impl<'a> Request<'a> {
             _ => return Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m")),
         };
         let haze = haze_params.map(|(sigma, air)| Haze::new(sigma, air)).transpose().map_err(CoreError)?;
+        let (shelter_wanted, occluders) = (rain.shelter && rain.region.is_some(), rain.occluders);
         let rain = match rain.region {
             None => None,
             Some(args) => {
@@ -138,7 +144,16 @@ impl<'a> Request<'a> {
                 Some((region(args)?, rain.exposure_s, v, rain.ground, shading))
             }
         };
-        Ok(Request { cam, boxes, photo, haze, rain })
+        let mut shelter = Vec::new();
+        if shelter_wanted {
+            if let Some(b) = &boxes {
+                shelter.extend_from_slice(&b.boxes);
+            }
+            if let Some(o) = occluders {
+                shelter.extend_from_slice(&box_scene(o, false, [0.0; 3])?.boxes);
+            }
+        }
+        Ok(Request { cam, boxes, photo, haze, rain, shelter })
     }
 
     fn scene(&self) -> SceneRef<'_> {
@@ -155,6 +170,7 @@ impl<'a> Request<'a> {
             exposure_s: *exposure_s,
             camera_velocity_m_s: *camera_velocity_m_s,
             ground: *ground,
+            shelter: &self.shelter,
             shading,
         })
     }
@@ -179,7 +195,8 @@ fn to_py<'py>(py: Python<'py>, cam: &Camera, f: FrameBuffers) -> PyResult<FrameT
 #[pyo3(signature = (
     width, height, camera_params, *, device=None, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
     photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3],
-    rain_ground=true, lights=None, sky_illuminance_lux=10000.0, cull_threshold=None, sky=None, ambient=None
+    rain_ground=true, lights=None, sky_illuminance_lux=10000.0, cull_threshold=None, sky=None, ambient=None,
+    occluders=None, rain_shelter=true
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn render_frame<'py>(
@@ -203,6 +220,8 @@ pub fn render_frame<'py>(
     cull_threshold: Option<f32>,
     sky: Option<Bound<'py, SkyModel>>,
     ambient: Option<Bound<'py, AmbientLightMap>>,
+    occluders: Option<PyReadonlyArray2<'py, f32>>,
+    rain_shelter: bool,
 ) -> PyResult<FrameTuple<'py>> {
     // Without a sky: the overcast sky; without a map: its open-sky light everywhere.
     let sky: Sky = match &sky {
@@ -222,6 +241,8 @@ pub fn render_frame<'py>(
         sky_illuminance_lux,
         cull_threshold,
         ambient: Some(Arc::clone(&ambient)),
+        occluders: occluders.as_ref(),
+        shelter: rain_shelter,
     };
     let light = SceneLight { sky: &sky, ambient: &ambient };
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());

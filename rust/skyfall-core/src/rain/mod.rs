@@ -3,5 +3,6 @@
 pub mod billboards;
 pub mod bins;
 pub mod drops;
+pub mod shelter;
 pub mod splat;
 pub mod texture;

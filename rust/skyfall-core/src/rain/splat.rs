@@ -246,19 +246,22 @@ pub struct RainFrame<'a> {
     pub camera_velocity_m_s: Vec3,
     /// Whether the ground bounds the rain.
     pub ground: bool,
+    /// Boxes that shelter the rain (see [`super::shelter`]); empty: none.
+    pub shelter: &'a [crate::scene::boxes::SceneBox],
     /// How drops are lit and culled.
     pub shading: &'a RainShading,
 }
 
 impl RainFrame<'_> {
-    /// The frame's streaks (see [`prepare`]), its stats, and how many drops were generated
-    /// (those of the voxels that can reach the view).
+    /// The frame's streaks (see [`prepare`]), its stats, and how many drops there were (those
+    /// of the voxels that can reach the view, less the sheltered ones).
     pub fn streaks(&self, cam: &Camera) -> (Vec<ScreenStreak>, RainStats, usize) {
         let (t, v) = (f64::from(self.exposure_s), f64::from(self.camera_velocity_m_s.length()));
-        let drops = match self.region.method {
+        let mut drops = match self.region.method {
             super::drops::RainMethod::Drops => super::drops::drops_in_view(self.region, cam, t, v, self.ground),
             super::drops::RainMethod::Billboards => super::billboards::billboards_in_view(self.region, cam, t, v, self.ground),
         };
+        super::shelter::remove_sheltered(&mut drops, self.shelter, cam.position_m, self.region.near_m as f32);
         let (streaks, stats) = prepare(cam, &drops, self.exposure_s, self.camera_velocity_m_s, self.shading);
         (streaks, stats, drops.len())
     }
