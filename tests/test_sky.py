@@ -97,6 +97,8 @@ def test_sky_inputs_are_checked():
         sky.luminance(95.0, 0.0)
     with pytest.raises(ValueError, match="samples"):
         sky.horizontal_illuminance([0, 0, 0], samples=2)
+    with pytest.raises(ValueError, match="samples"):
+        sky.horizontal_illuminance([0, 0, 0], samples=100_000)
     with pytest.raises(ValueError, match=r"\(N, 3\)"):
         sky.horizontal_illuminance([[0, 0]])
     with pytest.raises(ValueError, match="spacing_m"):
@@ -134,8 +136,8 @@ def canyon(height: float, width: float) -> scenes.BoxScene:
 @pytest.mark.parametrize(("x", "height", "width"), [(0.0, 10.0, 10.0), (0.0, 20.0, 8.0), (3.999, 10.0, 8.0)])
 def test_canyon_illuminance_matches_a_numerical_integral(x, height, width):
     ref = canyon_illuminance(x, height, width) * E
-    got = sky.horizontal_illuminance([x, 0.0, 0.0], canyon(height, width), samples=16384)[0]
-    assert got == pytest.approx(ref, rel=0.01)
+    got = sky.horizontal_illuminance([x, 0.0, 0.0], canyon(height, width))[0]
+    assert got == pytest.approx(ref, rel=1e-3)  # the issue asks for 1 %
     assert got < 0.8 * E
 
 
@@ -143,8 +145,8 @@ def test_rain_attenuation_enters_the_occluded_integral():
     wet = Weather(rain_rate_mm_h=30.0)
     ref = canyon_illuminance(0.0, 12.0, 10.0, extinction_per_m=wet.extinction_per_m, cloud_base_m=wet.cloud_base_height_m)
     dry = canyon_illuminance(0.0, 12.0, 10.0)
-    got = sky.horizontal_illuminance([0.0, 0.0, 0.0], canyon(12.0, 10.0), weather=wet, samples=16384)[0]
-    assert got / E == pytest.approx(ref, rel=0.01)
+    got = sky.horizontal_illuminance([0.0, 0.0, 0.0], canyon(12.0, 10.0), weather=wet)[0]
+    assert got / E == pytest.approx(ref, rel=1e-3)
     # E is held fixed and rain moves the sky's light towards the zenith, which the canyon floor
     # sees: its share of E grows (0.44 dry, 0.62 at 30 mm/h here).
     assert ref > dry + 0.1
@@ -157,7 +159,7 @@ def test_points_inside_boxes_see_no_sky_and_roofs_see_all():
     np.testing.assert_allclose(e[1:], E, rtol=1e-3)
     # A wall facing +X at its foot sees the open vertical sky: E (3/14 + 4/(7 pi)).
     v = sky.horizontal_illuminance([2.0, 0.0, 0.0], s, normal="+x")[0]
-    assert v == pytest.approx(E * (3 / 14 + 4 / (7 * np.pi)), rel=2e-2)
+    assert v == pytest.approx(E * (3 / 14 + 4 / (7 * np.pi)), rel=1e-3)
 
 
 # ---- the ambient map ------------------------------------------------------------------
@@ -310,6 +312,6 @@ def test_haze_airlight_follows_the_viewpoint_illuminance():
     under = PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), occluders=occ)
     roofed = r.render(under, w).rgb[0, 0, 0]
     assert open_sky == pytest.approx(3 / 7, rel=1e-3)
-    e_view = sky.horizontal_illuminance([0, 0, 0], under, weather=w, samples=256)[0] / w.sky_illuminance_lux
-    assert roofed == pytest.approx(3 / 7 * e_view, rel=0.02)
+    e_view = sky.horizontal_illuminance([0, 0, 0], under, weather=w, samples=sky.MAP_SAMPLES)[0] / w.sky_illuminance_lux
+    assert roofed == pytest.approx(3 / 7 * e_view, rel=1e-4)
     assert e_view < 0.2

@@ -146,7 +146,7 @@ class Renderer:
         seed: int = 0,
         cull_threshold: float | None = None,
         ambient_spacing_m: float = 1.0,
-        ambient_samples: int = 256,
+        ambient_samples: int = sky.MAP_SAMPLES,
     ) -> Frame:
         """Render one frame.
 
@@ -174,7 +174,7 @@ class Renderer:
             [0.05, 100]. A box scene's surfaces, every drop's I_R and the haze's airlight read
             the sky light from it; it is built once per scene, sky and spacing and cached.
         ambient_samples : int
-            Sky directions per map node, in [4, 1048576] (rounded to 4 x rings^2).
+            Azimuths per map node, in [4, 65536] (default 64).
 
         Returns
         -------
@@ -248,7 +248,7 @@ class Renderer:
         s = real("ambient_spacing_m", spacing_m)
         if not 0.05 <= s <= 100.0:
             raise ValueError(f"ambient_spacing_m = {s} is outside the valid range [0.05, 100] m")
-        n = integer("ambient_samples", samples, 4, 1_048_576)
+        n = integer("ambient_samples", samples, 4, 65_536)
         occluders = scene.boxes if isinstance(scene, BoxScene) else scene.occluders
         if len(occluders) == 0:
             return None

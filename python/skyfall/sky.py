@@ -8,10 +8,10 @@ cloud base H, so heavier rain makes the low sky relatively darker and a point th
 the low sky (a street canyon, under an awning) darker still.
 
 Illuminance is the integral of L tau H cos(theta) over the hemisphere, H = 1 where the sky is
-visible. It is evaluated on a product rule (Gauss-Legendre rings in sin(elevation) times
-4 x rings azimuths): exact for the open overcast sky, spectrally convergent for every open
-sky, and O(1/rings) where occluders cut the sky (``benches/results/sky.md`` tabulates the
-error against sample count).
+visible. ``samples`` azimuths are sampled (midpoint rule); along each, the boxes' hidden
+elevations are found exactly and the sky is integrated over the visible ones from tables
+precomputed per sky (512 elevation steps, 4-point Gauss-Legendre each). The error so falls
+as 1/samples^2 even where occluders cut the sky (``benches/results/sky.md`` tabulates it).
 
 Occluders: the boxes of a :class:`~skyfall.scenes.BoxScene`, or the ``occluders`` a
 :class:`~skyfall.PhotoScene` was given (a photo's depth map is not turned into geometry:
@@ -67,8 +67,10 @@ SKY_TYPES: dict[int | str, str] = {
 }
 """The skies ``sky=`` accepts (CIE S 011/E:2003 general skies 1-15)."""
 
-DEFAULT_SAMPLES = 1024
-"""Sample directions for :func:`horizontal_illuminance` (16 rings of 64 azimuths)."""
+DEFAULT_SAMPLES = 256
+"""Azimuths for :func:`horizontal_illuminance`."""
+MAP_SAMPLES = 64
+"""Azimuths per node for :func:`ambient_light_map` and the renderer's map."""
 
 
 def cloud_base_m(rain_rate_mm_h: float) -> float:
@@ -212,7 +214,8 @@ def horizontal_illuminance(
     sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg, weather
         As for :func:`luminance`.
     samples : int
-        Sample directions, in [4, 1048576], rounded to 4 x rings^2 (default 1024: 16 rings).
+        Azimuths sampled, in [4, 65536] (default 256); the elevation integral along each is
+        exact for the boxes.
     normal : {"up", "+x", "-x", "+z", "-z"}
         The surface's normal: "up" (default) is the horizontal illuminance of seed 002.
 
@@ -224,7 +227,7 @@ def horizontal_illuminance(
     w = _weather(weather, sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg)
     if normal not in CHANNELS:
         raise ValueError(f"normal = {normal!r} must be one of {CHANNELS}")
-    n = integer("samples", samples, 4, 1_048_576)
+    n = integer("samples", samples, 4, 65_536)
     rel = w.sky_model().illuminance(_points(points_m), _occluders(scene), samples=n)
     return rel[:, CHANNELS.index(normal)].astype(np.float64) * w.sky_illuminance_lux
 
@@ -320,7 +323,7 @@ def ambient_light_map(
     sun_elevation_deg: float | None = None,
     sun_azimuth_deg: float | None = None,
     weather: Weather | None = None,
-    samples: int = 256,
+    samples: int = MAP_SAMPLES,
 ) -> AmbientLightMap:
     """Build (or fetch from the per-process cache) the ambient-light map of a scene.
 
@@ -337,7 +340,7 @@ def ambient_light_map(
     sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg, weather
         As for :func:`luminance`.
     samples : int
-        Sample directions per node (default 256: 8 rings of 32 azimuths).
+        Azimuths per node, in [4, 65536] (default 64).
 
     Returns
     -------
@@ -347,7 +350,7 @@ def ambient_light_map(
     s = real("spacing_m", spacing_m)
     if not 0.05 <= s <= 100.0:
         raise ValueError(f"spacing_m = {s} is outside the valid range [0.05, 100] m")
-    n = integer("samples", samples, 4, 1_048_576)
+    n = integer("samples", samples, 4, 65_536)
     if bounds is None:
         lo, hi = default_bounds(scene, s)
     else:

@@ -11,7 +11,7 @@ use skyfall_core::scene::lights::Light;
 use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
 use skyfall_core::sky::ambient::{scene_bounds, AmbientMap};
 use skyfall_core::sky::cie::SkyKind;
-use skyfall_core::sky::illuminance::SkySamples;
+use skyfall_core::sky::illuminance::SkyTable;
 use skyfall_core::sky::{sun_direction, Sky};
 use skyfall_core::scene::camera::Camera;
 use skyfall_gpu::frame::GpuRenderer;
@@ -33,7 +33,7 @@ fn street() -> (BoxScene, Camera) {
 
 /// The scene's ambient-light map under `sky`, 2 m spacing.
 fn lit(scene: &BoxScene, cam: &Camera, sky: &Sky) -> AmbientMap {
-    let s = SkySamples::new(sky, 144).unwrap();
+    let s = SkyTable::new(sky, 64).unwrap();
     let (lo, hi) = scene_bounds(scene, &[cam.position_m], 2.0);
     AmbientMap::build(scene, &s, lo, hi, 2.0).unwrap()
 }

@@ -14,7 +14,7 @@ use skyfall_core::rain::splat::{RainFrame, RainShading};
 use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
 use skyfall_core::sky::ambient::AmbientMap;
 use skyfall_core::sky::cie::SkyKind;
-use skyfall_core::sky::illuminance::{irradiance, SkySamples};
+use skyfall_core::sky::illuminance::{irradiance, SkyTable};
 use skyfall_core::sky::Sky;
 use crate::sky::{AmbientLightMap, SkyModel};
 use std::sync::Arc;
@@ -230,7 +230,7 @@ pub fn render_frame<'py>(
     };
     let ambient: Arc<AmbientMap> = match &ambient {
         Some(a) => Arc::clone(&a.get().map),
-        None => Arc::new(AmbientMap::uniform(irradiance(&[], &SkySamples::new(&sky, 256).map_err(CoreError)?, Vec3::ZERO))),
+        None => Arc::new(AmbientMap::uniform(irradiance(&[], &SkyTable::new(&sky, 64).map_err(CoreError)?, Vec3::ZERO))),
     };
     let rain = RainArgs {
         region: rain_region.as_ref(),

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::ambient::AmbientMap;
 use skyfall_core::sky::cie::SkyKind;
-use skyfall_core::sky::illuminance::{boxes_above, irradiance, SkySamples, CHANNELS};
+use skyfall_core::sky::illuminance::{boxes_above, irradiance, SkyTable, CHANNELS};
 use skyfall_core::sky::{cloud_base_m as base_for_rate, sun_direction, Sky};
 use std::sync::Arc;
 
@@ -90,7 +90,7 @@ impl SkyModel {
     fn illuminance<'py>(&self, py: Python<'py>, points_m: PyReadonlyArray2<'py, f32>, boxes: PyReadonlyArray2<'py, f32>, samples: usize) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let pts = points(&points_m, "points_m")?;
         let scene = box_scene(&boxes, true, [0.0; 3])?;
-        let s = SkySamples::new(&self.sky, samples).map_err(CoreError)?;
+        let s = SkyTable::new(&self.sky, samples).map_err(CoreError)?;
         let rows: Vec<[f32; CHANNELS]> = py.detach(|| pts.par_iter().map(|&p| irradiance(&boxes_above(&scene, p.y), &s, p)).collect());
         channels(py, rows)
     }
@@ -99,7 +99,7 @@ impl SkyModel {
     #[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples))]
     fn ambient_map(&self, py: Python<'_>, boxes: PyReadonlyArray2<'_, f32>, bounds_min_m: [f32; 3], bounds_max_m: [f32; 3], spacing_m: f64, samples: usize) -> PyResult<AmbientLightMap> {
         let scene: BoxScene = box_scene(&boxes, true, [0.0; 3])?;
-        let s = SkySamples::new(&self.sky, samples).map_err(CoreError)?;
+        let s = SkyTable::new(&self.sky, samples).map_err(CoreError)?;
         let (lo, hi) = (Vec3::from(bounds_min_m), Vec3::from(bounds_max_m));
         let map = if scene.boxes.is_empty() {
             AmbientMap::grid_dims(lo, hi, spacing_m).map_err(CoreError)?;

@@ -162,13 +162,13 @@ pub fn shade_pixel(scene: &BoxScene, cam: &Camera, light: &SceneLight<'_>, x: u3
 mod tests {
     use super::*;
     use crate::sky::cie::SkyKind;
-    use crate::sky::illuminance::{irradiance, SkySamples};
+    use crate::sky::illuminance::{irradiance, SkyTable};
     use glam::Mat3;
 
     /// The overcast sky and its open-sky light (no occluders).
     fn open() -> (Sky, AmbientMap) {
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
-        let e = irradiance(&[], &SkySamples::new(&sky, 1024).unwrap(), Vec3::ZERO);
+        let e = irradiance(&[], &SkyTable::new(&sky, 256).unwrap(), Vec3::ZERO);
         (sky, AmbientMap::uniform(e))
     }
 

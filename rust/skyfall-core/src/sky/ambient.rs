@@ -9,7 +9,7 @@
 //! [`AmbientMap::sample`] is the CPU reference of the WGSL `ambient_sample` in
 //! `skyfall-gpu`'s `common.wgsl`.
 
-use super::illuminance::{boxes_above, irradiance, SkySamples, CHANNELS};
+use super::illuminance::{boxes_above, irradiance, SkyTable, CHANNELS};
 use crate::error::{Error, Param, Range, Result};
 use crate::scene::boxes::BoxScene;
 use glam::Vec3;
@@ -70,7 +70,7 @@ impl AmbientMap {
 
     /// Builds the map over `min_m`..`max_m` (the last node may overshoot `max_m` by less than
     /// a spacing), nodes in parallel.
-    pub fn build(scene: &BoxScene, samples: &SkySamples, min_m: Vec3, max_m: Vec3, spacing_m: f64) -> Result<Self> {
+    pub fn build(scene: &BoxScene, samples: &SkyTable, min_m: Vec3, max_m: Vec3, spacing_m: f64) -> Result<Self> {
         let dims = Self::grid_dims(min_m, max_m, spacing_m)?;
         let [nx, ny, nz] = dims;
         let s = spacing_m as f32;
@@ -258,7 +258,7 @@ mod tests {
         let wall = SceneBox { min_m: Vec3::new(2.0, 0.0, -50.0), max_m: Vec3::new(4.0, 10.0, 50.0), albedo: Vec3::ONE };
         let scene = BoxScene::new(vec![wall], true, Vec3::ONE).unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
-        let s = SkySamples::new(&sky, 256).unwrap();
+        let s = SkyTable::new(&sky, 256).unwrap();
         let m = AmbientMap::build(&scene, &s, Vec3::new(0.0, 0.0, 0.0), Vec3::new(6.0, 4.0, 0.0), 1.0).unwrap();
         assert_eq!(m.dims, [7, 5, 1]);
         let at = |i: usize, j: usize| &m.values[(i * 5 + j) * CHANNELS..(i * 5 + j + 1) * CHANNELS];

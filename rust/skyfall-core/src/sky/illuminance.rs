@@ -1,100 +1,168 @@
 //! Sky illuminance with occlusion (seed 002, eq. 8): E_n(P) = ∫ L(ω) τ(ω) H(P, ω) max(0, n·ω) dω.
 //!
-//! Directions: a product rule over the hemisphere, Gauss–Legendre in μ = sin γ (dω = dμ dφ)
-//! times the periodic midpoint rule in azimuth with 4 azimuths per ring. It is exact for the
-//! open overcast sky with two rings and converges spectrally for every smooth sky; with
-//! occluders H is a step in each direction, the error falls as O(1/rings) (measured in
-//! `benches/results/sky.md`). Unlike the seed's uniform grid on the projected disk, which
-//! carries cos θ for the horizontal only, explicit weights also give the vertical normals.
+//! Per azimuth the integral over elevation is done exactly for the scene's geometry: along an
+//! azimuth each box hides one interval of elevations (seen from P, the vertical half-plane at
+//! that azimuth cuts the box in a rectangle), so the visible elevations are [0, π/2] less a
+//! union of intervals, and the sky's contribution over each visible interval is read from
+//! cumulative tables of ∫ L τ sin γ cos γ dγ (horizontal surfaces) and ∫ L τ cos² γ dγ
+//! (vertical ones) along that azimuth, precomputed once per sky on 512 elevation steps with
+//! 4-point Gauss–Legendre each. Only the azimuths are sampled (periodic midpoint rule): the
+//! visible elevation varies continuously with azimuth, with kinks at box corners, so the error
+//! falls as O(1/azimuths²) (measured in `benches/results/sky.md`). Unlike ray sampling (the
+//! seed's grid on the projected disk, or any set of directions), whose error at an occluder's
+//! edge falls only as O(1/directions^½), this is exact in elevation.
 //!
 //! The five normals are up, +X, −X, +Z, −Z: every face of the box scene (and the ground)
-//! faces one of them; a face facing down sees no sky.
+//! faces one of them; a face looking down sees no sky.
 
 use super::model::Sky;
 use crate::error::{Range, Result};
 use crate::scene::boxes::{BoxScene, SceneBox, T_MIN};
 use glam::Vec3;
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 /// Number of normals per point: up, +X, −X, +Z, −Z.
 pub const CHANNELS: usize = 5;
 /// The normals, in channel order.
 pub const NORMALS: [Vec3; CHANNELS] = [Vec3::Y, Vec3::X, Vec3::NEG_X, Vec3::Z, Vec3::NEG_Z];
-/// Valid numbers of sample directions.
-pub const SAMPLES: Range = Range::closed(4.0, 1_048_576.0, "directions");
+/// Valid numbers of azimuths.
+pub const AZIMUTHS: Range = Range::closed(4.0, 65_536.0, "azimuths");
+/// Elevation steps of the cumulative tables.
+const STEPS: usize = 512;
 
-/// Gauss–Legendre nodes and weights on [0, 1].
-pub fn gauss_legendre_01(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut nodes = Vec::with_capacity(n);
-    let mut weights = Vec::with_capacity(n);
-    for i in 0..n {
-        // Newton on P_n from Tricomi's initial guess.
-        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, x);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            let pn = if n == 0 { 1.0 } else if n == 1 { x } else { p1 };
-            let pm = if n == 1 { 1.0 } else { p0 };
-            dp = n as f64 * (x * pn - pm) / (x * x - 1.0);
-            let dx = pn / dp;
-            x -= dx;
-            if dx.abs() < 1e-15 {
-                break;
-            }
-        }
-        nodes.push(0.5 * (1.0 - x));
-        weights.push(1.0 / ((1.0 - x * x) * dp * dp));
-    }
-    (nodes, weights)
-}
+/// 4-point Gauss–Legendre nodes and weights on [0, 1].
+const GL4: [(f64, f64); 4] = [
+    (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
+    (0.330_009_478_207_571_9, 0.326_072_577_431_273_07),
+    (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
+    (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
+];
 
-/// Sample directions over the upper hemisphere with each one's contribution to the five
-/// normals' illuminance (relative to E) when the sky is visible along it.
+/// A sky tabulated for illuminance: per azimuth, cumulative integrals over elevation.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SkySamples {
-    /// Unit directions.
-    pub dirs: Vec<Vec3>,
-    /// L τ max(0, n·ω) dω / π per direction and normal.
-    pub weights: Vec<[f32; CHANNELS]>,
+pub struct SkyTable {
+    /// Azimuths (midpoints of equal sectors), as unit horizontal directions (sin φ, −cos φ).
+    dirs: Vec<(f64, f64)>,
+    /// ∫₀^γ L τ sin γ cos γ dγ / π · Δφ per azimuth, STEPS + 1 values each.
+    up: Vec<f64>,
+    /// ∫₀^γ L τ cos² γ dγ / π · Δφ per azimuth, STEPS + 1 values each.
+    side: Vec<f64>,
 }
 
-impl SkySamples {
-    /// About `samples` directions: `rings` = round(√(samples/4)) Gauss–Legendre rings of
-    /// 4·rings azimuths (4·rings² in all).
-    pub fn new(sky: &Sky, samples: usize) -> Result<Self> {
-        SAMPLES.check("samples", None, samples as f64)?;
-        let rings = ((samples as f64 / 4.0).sqrt().round() as usize).max(1);
-        let az_n = 4 * rings;
-        let (mus, ws) = gauss_legendre_01(rings);
-        let mut dirs = Vec::with_capacity(rings * az_n);
-        let mut weights = Vec::with_capacity(rings * az_n);
-        for (&mu, &wm) in mus.iter().zip(&ws) {
-            let c = (1.0 - mu * mu).sqrt();
-            for k in 0..az_n {
-                let az = (k as f64 + 0.5) * TAU / az_n as f64;
-                let dir = Vec3::new((c * az.sin()) as f32, mu as f32, (-c * az.cos()) as f32);
-                let l = sky.received(dir) * wm * TAU / az_n as f64 / PI;
-                weights.push(NORMALS.map(|n| (l * f64::from(n.dot(dir).max(0.0))) as f32));
-                dirs.push(dir);
+impl SkyTable {
+    /// Tabulates `sky` (luminance received at the ground, relative to E/π) on `azimuths` sectors.
+    pub fn new(sky: &Sky, azimuths: usize) -> Result<Self> {
+        AZIMUTHS.check("samples", None, azimuths as f64)?;
+        let dphi = TAU / azimuths as f64;
+        let h = FRAC_PI_2 / STEPS as f64;
+        let mut dirs = Vec::with_capacity(azimuths);
+        let mut up = Vec::with_capacity(azimuths * (STEPS + 1));
+        let mut side = Vec::with_capacity(azimuths * (STEPS + 1));
+        for k in 0..azimuths {
+            let phi = (k as f64 + 0.5) * dphi;
+            let (sx, sz) = (phi.sin(), -phi.cos());
+            dirs.push((sx, sz));
+            let (mut a, mut b) = (0.0, 0.0);
+            up.push(0.0);
+            side.push(0.0);
+            for j in 0..STEPS {
+                for (x, w) in GL4 {
+                    let g = (j as f64 + x) * h;
+                    let (sg, cg) = g.sin_cos();
+                    let dir = Vec3::new((cg * sx) as f32, sg as f32, (cg * sz) as f32);
+                    let l = sky.received(dir) * w * h * dphi / PI;
+                    a += l * sg * cg;
+                    b += l * cg * cg;
+                }
+                up.push(a);
+                side.push(b);
             }
         }
-        Ok(SkySamples { dirs, weights })
+        Ok(SkyTable { dirs, up, side })
     }
 
-    /// Number of directions.
-    pub fn len(&self) -> usize {
+    /// Number of azimuths.
+    pub fn azimuths(&self) -> usize {
         self.dirs.len()
     }
 
-    /// Whether there are none.
-    pub fn is_empty(&self) -> bool {
-        self.dirs.is_empty()
+    /// Cumulative value of azimuth `k`'s table at elevation `g` (linear between steps).
+    #[inline]
+    fn at(table: &[f64], k: usize, g: f64) -> f64 {
+        let x = (g / FRAC_PI_2 * STEPS as f64).clamp(0.0, STEPS as f64);
+        let j = (x as usize).min(STEPS - 1);
+        let f = x - j as f64;
+        let row = &table[k * (STEPS + 1)..(k + 1) * (STEPS + 1)];
+        row[j] + f * (row[j + 1] - row[j])
     }
+}
+
+/// The elevations (radians, in [0, π/2]) box `b` hides along horizontal direction (dx, dz)
+/// seen from `p`, if any.
+#[inline]
+fn hidden(b: &SceneBox, p: Vec3, dx: f64, dz: f64) -> Option<(f64, f64)> {
+    let y_hi = f64::from(b.max_m.y - p.y);
+    if y_hi <= 0.0 {
+        return None;
+    }
+    // Horizontal distances along the azimuth at which the half-plane is inside the footprint.
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    for (o, d, lo, hi) in [(p.x, dx, b.min_m.x, b.max_m.x), (p.z, dz, b.min_m.z, b.max_m.z)] {
+        let (o, lo, hi) = (f64::from(o), f64::from(lo), f64::from(hi));
+        if d.abs() < 1e-12 {
+            if o < lo || o > hi {
+                return None;
+            }
+        } else {
+            let (a, c) = ((lo - o) / d, (hi - o) / d);
+            t0 = t0.max(a.min(c));
+            t1 = t1.min(a.max(c));
+        }
+    }
+    if t1 <= f64::from(T_MIN) || t0 > t1 {
+        return None;
+    }
+    let d0 = t0.max(0.0);
+    let hi = y_hi.atan2(d0);
+    let y_lo = f64::from(b.min_m.y - p.y);
+    let lo = if y_lo <= 0.0 { 0.0 } else { y_lo.atan2(t1) };
+    (hi > lo).then_some((lo, hi))
+}
+
+/// The boxes that can hide sky from height `y_m` (those reaching above it).
+pub fn boxes_above(scene: &BoxScene, y_m: f32) -> Vec<SceneBox> {
+    scene.boxes.iter().filter(|b| b.max_m.y > y_m).copied().collect()
+}
+
+/// Illuminance on the five normals at `p`, relative to E (1 on the open ground).
+pub fn irradiance(boxes_above_p: &[SceneBox], table: &SkyTable, p: Vec3) -> [f32; CHANNELS] {
+    let mut acc = [0.0f64; CHANNELS];
+    let mut spans: Vec<(f64, f64)> = Vec::with_capacity(boxes_above_p.len());
+    for (k, &(dx, dz)) in table.dirs.iter().enumerate() {
+        spans.clear();
+        spans.extend(boxes_above_p.iter().filter_map(|b| hidden(b, p, dx, dz)));
+        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Visible elevations: [0, π/2] less the union of the hidden spans.
+        let (mut up, mut side) = (0.0, 0.0);
+        let mut from = 0.0;
+        for &(lo, hi) in &spans {
+            if lo > from {
+                up += SkyTable::at(&table.up, k, lo) - SkyTable::at(&table.up, k, from);
+                side += SkyTable::at(&table.side, k, lo) - SkyTable::at(&table.side, k, from);
+            }
+            from = f64::max(from, hi);
+        }
+        if from < FRAC_PI_2 {
+            up += SkyTable::at(&table.up, k, FRAC_PI_2) - SkyTable::at(&table.up, k, from);
+            side += SkyTable::at(&table.side, k, FRAC_PI_2) - SkyTable::at(&table.side, k, from);
+        }
+        acc[0] += up;
+        // n·ω / cos γ for the vertical normals +X, −X, +Z, −Z.
+        for (c, w) in [dx, -dx, dz, -dz].into_iter().enumerate() {
+            acc[c + 1] += side * w.max(0.0);
+        }
+    }
+    acc.map(|v| v as f32)
 }
 
 /// Whether the ray from `p` along `dir` meets a box (a box containing `p` counts; one `p` sits
@@ -114,42 +182,31 @@ pub fn occluded(boxes: &[SceneBox], p: Vec3, dir: Vec3) -> bool {
     })
 }
 
-/// The boxes an upward ray from height `y_m` can meet (those reaching above it).
-pub fn boxes_above(scene: &BoxScene, y_m: f32) -> Vec<SceneBox> {
-    scene.boxes.iter().filter(|b| b.max_m.y > y_m).copied().collect()
-}
-
-/// Illuminance on the five normals at `p`, relative to E (1 on the open ground).
-pub fn irradiance(boxes_above_p: &[SceneBox], samples: &SkySamples, p: Vec3) -> [f32; CHANNELS] {
-    let mut acc = [0.0f32; CHANNELS];
-    for (dir, w) in samples.dirs.iter().zip(&samples.weights) {
-        if !occluded(boxes_above_p, p, *dir) {
-            for (a, wk) in acc.iter_mut().zip(w) {
-                *a += wk;
-            }
-        }
-    }
-    acc
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sky::cie::SkyKind;
 
     #[test]
-    fn gauss_legendre_integrates_polynomials() {
-        let (x, w) = gauss_legendre_01(5);
-        let s: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(9)).sum();
-        assert!((s - 0.1).abs() < 1e-13, "{s}");
-        let (x1, w1) = gauss_legendre_01(1);
-        assert!((x1[0] - 0.5).abs() < 1e-15 && (w1[0] - 1.0).abs() < 1e-15);
+    fn an_infinite_wall_hides_its_view_factor_of_a_uniform_sky() {
+        // Uniform sky (CIE type 5), a wall of height H at horizontal distance D running along Z:
+        // the floor sees (1 + cos γ0)/2 of it, γ0 = atan(H/D) (the 2D view factor).
+        let sky = Sky::new(SkyKind::general(5, None).unwrap(), 0.0, 1000.0).unwrap();
+        let t = SkyTable::new(&sky, 256).unwrap();
+        let wall = SceneBox { min_m: Vec3::new(5.0, 0.0, -1e5), max_m: Vec3::new(6.0, 10.0, 1e5), albedo: Vec3::ONE };
+        let e = irradiance(&[wall], &t, Vec3::ZERO);
+        let want = (1.0 + 2f64.atan().cos()) / 2.0;
+        assert!((f64::from(e[0]) - want).abs() < 2e-4, "{} vs {want}", e[0]);
+        // At its foot exactly half the sky; the wall face itself (normal −X) sees all its half.
+        let foot = irradiance(&[wall], &t, Vec3::new(5.0, 0.0, 0.0));
+        assert!((foot[0] - 0.5).abs() < 1e-4 && foot[1] == 0.0, "{foot:?}");
+        assert!((f64::from(foot[2]) - 0.5).abs() < 1e-3, "{foot:?}"); // uniform sky: E_v = E/2
     }
 
     #[test]
     fn open_overcast_sky_gives_e_and_the_vertical_ratio() {
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
-        let s = SkySamples::new(&sky, 1024).unwrap();
+        let s = SkyTable::new(&sky, 256).unwrap();
         let e = irradiance(&[], &s, Vec3::ZERO);
         assert!((e[0] - 1.0).abs() < 1e-5, "{e:?}");
         // Vertical/horizontal illuminance of the CIE overcast sky: 3/14 + 4/(7π) = 0.3962.
@@ -162,7 +219,7 @@ mod tests {
     #[test]
     fn a_point_inside_or_under_a_box_sees_no_sky() {
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
-        let s = SkySamples::new(&sky, 256).unwrap();
+        let s = SkyTable::new(&sky, 256).unwrap();
         let b = SceneBox { min_m: Vec3::new(-1.0, 2.0, -1.0), max_m: Vec3::new(1.0, 3.0, 1.0), albedo: Vec3::ONE };
         assert_eq!(irradiance(&[b], &s, Vec3::new(0.0, 2.5, 0.0)), [0.0; 5]);
         // on its roof: the open sky for up
