@@ -203,7 +203,7 @@ class Renderer:
         sigma = weather.extinction_per_m
         if sigma > 0:
             # Seed 002: Is = ks E_hv, the sky illuminance at the viewpoint (1 in the open).
-            e_view = 1.0 if ambient is None else float(ambient.sample(cam.position_m.reshape(1, 3).astype(np.float32))[0, 0])
+            e_view = float(ambient.sample(cam.position_m.reshape(1, 3).astype(np.float32))[0, 0])
             kwargs["haze_params"] = (sigma, [_core.AIRLIGHT_RELATIVE * e_view] * 3)
         if cull_threshold is not None:
             th = real("cull_threshold", cull_threshold)
@@ -243,18 +243,18 @@ class Renderer:
     @staticmethod
     def _ambient(
         scene: BoxScene | PhotoScene, weather: Weather, cam: Camera, spacing_m: float, samples: int
-    ) -> _core.AmbientLightMap | None:
-        """The frame's ambient-light map, or None where nothing hides the sky (the open sky)."""
+    ) -> _core.AmbientLightMap:
+        """The frame's ambient-light map (a single node of open sky where nothing hides it), cached."""
         s = real("ambient_spacing_m", spacing_m)
         if not 0.05 <= s <= 100.0:
             raise ValueError(f"ambient_spacing_m = {s} is outside the valid range [0.05, 100] m")
         n = integer("ambient_samples", samples, 4, 65_536)
-        occluders = scene.boxes if isinstance(scene, BoxScene) else scene.occluders
+        occluders = np.ascontiguousarray(scene.boxes if isinstance(scene, BoxScene) else scene.occluders, dtype=np.float32)
         if len(occluders) == 0:
-            return None
+            return sky.cached_core_map(occluders, weather, np.zeros(3), np.zeros(3), s, n)
         reach = weather.rain_near_m + 1.0 if weather.rain_rate_mm_h > 0 and weather.rain_streaks else 1.0
         lo, hi = sky.default_bounds(scene, s, around_m=cam.position_m, radius_m=reach)
-        return sky.cached_core_map(np.ascontiguousarray(occluders, dtype=np.float32), weather, lo, hi, s, n)
+        return sky.cached_core_map(occluders, weather, lo, hi, s, n)
 
     def render_sequence(
         self,
