@@ -6,6 +6,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "apply_lut8",
     "encode_srgb8",
     "rain_drops",
     "AIRLIGHT_RELATIVE",
@@ -156,3 +157,4 @@ def rain_drops(
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
 
 def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...
+def apply_lut8(encoded: NDArray[np.uint8], table: NDArray[np.float32]) -> NDArray[np.float32]: ...

@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 #[pymodule]
 mod _core {
     #[pymodule_export]
-    use super::color::encode_srgb8;
+    use super::color::{apply_lut8, encode_srgb8};
     #[pymodule_export]
     use super::errors::{GpuUnavailableError, SkyfallError};
     #[pymodule_export]

@@ -1,6 +1,7 @@
 //! sRGB transfer function (IEC 61966-2-1) for output encoding.
 
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Encodes one linear value to sRGB in [0, 1] (input clipped to [0, 1]).
 #[inline]
@@ -9,12 +10,66 @@ pub fn encode_srgb(linear: f32) -> f32 {
     if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
 }
 
-/// Encodes linear values to 8-bit sRGB (rounded to nearest), in parallel. NaN encodes as 0.
+/// One value to 8-bit sRGB by the formula: round(255 · encode(x)). NaN encodes as 0.
+#[inline]
+pub fn encode_srgb8_formula(x: f32) -> u8 {
+    let x = if x.is_nan() { 0.0 } else { x };
+    (encode_srgb(x) * 255.0).round() as u8
+}
+
+/// Lookup tables that reproduce [`encode_srgb8_formula`] bit for bit without `powf`: the
+/// smallest input of each code from 1 to 255, and per block of 2¹⁶ float bit patterns below
+/// 1.0 the code of the block's first value.
+struct Srgb8Table {
+    thresholds: [f32; 255],
+    coarse: Vec<u8>,
+}
+
+fn srgb8_table() -> &'static Srgb8Table {
+    static TABLE: OnceLock<Srgb8Table> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let one = 1.0f32.to_bits();
+        let mut thresholds = [0.0f32; 255];
+        for (k, t) in thresholds.iter_mut().enumerate() {
+            // Smallest non-negative float whose code exceeds k (the formula is monotonic).
+            let (mut lo, mut hi) = (0u32, one);
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if usize::from(encode_srgb8_formula(f32::from_bits(mid))) > k { hi = mid } else { lo = mid + 1 }
+            }
+            *t = f32::from_bits(lo);
+        }
+        let coarse = (0..=(one >> 16)).map(|b| encode_srgb8_formula(f32::from_bits(b << 16))).collect();
+        Srgb8Table { thresholds, coarse }
+    })
+}
+
+/// Encodes linear values to 8-bit sRGB (rounded to nearest, clipped, NaN as 0), in parallel;
+/// the same bits as [`encode_srgb8_formula`], through [`Srgb8Table`].
 pub fn encode_srgb8(linear: &[f32], out: &mut [u8]) {
+    let t = srgb8_table();
     out.par_chunks_mut(1 << 16).zip(linear.par_chunks(1 << 16)).for_each(|(o, l)| {
         for (b, &x) in o.iter_mut().zip(l) {
-            let x = if x.is_nan() { 0.0 } else { x };
-            *b = (encode_srgb(x) * 255.0).round() as u8;
+            *b = if x >= 1.0 {
+                255
+            } else if x > 0.0 {
+                let mut c = t.coarse[(x.to_bits() >> 16) as usize];
+                while c < 255 && x >= t.thresholds[usize::from(c)] {
+                    c += 1;
+                }
+                c
+            } else {
+                0 // zero, negative, NaN
+            };
+        }
+    });
+}
+
+/// Maps bytes through a 256-entry table (8-bit decoding), in parallel.
+pub fn apply_lut8(bytes: &[u8], table: &[f32; 256], out: &mut [f32]) {
+    out.par_chunks_mut(1 << 16).zip(bytes.par_chunks(1 << 16)).for_each(|(o, b)| {
+        for (v, &x) in o.iter_mut().zip(b) {
+            *v = table[usize::from(x)];
         }
     });
 }
@@ -31,5 +86,28 @@ mod tests {
         let mut out = [0u8; 4];
         encode_srgb8(&[0.0, 1.0, 2.0, f32::NAN], &mut out);
         assert_eq!(out, [0, 255, 255, 0]);
+    }
+
+    #[test]
+    fn lut8_maps_every_byte() {
+        let table: [f32; 256] = std::array::from_fn(|i| i as f32 * 0.5);
+        let bytes: Vec<u8> = (0..=255u8).rev().collect();
+        let mut out = vec![0.0; 256];
+        apply_lut8(&bytes, &table, &mut out);
+        assert!(out.iter().zip(&bytes).all(|(v, &b)| *v == f32::from(b) * 0.5));
+    }
+
+    #[test]
+    fn the_table_gives_the_formula_bits() {
+        // Every threshold and its neighbours, and a sweep of float bit patterns in [0, 1].
+        let t = srgb8_table();
+        let mut xs: Vec<f32> = t.thresholds.iter().flat_map(|&v| [f32::from_bits(v.to_bits() - 1), v, f32::from_bits(v.to_bits() + 1)]).collect();
+        xs.extend((0..1_000_000u32).map(|i| f32::from_bits(i * (1.0f32.to_bits() / 1_000_000))));
+        xs.extend([-1.0, -0.0, f32::MIN_POSITIVE, 1e-40, 0.999_999_9, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY, f32::NAN]);
+        let mut out = vec![0u8; xs.len()];
+        encode_srgb8(&xs, &mut out);
+        for (x, b) in xs.iter().zip(&out) {
+            assert_eq!(*b, encode_srgb8_formula(*x), "{x:e}");
+        }
     }
 }
