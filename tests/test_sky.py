@@ -191,13 +191,21 @@ def test_map_sampling_is_trilinear(street_map):
     g = m.grid[..., 0].astype(np.float64)
     rng = np.random.default_rng(1)
     base = rng.integers(0, np.array(g.shape) - 1, size=(50, 3))
+    base[:10] = [[int((7.0 - m.origin_m[0]) / m.spacing_m) - 1, 1, k] for k in range(10, 20)]  # at the right-hand wall
     f = rng.uniform(0, 1, size=(50, 3))
-    want = np.zeros(50)
+    # Trilinear over the cell's open corners, weights renormalised (all corners if none is open).
+    num, den, full = np.zeros(50), np.zeros(50), np.zeros(50)
     for corner in range(8):
         off = np.array([(corner >> k) & 1 for k in range(3)])
         w = np.prod(np.where(off == 1, f, 1 - f), axis=1)
         ijk = base + off
-        want += w * g[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+        v = g[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+        is_open = ~m.solid[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+        num += w * v * is_open
+        den += w * is_open
+        full += w * v
+    want = np.where(den > 0, num / np.where(den > 0, den, 1), full)
+    assert np.any((den > 0) & (den < 1))  # some cells straddle a wall
     got = m.sample(m.origin_m + m.spacing_m * (base + f))
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-2)
     # Outside the grid: the nearest boundary value.

@@ -236,8 +236,11 @@ def horizontal_illuminance(
 class AmbientLightMap:
     """Sky illuminance on a uniform grid, interpolated trilinearly (seed 002 section 4.3).
 
-    Nodes inside boxes carry the light just outside them, so that points on walls interpolate
-    the light in front of the wall. Points outside the grid take the nearest boundary value.
+    Nodes inside boxes (``solid``) are left out of the interpolation: a point reads the open
+    corners of its cell (weights renormalised), so beneath a thin awning it reads the nodes
+    below it, on a wall those in front of it. (Solid nodes are filled from their open
+    neighbours for the rare cell whose corners are all solid.) Points outside the grid take
+    the nearest boundary value.
 
     Attributes
     ----------
@@ -248,6 +251,8 @@ class AmbientLightMap:
         Position of node (0, 0, 0), m.
     spacing_m : float
         Node spacing, m.
+    solid : ndarray of bool, shape (nx, ny, nz)
+        Nodes inside a box.
     illuminance_lux : float
         E, the open ground's illuminance the values are scaled by.
     """
@@ -255,6 +260,7 @@ class AmbientLightMap:
     grid: NDArray[np.float32]
     origin_m: NDArray[np.float64]
     spacing_m: float
+    solid: NDArray[np.bool_]
     illuminance_lux: float
     core: _core.AmbientLightMap
 
@@ -367,6 +373,7 @@ def wrap(core: _core.AmbientLightMap, illuminance_lux: float) -> AmbientLightMap
         grid=core.values * np.float32(illuminance_lux),
         origin_m=np.asarray(core.origin_m, dtype=np.float64),
         spacing_m=float(core.spacing_m),
+        solid=core.solid,
         illuminance_lux=float(illuminance_lux),
         core=core,
     )

@@ -94,7 +94,7 @@ pub fn uniform(ctx: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
 }
 
 /// A storage buffer initialised with `values`, readable back.
-pub fn storage_init(ctx: &GpuContext, label: &str, values: &[f32]) -> wgpu::Buffer {
+pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, values: &[T]) -> wgpu::Buffer {
     ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::cast_slice(values),

@@ -56,8 +56,8 @@ impl RainPass {
         let cam_buf = uniform(ctx, "camera", &camera_words(cam));
         let params_buf = uniform(ctx, "rain", &params);
         let streak_buf = storage_init(ctx, "streaks", &packed);
-        let offsets_buf = storage_init(ctx, "tile offsets", bytemuck::cast_slice(&offsets));
-        let indices_buf = storage_init(ctx, "tile indices", bytemuck::cast_slice(&indices));
+        let offsets_buf = storage_init(ctx, "tile offsets", &offsets);
+        let indices_buf = storage_init(ctx, "tile indices", &indices);
         self.0.encode(
             ctx,
             enc,

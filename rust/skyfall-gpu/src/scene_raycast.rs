@@ -17,7 +17,7 @@ impl SceneRaycastPass {
     /// Compiles the pass.
     pub fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
-        SceneRaycastPass(ComputePass::new(ctx, "scene_raycast", SOURCE, &[Uniform, Uniform, ReadOnly, ReadWrite, ReadWrite, Uniform, Uniform, ReadOnly]))
+        SceneRaycastPass(ComputePass::new(ctx, "scene_raycast", SOURCE, &[Uniform, Uniform, ReadOnly, ReadWrite, ReadWrite, Uniform, Uniform, ReadOnly, ReadOnly]))
     }
 
     /// Records the pass writing `rgb` (H·W·3) and `depth` (H·W).
@@ -49,9 +49,10 @@ impl SceneRaycastPass {
         let sky_buf = uniform(ctx, "sky", &sky.map(f32::to_bits));
         let amb_buf = uniform(ctx, "ambient", &amb);
         let amb_values = storage_init(ctx, "ambient_values", &m.values);
+        let amb_solid = storage_init(ctx, "ambient_solid", &m.solid);
         let cam_buf = uniform(ctx, "camera", &camera_words(cam));
         let info_buf = uniform(ctx, "scene", &info);
         let box_buf = storage_init(ctx, "boxes", &boxes);
-        self.0.encode(ctx, enc, &[&cam_buf, &info_buf, &box_buf, rgb, depth, &sky_buf, &amb_buf, &amb_values], cam.width, cam.height);
+        self.0.encode(ctx, enc, &[&cam_buf, &info_buf, &box_buf, rgb, depth, &sky_buf, &amb_buf, &amb_values, &amb_solid], cam.width, cam.height);
     }
 }

@@ -3,8 +3,8 @@
 use crate::errors::CoreError;
 use crate::render::box_scene;
 use glam::Vec3;
-use numpy::ndarray::{Array2, Array4};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray4, PyReadonlyArray2};
+use numpy::ndarray::{Array2, Array3, Array4};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArray4, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
@@ -142,6 +142,14 @@ impl AmbientLightMap {
     fn values<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray4<f32>>> {
         let [nx, ny, nz] = self.map.dims;
         let a = Array4::from_shape_vec((nx, ny, nz, CHANNELS), self.map.values.clone()).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(a.into_pyarray(py))
+    }
+
+    /// Nodes inside a box, (nx, ny, nz).
+    #[getter]
+    fn solid<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<bool>>> {
+        let [nx, ny, nz] = self.map.dims;
+        let a = Array3::from_shape_vec((nx, ny, nz), self.map.solid.iter().map(|&s| s != 0).collect()).map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(a.into_pyarray(py))
     }
 

@@ -22,6 +22,7 @@ struct SceneBox {
 @group(0) @binding(5) var<uniform> sky: SkyInfo;
 @group(0) @binding(6) var<uniform> amb: AmbientInfo;
 @group(0) @binding(7) var<storage, read> amb_values: array<f32>;
+@group(0) @binding(8) var<storage, read> amb_solid: array<u32>;
 
 struct SkyInfo {
     abcd: vec4<f32>,      // CIE a, b, c, d
@@ -63,10 +64,6 @@ fn relative_to_zenith(dir: vec3<f32>) -> f32 {
     return phi * f_chi / (phi0 * f_zs);
 }
 
-fn amb_node(i: u32, j: u32, k: u32, ch: u32) -> f32 {
-    return amb_values[((i * amb.dims.y + j) * amb.dims.z + k) * CHANNELS + ch];
-}
-
 // Lower node and fraction along one axis of `n` nodes, clamped to the grid.
 fn amb_axis(coord: f32, origin: f32, n: u32) -> vec2<f32> {
     let g = clamp((coord - origin) / amb.origin_spacing.w, 0.0, f32(n - 1u));
@@ -74,7 +71,16 @@ fn amb_axis(coord: f32, origin: f32, n: u32) -> vec2<f32> {
     return vec2<f32>(i0, select(0.0, g - i0, n > 1u));
 }
 
-// Trilinear sample of one channel, clamped to the grid (skyfall_core::sky::ambient::AmbientMap::sample).
+// One corner's contribution: (w v, w) over all corners and over the open ones.
+fn amb_corner(acc: vec4<f32>, i: u32, j: u32, k: u32, ch: u32, w: f32) -> vec4<f32> {
+    let n = (i * amb.dims.y + j) * amb.dims.z + k;
+    let v = amb_values[n * CHANNELS + ch];
+    let open = select(0.0, 1.0, amb_solid[n] == 0u);
+    return acc + vec4<f32>(w * v, w, open * w * v, open * w);
+}
+
+// Trilinear sample of one channel, clamped to the grid, over the cell's open corners
+// (all of them when every weighted corner is solid): skyfall_core::sky::ambient::AmbientMap::sample.
 fn ambient_sample(p: vec3<f32>, ch: u32) -> f32 {
     let ax = amb_axis(p.x, amb.origin_spacing.x, amb.dims.x);
     let ay = amb_axis(p.y, amb.origin_spacing.y, amb.dims.y);
@@ -88,16 +94,19 @@ fn ambient_sample(p: vec3<f32>, ch: u32) -> f32 {
     let fx = ax.y;
     let fy = ay.y;
     let fz = az.y;
-    var out = 0.0;
-    out += (1.0 - fx) * (1.0 - fy) * (1.0 - fz) * amb_node(i0, j0, k0, ch);
-    out += fx * (1.0 - fy) * (1.0 - fz) * amb_node(i1, j0, k0, ch);
-    out += (1.0 - fx) * fy * (1.0 - fz) * amb_node(i0, j1, k0, ch);
-    out += fx * fy * (1.0 - fz) * amb_node(i1, j1, k0, ch);
-    out += (1.0 - fx) * (1.0 - fy) * fz * amb_node(i0, j0, k1, ch);
-    out += fx * (1.0 - fy) * fz * amb_node(i1, j0, k1, ch);
-    out += (1.0 - fx) * fy * fz * amb_node(i0, j1, k1, ch);
-    out += fx * fy * fz * amb_node(i1, j1, k1, ch);
-    return out;
+    var acc = vec4<f32>(0.0);
+    acc = amb_corner(acc, i0, j0, k0, ch, (1.0 - fx) * (1.0 - fy) * (1.0 - fz));
+    acc = amb_corner(acc, i1, j0, k0, ch, fx * (1.0 - fy) * (1.0 - fz));
+    acc = amb_corner(acc, i0, j1, k0, ch, (1.0 - fx) * fy * (1.0 - fz));
+    acc = amb_corner(acc, i1, j1, k0, ch, fx * fy * (1.0 - fz));
+    acc = amb_corner(acc, i0, j0, k1, ch, (1.0 - fx) * (1.0 - fy) * fz);
+    acc = amb_corner(acc, i1, j0, k1, ch, fx * (1.0 - fy) * fz);
+    acc = amb_corner(acc, i0, j1, k1, ch, (1.0 - fx) * fy * fz);
+    acc = amb_corner(acc, i1, j1, k1, ch, fx * fy * fz);
+    if acc.w > 0.0 {
+        return acc.z / acc.w;
+    }
+    return acc.x;
 }
 
 // Channel of an axis-aligned normal: 0 up, 1 +X, 2 -X, 3 +Z, 4 -Z; 5 for faces looking down.
