@@ -293,7 +293,7 @@ mod tests {
         assert_eq!(m.sample(Vec3::new(1.0, 1.0, 0.0)), direct);
         assert!(AmbientMap::build(&scene, &s, Vec3::ZERO, Vec3::splat(1e5), 0.1).is_err());
         // Halfway between the open node x = 2 and the solid x = 3, the open one alone counts.
-        assert_eq!(m.solid[(3 * 5 + 2)], 1);
+        assert_eq!(m.solid[3 * 5 + 2], 1);
         assert_eq!(m.sample(Vec3::new(2.5, 2.0, 0.0)), m.sample(Vec3::new(2.0, 2.0, 0.0)));
     }
 
