@@ -9,7 +9,8 @@ import csv
 import colour
 import numpy as np
 import pytest
-from scipy import integrate
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, rain, scenes, sky
 from skyfall.reference import canyon_illuminance
@@ -323,3 +324,30 @@ def test_haze_airlight_follows_the_viewpoint_illuminance():
     e_view = sky.horizontal_illuminance([0, 0, 0], under, weather=w, samples=sky.MAP_SAMPLES)[0] / w.sky_illuminance_lux
     assert roofed == pytest.approx(3 / 7 * e_view, rel=1e-4)
     assert e_view < 0.2
+
+
+# ---- hard inputs ----------------------------------------------------------------------
+
+_coord = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(_coord, st.floats(-50, 1e6), _coord), min_size=1, max_size=6), st.sampled_from(["up", "+x", "-x", "+z", "-z"]))
+def test_illuminance_never_exceeds_the_open_sky_and_never_crashes(points, normal):
+    s = scenes.street(length_m=40.0)
+    e = sky.horizontal_illuminance(np.array(points), s, samples=16, normal=normal)
+    assert e.shape == (len(points),)
+    open_sky = sky.horizontal_illuminance([0, 1e5, 0], samples=16, normal=normal)[0]
+    assert np.all((e >= 0) & (e <= open_sky * (1 + 1e-5)))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(allow_nan=True), st.floats(allow_nan=True), st.floats(allow_nan=True)), min_size=1, max_size=4))
+def test_bad_points_raise_value_errors(points):
+    arr = np.array(points, dtype=np.float64)
+    m = sky.ambient_light_map(scenes.street(length_m=40.0), spacing_m=2.0, samples=16)
+    if np.all(np.isfinite(arr)) and np.all(np.abs(arr) <= np.finfo(np.float32).max):
+        assert np.all(np.isfinite(m.sample(arr)))
+    else:
+        with pytest.raises(ValueError, match="points_m"):
+            m.sample(arr)

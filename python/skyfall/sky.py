@@ -183,8 +183,8 @@ def _points(points_m: Any) -> NDArray[np.float32]:
         p = p.reshape(1, 3)
     if p.ndim != 2 or p.shape[1] != 3:
         raise ValueError(f"points_m must have shape (N, 3), got {p.shape}")
-    if not np.all(np.isfinite(p)):
-        raise ValueError("points_m must be finite")
+    if not np.all(np.isfinite(p)) or np.any(np.abs(p) > np.finfo(np.float32).max):
+        raise ValueError("points_m must be finite (and within float32 range)")
     return np.ascontiguousarray(p, dtype=np.float32)
 
 
