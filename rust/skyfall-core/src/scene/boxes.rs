@@ -1,4 +1,4 @@
-//! The procedural scene: a ground plane and axis-aligned boxes under a uniform overcast sky,
+//! The procedural scene: a ground plane and axis-aligned boxes under the frame's sky,
 //! ray cast per pixel. This file is the CPU reference of `skyfall-gpu`'s `scene_raycast.wgsl`,
 //! kept line-for-line comparable.
 //!
