@@ -94,9 +94,12 @@ def ambient_plot(weather: Weather) -> Figure:
     from matplotlib.figure import Figure
 
     amb = sky.ambient_light_map(scenes.street(), spacing_m=1.0, weather=weather)
-    g, o, s = amb.grid[..., 0], amb.origin_m, amb.spacing_m
+    g = np.where(amb.solid, np.nan, amb.grid[..., 0])  # nodes inside boxes: blank (grey)
+    o, s = amb.origin_m, amb.spacing_m
     fig = Figure(figsize=(10, 4.2), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2, width_ratios=[2.2, 1])
+    for ax in (ax1, ax2):
+        ax.set_facecolor("0.6")
     j = int(round((1.5 - o[1]) / s))
     x_ext = (o[0], o[0] + s * (g.shape[0] - 1))
     im = ax1.imshow(g[:, j, :], origin="lower", aspect="auto", extent=(o[2], o[2] + s * (g.shape[2] - 1), *x_ext), vmin=0, vmax=weather.sky_illuminance_lux)
