@@ -15,6 +15,7 @@ __all__ = [
     "GpuDevice",
     "GpuUnavailableError",
     "render_frame",
+    "render_photo8",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
     "SkyModel",
@@ -72,6 +73,28 @@ def render_frame(
     occluders: NDArray[np.float32] | None = None,
     rain_shelter: bool = True,
 ) -> _FrameTuple: ...
+def render_photo8(
+    width: int,
+    height: int,
+    camera_params: list[float],
+    photo_srgb8: NDArray[np.uint8],
+    photo_depth_m: NDArray[np.float32],
+    decode_table: NDArray[np.float32],
+    out_srgb8: NDArray[np.uint8],
+    *,
+    rain_alpha_out: NDArray[np.float32] | None = None,
+    haze_params: tuple[float, list[float]] | None = None,
+    rain_region: _RegionArgs | None = None,
+    exposure_s: float = ...,
+    camera_velocity_m_s: list[float] = ...,
+    lights: NDArray[np.float32] | None = None,
+    sky_illuminance_lux: float = 10000.0,
+    cull_threshold: float | None = None,
+    sky: SkyModel | None = None,
+    ambient: AmbientLightMap | None = None,
+    occluders: NDArray[np.float32] | None = None,
+    rain_shelter: bool = True,
+) -> tuple[int, int, int] | None: ...
 
 def cloud_base_m(rain_rate_mm_h: float) -> float: ...
 @final

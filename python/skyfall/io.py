@@ -26,6 +26,7 @@ __all__ = [
     "read_channels",
     "read_image",
     "read_image_with_metadata",
+    "srgb8_table",
     "to_srgb8",
     "write_image",
 ]
@@ -52,14 +53,19 @@ def decode_srgb(encoded: Any) -> NDArray[np.float32]:
 _SRGB8_TO_LINEAR = None
 
 
-def decode_srgb8(encoded: Any) -> NDArray[np.float32]:
-    """Decode 8-bit sRGB to linear float32 through a 256-entry table (same values as
-    :func:`decode_srgb` of ``encoded / 255``), in Rust, in parallel."""
+def srgb8_table() -> NDArray[np.float32]:
+    """The 256 linear values of the 8-bit sRGB codes (:func:`decode_srgb` of ``k / 255``)."""
     global _SRGB8_TO_LINEAR
     if _SRGB8_TO_LINEAR is None:
         _SRGB8_TO_LINEAR = decode_srgb(np.arange(256, dtype=np.float32) / np.float32(255.0))
     table: NDArray[np.float32] = _SRGB8_TO_LINEAR
-    return _core.apply_lut8(np.ascontiguousarray(encoded, dtype=np.uint8), table)
+    return table
+
+
+def decode_srgb8(encoded: Any) -> NDArray[np.float32]:
+    """Decode 8-bit sRGB to linear float32 through a 256-entry table (same values as
+    :func:`decode_srgb` of ``encoded / 255``), in Rust, in parallel."""
+    return _core.apply_lut8(np.ascontiguousarray(encoded, dtype=np.uint8), srgb8_table())
 
 
 def to_srgb8(linear: Any, *, alpha_channel: int | None = None) -> NDArray[np.uint8]:

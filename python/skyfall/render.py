@@ -181,6 +181,114 @@ class Renderer:
         Frame
         """
         weather = weather if weather is not None else Weather()
+        cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
+        if isinstance(scene, PhotoScene):
+            kwargs.update(photo_rgb=scene.image, photo_depth_m=scene.depth_m)
+        args = (self.width, self.height, cam.core_params())
+        rgb, depth, trans, rain = _core.render_frame(*args, device=self._device, **kwargs)
+        layers = {} if trans is None else {"transmittance": trans}
+        stats: dict[str, int] = {}
+        if rain is not None:
+            alpha, rain_depth, n_drops, n_streaks, n_culled = rain
+            layers.update(rain_alpha=alpha, rain_depth_m=rain_depth)
+            stats.update(rain_drops=n_drops, rain_streaks=n_streaks, rain_culled=n_culled)
+        return Frame(
+            rgb=rgb,
+            depth_m=depth,
+            layers=layers,
+            backend=self.backend,
+            adapter_info=self.adapter_info,
+            luminance_scale_cd_m2=weather.luminance_scale_cd_m2,
+            stats=stats,
+        )
+
+    def render_srgb8(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        camera: Camera | None = None,
+        time_s: float = 0.0,
+        seed: int = 0,
+        cull_threshold: float | None = None,
+        ambient_spacing_m: float = 1.0,
+        ambient_samples: int = sky.MAP_SAMPLES,
+        out: NDArray[np.uint8] | None = None,
+        rain_alpha_out: NDArray[np.float32] | None = None,
+    ) -> NDArray[np.uint8]:
+        """Render one frame straight to 8-bit sRGB: the augmentation path.
+
+        The same frame as :meth:`render` followed by :func:`skyfall.io.to_srgb8`, every byte
+        within 1 code of it (nearly all equal). For an 8-bit :class:`PhotoScene` on the CPU
+        backend the haze and the rain are fused into one pass over bands of rows that decodes,
+        hazes, composites and encodes each pixel once, with no frame-sized float buffers: the
+        fast way to put rain on a dataset of photos. Other scenes and the GPU backend render
+        the float frame and encode it.
+
+        Parameters
+        ----------
+        scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples
+            As for :meth:`render`.
+        out : ndarray of uint8, shape (H, W, 3), optional
+            Where to write the image (C-contiguous); a new array when None. Reusing one
+            across frames saves its allocation.
+        rain_alpha_out : ndarray of float32, shape (H, W), optional
+            Filled with the rain's coverage (``frame.layers["rain_alpha"]``; zeros without
+            rain) when given: the ground truth of a deraining dataset.
+
+        Returns
+        -------
+        ndarray of uint8, shape (H, W, 3)
+            The image (``out`` when given).
+        """
+        weather = weather if weather is not None else Weather()
+        shape = (self.height, self.width)
+        if out is None:
+            out = np.empty((*shape, 3), np.uint8)
+        elif not (isinstance(out, np.ndarray) and out.dtype == np.uint8 and out.shape == (*shape, 3) and out.flags.c_contiguous and out.flags.writeable):
+            raise ValueError(f"out must be a writable C-contiguous uint8 array of shape {(*shape, 3)}")
+        if rain_alpha_out is not None and not (
+            isinstance(rain_alpha_out, np.ndarray)
+            and rain_alpha_out.dtype == np.float32
+            and rain_alpha_out.shape == shape
+            and rain_alpha_out.flags.c_contiguous
+            and rain_alpha_out.flags.writeable
+        ):
+            raise ValueError(f"rain_alpha_out must be a writable C-contiguous float32 array of shape {shape}")
+        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
+            cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
+            kwargs.pop("rain_ground", None)
+            args = (self.width, self.height, cam.core_params(), scene.srgb8, scene.depth_m, io.srgb8_table(), out)
+            _core.render_photo8(*args, rain_alpha_out=rain_alpha_out, **kwargs)
+            return out
+        frame = self.render(
+            scene,
+            weather,
+            camera=camera,
+            time_s=time_s,
+            seed=seed,
+            cull_threshold=cull_threshold,
+            ambient_spacing_m=ambient_spacing_m,
+            ambient_samples=ambient_samples,
+        )
+        out[...] = io.to_srgb8(frame.rgb)
+        if rain_alpha_out is not None:
+            rain_alpha_out[...] = frame.layers.get("rain_alpha", 0.0)
+        return out
+
+    def _frame_args(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather,
+        camera: Camera | None,
+        time_s: float,
+        seed: int,
+        cull_threshold: float | None,
+        ambient_spacing_m: float,
+        ambient_samples: int,
+    ) -> tuple[Camera, dict[str, Any]]:
+        """The frame's camera and the keyword arguments of ``_core.render_frame`` and
+        ``_core.render_photo8`` (all but the scene's pixels), validated."""
         if not isinstance(weather, Weather):
             raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
         t = real("time_s", time_s)
@@ -192,7 +300,6 @@ class Renderer:
             if scene.shape != (self.height, self.width):
                 raise ValueError(f"the photo is {scene.shape[1]}x{scene.shape[0]}, the renderer {self.width}x{self.height}")
             cam = scene.camera
-            kwargs.update(photo_rgb=scene.image, photo_depth_m=scene.depth_m)
         elif isinstance(scene, BoxScene):
             cam = (camera if camera is not None else scene.camera).with_resolution(self.width, self.height)
             kwargs.update(boxes=scene.boxes, ground=scene.ground, ground_albedo=list(scene.ground_albedo))
@@ -222,23 +329,7 @@ class Renderer:
             )
             if isinstance(scene, PhotoScene) and len(scene.occluders):
                 kwargs["occluders"] = scene.occluders
-        args = (self.width, self.height, cam.core_params())
-        rgb, depth, trans, rain = _core.render_frame(*args, device=self._device, **kwargs)
-        layers = {} if trans is None else {"transmittance": trans}
-        stats: dict[str, int] = {}
-        if rain is not None:
-            alpha, rain_depth, n_drops, n_streaks, n_culled = rain
-            layers.update(rain_alpha=alpha, rain_depth_m=rain_depth)
-            stats.update(rain_drops=n_drops, rain_streaks=n_streaks, rain_culled=n_culled)
-        return Frame(
-            rgb=rgb,
-            depth_m=depth,
-            layers=layers,
-            backend=self.backend,
-            adapter_info=self.adapter_info,
-            luminance_scale_cd_m2=weather.luminance_scale_cd_m2,
-            stats=stats,
-        )
+        return cam, kwargs
 
     @staticmethod
     def _ambient(

@@ -205,8 +205,10 @@ class PhotoScene:
     Parameters
     ----------
     image : array_like, shape (H, W, 3)
-        Linear RGB float (any float dtype, stored as float32), or uint8 sRGB, which is
-        decoded to linear with the sRGB transfer function.
+        Linear RGB float (any float dtype, stored as float32), or uint8 sRGB, which is kept
+        as given in ``srgb8`` (the input of :meth:`skyfall.Renderer.render_srgb8`'s fused
+        8-bit path) and decoded to linear with the sRGB transfer function when ``image`` is
+        first read.
     depth_m : array_like, shape (H, W)
         Depth along the optical axis, m, >= 0; ``inf`` marks sky. From a sensor or a depth
         estimator.
@@ -226,11 +228,12 @@ class PhotoScene:
         over a drop.
     """
 
-    image: NDArray[np.float32]
     depth_m: NDArray[np.float32]
     camera: Camera
     lights: tuple[PointLight | SpotLight, ...]
     occluders: NDArray[np.float32]
+    srgb8: NDArray[np.uint8] | None = field(repr=False)
+    _linear: list[NDArray[np.float32]] = field(repr=False, compare=False)
 
     def __init__(
         self,
@@ -245,11 +248,13 @@ class PhotoScene:
         img = np.asarray(image)
         if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
             raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
+        srgb8: NDArray[np.uint8] | None = None
+        lin: list[NDArray[np.float32]] = []
         if img.dtype == np.uint8:
-            lin = decode_srgb8(img)
+            srgb8 = np.ascontiguousarray(img)  # decoded when `image` is first read
         elif img.dtype.kind == "f":
-            lin = np.ascontiguousarray(img, dtype=np.float32)
-            if not np.all(np.isfinite(lin)) or lin.min() < 0:
+            lin = [np.ascontiguousarray(img, dtype=np.float32)]
+            if not np.all(np.isfinite(lin[0])) or lin[0].min() < 0:
                 raise ValueError("image must hold finite, non-negative linear values")
         else:
             raise TypeError(f"image must be uint8 (sRGB) or float (linear), got dtype {img.dtype}")
@@ -259,17 +264,26 @@ class PhotoScene:
         d = np.ascontiguousarray(d, dtype=np.float32)
         if d.shape != img.shape[:2]:
             raise ValueError(f"depth_m has shape {d.shape}, the image is {img.shape[:2]}")
-        if np.isnan(d).any() or (d < 0).any():
+        if not (d >= 0).all():  # NaN compares false
             raise ValueError("depth_m must be >= 0 m everywhere (inf for sky), without NaN")
         h, w = img.shape[:2]
         cam = camera if camera is not None else Camera((0.0, 0.0, 0.0), vertical_fov_deg=vertical_fov_deg)
-        object.__setattr__(self, "image", lin)
+        object.__setattr__(self, "srgb8", srgb8)
+        object.__setattr__(self, "_linear", lin)
         object.__setattr__(self, "depth_m", d)
         object.__setattr__(self, "camera", cam.with_resolution(w, h))
         object.__setattr__(self, "lights", tuple(lights))
         object.__setattr__(self, "occluders", _box_rows(occluders, "occluders"))
 
     @property
+    def image(self) -> NDArray[np.float32]:
+        """The photo in linear RGB, (H, W, 3) float32 (an 8-bit photo is decoded on first use)."""
+        if not self._linear:
+            assert self.srgb8 is not None
+            self._linear.append(decode_srgb8(self.srgb8))
+        return self._linear[0]
+
+    @property
     def shape(self) -> tuple[int, int]:
         """(height, width) in px."""
-        return (int(self.image.shape[0]), int(self.image.shape[1]))
+        return (int(self.depth_m.shape[0]), int(self.depth_m.shape[1]))

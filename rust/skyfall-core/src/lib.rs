@@ -10,6 +10,7 @@
 //! - [`haze`]: rain haze along view rays (seed 002).
 //! - [`sky`]: CIE skies, sky illuminance with occlusion, the ambient-light map (seed 002).
 //! - [`frame`]: the CPU backend's frame composition (fused passes).
+//! - [`photo8`]: the CPU fast path for 8-bit photos (haze and rain fused, bytes in and out).
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
@@ -17,6 +18,7 @@ pub mod color;
 pub mod error;
 pub mod frame;
 pub mod haze;
+pub mod photo8;
 pub mod physics;
 pub mod rain;
 pub mod scene;

@@ -27,7 +27,7 @@ mod _core {
     #[pymodule_export]
     use super::rain_frame::rain_drops;
     #[pymodule_export]
-    use super::render::{render_frame, GpuDevice};
+    use super::render::{render_frame, render_photo8, GpuDevice};
     #[pymodule_export]
     use super::sky::{cloud_base_m, AmbientLightMap, SkyModel};
 

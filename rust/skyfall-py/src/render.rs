@@ -4,10 +4,11 @@
 use crate::errors::{gpu_error, CoreError};
 use glam::{Mat3, Vec3};
 use numpy::ndarray::{Array2, Array3};
-use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
+use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use skyfall_core::frame::{render, FrameBuffers, SceneRef};
+use skyfall_core::photo8::{render_photo8 as render_photo8_core, Photo8, Photo8Out};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::{RainMethod, RainRegion};
 use skyfall_core::rain::splat::{RainFrame, RainShading};
@@ -103,6 +104,7 @@ impl<'a> Request<'a> {
         let (boxes, photo) = match (boxes, photo) {
             (Some(b), None) => (Some(box_scene(b, ground, ground_albedo)?), None),
             (None, Some((rgb, depth))) => (None, Some((rgb.as_slice()?, depth.as_slice()?))),
+            (None, None) => (None, None),
             _ => return Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m")),
         };
         let haze = haze_params.map(|(sigma, air)| Haze::new(sigma, air)).transpose().map_err(CoreError)?;
@@ -223,28 +225,12 @@ pub fn render_frame<'py>(
     occluders: Option<PyReadonlyArray2<'py, f32>>,
     rain_shelter: bool,
 ) -> PyResult<FrameTuple<'py>> {
-    // Without a sky: the overcast sky; without a map: its open-sky light everywhere.
-    let sky: Sky = match &sky {
-        Some(s) => s.get().sky,
-        None => Sky::new(SkyKind::Overcast, 0.0, 1000.0).map_err(CoreError)?,
-    };
-    let ambient: Arc<AmbientMap> = match &ambient {
-        Some(a) => Arc::clone(&a.get().map),
-        None => Arc::new(AmbientMap::uniform(irradiance(&[], &SkyTable::new(&sky, 64).map_err(CoreError)?, Vec3::ZERO))),
-    };
-    let rain = RainArgs {
-        region: rain_region.as_ref(),
-        exposure_s,
-        camera_velocity_m_s,
-        ground: rain_ground,
-        lights: lights.as_ref(),
-        sky_illuminance_lux,
-        cull_threshold,
-        ambient: Some(Arc::clone(&ambient)),
-        occluders: occluders.as_ref(),
-        shelter: rain_shelter,
-    };
-    let light = SceneLight { sky: &sky, ambient: &ambient };
+    let lit = Lighting::new(sky.as_ref(), ambient.as_ref())?;
+    let rain = lit.rain_args(rain_region.as_ref(), exposure_s, camera_velocity_m_s, rain_ground, lights.as_ref(), sky_illuminance_lux, cull_threshold, occluders.as_ref(), rain_shelter);
+    let light = SceneLight { sky: &lit.sky, ambient: &lit.ambient };
+    if boxes.is_none() && (photo_rgb.is_none() || photo_depth_m.is_none()) {
+        return Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m"));
+    }
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
     let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
     let (scene, cam, haze, rain) = (req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame());
@@ -253,6 +239,101 @@ pub fn render_frame<'py>(
         None => py.detach(|| render(scene, cam, &light, haze, rain.as_ref())).map_err(CoreError)?,
     };
     to_py(py, cam, frame)
+}
+
+/// The sky and its ambient-light map for a frame: the given ones, or the overcast sky and its
+/// open-sky light everywhere.
+struct Lighting {
+    sky: Sky,
+    ambient: Arc<AmbientMap>,
+}
+
+impl Lighting {
+    fn new(sky: Option<&Bound<'_, SkyModel>>, ambient: Option<&Bound<'_, AmbientLightMap>>) -> PyResult<Self> {
+        let sky: Sky = match sky {
+            Some(s) => s.get().sky,
+            None => Sky::new(SkyKind::Overcast, 0.0, 1000.0).map_err(CoreError)?,
+        };
+        let ambient: Arc<AmbientMap> = match ambient {
+            Some(a) => Arc::clone(&a.get().map),
+            None => Arc::new(AmbientMap::uniform(irradiance(&[], &SkyTable::new(&sky, 64).map_err(CoreError)?, Vec3::ZERO))),
+        };
+        Ok(Lighting { sky, ambient })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn rain_args<'a, 'py>(
+        &self,
+        region: Option<&'a RegionArgs<'py>>,
+        exposure_s: f32,
+        camera_velocity_m_s: [f32; 3],
+        ground: bool,
+        lights: Option<&'a PyReadonlyArray2<'py, f32>>,
+        sky_illuminance_lux: f32,
+        cull_threshold: Option<f32>,
+        occluders: Option<&'a PyReadonlyArray2<'py, f32>>,
+        shelter: bool,
+    ) -> RainArgs<'a, 'py> {
+        RainArgs {
+            region,
+            exposure_s,
+            camera_velocity_m_s,
+            ground,
+            lights,
+            sky_illuminance_lux,
+            cull_threshold,
+            ambient: Some(Arc::clone(&self.ambient)),
+            occluders,
+            shelter,
+        }
+    }
+}
+
+/// Renders haze and rain over an 8-bit sRGB photo into `out_srgb8` on the CPU, fused (see
+/// `skyfall_core::photo8`); fills `rain_alpha_out` when given. Returns (drops generated,
+/// streaks drawn, drops culled) when it rains.
+#[pyfunction]
+#[pyo3(signature = (
+    width, height, camera_params, photo_srgb8, photo_depth_m, decode_table, out_srgb8, *, rain_alpha_out=None,
+    haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3], lights=None,
+    sky_illuminance_lux=10000.0, cull_threshold=None, sky=None, ambient=None, occluders=None, rain_shelter=true
+))]
+#[allow(clippy::too_many_arguments)]
+pub fn render_photo8<'py>(
+    py: Python<'py>,
+    width: u32,
+    height: u32,
+    camera_params: [f32; 16],
+    photo_srgb8: PyReadonlyArray3<'py, u8>,
+    photo_depth_m: PyReadonlyArray2<'py, f32>,
+    decode_table: PyReadonlyArray1<'py, f32>,
+    mut out_srgb8: PyReadwriteArray3<'py, u8>,
+    rain_alpha_out: Option<PyReadwriteArray2<'py, f32>>,
+    haze_params: Option<(f32, [f32; 3])>,
+    rain_region: Option<RegionArgs<'py>>,
+    exposure_s: f32,
+    camera_velocity_m_s: [f32; 3],
+    lights: Option<PyReadonlyArray2<'py, f32>>,
+    sky_illuminance_lux: f32,
+    cull_threshold: Option<f32>,
+    sky: Option<Bound<'py, SkyModel>>,
+    ambient: Option<Bound<'py, AmbientLightMap>>,
+    occluders: Option<PyReadonlyArray2<'py, f32>>,
+    rain_shelter: bool,
+) -> PyResult<Option<(usize, usize, usize)>> {
+    let lit = Lighting::new(sky.as_ref(), ambient.as_ref())?;
+    let rain = lit.rain_args(rain_region.as_ref(), exposure_s, camera_velocity_m_s, false, lights.as_ref(), sky_illuminance_lux, cull_threshold, occluders.as_ref(), rain_shelter);
+    let req = Request::parse(width, height, camera_params, None, false, [0.0; 3], None, haze_params, rain)?;
+    let decode: &[f32; 256] = decode_table
+        .as_slice()?
+        .try_into()
+        .map_err(|_| PyValueError::new_err(format!("decode_table must have 256 entries, got {}", decode_table.len())))?;
+    let photo = Photo8 { srgb: photo_srgb8.as_slice()?, depth_m: photo_depth_m.as_slice()?, decode };
+    let mut alpha = rain_alpha_out;
+    let out = Photo8Out { srgb: out_srgb8.as_slice_mut()?, rain_alpha: alpha.as_mut().map(|a| a.as_slice_mut()).transpose()? };
+    let (cam, haze, rain) = (&req.cam, req.haze.as_ref(), req.rain_frame());
+    let stats = py.detach(|| render_photo8_core(cam, &photo, haze, rain.as_ref(), out)).map_err(CoreError)?;
+    Ok(stats.map(|s| (s.drops, s.rain.streaks, s.rain.culled)))
 }
 
 /// A wgpu device with every pass compiled, reused across frames.

@@ -18,10 +18,12 @@ pub fn encode_srgb8_formula(x: f32) -> u8 {
 }
 
 /// Lookup tables that reproduce [`encode_srgb8_formula`] bit for bit without `powf`: the
-/// smallest input of each code from 1 to 255, and per block of 2¹⁶ float bit patterns below
-/// 1.0 the code of the block's first value.
+/// smallest input of each code from 1 to 255 (and +inf after them), and per block of 2¹⁶
+/// float bit patterns below 1.0 the code of the block's first value. No block holds more than
+/// one threshold (a block spans 1/128 of an octave, the code steps are wider; checked when
+/// the table is built and by the tests), so one comparison finishes the lookup.
 struct Srgb8Table {
-    thresholds: [f32; 255],
+    thresholds: [f32; 256],
     coarse: Vec<u8>,
 }
 
@@ -29,8 +31,8 @@ fn srgb8_table() -> &'static Srgb8Table {
     static TABLE: OnceLock<Srgb8Table> = OnceLock::new();
     TABLE.get_or_init(|| {
         let one = 1.0f32.to_bits();
-        let mut thresholds = [0.0f32; 255];
-        for (k, t) in thresholds.iter_mut().enumerate() {
+        let mut thresholds = [f32::INFINITY; 256];
+        for (k, t) in thresholds.iter_mut().enumerate().take(255) {
             // Smallest non-negative float whose code exceeds k (the formula is monotonic).
             let (mut lo, mut hi) = (0u32, one);
             while lo < hi {
@@ -39,28 +41,48 @@ fn srgb8_table() -> &'static Srgb8Table {
             }
             *t = f32::from_bits(lo);
         }
-        let coarse = (0..=(one >> 16)).map(|b| encode_srgb8_formula(f32::from_bits(b << 16))).collect();
+        let coarse: Vec<u8> = (0..=(one >> 16)).map(|b| encode_srgb8_formula(f32::from_bits(b << 16))).collect();
+        debug_assert!(thresholds.windows(2).all(|p| p[0].to_bits() >> 16 < p[1].to_bits() >> 16 || p[1].is_infinite()));
         Srgb8Table { thresholds, coarse }
     })
 }
 
+/// The 8-bit sRGB encoder: [`encode_srgb8_formula`]'s bits without `powf` (a table lookup
+/// and at most a few comparisons), for fused passes that encode pixel by pixel.
+#[derive(Clone, Copy)]
+pub struct Srgb8Encoder(&'static Srgb8Table);
+
+impl Srgb8Encoder {
+    /// The encoder (its tables are built once per process, ~2 ms).
+    pub fn new() -> Self {
+        Srgb8Encoder(srgb8_table())
+    }
+
+    /// One linear value to 8-bit sRGB (rounded to nearest, clipped, NaN as 0), without a
+    /// branch on the value.
+    #[inline]
+    pub fn encode(self, x: f32) -> u8 {
+        let t = self.0;
+        // NaN and negatives (−0 included: max may keep it) to 0, ≥ 1 to the last block.
+        let x = if x > 0.0 { x.min(1.0) } else { 0.0 };
+        let c = t.coarse[(x.to_bits() >> 16) as usize];
+        c + u8::from(x >= t.thresholds[usize::from(c)])
+    }
+}
+
+impl Default for Srgb8Encoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// Encodes linear values to 8-bit sRGB (rounded to nearest, clipped, NaN as 0), in parallel;
-/// the same bits as [`encode_srgb8_formula`], through [`Srgb8Table`].
+/// the same bits as [`encode_srgb8_formula`], through [`Srgb8Encoder`].
 pub fn encode_srgb8(linear: &[f32], out: &mut [u8]) {
-    let t = srgb8_table();
+    let e = Srgb8Encoder::new();
     out.par_chunks_mut(1 << 16).zip(linear.par_chunks(1 << 16)).for_each(|(o, l)| {
         for (b, &x) in o.iter_mut().zip(l) {
-            *b = if x >= 1.0 {
-                255
-            } else if x > 0.0 {
-                let mut c = t.coarse[(x.to_bits() >> 16) as usize];
-                while c < 255 && x >= t.thresholds[usize::from(c)] {
-                    c += 1;
-                }
-                c
-            } else {
-                0 // zero, negative, NaN
-            };
+            *b = e.encode(x);
         }
     });
 }
@@ -95,6 +117,14 @@ mod tests {
         let mut out = vec![0.0; 256];
         apply_lut8(&bytes, &table, &mut out);
         assert!(out.iter().zip(&bytes).all(|(v, &b)| *v == f32::from(b) * 0.5));
+    }
+
+    #[test]
+    fn no_coarse_block_holds_two_thresholds() {
+        // What lets the encoder finish with one comparison.
+        let t = srgb8_table();
+        let blocks: Vec<u32> = t.thresholds[..255].iter().map(|v| v.to_bits() >> 16).collect();
+        assert!(blocks.windows(2).all(|p| p[0] < p[1]), "{blocks:?}");
     }
 
     #[test]

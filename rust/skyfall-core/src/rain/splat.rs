@@ -167,6 +167,11 @@ pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_
 }
 
 impl ScreenStreak {
+    /// The drop's received light I_R, per channel (relative units).
+    pub fn light(&self) -> Vec3 {
+        self.light
+    }
+
     /// The streak as 12 floats: a.xy, b.xy | 1/z_a, 1/z_b, w_a, w_b | α, light rgb.
     pub fn packed(&self) -> [f32; 12] {
         [
@@ -274,6 +279,79 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainSh
     stats
 }
 
+/// ⌊v⌋ for v ≥ 0 (as an index; no libm call on targets without a rounding instruction).
+#[inline]
+fn floor_nonneg(v: f32) -> usize {
+    v as usize
+}
+
+/// ⌈v⌉ for v ≥ 0.
+#[inline]
+fn ceil_nonneg(v: f32) -> usize {
+    let t = v as usize;
+    t + usize::from((t as f32) < v)
+}
+
+/// Calls `f(i, a, inv_z)` for the pixels of rows `y0..y0 + rows` (a band of a `w`-wide
+/// frame) that the streak may cover: `i` the index within the band, `a` = α·coverage (0 where
+/// it misses the pixel: `f` must treat a = 0 as nothing) and `inv_z` the streak's inverse depth
+/// there (1/m), as [`ScreenStreak::fragment`] computes them (up to rounding: a product by 1/L
+/// for the division by L). Far to near order is the caller's.
+///
+/// On a steep streak each row visits a window of the same width around the axis, so the
+/// loops have fixed trip counts and the coverage no branch: the branches of a data-dependent
+/// span mispredict on nearly every row of a thin streak.
+#[inline]
+pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut f: impl FnMut(usize, f32, f32)) {
+    if s.max.y <= y0 as f32 || s.min.y >= (y0 + rows) as f32 || s.max.x <= 0.0 || s.min.x >= w as f32 {
+        return;
+    }
+    let (dir, len) = (s.dir, s.len);
+    let inv_len = if len > 1e-6 { 1.0 / len } else { 0.0 };
+    let (ya, yb) = (floor_nonneg(s.min.y.max(y0 as f32)), ceil_nonneg(s.max.y.min((y0 + rows) as f32)));
+    // Pixels farther than `reach` from the axis get no coverage.
+    let reach = (0.5 * s.wa.max(s.wb) + 0.5).max(1.0);
+    let steep = dir.y.abs() > 0.5;
+    let (dw, dinv) = (s.wb - s.wa, s.inv_zb - s.inv_za);
+    let (a0, dir_x, dir_y) = (s.a, dir.x, dir.y);
+    // One pixel: q = (qx, qy) from the streak's start; along_row = qy·dir.y, across_row = −qy·dir.x.
+    #[inline(always)]
+    fn pixel(s: &ScreenStreak, qx: f32, along_row: f32, across_row: f32, inv_len: f32, dw: f32, dinv: f32) -> (f32, f32) {
+        let along = along_row + qx * s.dir.x;
+        let across = (qx * s.dir.y + across_row).abs();
+        let k = (along * inv_len).clamp(0.0, 1.0);
+        let width = s.wa + dw * k;
+        let cov_across = if width >= 1.0 { (0.5 * width + 0.5 - across).clamp(0.0, 1.0) } else { width * (1.0 - across).clamp(0.0, 1.0) };
+        let cov_along = (along + 0.5).clamp(0.0, 1.0).min((s.len - along + 0.5).clamp(0.0, 1.0));
+        (s.alpha * cov_across * cov_along, s.inv_za + dinv * k)
+    }
+    if steep {
+        let (slope, half) = (dir.x / dir.y, reach / dir.y.abs());
+        // The window: every pixel whose centre may lie within `half` of the axis' crossing.
+        let span = (ceil_nonneg(2.0 * half) + 1).min(w);
+        for y in ya..yb {
+            let qy = y as f32 + 0.5 - s.a.y;
+            let xc = s.a.x + qy * slope;
+            let x0 = floor_nonneg((xc - half).max(0.0)).min(w - span);
+            let (row, along_row, across_row) = ((y - y0) * w, qy * dir_y, -qy * dir_x);
+            for x in x0..x0 + span {
+                let (a, inv_z) = pixel(s, x as f32 + 0.5 - a0.x, along_row, across_row, inv_len, dw, dinv);
+                f(row + x, a, inv_z);
+            }
+        }
+    } else {
+        let (x0, x1) = (floor_nonneg(s.min.x.max(0.0)), ceil_nonneg(s.max.x.min(w as f32)));
+        for y in ya..yb {
+            let qy = y as f32 + 0.5 - s.a.y;
+            let (row, along_row, across_row) = ((y - y0) * w, qy * dir_y, -qy * dir_x);
+            for x in x0..x1 {
+                let (a, inv_z) = pixel(s, x as f32 + 0.5 - a0.x, along_row, across_row, inv_len, dw, dinv);
+                f(row + x, a, inv_z);
+            }
+        }
+    }
+}
+
 /// Composites prepared streaks (see [`prepare`]) over the frame, rows in parallel bands.
 pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], reflectance: f32, t: RainTargets<'_>) {
     let w = cam.width as usize;
@@ -292,41 +370,19 @@ pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], reflectance: f3
             alpha.fill(1.0);
             rdepth.fill(f32::INFINITY);
             for s in streaks {
-                if s.max.y <= y0 as f32 || s.min.y >= (y0 + rows) as f32 {
-                    continue;
-                }
-                let dir = s.dir;
-                let ys = (s.min.y.floor().max(y0 as f32) as usize)..(s.max.y.ceil().min((y0 + rows) as f32) as usize);
-                let (bx0, bx1) = (s.min.x.floor().max(0.0), s.max.x.ceil().min(w as f32));
-                // Pixels farther than `reach` from the axis get no coverage: on a steep streak
-                // each row only needs the span around the axis, not the whole bounding box.
-                let reach = (0.5 * s.wa.max(s.wb) + 0.5).max(1.0);
-                let steep = dir.y.abs() > 0.5;
-                for y in ys {
-                    let (x0, x1) = if steep {
-                        let xc = s.a.x + (y as f32 + 0.5 - s.a.y) * dir.x / dir.y;
-                        let half = reach / dir.y.abs();
-                        ((xc - half).floor().max(bx0), (xc + half).ceil().min(bx1))
-                    } else {
-                        (bx0, bx1)
-                    };
-                    if x1 <= x0 {
-                        continue;
+                let light = s.light.to_array();
+                for_each_fragment(s, y0, rows, w, |i, a, inv_z| {
+                    // Hidden where z ≥ depth (1 ≥ depth/z, without the division); a = 0
+                    // leaves the pixel as it is, so there is no branch on it.
+                    let a = if 1.0 >= depth[i] * inv_z { 0.0 } else { a };
+                    let ar = a * r;
+                    for (c, l) in rgb[3 * i..3 * i + 3].iter_mut().zip(light) {
+                        *c += ar * (l - *c);
                     }
-                    for x in x0 as usize..x1 as usize {
-                        let Some((a, z)) = s.fragment(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)) else { continue };
-                        let i = (y - y0) * w + x;
-                        if z >= depth[i] {
-                            continue;
-                        }
-                        let ar = a * r;
-                        for (c, l) in rgb[3 * i..3 * i + 3].iter_mut().zip(s.light.to_array()) {
-                            *c += ar * (l - *c);
-                        }
-                        alpha[i] *= 1.0 - a;
-                        rdepth[i] = rdepth[i].min(z);
-                    }
-                }
+                    alpha[i] *= 1.0 - a;
+                    let z = if a > 0.0 { 1.0 / inv_z } else { f32::INFINITY };
+                    rdepth[i] = rdepth[i].min(z);
+                });
             }
             for a in alpha.iter_mut() {
                 *a = 1.0 - *a;

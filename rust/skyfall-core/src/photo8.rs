@@ -1,0 +1,346 @@
+//! The CPU backend's fast path for 8-bit photos: sRGB bytes in, sRGB bytes out, with the
+//! haze and the rain streaks of [`crate::frame::render`] fused into one pass per band of rows.
+//!
+//! The rain is composited far to near as in [`crate::rain::splat::composite_streaks`], but
+//! into a per-pixel affine map instead of the colour: each streak does C ← (1 − a r) C + a r L,
+//! so the whole ordered stack is C ↦ P·C + Q with P = ∏(1 − a r) and Q accumulated as
+//! Q ← (1 − a r) Q + a r L. P and Q depend only on the streaks and the depth test, not on the
+//! background, so a band's streaks are rasterised into P and Q first (a band-sized scratch that
+//! stays in cache, no frame-sized float buffers), then each pixel is decoded, hazed, mapped
+//! and encoded once. The result equals the float frame encoded to 8 bits up to the rounding of
+//! the reassociated sums (tests: every byte within 1 code, nearly all identical).
+
+use crate::color::Srgb8Encoder;
+use crate::error::{Error, Param, Result};
+use crate::frame::check_frame_size;
+use crate::haze::Haze;
+use crate::rain::splat::{for_each_fragment, RainFrame, RainStats, ScreenStreak};
+use crate::scene::camera::Camera;
+use rayon::prelude::*;
+use std::cell::RefCell;
+
+/// Rows per band: a band's scratch (16 B per pixel) stays in a core's L2 up to 8k-wide frames.
+const BAND_ROWS: usize = 8;
+
+/// An 8-bit sRGB photo with its depth.
+#[derive(Debug, Clone, Copy)]
+pub struct Photo8<'a> {
+    /// sRGB bytes, H·W·3.
+    pub srgb: &'a [u8],
+    /// Depth along the optical axis, m (inf = sky), H·W.
+    pub depth_m: &'a [f32],
+    /// The 8-bit decoding table (byte → linear).
+    pub decode: &'a [f32; 256],
+}
+
+/// What the pass writes.
+pub struct Photo8Out<'a> {
+    /// sRGB bytes, H·W·3.
+    pub srgb: &'a mut [u8],
+    /// The rain's coverage 1 − ∏(1 − aᵢ), H·W, when wanted.
+    pub rain_alpha: Option<&'a mut [f32]>,
+}
+
+/// What the rain did: streak counts and drops generated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Photo8Stats {
+    /// Streaks drawn and culled.
+    pub rain: RainStats,
+    /// Drops generated (in the voxels that can reach the view, less the sheltered ones).
+    pub drops: usize,
+}
+
+fn length_error(name: &'static str, len: usize, expected: usize) -> Error {
+    Error::Length { param: Param { name, index: None }, len, expected }
+}
+
+/// Checks depth values in parallel: none NaN or negative (the first bad one is named).
+fn check_depth_par(depth_m: &[f32]) -> Result<()> {
+    let bad = depth_m.par_chunks(1 << 16).enumerate().find_first(|(_, c)| c.iter().any(|&d| d.is_nan() || d < 0.0));
+    match bad {
+        None => Ok(()),
+        Some((k, _)) => crate::haze::check_depth(&depth_m[k << 16..]).map_err(|e| match e {
+            Error::OutOfRange { param, value, range } => {
+                Error::OutOfRange { param: Param { index: param.index.map(|i| i + (k << 16)), ..param }, value, range }
+            }
+            other => other,
+        }),
+    }
+}
+
+/// Streak indices per band of `rows` rows, in list order: (offsets, indices).
+fn bin_by_band(streaks: &[ScreenStreak], height: u32, rows: usize) -> (Vec<usize>, Vec<u32>) {
+    let bands = (height as usize).div_ceil(rows);
+    let range = |s: &ScreenStreak| {
+        let (_, _, y0, y1) = s.pixel_bounds(1, height);
+        (y0 as usize / rows, (y1 as usize).div_ceil(rows))
+    };
+    let mut offsets = vec![0usize; bands + 1];
+    for s in streaks {
+        let (b0, b1) = range(s);
+        for b in b0..b1 {
+            offsets[b + 1] += 1;
+        }
+    }
+    for b in 1..offsets.len() {
+        offsets[b] += offsets[b - 1];
+    }
+    let mut fill = offsets.clone();
+    let mut indices = vec![0u32; offsets[bands]];
+    for (k, s) in streaks.iter().enumerate() {
+        let (b0, b1) = range(s);
+        for b in b0..b1 {
+            indices[fill[b]] = k as u32;
+            fill[b] += 1;
+        }
+    }
+    (offsets, indices)
+}
+
+/// Per-thread band scratch, reused across bands and frames.
+#[derive(Default)]
+struct Scratch {
+    /// The rain's (P, Q) per pixel.
+    pq: Vec<[f32; 4]>,
+    /// The coverage product ∏(1 − a), when the alpha layer is wanted.
+    cover: Vec<f32>,
+    /// A row's transmittance.
+    t_row: Vec<f32>,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// Renders haze and rain over an 8-bit photo into `out` (same size), on the CPU. Returns the
+/// rain's counts when `rain` is given.
+pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>, out: Photo8Out<'_>) -> Result<Option<Photo8Stats>> {
+    check_frame_size(cam)?;
+    let (w, n) = (cam.width as usize, cam.pixels());
+    if photo.srgb.len() != 3 * n {
+        return Err(length_error("image", photo.srgb.len(), 3 * n));
+    }
+    if photo.depth_m.len() != n {
+        return Err(length_error("depth_m", photo.depth_m.len(), n));
+    }
+    if out.srgb.len() != 3 * n {
+        return Err(length_error("out", out.srgb.len(), 3 * n));
+    }
+    if let Some(a) = &out.rain_alpha {
+        if a.len() != n {
+            return Err(length_error("rain_alpha", a.len(), n));
+        }
+    }
+    check_depth_par(photo.depth_m)?;
+
+    let (streaks, stats) = match rain {
+        Some(rf) => {
+            let (s, st, drops) = rf.streaks(cam);
+            (s, Some(Photo8Stats { rain: st, drops }))
+        }
+        None => (Vec::new(), None),
+    };
+    let r = rain.map_or(0.0, |rf| rf.shading.reflectance);
+    let (offsets, indices) = bin_by_band(&streaks, cam.height, BAND_ROWS);
+    let u2 = cam.column_slopes_sq();
+    let enc = Srgb8Encoder::new();
+    let band = BAND_ROWS * w;
+    let mut alpha_bands: Vec<Option<&mut [f32]>> = match out.rain_alpha {
+        Some(a) => a.chunks_mut(band).map(Some).collect(),
+        None => (0..offsets.len() - 1).map(|_| None).collect(),
+    };
+    let air = haze.map_or([0.0; 3], |h| h.airlight);
+    out.srgb.par_chunks_mut(3 * band).zip(alpha_bands.par_iter_mut()).enumerate().for_each(|(bi, (out_band, alpha))| {
+        let y0 = bi * BAND_ROWS;
+        let rows = out_band.len() / (3 * w);
+        let px = rows * w;
+        let depth = &photo.depth_m[y0 * w..y0 * w + px];
+        let src = &photo.srgb[3 * y0 * w..3 * (y0 * w + px)];
+        let mine: Vec<&ScreenStreak> = indices[offsets[bi]..offsets[bi + 1]].iter().map(|&k| &streaks[k as usize]).collect();
+        SCRATCH.with(|cell| {
+            let mut guard = cell.borrow_mut();
+            let Scratch { pq, cover, t_row } = &mut *guard;
+            let rained = !mine.is_empty();
+            if rained {
+                pq.clear();
+                pq.resize(px, [1.0, 0.0, 0.0, 0.0]);
+                cover.clear();
+                cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
+                raster_band(&mine, y0, rows, w, depth, r, pq, cover);
+            }
+            t_row.clear();
+            t_row.resize(w, 1.0);
+            for row in 0..rows {
+                let i0 = row * w;
+                if let Some(h) = haze {
+                    transmittance_row(h, &u2, cam.row_slope_sq((y0 + row) as u32), &depth[i0..i0 + w], t_row);
+                }
+                let pq_row = if rained { Some(&pq[i0..i0 + w]) } else { None };
+                shade_row(photo.decode, enc, air, t_row, pq_row, &src[3 * i0..3 * (i0 + w)], &mut out_band[3 * i0..3 * (i0 + w)]);
+            }
+            if let Some(a) = alpha.as_deref_mut() {
+                if rained {
+                    for (o, c) in a.iter_mut().zip(cover.iter()) {
+                        *o = 1.0 - c;
+                    }
+                } else {
+                    a.fill(0.0);
+                }
+            }
+        });
+    });
+    Ok(stats)
+}
+
+/// Rasterises a band's streaks (far to near) into the affine map (P, Q) per pixel, and the
+/// coverage product into `cover` when it is not empty.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn raster_band(streaks: &[&ScreenStreak], y0: usize, rows: usize, w: usize, depth: &[f32], r: f32, pq: &mut [[f32; 4]], cover: &mut [f32]) {
+    let want_alpha = !cover.is_empty();
+    for s in streaks {
+        let l = s.light().to_array();
+        for_each_fragment(s, y0, rows, w, |i, a, inv_z| {
+            // Hidden where z ≥ depth (1 ≥ depth/z, without the division); a = 0 leaves the
+            // pixel as it is, so there is no branch on it.
+            let a = if 1.0 >= depth[i] * inv_z { 0.0 } else { a };
+            let ar = a * r;
+            let keep = 1.0 - ar;
+            let m = &mut pq[i];
+            m[0] *= keep;
+            m[1] = m[1] * keep + ar * l[0];
+            m[2] = m[2] * keep + ar * l[1];
+            m[3] = m[3] * keep + ar * l[2];
+            if want_alpha {
+                cover[i] *= 1.0 - a;
+            }
+        });
+    }
+}
+
+/// A row's haze transmittance (branch-free: the loop vectorises).
+#[inline(never)]
+fn transmittance_row(h: &Haze, u2: &[f32], v2: f32, depth: &[f32], t: &mut [f32]) {
+    for ((t, &d), &u) in t.iter_mut().zip(depth).zip(u2) {
+        *t = h.transmittance(d * (u + v2 + 1.0).sqrt());
+    }
+}
+
+/// A row's bytes: decoded, hazed (eq. 2; t = 1 without haze), mapped by the rain's P·C + Q,
+/// encoded.
+#[inline(never)]
+fn shade_row(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<&[[f32; 4]]>, src: &[u8], out: &mut [u8]) {
+    let clear = [1.0, 0.0, 0.0, 0.0];
+    for (x, (o, s)) in out.chunks_exact_mut(3).zip(src.chunks_exact(3)).enumerate() {
+        let (t, m) = (t[x], pq.map_or(clear, |p| p[x]));
+        for ch in 0..3 {
+            let v = decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t);
+            o[ch] = enc.encode(v * m[0] + m[ch + 1]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::color::{encode_srgb8, encode_srgb8_formula};
+    use crate::frame::{render, SceneRef};
+    use crate::rain::drops::RainRegion;
+    use crate::rain::splat::RainShading;
+    use crate::scene::boxes::SceneLight;
+    use crate::sky::ambient::AmbientMap;
+    use crate::sky::{cie::SkyKind, Sky};
+    use glam::{Mat3, Vec3};
+
+    fn decode_table() -> [f32; 256] {
+        std::array::from_fn(|k| {
+            let v = k as f32 / 255.0;
+            if v <= 0.040_45 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+        })
+    }
+
+    /// A 96x61 photo (61 rows: the last band is short) with a near wall on the left, a far
+    /// street and sky, and bytes that sweep 0..255.
+    fn photo(w: usize, h: usize) -> (Vec<u8>, Vec<f32>) {
+        let srgb = (0..w * h * 3).map(|i| ((i * 37 + i / 7) % 256) as u8).collect();
+        let depth = (0..w * h)
+            .map(|i| match (i % w, i / w) {
+                (x, _) if x < w / 4 => 0.6,
+                (_, y) if y < h / 3 => f32::INFINITY,
+                (x, y) => 2.0 + 0.3 * x as f32 + 0.5 * y as f32,
+            })
+            .collect();
+        (srgb, depth)
+    }
+
+    #[test]
+    fn the_fused_8_bit_path_is_the_float_frame_encoded() {
+        let (w, h) = (96usize, 61usize);
+        let cam = Camera::new(w as u32, h as u32, [60.0, 60.0, 48.0, 30.5], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY).unwrap();
+        let (srgb, depth) = photo(w, h);
+        let dec = decode_table();
+        let linear: Vec<f32> = srgb.iter().map(|&b| dec[usize::from(b)]).collect();
+        let haze = Haze::new(0.03, [0.4, 0.42, 0.45]).unwrap();
+        let region = RainRegion::new(60.0, &[1.0, 1.5, 2.0, 3.0], 4.0, [1.5, 0.0, 0.0], 0.3, 5).unwrap();
+        let shading = RainShading::open_sky();
+        let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::ZERO, ground: false, shelter: &[], shading: &shading };
+        let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+        let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
+        let light = SceneLight { sky: &sky, ambient: &amb };
+        let reference = render(SceneRef::Photo { rgb: &linear, depth_m: &depth }, &cam, &light, Some(&haze), Some(&rf)).unwrap();
+        let mut expected = vec![0u8; srgb.len()];
+        encode_srgb8(&reference.rgb, &mut expected);
+        let mut out = vec![0u8; srgb.len()];
+        let mut alpha = vec![0.0f32; w * h];
+        let photo = Photo8 { srgb: &srgb, depth_m: &depth, decode: &dec };
+        let stats = render_photo8(&cam, &photo, Some(&haze), Some(&rf), Photo8Out { srgb: &mut out, rain_alpha: Some(&mut alpha) }).unwrap().unwrap();
+        let rain = reference.rain.unwrap();
+        assert_eq!((stats.drops, stats.rain), (rain.drops, rain.stats));
+        assert!(stats.rain.streaks > 50, "{stats:?}");
+        // P·C + Q reassociates the float frame's sums: bytes within 1 code, nearly all equal.
+        let diff: Vec<i32> = out.iter().zip(&expected).map(|(a, b)| (i32::from(*a) - i32::from(*b)).abs()).collect();
+        assert!(diff.iter().all(|&d| d <= 1));
+        assert!(diff.iter().filter(|&&d| d > 0).count() * 1000 <= diff.len(), "{} differ", diff.iter().filter(|&&d| d > 0).count());
+        let alpha_err = alpha.iter().zip(&rain.alpha).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+        assert!(alpha_err < 1e-6 && rain.alpha.iter().any(|&a| a > 0.01), "{alpha_err}");
+    }
+
+    #[test]
+    fn without_haze_and_rain_the_bytes_come_back_unchanged() {
+        // encode(decode(b)) = b for every byte, and no scratch state leaks from a hazy frame.
+        let (w, h) = (96usize, 61usize);
+        let cam = Camera::new(w as u32, h as u32, [60.0, 60.0, 48.0, 30.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let (srgb, depth) = photo(w, h);
+        let dec = decode_table();
+        assert!((0..=255u8).all(|b| encode_srgb8_formula(dec[usize::from(b)]) == b));
+        let photo = Photo8 { srgb: &srgb, depth_m: &depth, decode: &dec };
+        let mut out = vec![0u8; srgb.len()];
+        let haze = Haze::new(0.5, [0.4; 3]).unwrap();
+        render_photo8(&cam, &photo, Some(&haze), None, Photo8Out { srgb: &mut out, rain_alpha: None }).unwrap();
+        assert_ne!(out, srgb);
+        let mut alpha = vec![1.0f32; w * h];
+        let stats = render_photo8(&cam, &photo, None, None, Photo8Out { srgb: &mut out, rain_alpha: Some(&mut alpha) }).unwrap();
+        assert_eq!(stats, None);
+        assert_eq!(out, srgb);
+        assert!(alpha.iter().all(|&a| a == 0.0));
+    }
+
+    #[test]
+    fn bad_inputs_name_the_parameter() {
+        let cam = Camera::new(4, 2, [4.0, 4.0, 2.0, 1.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let dec = decode_table();
+        let srgb = vec![0u8; 24];
+        let mut depth = vec![1.0f32; 8];
+        let mut out = vec![0u8; 24];
+        let short = Photo8 { srgb: &srgb[..23], depth_m: &depth, decode: &dec };
+        let e = render_photo8(&cam, &short, None, None, Photo8Out { srgb: &mut out, rain_alpha: None }).unwrap_err();
+        assert!(e.to_string().contains("image"), "{e}");
+        depth[5] = f32::NAN;
+        let bad = Photo8 { srgb: &srgb, depth_m: &depth, decode: &dec };
+        let e = render_photo8(&cam, &bad, None, None, Photo8Out { srgb: &mut out, rain_alpha: None }).unwrap_err();
+        assert!(e.to_string().contains("depth_m") && e.to_string().contains('5'), "{e}");
+        let ok = Photo8 { srgb: &srgb, depth_m: &[1.0; 8], decode: &dec };
+        let e = render_photo8(&cam, &ok, None, None, Photo8Out { srgb: &mut out[..3], rain_alpha: None }).unwrap_err();
+        assert!(e.to_string().contains("out"), "{e}");
+    }
+}
