@@ -329,15 +329,14 @@ pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut
         let (slope, half) = (dir.x / dir.y, reach / dir.y.abs());
         // The window: every pixel whose centre may lie within `half` of the axis' crossing.
         let span = (ceil_nonneg(2.0 * half) + 1).min(w);
-        for y in ya..yb {
-            let qy = y as f32 + 0.5 - s.a.y;
-            let xc = s.a.x + qy * slope;
-            let x0 = floor_nonneg((xc - half).max(0.0)).min(w - span);
-            let (row, along_row, across_row) = ((y - y0) * w, qy * dir_y, -qy * dir_x);
-            for x in x0..x0 + span {
-                let (a, inv_z) = pixel(s, x as f32 + 0.5 - a0.x, along_row, across_row, inv_len, dw, dinv);
-                f(row + x, a, inv_z);
-            }
+        let rows_of = SteepRows { s, y0, w, slope, half, inv_len, dw, dinv };
+        // Monomorphised on the common cases: a thin streak (w < 1 px all along: the coverage
+        // across is w·(1 − d)) in a window of 3 or 4 pixels, whose loops then unroll.
+        match (s.wa.max(s.wb) < 1.0, span) {
+            (true, 3) => rows_of.run::<true, 3>(ya..yb, span, &mut f),
+            (true, 4) => rows_of.run::<true, 4>(ya..yb, span, &mut f),
+            (true, _) => rows_of.run::<true, 0>(ya..yb, span, &mut f),
+            (false, _) => rows_of.run::<false, 0>(ya..yb, span, &mut f),
         }
     } else {
         let (x0, x1) = (floor_nonneg(s.min.x.max(0.0)), ceil_nonneg(s.max.x.min(w as f32)));
@@ -347,6 +346,53 @@ pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut
             for x in x0..x1 {
                 let (a, inv_z) = pixel(s, x as f32 + 0.5 - a0.x, along_row, across_row, inv_len, dw, dinv);
                 f(row + x, a, inv_z);
+            }
+        }
+    }
+}
+
+/// A steep streak's rows (see [`for_each_fragment`]).
+struct SteepRows<'a> {
+    s: &'a ScreenStreak,
+    y0: usize,
+    w: usize,
+    slope: f32,
+    half: f32,
+    inv_len: f32,
+    dw: f32,
+    dinv: f32,
+}
+
+impl SteepRows<'_> {
+    /// Visits the window of `span` pixels (`N` when it is not 0) on each row of `ys`;
+    /// `THIN`: the streak is under a pixel wide all along.
+    #[inline(always)]
+    fn run<const THIN: bool, const N: usize>(&self, ys: std::ops::Range<usize>, span: usize, f: &mut impl FnMut(usize, f32, f32)) {
+        let s = self.s;
+        let span = if N > 0 { N } else { span };
+        let (dx, dy) = (s.dir.x, s.dir.y);
+        for y in ys {
+            let qy = y as f32 + 0.5 - s.a.y;
+            let xc = s.a.x + qy * self.slope;
+            let x0 = floor_nonneg((xc - self.half).max(0.0)).min(self.w - span);
+            let qx0 = x0 as f32 + 0.5 - s.a.x;
+            let (along0, across0) = (qy * dy + qx0 * dx, qx0 * dy - qy * dx);
+            let row = (y - self.y0) * self.w + x0;
+            for j in 0..span {
+                let jf = j as f32;
+                let along = along0 + jf * dx;
+                let across = (across0 + jf * dy).abs();
+                let k = (along * self.inv_len).clamp(0.0, 1.0);
+                let width = s.wa + self.dw * k;
+                let cov_across = if THIN {
+                    width * (1.0 - across).max(0.0)
+                } else if width >= 1.0 {
+                    (0.5 * width + 0.5 - across).clamp(0.0, 1.0)
+                } else {
+                    width * (1.0 - across).clamp(0.0, 1.0)
+                };
+                let cov_along = (along.min(s.len - along) + 0.5).clamp(0.0, 1.0);
+                f(row + j, s.alpha * cov_across * cov_along, s.inv_za + self.dinv * k);
             }
         }
     }

@@ -1,0 +1,113 @@
+"""Renderer.render_srgb8: the fused 8-bit photo path against the float frame, against an
+independent numpy + colour-science haze, and its fallbacks and errors."""
+
+from __future__ import annotations
+
+import colour
+import numpy as np
+import pytest
+
+from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
+
+W, H = 160, 101  # 101 rows: the last band of rows is short
+
+
+@pytest.fixture(scope="module")
+def cpu() -> Renderer:
+    return Renderer(W, H, backend="cpu")
+
+
+def photo8(seed: int = 0, near_wall: bool = True) -> PhotoScene:
+    rng = np.random.default_rng(seed)
+    img = rng.integers(0, 256, (H, W, 3), dtype=np.uint8)
+    y, x = np.mgrid[0:H, 0:W]
+    depth = (1.0 + 0.05 * x + 0.2 * y).astype(np.float32)
+    depth[:20] = np.inf  # sky
+    if near_wall:
+        depth[:, :30] = 0.7
+    cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0)
+    return PhotoScene(img, depth, camera=cam)
+
+
+def test_the_fused_path_is_the_float_frame_encoded(cpu):
+    scene = photo8(1)
+    weather = Weather(rain_rate_mm_h=40.0, visibility_m=300.0, wind_m_s=(2.0, 0.0, 0.0))
+    frame = cpu.render(scene, weather, seed=3)
+    want = io.to_srgb8(frame.rgb)
+    alpha = np.full((H, W), -1.0, np.float32)
+    got = cpu.render_srgb8(scene, weather, seed=3, rain_alpha_out=alpha)
+    assert got.dtype == np.uint8 and got.shape == (H, W, 3)
+    diff = np.abs(got.astype(int) - want)
+    # The rain is applied as P*C + Q (the same sums, reassociated): within one code.
+    assert diff.max() <= 1
+    assert np.mean(diff > 0) < 1e-3
+    np.testing.assert_allclose(alpha, frame.layers["rain_alpha"], atol=1e-6)
+    assert frame.layers["rain_alpha"].max() > 0.01
+    # and the rain did change the picture: many bytes differ from the haze-only frame
+    haze_only = cpu.render_srgb8(scene, Weather(visibility_m=300.0), seed=3)
+    assert np.mean(haze_only != got) > 0.05
+
+
+def test_haze_matches_numpy_and_colour_science(cpu):
+    # Seed 002 eq. 2, written independently, decoded and encoded by colour-science.
+    scene = photo8(2, near_wall=False)
+    weather = Weather(visibility_m=80.0)
+    sigma = weather.extinction_per_m
+    got = cpu.render_srgb8(scene, weather)
+    fx, fy, cx, cy = scene.camera.intrinsics()
+    y, x = np.mgrid[0:H, 0:W] + 0.5
+    dist = scene.depth_m.astype(np.float64) * np.sqrt(((x - cx) / fx) ** 2 + ((y - cy) / fy) ** 2 + 1)
+    with np.errstate(invalid="ignore"):
+        t = np.where(np.isinf(dist), 0.0, np.exp(-sigma * dist))[..., None]
+    linear = colour.cctf_decoding(scene.srgb8 / 255.0, function="sRGB") * t + 3 / 7 * (1 - t)
+    want = np.round(255 * colour.cctf_encoding(np.clip(linear, 0, 1), function="sRGB")).astype(int)
+    diff = np.abs(got.astype(int) - want)
+    assert diff.max() <= 1 and np.mean(diff > 0) < 1e-3
+
+
+def test_clear_weather_gives_the_bytes_back(cpu):
+    scene = photo8(3)
+    out = np.zeros((H, W, 3), np.uint8)
+    alpha = np.ones((H, W), np.float32)
+    got = cpu.render_srgb8(scene, Weather(), out=out, rain_alpha_out=alpha)
+    assert got is out
+    assert got.tobytes() == scene.srgb8.tobytes()
+    assert not alpha.any()
+
+
+def test_other_scenes_and_float_photos_render_then_encode(cpu):
+    # Box scenes and linear float photos take the float frame, encoded: the same bytes.
+    weather = Weather(rain_rate_mm_h=20.0, visibility_m=500.0)
+    street = scenes.street()
+    want = io.to_srgb8(cpu.render(street, weather, seed=1).rgb)
+    assert cpu.render_srgb8(street, weather, seed=1).tobytes() == want.tobytes()
+    lin = PhotoScene(photo8(4).image, photo8(4).depth_m, camera=photo8(4).camera)
+    alpha = np.empty((H, W), np.float32)
+    got = cpu.render_srgb8(lin, weather, seed=1, rain_alpha_out=alpha)
+    frame = cpu.render(lin, weather, seed=1)
+    assert got.tobytes() == io.to_srgb8(frame.rgb).tobytes()
+    assert alpha.tobytes() == frame.layers["rain_alpha"].tobytes()
+
+
+def test_gpu_backend_gives_the_same_bytes_within_a_code():
+    gpu = Renderer(W, H, backend="gpu")
+    cpu = Renderer(W, H, backend="cpu")
+    scene = photo8(5)
+    weather = Weather(rain_rate_mm_h=30.0, visibility_m=400.0)
+    a = gpu.render_srgb8(scene, weather, seed=2).astype(int)
+    b = cpu.render_srgb8(scene, weather, seed=2).astype(int)
+    assert np.mean(np.abs(a - b) <= 1) > 0.99
+
+
+def test_bad_outputs_are_refused(cpu):
+    scene = photo8(6)
+    with pytest.raises(ValueError, match="out must be"):
+        cpu.render_srgb8(scene, out=np.zeros((H, W, 3), np.float32))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="out must be"):
+        cpu.render_srgb8(scene, out=np.zeros((H, W + 1, 3), np.uint8))
+    with pytest.raises(ValueError, match="rain_alpha_out must be"):
+        cpu.render_srgb8(scene, rain_alpha_out=np.zeros((H, W), np.float64))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="the photo is"):
+        Renderer(W + 2, H, backend="cpu").render_srgb8(scene)
+    with pytest.raises(TypeError, match="weather"):
+        cpu.render_srgb8(scene, "rain")  # type: ignore[arg-type]
