@@ -150,18 +150,29 @@ pub struct RainTargets<'a> {
 /// Projects, lights and culls the drops, sorted far to near (stable: ties keep the drops'
 /// deterministic order). The GPU backend draws the same list.
 pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_s: Vec3, shading: &RainShading) -> (Vec<ScreenStreak>, RainStats) {
+    // Projected and lit in parallel (in the drops' order: `collect` keeps it), None = off screen.
+    let lit: Vec<Option<ScreenStreak>> = drops
+        .par_iter()
+        .with_min_len(1024)
+        .map(|d| {
+            screen_streak(cam, d, exposure_s, camera_velocity_m_s).map(|mut s| {
+                s.light = shading.drop_light(d.position_m);
+                s
+            })
+        })
+        .collect();
     let mut stats = RainStats::default();
-    let mut streaks: Vec<ScreenStreak> = Vec::with_capacity(drops.len() / 4);
-    for d in drops {
-        let Some(mut s) = screen_streak(cam, d, exposure_s, camera_velocity_m_s) else { continue };
-        s.light = shading.drop_light(d.position_m);
+    let mut streaks: Vec<ScreenStreak> = Vec::with_capacity(lit.len() / 2);
+    for s in lit.into_iter().flatten() {
         if shading.cull_threshold.is_some_and(|th| s.light.max_element() < th) {
             stats.culled += 1;
-            continue;
+        } else {
+            streaks.push(s);
         }
-        streaks.push(s);
     }
-    streaks.sort_by(|p, q| (p.inv_za + p.inv_zb).total_cmp(&(q.inv_za + q.inv_zb)));
+    // Far to near; ties keep the drops' order (the sort is stable), so the order is the same
+    // in every process.
+    streaks.par_sort_by(|p, q| (p.inv_za + p.inv_zb).total_cmp(&(q.inv_za + q.inv_zb)));
     stats.streaks = streaks.len();
     (streaks, stats)
 }
@@ -382,20 +393,40 @@ impl SteepRows<'_> {
                 let jf = j as f32;
                 let along = along0 + jf * dx;
                 let across = (across0 + jf * dy).abs();
-                let k = (along * self.inv_len).clamp(0.0, 1.0);
+                let k = clamp01(along * self.inv_len);
                 let width = s.wa + self.dw * k;
                 let cov_across = if THIN {
-                    width * (1.0 - across).max(0.0)
+                    width * pos(1.0 - across)
                 } else if width >= 1.0 {
-                    (0.5 * width + 0.5 - across).clamp(0.0, 1.0)
+                    clamp01(0.5 * width + 0.5 - across)
                 } else {
-                    width * (1.0 - across).clamp(0.0, 1.0)
+                    width * clamp01(1.0 - across)
                 };
-                let cov_along = (along.min(s.len - along) + 0.5).clamp(0.0, 1.0);
+                let cov_along = clamp01(least(along, s.len - along) + 0.5);
                 f(row + j, s.alpha * cov_across * cov_along, s.inv_za + self.dinv * k);
             }
         }
     }
+}
+
+/// max(x, 0) as one compare-select (`f32::max` also handles NaN, which costs instructions;
+/// no NaN reaches here).
+#[inline(always)]
+fn pos(x: f32) -> f32 {
+    if x > 0.0 { x } else { 0.0 }
+}
+
+/// x clamped to [0, 1] (see [`pos`]).
+#[inline(always)]
+fn clamp01(x: f32) -> f32 {
+    let x = pos(x);
+    if x < 1.0 { x } else { 1.0 }
+}
+
+/// min(a, b) as one compare-select.
+#[inline(always)]
+fn least(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
 }
 
 /// Composites prepared streaks (see [`prepare`]) over the frame, rows in parallel bands.
