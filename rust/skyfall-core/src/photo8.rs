@@ -19,8 +19,8 @@ use crate::scene::camera::Camera;
 use rayon::prelude::*;
 use std::cell::RefCell;
 
-/// Rows per band: a band's scratch (16 B per pixel) stays in a core's L2 up to 8k-wide frames.
-const BAND_ROWS: usize = 8;
+/// Rows per band: a band's scratch (16 B per pixel) stays in a core's L2 up to 4k-wide frames.
+const BAND_ROWS: usize = 16;
 
 /// An 8-bit sRGB photo with its depth.
 #[derive(Debug, Clone, Copy)]

@@ -92,6 +92,11 @@ pub struct ScreenStreak {
     /// Unit direction a → b (+y for a dot) and length, px: per streak, not per pixel.
     dir: Vec2,
     len: f32,
+    /// 1/len (0 for a dot), dx/dy and the half-width of a row's window, px, for steep streaks
+    /// (see [`for_each_fragment`]): per streak, not per band of rows.
+    inv_len: f32,
+    slope: f32,
+    half: f32,
 }
 
 fn to_camera(cam: &Camera, p: glam::Vec3) -> glam::Vec3 {
@@ -132,7 +137,12 @@ pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_
         return None;
     }
     let dir = if len > 1e-6 { (b - a) / len } else { Vec2::Y };
-    Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max, light: Vec3::ONE, dir, len })
+    let inv_len = if len > 1e-6 { 1.0 / len } else { 0.0 };
+    // Pixels farther than `reach` from the axis get no coverage; on a steep streak a row's
+    // window is the pixels whose centre lies within `half` of the axis' crossing.
+    let reach = (0.5 * wa.max(wb) + 0.5).max(1.0);
+    let (slope, half) = if dir.y.abs() > 0.5 { (dir.x / dir.y, reach / dir.y.abs()) } else { (0.0, 0.0) };
+    Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max, light: Vec3::ONE, dir, len, inv_len, slope, half })
 }
 
 /// Per-pixel buffers the rain pass writes.
@@ -317,12 +327,9 @@ pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut
     if s.max.y <= y0 as f32 || s.min.y >= (y0 + rows) as f32 || s.max.x <= 0.0 || s.min.x >= w as f32 {
         return;
     }
-    let (dir, len) = (s.dir, s.len);
-    let inv_len = if len > 1e-6 { 1.0 / len } else { 0.0 };
+    let (dir, inv_len) = (s.dir, s.inv_len);
     let (ya, yb) = (floor_nonneg(s.min.y.max(y0 as f32)), ceil_nonneg(s.max.y.min((y0 + rows) as f32)));
-    // Pixels farther than `reach` from the axis get no coverage.
-    let reach = (0.5 * s.wa.max(s.wb) + 0.5).max(1.0);
-    let steep = dir.y.abs() > 0.5;
+    let steep = s.half > 0.0;
     let (dw, dinv) = (s.wb - s.wa, s.inv_zb - s.inv_za);
     let (a0, dir_x, dir_y) = (s.a, dir.x, dir.y);
     // One pixel: q = (qx, qy) from the streak's start; along_row = qy·dir.y, across_row = −qy·dir.x.
@@ -337,8 +344,7 @@ pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut
         (s.alpha * cov_across * cov_along, s.inv_za + dinv * k)
     }
     if steep {
-        let (slope, half) = (dir.x / dir.y, reach / dir.y.abs());
-        // The window: every pixel whose centre may lie within `half` of the axis' crossing.
+        let (slope, half) = (s.slope, s.half);
         let span = (ceil_nonneg(2.0 * half) + 1).min(w);
         let rows_of = SteepRows { s, y0, w, slope, half, inv_len, dw, dinv };
         // Monomorphised on the common cases: a thin streak (w < 1 px all along: the coverage
@@ -382,6 +388,42 @@ impl SteepRows<'_> {
         let s = self.s;
         let span = if N > 0 { N } else { span };
         let (dx, dy) = (s.dir.x, s.dir.y);
+        let mut ys = ys;
+        if THIN && N > 0 {
+            // Four rows at a time, one per lane: the arithmetic is element-wise over arrays
+            // and vectorises; the rest of the rows go one by one below.
+            while ys.len() >= 4 {
+                let y = ys.start;
+                let mut row = [0usize; 4];
+                let (mut along0, mut across0) = ([0.0f32; 4], [0.0f32; 4]);
+                for l in 0..4 {
+                    let qy = (y + l) as f32 + 0.5 - s.a.y;
+                    let xc = s.a.x + qy * self.slope;
+                    let x0 = floor_nonneg((xc - self.half).max(0.0)).min(self.w - N);
+                    let qx0 = x0 as f32 + 0.5 - s.a.x;
+                    along0[l] = qy * dy + qx0 * dx;
+                    across0[l] = qx0 * dy - qy * dx;
+                    row[l] = (y + l - self.y0) * self.w + x0;
+                }
+                for j in 0..N {
+                    let jf = j as f32;
+                    let (mut a, mut inv_z) = ([0.0f32; 4], [0.0f32; 4]);
+                    for l in 0..4 {
+                        let along = along0[l] + jf * dx;
+                        let across = (across0[l] + jf * dy).abs();
+                        let k = clamp01(along * self.inv_len);
+                        let cov_across = (s.wa + self.dw * k) * pos(1.0 - across);
+                        let cov_along = clamp01(least(along, s.len - along) + 0.5);
+                        a[l] = s.alpha * cov_across * cov_along;
+                        inv_z[l] = s.inv_za + self.dinv * k;
+                    }
+                    for l in 0..4 {
+                        f(row[l] + j, a[l], inv_z[l]);
+                    }
+                }
+                ys.start += 4;
+            }
+        }
         for y in ys {
             let qy = y as f32 + 0.5 - s.a.y;
             let xc = s.a.x + qy * self.slope;
