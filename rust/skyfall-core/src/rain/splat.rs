@@ -160,11 +160,11 @@ pub struct RainTargets<'a> {
 /// Projects, lights and culls the drops, sorted far to near (stable: ties keep the drops'
 /// deterministic order). The GPU backend draws the same list.
 pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_s: Vec3, shading: &RainShading) -> (Vec<ScreenStreak>, RainStats) {
-    // Projected and lit in parallel (in the drops' order: `collect` keeps it), None = off screen.
-    let lit: Vec<Option<ScreenStreak>> = drops
+    // Projected and lit in parallel, in the drops' order (rayon's collect keeps it).
+    let mut streaks: Vec<ScreenStreak> = drops
         .par_iter()
         .with_min_len(1024)
-        .map(|d| {
+        .filter_map(|d| {
             screen_streak(cam, d, exposure_s, camera_velocity_m_s).map(|mut s| {
                 s.light = shading.drop_light(d.position_m);
                 s
@@ -172,17 +172,17 @@ pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_
         })
         .collect();
     let mut stats = RainStats::default();
-    let mut streaks: Vec<ScreenStreak> = Vec::with_capacity(lit.len() / 2);
-    for s in lit.into_iter().flatten() {
-        if shading.cull_threshold.is_some_and(|th| s.light.max_element() < th) {
-            stats.culled += 1;
-        } else {
-            streaks.push(s);
-        }
+    if let Some(th) = shading.cull_threshold {
+        let before = streaks.len();
+        streaks.retain(|s| s.light.max_element() >= th);
+        stats.culled = before - streaks.len();
     }
-    // Far to near; ties keep the drops' order (the sort is stable), so the order is the same
-    // in every process.
-    streaks.par_sort_by(|p, q| (p.inv_za + p.inv_zb).total_cmp(&(q.inv_za + q.inv_zb)));
+    // Far to near, ties in the drops' order: (key, index) pairs are a total order, so the
+    // unstable sort of the small pairs gives the stable sort's order, the same in every
+    // process, without moving the streaks around.
+    let mut order: Vec<(f32, u32)> = streaks.iter().enumerate().map(|(i, s)| (s.inv_za + s.inv_zb, i as u32)).collect();
+    order.par_sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
+    let streaks: Vec<ScreenStreak> = order.iter().map(|&(_, i)| streaks[i as usize]).collect();
     stats.streaks = streaks.len();
     (streaks, stats)
 }
