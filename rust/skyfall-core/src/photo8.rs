@@ -100,8 +100,9 @@ fn bin_by_band(streaks: &[ScreenStreak], height: u32, rows: usize) -> (Vec<usize
 /// Per-thread band scratch, reused across bands and frames.
 #[derive(Default)]
 struct Scratch {
-    /// The rain's (P, Q) per pixel.
-    pq: Vec<[f32; 4]>,
+    /// The rain's (P, Q) per pixel: K floats, Q one value when every streak's light is grey
+    /// (K = 2) or three (K = 4).
+    pq: Vec<f32>,
     /// The coverage product ∏(1 − a), when the alpha layer is wanted.
     cover: Vec<f32>,
     /// A row's transmittance.
@@ -150,6 +151,11 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
         None => (0..offsets.len() - 1).map(|_| None).collect(),
     };
     let air = haze.map_or([0.0; 3], |h| h.airlight);
+    // Grey light everywhere (the sky's; coloured lamps aside): Q's three channels are equal.
+    let grey = streaks.iter().all(|s| {
+        let l = s.light();
+        l.x == l.y && l.y == l.z
+    });
     out.srgb.par_chunks_mut(3 * band).zip(alpha_bands.par_iter_mut()).enumerate().for_each(|(bi, (out_band, alpha))| {
         let y0 = bi * BAND_ROWS;
         let rows = out_band.len() / (3 * w);
@@ -161,12 +167,18 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
             let mut guard = cell.borrow_mut();
             let Scratch { pq, cover, t_row } = &mut *guard;
             let rained = !mine.is_empty();
+            let k = if grey { 2 } else { 4 };
             if rained {
                 pq.clear();
-                pq.resize(px, [1.0, 0.0, 0.0, 0.0]);
+                pq.resize(k * px, 0.0);
+                pq.iter_mut().step_by(k).for_each(|p| *p = 1.0);
                 cover.clear();
                 cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
-                raster_band(&mine, y0, rows, w, depth, r, pq, cover);
+                if grey {
+                    raster_band::<2>(&mine, y0, rows, w, depth, r, pq, cover);
+                } else {
+                    raster_band::<4>(&mine, y0, rows, w, depth, r, pq, cover);
+                }
             }
             t_row.clear();
             t_row.resize(w, 1.0);
@@ -175,8 +187,12 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
                 if let Some(h) = haze {
                     transmittance_row(h, &u2, cam.row_slope_sq((y0 + row) as u32), &depth[i0..i0 + w], t_row);
                 }
-                let pq_row = if rained { Some(&pq[i0..i0 + w]) } else { None };
-                shade_row(photo.decode, enc, air, t_row, pq_row, &src[3 * i0..3 * (i0 + w)], &mut out_band[3 * i0..3 * (i0 + w)]);
+                let (src_row, out_row) = (&src[3 * i0..3 * (i0 + w)], &mut out_band[3 * i0..3 * (i0 + w)]);
+                match (rained, grey) {
+                    (false, _) => shade_row::<2>(photo.decode, enc, air, t_row, None, src_row, out_row),
+                    (true, true) => shade_row::<2>(photo.decode, enc, air, t_row, Some(&pq[2 * i0..2 * (i0 + w)]), src_row, out_row),
+                    (true, false) => shade_row::<4>(photo.decode, enc, air, t_row, Some(&pq[4 * i0..4 * (i0 + w)]), src_row, out_row),
+                }
             }
             if let Some(a) = alpha.as_deref_mut() {
                 if rained {
@@ -192,11 +208,12 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
     Ok(stats)
 }
 
-/// Rasterises a band's streaks (far to near) into the affine map (P, Q) per pixel, and the
-/// coverage product into `cover` when it is not empty.
+/// Rasterises a band's streaks (far to near) into the affine map (P, Q) per pixel, `K` floats
+/// each (P, then Q grey for K = 2 or per channel for K = 4), and the coverage product into
+/// `cover` when it is not empty.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
-fn raster_band(streaks: &[&ScreenStreak], y0: usize, rows: usize, w: usize, depth: &[f32], r: f32, pq: &mut [[f32; 4]], cover: &mut [f32]) {
+fn raster_band<const K: usize>(streaks: &[&ScreenStreak], y0: usize, rows: usize, w: usize, depth: &[f32], r: f32, pq: &mut [f32], cover: &mut [f32]) {
     let want_alpha = !cover.is_empty();
     for s in streaks {
         let l = s.light().to_array();
@@ -206,11 +223,11 @@ fn raster_band(streaks: &[&ScreenStreak], y0: usize, rows: usize, w: usize, dept
             let a = if 1.0 >= depth[i] * inv_z { 0.0 } else { a };
             let ar = a * r;
             let keep = 1.0 - ar;
-            let m = &mut pq[i];
+            let m = &mut pq[K * i..K * i + K];
             m[0] *= keep;
-            m[1] = m[1] * keep + ar * l[0];
-            m[2] = m[2] * keep + ar * l[1];
-            m[3] = m[3] * keep + ar * l[2];
+            for c in 1..K {
+                m[c] = m[c] * keep + ar * l[c - 1];
+            }
             if want_alpha {
                 cover[i] *= 1.0 - a;
             }
@@ -226,16 +243,24 @@ fn transmittance_row(h: &Haze, u2: &[f32], v2: f32, depth: &[f32], t: &mut [f32]
     }
 }
 
-/// A row's bytes: decoded, hazed (eq. 2; t = 1 without haze), mapped by the rain's P·C + Q,
-/// encoded.
+/// A row's bytes: decoded, hazed (eq. 2; t = 1 without haze), mapped by the rain's P·C + Q
+/// (`K` floats per pixel, see [`raster_band`]), encoded.
 #[inline(never)]
-fn shade_row(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<&[[f32; 4]]>, src: &[u8], out: &mut [u8]) {
-    let clear = [1.0, 0.0, 0.0, 0.0];
+fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<&[f32]>, src: &[u8], out: &mut [u8]) {
     for (x, (o, s)) in out.chunks_exact_mut(3).zip(src.chunks_exact(3)).enumerate() {
-        let (t, m) = (t[x], pq.map_or(clear, |p| p[x]));
+        let t = t[x];
+        let mut v = [0.0f32; 3];
         for ch in 0..3 {
-            let v = decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t);
-            o[ch] = enc.encode(v * m[0] + m[ch + 1]);
+            v[ch] = decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t);
+        }
+        if let Some(p) = pq {
+            let m = &p[K * x..K * x + K];
+            for ch in 0..3 {
+                v[ch] = v[ch] * m[0] + m[1 + ch.min(K - 2)];
+            }
+        }
+        for ch in 0..3 {
+            o[ch] = enc.encode(v[ch]);
         }
     }
 }
@@ -248,6 +273,7 @@ mod tests {
     use crate::rain::drops::RainRegion;
     use crate::rain::splat::RainShading;
     use crate::scene::boxes::SceneLight;
+    use crate::scene::lights::Light;
     use crate::sky::ambient::AmbientMap;
     use crate::sky::{cie::SkyKind, Sky};
     use glam::{Mat3, Vec3};
@@ -273,8 +299,9 @@ mod tests {
         (srgb, depth)
     }
 
-    #[test]
-    fn the_fused_8_bit_path_is_the_float_frame_encoded() {
+    /// The fused frame against the float frame encoded: bytes within 1 code and nearly all
+    /// equal, the same counts and the same coverage layer.
+    fn check_against_the_float_frame(shading: &RainShading) {
         let (w, h) = (96usize, 61usize);
         let cam = Camera::new(w as u32, h as u32, [60.0, 60.0, 48.0, 30.5], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY).unwrap();
         let (srgb, depth) = photo(w, h);
@@ -282,8 +309,7 @@ mod tests {
         let linear: Vec<f32> = srgb.iter().map(|&b| dec[usize::from(b)]).collect();
         let haze = Haze::new(0.03, [0.4, 0.42, 0.45]).unwrap();
         let region = RainRegion::new(60.0, &[1.0, 1.5, 2.0, 3.0], 4.0, [1.5, 0.0, 0.0], 0.3, 5).unwrap();
-        let shading = RainShading::open_sky();
-        let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::ZERO, ground: false, shelter: &[], shading: &shading };
+        let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::ZERO, ground: false, shelter: &[], shading };
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
         let light = SceneLight { sky: &sky, ambient: &amb };
@@ -303,6 +329,16 @@ mod tests {
         assert!(diff.iter().filter(|&&d| d > 0).count() * 1000 <= diff.len(), "{} differ", diff.iter().filter(|&&d| d > 0).count());
         let alpha_err = alpha.iter().zip(&rain.alpha).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
         assert!(alpha_err < 1e-6 && rain.alpha.iter().any(|&a| a > 0.01), "{alpha_err}");
+    }
+
+    #[test]
+    fn the_fused_8_bit_path_is_the_float_frame_encoded() {
+        // Grey light (Q one value per pixel) and a warm lamp by the camera (Q per channel).
+        check_against_the_float_frame(&RainShading::open_sky());
+        let lamp = Light { position_m: Vec3::new(0.5, 1.8, -1.5), intensity_cd: 3e4, color: Vec3::new(1.0, 0.7, 0.4), spot: None };
+        let lit = RainShading { lights: vec![lamp], ..RainShading::open_sky() };
+        assert!(lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).x > 2.0 * lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).z);
+        check_against_the_float_frame(&lit);
     }
 
     #[test]
