@@ -420,8 +420,13 @@ impl SteepRows<'_> {
                         a[l] = s.alpha * cov_across * cov_along;
                         inv_z[l] = s.inv_za + self.dinv * k;
                     }
+                    // The window's last pixel is often uncovered (an open interval of 2·half
+                    // just over 2 px holds a third centre only now and then): skip the call,
+                    // a branch that near-vertical streaks predict well.
                     for l in 0..4 {
-                        f(row[l] + j, a[l], inv_z[l]);
+                        if j + 1 < N || a[l] > 0.0 {
+                            f(row[l] + j, a[l], inv_z[l]);
+                        }
                     }
                 }
                 ys.start += 4;
