@@ -6,8 +6,8 @@
 //! so the whole ordered stack is C ↦ P·C + Q with P = ∏(1 − a r) and Q accumulated as
 //! Q ← (1 − a r) Q + a r L. P and Q depend only on the streaks and the depth test, not on the
 //! background, so a band's streaks are rasterised into P and Q first (a band-sized scratch that
-//! stays in cache, no frame-sized float buffers), then each pixel is decoded, hazed, mapped
-//! and encoded once. The result equals the float frame encoded to 8 bits up to the rounding of
+//! stays in cache, no frame-sized float buffers; Q is one value when every light is grey),
+//! then each pixel is decoded, hazed, mapped and encoded once. The result equals the float frame encoded to 8 bits up to the rounding of
 //! the reassociated sums (tests: every byte within 1 code, nearly all identical).
 
 use crate::color::Srgb8Encoder;
@@ -19,7 +19,8 @@ use crate::scene::camera::Camera;
 use rayon::prelude::*;
 use std::cell::RefCell;
 
-/// Rows per band: a band's scratch (16 B per pixel) stays in a core's L2 up to 4k-wide frames.
+/// Rows per band: a band's scratch (8 B per pixel, 16 with coloured lights) stays in a core's
+/// L2 up to 4k-wide frames.
 const BAND_ROWS: usize = 16;
 
 /// An 8-bit sRGB photo with its depth.
@@ -110,6 +111,8 @@ struct Scratch {
 }
 
 thread_local! {
+    /// Borrowed once per band; nothing inside the borrow calls into rayon, so a thread never
+    /// re-enters it through work stealing.
     static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
 
