@@ -37,6 +37,8 @@ def test_the_fused_path_is_the_float_frame_encoded(cpu):
     alpha = np.full((H, W), -1.0, np.float32)
     got = cpu.render_srgb8(scene, weather, seed=3, rain_alpha_out=alpha)
     assert got.dtype == np.uint8 and got.shape == (H, W, 3)
+    # the same bits again (bands run in parallel; the streak order is a total order)
+    assert cpu.render_srgb8(scene, weather, seed=3).tobytes() == got.tobytes()
     diff = np.abs(got.astype(int) - want)
     # The rain is applied as P*C + Q (the same sums, reassociated): within one code.
     assert diff.max() <= 1
