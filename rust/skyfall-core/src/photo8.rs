@@ -250,20 +250,25 @@ fn transmittance_row(h: &Haze, u2: &[f32], v2: f32, depth: &[f32], t: &mut [f32]
 /// (`K` floats per pixel, see [`raster_band`]), encoded.
 #[inline(never)]
 fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<&[f32]>, src: &[u8], out: &mut [u8]) {
-    for (x, (o, s)) in out.chunks_exact_mut(3).zip(src.chunks_exact(3)).enumerate() {
-        let t = t[x];
-        let mut v = [0.0f32; 3];
-        for ch in 0..3 {
-            v[ch] = decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t);
-        }
-        if let Some(p) = pq {
-            let m = &p[K * x..K * x + K];
-            for ch in 0..3 {
-                v[ch] = v[ch] * m[0] + m[1 + ch.min(K - 2)];
+    // Zipped iterators, one loop per case: no bounds check and no branch per pixel.
+    let pixels = out.chunks_exact_mut(3).zip(src.chunks_exact(3)).zip(t);
+    let hazed = |s: &[u8], t: f32| -> [f32; 3] { std::array::from_fn(|ch| decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t)) };
+    match pq {
+        None => {
+            for ((o, s), &t) in pixels {
+                let v = hazed(s, t);
+                for ch in 0..3 {
+                    o[ch] = enc.encode(v[ch]);
+                }
             }
         }
-        for ch in 0..3 {
-            o[ch] = enc.encode(v[ch]);
+        Some(pq) => {
+            for (((o, s), &t), m) in pixels.zip(pq.chunks_exact(K)) {
+                let v = hazed(s, t);
+                for ch in 0..3 {
+                    o[ch] = enc.encode(v[ch] * m[0] + m[1 + ch.min(K - 2)]);
+                }
+            }
         }
     }
 }
