@@ -55,20 +55,6 @@ fn length_error(name: &'static str, len: usize, expected: usize) -> Error {
     Error::Length { param: Param { name, index: None }, len, expected }
 }
 
-/// Checks depth values in parallel: none NaN or negative (the first bad one is named).
-fn check_depth_par(depth_m: &[f32]) -> Result<()> {
-    let bad = depth_m.par_chunks(1 << 16).enumerate().find_first(|(_, c)| c.iter().any(|&d| d.is_nan() || d < 0.0));
-    match bad {
-        None => Ok(()),
-        Some((k, _)) => crate::haze::check_depth(&depth_m[k << 16..]).map_err(|e| match e {
-            Error::OutOfRange { param, value, range } => {
-                Error::OutOfRange { param: Param { index: param.index.map(|i| i + (k << 16)), ..param }, value, range }
-            }
-            other => other,
-        }),
-    }
-}
-
 /// Streak indices per band of `rows` rows, in list order: (offsets, indices).
 fn bin_by_band(streaks: &[ScreenStreak], height: u32, rows: usize) -> (Vec<usize>, Vec<u32>) {
     let bands = (height as usize).div_ceil(rows);
@@ -135,7 +121,7 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
             return Err(length_error("rain_alpha", a.len(), n));
         }
     }
-    check_depth_par(photo.depth_m)?;
+    crate::haze::check_depth(photo.depth_m)?;
 
     let (streaks, stats) = match rain {
         Some(rf) => {

@@ -11,6 +11,7 @@
 //! (`crate::frame`) calls it row by row.
 
 use crate::error::{Error, Param, Range, Result};
+use rayon::prelude::*;
 
 /// Airlight at saturation, relative to E/π: the overcast sky's horizon luminance, 3/7.
 pub const AIRLIGHT_RELATIVE: f32 = 3.0 / 7.0;
@@ -73,18 +74,15 @@ pub fn exp_neg(x: f32) -> f32 {
     if under { 0.0 } else { p * scale }
 }
 
-/// Checks that a depth map holds no NaN and no negative value.
+/// Checks that a depth map holds no NaN and no negative value (in parallel; the first bad
+/// value is named).
 pub fn check_depth(depth_m: &[f32]) -> Result<()> {
-    for (i, &d) in depth_m.iter().enumerate() {
-        if d.is_nan() || d < 0.0 {
-            return Err(Error::OutOfRange {
-                param: Param { name: "depth_m", index: Some(i) },
-                value: f64::from(d),
-                range: "[0, inf] m (inf for sky)".into(),
-            });
-        }
-    }
-    Ok(())
+    const CHUNK: usize = 1 << 16;
+    let bad = |d: f32| d.is_nan() || d < 0.0;
+    let Some(k) = depth_m.par_chunks(CHUNK).position_first(|c| c.iter().any(|&d| bad(d))) else { return Ok(()) };
+    let i = k * CHUNK + depth_m[k * CHUNK..].iter().position(|&d| bad(d)).unwrap_or(0);
+    let d = depth_m[i];
+    Err(Error::OutOfRange { param: Param { name: "depth_m", index: Some(i) }, value: f64::from(d), range: "[0, inf] m (inf for sky)".into() })
 }
 
 /// Applies haze to one row: `rgb_row` (W·3, in place), `t_row` (W) written, from
@@ -116,6 +114,12 @@ mod tests {
         assert_eq!(clear.transmittance(f32::INFINITY), 1.0);
         assert!(Haze::new(f32::NAN, [0.0; 3]).is_err());
         assert!(check_depth(&[1.0, f32::INFINITY]).is_ok() && check_depth(&[f32::NAN]).is_err() && check_depth(&[-1.0]).is_err());
+        // the first bad value is named, past the first parallel chunk too
+        let mut far = vec![1.0f32; 300_000];
+        far[250_000] = -2.0;
+        far[200_001] = f32::NAN;
+        let e = check_depth(&far).unwrap_err().to_string();
+        assert!(e.contains("200001") && e.contains("depth_m"), "{e}");
     }
 
     #[test]
