@@ -14,7 +14,7 @@ use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
 use crate::frame::check_frame_size;
 use crate::haze::Haze;
-use crate::rain::splat::{for_each_fragment, RainFrame, RainStats, ScreenStreak};
+use crate::rain::splat::{bin_by_tiles, for_each_fragment, RainFrame, RainStats, ScreenStreak};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
 use std::cell::RefCell;
@@ -53,35 +53,6 @@ pub struct Photo8Stats {
 
 fn length_error(name: &'static str, len: usize, expected: usize) -> Error {
     Error::Length { param: Param { name, index: None }, len, expected }
-}
-
-/// Streak indices per band of `rows` rows, in list order: (offsets, indices).
-fn bin_by_band(streaks: &[ScreenStreak], height: u32, rows: usize) -> (Vec<usize>, Vec<u32>) {
-    let bands = (height as usize).div_ceil(rows);
-    let range = |s: &ScreenStreak| {
-        let (_, _, y0, y1) = s.pixel_bounds(1, height);
-        (y0 as usize / rows, (y1 as usize).div_ceil(rows))
-    };
-    let mut offsets = vec![0usize; bands + 1];
-    for s in streaks {
-        let (b0, b1) = range(s);
-        for b in b0..b1 {
-            offsets[b + 1] += 1;
-        }
-    }
-    for b in 1..offsets.len() {
-        offsets[b] += offsets[b - 1];
-    }
-    let mut fill = offsets.clone();
-    let mut indices = vec![0u32; offsets[bands]];
-    for (k, s) in streaks.iter().enumerate() {
-        let (b0, b1) = range(s);
-        for b in b0..b1 {
-            indices[fill[b]] = k as u32;
-            fill[b] += 1;
-        }
-    }
-    (offsets, indices)
 }
 
 /// Per-thread band scratch, reused across bands and frames.
@@ -131,7 +102,8 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
         None => (Vec::new(), None),
     };
     let r = rain.map_or(0.0, |rf| rf.shading.reflectance);
-    let (offsets, indices) = bin_by_band(&streaks, cam.height, BAND_ROWS);
+    // Bands of rows are tiles as wide as the frame.
+    let (offsets, indices) = bin_by_tiles(&streaks, cam.width, cam.height, cam.width, BAND_ROWS as u32);
     let u2 = cam.column_slopes_sq();
     let enc = Srgb8Encoder::new();
     let band = BAND_ROWS * w;
@@ -151,7 +123,7 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
         let px = rows * w;
         let depth = &photo.depth_m[y0 * w..y0 * w + px];
         let src = &photo.srgb[3 * y0 * w..3 * (y0 * w + px)];
-        let mine: Vec<&ScreenStreak> = indices[offsets[bi]..offsets[bi + 1]].iter().map(|&k| &streaks[k as usize]).collect();
+        let mine = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
         SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
             let Scratch { pq, cover, t_row } = &mut *guard;
@@ -164,9 +136,9 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
                 cover.clear();
                 cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
                 if grey {
-                    raster_band::<2>(&mine, y0, rows, w, depth, r, pq, cover);
+                    raster_band::<2>(&streaks, mine, y0, rows, w, depth, r, pq, cover);
                 } else {
-                    raster_band::<4>(&mine, y0, rows, w, depth, r, pq, cover);
+                    raster_band::<4>(&streaks, mine, y0, rows, w, depth, r, pq, cover);
                 }
             }
             t_row.clear();
@@ -197,14 +169,14 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
     Ok(stats)
 }
 
-/// Rasterises a band's streaks (far to near) into the affine map (P, Q) per pixel, `K` floats
+/// Rasterises a band's streaks (`mine`, indices into `streaks`, far to near) into the affine map (P, Q) per pixel, `K` floats
 /// each (P, then Q grey for K = 2 or per channel for K = 4), and the coverage product into
 /// `cover` when it is not empty.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
-fn raster_band<const K: usize>(streaks: &[&ScreenStreak], y0: usize, rows: usize, w: usize, depth: &[f32], r: f32, pq: &mut [f32], cover: &mut [f32]) {
+fn raster_band<const K: usize>(streaks: &[ScreenStreak], mine: &[u32], y0: usize, rows: usize, w: usize, depth: &[f32], r: f32, pq: &mut [f32], cover: &mut [f32]) {
     let want_alpha = !cover.is_empty();
-    for s in streaks {
+    for s in mine.iter().map(|&k| &streaks[k as usize]) {
         let l = s.light().to_array();
         for_each_fragment(s, y0, rows, w, |i, a, inv_z| {
             // Hidden where z ≥ depth (1 ≥ depth/z, without the division); a = 0 leaves the

@@ -228,15 +228,21 @@ impl ScreenStreak {
     }
 }
 
-/// Streak indices per `tile` × `tile` pixel tile, in list order: (offsets, indices) with the
-/// tile t's streaks at `indices[offsets[t]..offsets[t + 1]]`. For the GPU pass.
+/// Streak indices per `tile` × `tile` pixel tile, in list order (see [`bin_by_tiles`]). For the
+/// GPU pass.
 pub fn bin_by_tile(streaks: &[ScreenStreak], width: u32, height: u32, tile: u32) -> (Vec<u32>, Vec<u32>) {
-    let (tx, ty) = (width.div_ceil(tile), height.div_ceil(tile));
+    bin_by_tiles(streaks, width, height, tile, tile)
+}
+
+/// Streak indices per `tile_w` × `tile_h` pixel tile (row-major tiles), in list order:
+/// (offsets, indices) with the tile t's streaks at `indices[offsets[t]..offsets[t + 1]]`.
+pub fn bin_by_tiles(streaks: &[ScreenStreak], width: u32, height: u32, tile_w: u32, tile_h: u32) -> (Vec<u32>, Vec<u32>) {
+    let (tx, ty) = (width.div_ceil(tile_w), height.div_ceil(tile_h));
     let mut counts = vec![0u32; (tx * ty) as usize + 1];
     let mut ranges = Vec::with_capacity(streaks.len());
     for s in streaks {
         let (x0, x1, y0, y1) = s.pixel_bounds(width, height);
-        let r = (x0 / tile, x1.div_ceil(tile), y0 / tile, y1.div_ceil(tile));
+        let r = (x0 / tile_w, x1.div_ceil(tile_w), y0 / tile_h, y1.div_ceil(tile_h));
         for j in r.2..r.3 {
             for i in r.0..r.1 {
                 counts[(j * tx + i) as usize + 1] += 1;
