@@ -226,6 +226,26 @@ impl ScreenStreak {
         }
         Some((self.alpha * cov, 1.0 / (self.inv_za + (self.inv_zb - self.inv_za) * k)))
     }
+
+    /// [`Self::fragment`]'s coverage and inverse depth (0 off the streak) at the point
+    /// `along` px along the axis from `a` and `across` px off it, for the walk of
+    /// [`for_each_fragment`]: a product by 1/L for the division by L, compare-selects for the
+    /// clamps. `THIN`: the streak is under a pixel wide all along (the coverage across is
+    /// w·(1 − d)).
+    #[inline(always)]
+    fn coverage<const THIN: bool>(&self, along: f32, across: f32) -> (f32, f32) {
+        let k = clamp01(along * self.inv_len);
+        let width = self.wa + (self.wb - self.wa) * k;
+        let cov_across = if THIN {
+            width * pos(1.0 - across)
+        } else if width >= 1.0 {
+            clamp01(0.5 * width + 0.5 - across)
+        } else {
+            width * clamp01(1.0 - across)
+        };
+        let cov_along = clamp01(least(along, self.len - along) + 0.5);
+        (self.alpha * cov_across * cov_along, self.inv_za + (self.inv_zb - self.inv_za) * k)
+    }
 }
 
 /// Streak indices per `tile` × `tile` pixel tile, in list order (see [`bin_by_tiles`]). For the
@@ -333,29 +353,15 @@ pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut
     if s.max.y <= y0 as f32 || s.min.y >= (y0 + rows) as f32 || s.max.x <= 0.0 || s.min.x >= w as f32 {
         return;
     }
-    let (dir, inv_len) = (s.dir, s.inv_len);
     let (ya, yb) = (floor_nonneg(s.min.y.max(y0 as f32)), ceil_nonneg(s.max.y.min((y0 + rows) as f32)));
     let steep = s.half > 0.0;
-    let (dw, dinv) = (s.wb - s.wa, s.inv_zb - s.inv_za);
-    let (a0, dir_x, dir_y) = (s.a, dir.x, dir.y);
-    // One pixel: q = (qx, qy) from the streak's start; along_row = qy·dir.y, across_row = −qy·dir.x.
-    #[inline(always)]
-    fn pixel(s: &ScreenStreak, qx: f32, along_row: f32, across_row: f32, inv_len: f32, dw: f32, dinv: f32) -> (f32, f32) {
-        let along = along_row + qx * s.dir.x;
-        let across = (qx * s.dir.y + across_row).abs();
-        let k = (along * inv_len).clamp(0.0, 1.0);
-        let width = s.wa + dw * k;
-        let cov_across = if width >= 1.0 { (0.5 * width + 0.5 - across).clamp(0.0, 1.0) } else { width * (1.0 - across).clamp(0.0, 1.0) };
-        let cov_along = (along + 0.5).clamp(0.0, 1.0).min((s.len - along + 0.5).clamp(0.0, 1.0));
-        (s.alpha * cov_across * cov_along, s.inv_za + dinv * k)
-    }
     if steep {
         let (slope, half) = (s.slope, s.half);
         // A pixel is covered only if its centre lies strictly within `half` of the axis'
         // crossing: an open interval of 2·half holds at most ⌈2·half⌉ pixel centres, the first
         // at ⌊xc − half + ½⌋.
         let span = ceil_nonneg(2.0 * half).clamp(1, w);
-        let rows_of = SteepRows { s, y0, w, slope, half, inv_len, dw, dinv };
+        let rows_of = SteepRows { s, y0, w, slope, half };
         // Monomorphised on the common cases: a thin streak (w < 1 px all along: the coverage
         // across is w·(1 − d)) in a window of 2 or 3 pixels, whose loops then unroll.
         match (s.wa.max(s.wb) < 1.0, span) {
@@ -366,12 +372,13 @@ pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut
         }
     } else {
         let (x0, x1) = (floor_nonneg(s.min.x.max(0.0)), ceil_nonneg(s.max.x.min(w as f32)));
+        let (dx, dy) = (s.dir.x, s.dir.y);
         for y in ya..yb {
             let qy = y as f32 + 0.5 - s.a.y;
-            let (row, along_row, across_row) = ((y - y0) * w, qy * dir_y, -qy * dir_x);
             for x in x0..x1 {
-                let (a, inv_z) = pixel(s, x as f32 + 0.5 - a0.x, along_row, across_row, inv_len, dw, dinv);
-                f(row + x, a, inv_z);
+                let qx = x as f32 + 0.5 - s.a.x;
+                let (a, inv_z) = s.coverage::<false>(qy * dy + qx * dx, (qx * dy - qy * dx).abs());
+                f((y - y0) * w + x, a, inv_z);
             }
         }
     }
@@ -384,9 +391,6 @@ struct SteepRows<'a> {
     w: usize,
     slope: f32,
     half: f32,
-    inv_len: f32,
-    dw: f32,
-    dinv: f32,
 }
 
 impl SteepRows<'_> {
@@ -418,13 +422,9 @@ impl SteepRows<'_> {
                     let jf = j as f32;
                     let (mut a, mut inv_z) = ([0.0f32; 4], [0.0f32; 4]);
                     for l in 0..4 {
-                        let along = along0[l] + jf * dx;
-                        let across = (across0[l] + jf * dy).abs();
-                        let k = clamp01(along * self.inv_len);
-                        let cov_across = (s.wa + self.dw * k) * pos(1.0 - across);
-                        let cov_along = clamp01(least(along, s.len - along) + 0.5);
-                        a[l] = s.alpha * cov_across * cov_along;
-                        inv_z[l] = s.inv_za + self.dinv * k;
+                        let c = s.coverage::<true>(along0[l] + jf * dx, (across0[l] + jf * dy).abs());
+                        a[l] = c.0;
+                        inv_z[l] = c.1;
                     }
                     // The window's last pixel is often uncovered (an open interval of 2·half
                     // just over 2 px holds a third centre only now and then): skip the call,
@@ -447,19 +447,8 @@ impl SteepRows<'_> {
             let row = (y - self.y0) * self.w + x0;
             for j in 0..span {
                 let jf = j as f32;
-                let along = along0 + jf * dx;
-                let across = (across0 + jf * dy).abs();
-                let k = clamp01(along * self.inv_len);
-                let width = s.wa + self.dw * k;
-                let cov_across = if THIN {
-                    width * pos(1.0 - across)
-                } else if width >= 1.0 {
-                    clamp01(0.5 * width + 0.5 - across)
-                } else {
-                    width * clamp01(1.0 - across)
-                };
-                let cov_along = clamp01(least(along, s.len - along) + 0.5);
-                f(row + j, s.alpha * cov_across * cov_along, s.inv_za + self.dinv * k);
+                let (a, inv_z) = s.coverage::<THIN>(along0 + jf * dx, (across0 + jf * dy).abs());
+                f(row + j, a, inv_z);
             }
         }
     }
