@@ -1,6 +1,6 @@
 """Type stubs for the compiled ``skyfall._core`` module (checked by mypy.stubtest)."""
 
-from typing import final
+from typing import TypedDict, final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,6 +46,17 @@ class SkyfallError(Exception): ...
 class GpuUnavailableError(SkyfallError): ...
 
 _RegionArgs = tuple[float, NDArray[np.float64], float, list[float], float, int, str]
+class _RainArgs(TypedDict):
+    region: _RegionArgs
+    exposure_s: float
+    camera_velocity_m_s: list[float]
+    ground: bool
+    lights: NDArray[np.float32] | None
+    sky_illuminance_lux: float
+    cull_threshold: float | None
+    occluders: NDArray[np.float32] | None
+    shelter: bool
+
 _RainTuple = tuple[NDArray[np.float32], NDArray[np.float32], int, int, int]
 _FrameTuple = tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32] | None, _RainTuple | None]
 
@@ -61,17 +72,9 @@ def render_frame(
     photo_rgb: NDArray[np.float32] | None = None,
     photo_depth_m: NDArray[np.float32] | None = None,
     haze_params: tuple[float, list[float]] | None = None,
-    rain_region: _RegionArgs | None = None,
-    exposure_s: float = ...,
-    camera_velocity_m_s: list[float] = ...,
-    rain_ground: bool = True,
-    lights: NDArray[np.float32] | None = None,
-    sky_illuminance_lux: float = 10000.0,
-    cull_threshold: float | None = None,
+    rain: _RainArgs | None = None,
     sky: SkyModel | None = None,
     ambient: AmbientLightMap | None = None,
-    occluders: NDArray[np.float32] | None = None,
-    rain_shelter: bool = True,
 ) -> _FrameTuple: ...
 def render_photo8(
     width: int,
@@ -84,16 +87,9 @@ def render_photo8(
     *,
     rain_alpha_out: NDArray[np.float32] | None = None,
     haze_params: tuple[float, list[float]] | None = None,
-    rain_region: _RegionArgs | None = None,
-    exposure_s: float = ...,
-    camera_velocity_m_s: list[float] = ...,
-    lights: NDArray[np.float32] | None = None,
-    sky_illuminance_lux: float = 10000.0,
-    cull_threshold: float | None = None,
+    rain: _RainArgs | None = None,
     sky: SkyModel | None = None,
     ambient: AmbientLightMap | None = None,
-    occluders: NDArray[np.float32] | None = None,
-    rain_shelter: bool = True,
 ) -> tuple[int, int, int] | None: ...
 
 def cloud_base_m(rain_rate_mm_h: float) -> float: ...

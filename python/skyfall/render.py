@@ -257,7 +257,6 @@ class Renderer:
             raise ValueError(f"rain_alpha_out must be a writable C-contiguous float32 array of shape {shape}")
         if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
             cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
-            kwargs.pop("rain_ground", None)
             args = (self.width, self.height, cam.core_params(), scene.srgb8, scene.depth_m, io.srgb8_table(), out)
             _core.render_photo8(*args, rain_alpha_out=rain_alpha_out, **kwargs)
             return out
@@ -317,18 +316,17 @@ class Renderer:
             if not (th >= 0 and np.isfinite(th)):
                 raise ValueError(f"cull_threshold = {th} must be a finite number >= 0")
         if weather.rain_rate_mm_h > 0 and weather.rain_streaks:
-            kwargs.update(
-                rain_region=weather.rain_region_args(t, seed),
-                exposure_s=cam.exposure_s,
-                camera_velocity_m_s=cam.velocity_m_s.tolist(),
-                rain_ground=isinstance(scene, BoxScene) and scene.ground,
-                lights=pack(scene.lights),
-                sky_illuminance_lux=weather.sky_illuminance_lux,
-                cull_threshold=cull_threshold,
-                rain_shelter=weather.rain_sheltered,
-            )
-            if isinstance(scene, PhotoScene) and len(scene.occluders):
-                kwargs["occluders"] = scene.occluders
+            kwargs["rain"] = {
+                "region": weather.rain_region_args(t, seed),
+                "exposure_s": cam.exposure_s,
+                "camera_velocity_m_s": cam.velocity_m_s.tolist(),
+                "ground": isinstance(scene, BoxScene) and scene.ground,
+                "lights": pack(scene.lights),
+                "sky_illuminance_lux": weather.sky_illuminance_lux,
+                "cull_threshold": cull_threshold,
+                "occluders": scene.occluders if isinstance(scene, PhotoScene) and len(scene.occluders) else None,
+                "shelter": weather.rain_sheltered,
+            }
         return cam, kwargs
 
     @staticmethod

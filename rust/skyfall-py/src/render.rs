@@ -71,19 +71,20 @@ struct Request<'a> {
     shelter: Vec<SceneBox>,
 }
 
-/// The rain arguments as received from Python.
-struct RainArgs<'a, 'py> {
-    region: Option<&'a RegionArgs<'py>>,
+/// The rain arguments: one dict from Python with every key (None where a type allows it).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct RainArgs<'py> {
+    region: RegionArgs<'py>,
     exposure_s: f32,
     camera_velocity_m_s: [f32; 3],
     ground: bool,
-    lights: Option<&'a PyReadonlyArray2<'py, f32>>,
+    lights: Option<PyReadonlyArray2<'py, f32>>,
     sky_illuminance_lux: f32,
     cull_threshold: Option<f32>,
-    ambient: Option<Arc<AmbientMap>>,
     /// Boxes that shelter the rain besides a box scene's own (a photo's occluders), and
     /// whether boxes shelter it at all.
-    occluders: Option<&'a PyReadonlyArray2<'py, f32>>,
+    occluders: Option<PyReadonlyArray2<'py, f32>>,
     shelter: bool,
 }
 
@@ -98,7 +99,8 @@ impl<'a> Request<'a> {
         ground_albedo: [f32; 3],
         photo: Option<(&'a PyReadonlyArray3<'py, f32>, &'a PyReadonlyArray2<'py, f32>)>,
         haze_params: Option<(f32, [f32; 3])>,
-        rain: RainArgs<'_, 'py>,
+        rain: Option<&RainArgs<'py>>,
+        ambient: &Arc<AmbientMap>,
     ) -> PyResult<Self> {
         let cam = camera(width, height, camera_params)?;
         let (boxes, photo) = match (boxes, photo) {
@@ -108,10 +110,10 @@ impl<'a> Request<'a> {
             _ => return Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m")),
         };
         let haze = haze_params.map(|(sigma, air)| Haze::new(sigma, air)).transpose().map_err(CoreError)?;
-        let (shelter_wanted, occluders) = (rain.shelter && rain.region.is_some(), rain.occluders);
-        let rain = match rain.region {
+        let (shelter_wanted, occluders) = (rain.is_some_and(|r| r.shelter), rain.and_then(|r| r.occluders.as_ref()));
+        let rain = match rain {
             None => None,
-            Some(args) => {
+            Some(rain) => {
                 if !(rain.exposure_s > 0.0 && rain.exposure_s <= 0.1) {
                     return Err(PyValueError::new_err(format!("exposure_s = {} is outside the valid range (0, 0.1] s", rain.exposure_s)));
                 }
@@ -121,7 +123,7 @@ impl<'a> Request<'a> {
                 if rain.cull_threshold.is_some_and(|t| !(t >= 0.0 && t.is_finite())) {
                     return Err(PyValueError::new_err("cull_threshold must be a finite number >= 0, or None"));
                 }
-                let lights = match rain.lights {
+                let lights = match &rain.lights {
                     None => Vec::new(),
                     Some(a) => a
                         .as_array()
@@ -136,14 +138,14 @@ impl<'a> Request<'a> {
                     lights,
                     sky_illuminance_lux: rain.sky_illuminance_lux,
                     cull_threshold: rain.cull_threshold,
-                    ambient: rain.ambient.clone(),
+                    ambient: Some(Arc::clone(ambient)),
                     ..RainShading::open_sky()
                 };
                 let v = Vec3::from(rain.camera_velocity_m_s);
                 if !v.is_finite() || v.length() > 1000.0 {
                     return Err(PyValueError::new_err(format!("camera velocity_m_s = {v} must be finite and at most 1000 m/s")));
                 }
-                Some((region(args)?, rain.exposure_s, v, rain.ground, shading))
+                Some((region(&rain.region)?, rain.exposure_s, v, rain.ground, shading))
             }
         };
         let mut shelter = Vec::new();
@@ -196,9 +198,7 @@ fn to_py<'py>(py: Python<'py>, cam: &Camera, f: FrameBuffers) -> PyResult<FrameT
 #[pyfunction]
 #[pyo3(signature = (
     width, height, camera_params, *, device=None, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
-    photo_depth_m=None, haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3],
-    rain_ground=true, lights=None, sky_illuminance_lux=10000.0, cull_threshold=None, sky=None, ambient=None,
-    occluders=None, rain_shelter=true
+    photo_depth_m=None, haze_params=None, rain=None, sky=None, ambient=None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn render_frame<'py>(
@@ -213,26 +213,17 @@ pub fn render_frame<'py>(
     photo_rgb: Option<PyReadonlyArray3<'py, f32>>,
     photo_depth_m: Option<PyReadonlyArray2<'py, f32>>,
     haze_params: Option<(f32, [f32; 3])>,
-    rain_region: Option<RegionArgs<'py>>,
-    exposure_s: f32,
-    camera_velocity_m_s: [f32; 3],
-    rain_ground: bool,
-    lights: Option<PyReadonlyArray2<'py, f32>>,
-    sky_illuminance_lux: f32,
-    cull_threshold: Option<f32>,
+    rain: Option<RainArgs<'py>>,
     sky: Option<Bound<'py, SkyModel>>,
     ambient: Option<Bound<'py, AmbientLightMap>>,
-    occluders: Option<PyReadonlyArray2<'py, f32>>,
-    rain_shelter: bool,
 ) -> PyResult<FrameTuple<'py>> {
     let lit = Lighting::new(sky.as_ref(), ambient.as_ref())?;
-    let rain = lit.rain_args(rain_region.as_ref(), exposure_s, camera_velocity_m_s, rain_ground, lights.as_ref(), sky_illuminance_lux, cull_threshold, occluders.as_ref(), rain_shelter);
     let light = SceneLight { sky: &lit.sky, ambient: &lit.ambient };
     if boxes.is_none() && (photo_rgb.is_none() || photo_depth_m.is_none()) {
         return Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m"));
     }
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
-    let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain)?;
+    let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain.as_ref(), &lit.ambient)?;
     let (scene, cam, haze, rain) = (req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame());
     let frame = match device.as_ref().map(|d| &d.get().inner) {
         Some(gpu) => py.detach(|| gpu.render(scene, cam, &light, haze, rain.as_ref())).map_err(gpu_error)?,
@@ -260,33 +251,6 @@ impl Lighting {
         };
         Ok(Lighting { sky, ambient })
     }
-
-    #[allow(clippy::too_many_arguments)]
-    fn rain_args<'a, 'py>(
-        &self,
-        region: Option<&'a RegionArgs<'py>>,
-        exposure_s: f32,
-        camera_velocity_m_s: [f32; 3],
-        ground: bool,
-        lights: Option<&'a PyReadonlyArray2<'py, f32>>,
-        sky_illuminance_lux: f32,
-        cull_threshold: Option<f32>,
-        occluders: Option<&'a PyReadonlyArray2<'py, f32>>,
-        shelter: bool,
-    ) -> RainArgs<'a, 'py> {
-        RainArgs {
-            region,
-            exposure_s,
-            camera_velocity_m_s,
-            ground,
-            lights,
-            sky_illuminance_lux,
-            cull_threshold,
-            ambient: Some(Arc::clone(&self.ambient)),
-            occluders,
-            shelter,
-        }
-    }
 }
 
 /// Renders haze and rain over an 8-bit sRGB photo into `out_srgb8` on the CPU, fused (see
@@ -295,8 +259,7 @@ impl Lighting {
 #[pyfunction]
 #[pyo3(signature = (
     width, height, camera_params, photo_srgb8, photo_depth_m, decode_table, out_srgb8, *, rain_alpha_out=None,
-    haze_params=None, rain_region=None, exposure_s=1.0 / 30.0, camera_velocity_m_s=[0.0; 3], lights=None,
-    sky_illuminance_lux=10000.0, cull_threshold=None, sky=None, ambient=None, occluders=None, rain_shelter=true
+    haze_params=None, rain=None, sky=None, ambient=None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn render_photo8<'py>(
@@ -310,20 +273,12 @@ pub fn render_photo8<'py>(
     mut out_srgb8: PyReadwriteArray3<'py, u8>,
     rain_alpha_out: Option<PyReadwriteArray2<'py, f32>>,
     haze_params: Option<(f32, [f32; 3])>,
-    rain_region: Option<RegionArgs<'py>>,
-    exposure_s: f32,
-    camera_velocity_m_s: [f32; 3],
-    lights: Option<PyReadonlyArray2<'py, f32>>,
-    sky_illuminance_lux: f32,
-    cull_threshold: Option<f32>,
+    rain: Option<RainArgs<'py>>,
     sky: Option<Bound<'py, SkyModel>>,
     ambient: Option<Bound<'py, AmbientLightMap>>,
-    occluders: Option<PyReadonlyArray2<'py, f32>>,
-    rain_shelter: bool,
 ) -> PyResult<Option<(usize, usize, usize)>> {
     let lit = Lighting::new(sky.as_ref(), ambient.as_ref())?;
-    let rain = lit.rain_args(rain_region.as_ref(), exposure_s, camera_velocity_m_s, false, lights.as_ref(), sky_illuminance_lux, cull_threshold, occluders.as_ref(), rain_shelter);
-    let req = Request::parse(width, height, camera_params, None, false, [0.0; 3], None, haze_params, rain)?;
+    let req = Request::parse(width, height, camera_params, None, false, [0.0; 3], None, haze_params, rain.as_ref(), &lit.ambient)?;
     let decode: &[f32; 256] = decode_table
         .as_slice()?
         .try_into()
