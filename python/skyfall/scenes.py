@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -233,7 +234,6 @@ class PhotoScene:
     lights: tuple[PointLight | SpotLight, ...]
     occluders: NDArray[np.float32]
     srgb8: NDArray[np.uint8] | None = field(repr=False)
-    _linear: list[NDArray[np.float32]] = field(repr=False, compare=False)
 
     def __init__(
         self,
@@ -249,13 +249,13 @@ class PhotoScene:
         if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
             raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
         srgb8: NDArray[np.uint8] | None = None
-        lin: list[NDArray[np.float32]] = []
         if img.dtype == np.uint8:
             srgb8 = np.ascontiguousarray(img)  # decoded when `image` is first read
         elif img.dtype.kind == "f":
-            lin = [np.ascontiguousarray(img, dtype=np.float32)]
-            if not np.all(np.isfinite(lin[0])) or lin[0].min() < 0:
+            lin = np.ascontiguousarray(img, dtype=np.float32)
+            if not np.all(np.isfinite(lin)) or lin.min() < 0:
                 raise ValueError("image must hold finite, non-negative linear values")
+            self.__dict__["image"] = lin  # the cached value of the `image` property
         else:
             raise TypeError(f"image must be uint8 (sRGB) or float (linear), got dtype {img.dtype}")
         d = np.asarray(depth_m)
@@ -269,19 +269,15 @@ class PhotoScene:
         h, w = img.shape[:2]
         cam = camera if camera is not None else Camera((0.0, 0.0, 0.0), vertical_fov_deg=vertical_fov_deg)
         object.__setattr__(self, "srgb8", srgb8)
-        object.__setattr__(self, "_linear", lin)
         object.__setattr__(self, "depth_m", d)
         object.__setattr__(self, "camera", cam.with_resolution(w, h))
         object.__setattr__(self, "lights", tuple(lights))
         object.__setattr__(self, "occluders", _box_rows(occluders, "occluders"))
 
-    @property
+    @cached_property
     def image(self) -> NDArray[np.float32]:
         """The photo in linear RGB, (H, W, 3) float32 (an 8-bit photo is decoded on first use)."""
-        if not self._linear:
-            assert self.srgb8 is not None
-            self._linear.append(decode_srgb8(self.srgb8))
-        return self._linear[0]
+        return decode_srgb8(self.srgb8)
 
     @property
     def shape(self) -> tuple[int, int]:
