@@ -264,7 +264,7 @@ class PhotoScene:
         d = np.ascontiguousarray(d, dtype=np.float32)
         if d.shape != img.shape[:2]:
             raise ValueError(f"depth_m has shape {d.shape}, the image is {img.shape[:2]}")
-        if not (d >= 0).all():  # NaN compares false
+        if not d.min() >= 0:  # a NaN makes the minimum NaN, which compares false
             raise ValueError("depth_m must be >= 0 m everywhere (inf for sky), without NaN")
         h, w = img.shape[:2]
         cam = camera if camera is not None else Camera((0.0, 0.0, 0.0), vertical_fov_deg=vertical_fov_deg)

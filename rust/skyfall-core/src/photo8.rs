@@ -14,7 +14,8 @@ use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
 use crate::frame::check_frame_size;
 use crate::haze::Haze;
-use crate::rain::splat::{bin_by_tiles, for_each_fragment, RainFrame, RainStats, ScreenStreak};
+use crate::rain::splat::{bin_by_tiles, for_each_fragment, for_each_fragment_x4, RainFrame, RainStats, ScreenStreak};
+use glam::Vec4;
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
 use std::cell::RefCell;
@@ -22,6 +23,8 @@ use std::cell::RefCell;
 /// Rows per band: a band's scratch (8 B per pixel, 16 with coloured lights) stays in a core's
 /// L2 up to 4k-wide frames.
 const BAND_ROWS: usize = 16;
+/// Columns per tile: a tile's scratch (P, Q, depth: 16 rows × 128 × 12 B) fits a core's L1.
+const TILE_W: usize = 128;
 
 /// An 8-bit sRGB photo with its depth.
 #[derive(Debug, Clone, Copy)]
@@ -58,9 +61,11 @@ fn length_error(name: &'static str, len: usize, expected: usize) -> Error {
 /// Per-thread band scratch, reused across bands and frames.
 #[derive(Default)]
 struct Scratch {
-    /// The rain's (P, Q) per pixel: K floats, Q one value when every streak's light is grey
-    /// (K = 2) or three (K = 4).
-    pq: Vec<f32>,
+    /// The rain's P per pixel.
+    p: Vec<f32>,
+    /// The rain's Q: one plane when every streak's light is grey, three (one per channel)
+    /// with coloured lights.
+    q: Vec<f32>,
     /// The coverage product ∏(1 − a), when the alpha layer is wanted.
     cover: Vec<f32>,
     /// A row's transmittance.
@@ -102,14 +107,16 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
         None => (Vec::new(), None),
     };
     let r = rain.map_or(0.0, |rf| rf.shading.reflectance);
-    // Bands of rows are tiles as wide as the frame.
-    let (offsets, indices) = bin_by_tiles(&streaks, cam.width, cam.height, cam.width, BAND_ROWS as u32);
+    // Each band of rows is cut into tiles of TILE_W columns, rasterised and shaded one after
+    // the other: a tile's scratch and depth stay in the core's L1.
+    let tiles_x = w.div_ceil(TILE_W);
+    let (offsets, indices) = bin_by_tiles(&streaks, cam.width, cam.height, TILE_W as u32, BAND_ROWS as u32);
     let u2 = cam.column_slopes_sq();
     let enc = Srgb8Encoder::new();
     let band = BAND_ROWS * w;
     let mut alpha_bands: Vec<Option<&mut [f32]>> = match out.rain_alpha {
         Some(a) => a.chunks_mut(band).map(Some).collect(),
-        None => (0..offsets.len() - 1).map(|_| None).collect(),
+        None => (0..n.div_ceil(band)).map(|_| None).collect(),
     };
     let air = haze.map_or([0.0; 3], |h| h.airlight);
     // Grey light everywhere (the sky's; coloured lamps aside): Q's three channels are equal.
@@ -117,51 +124,69 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
         let l = s.light();
         l.x == l.y && l.y == l.z
     });
+    let k = if grey { 1 } else { 3 };
     out.srgb.par_chunks_mut(3 * band).zip(alpha_bands.par_iter_mut()).enumerate().for_each(|(bi, (out_band, alpha))| {
         let y0 = bi * BAND_ROWS;
         let rows = out_band.len() / (3 * w);
         let px = rows * w;
         let depth = &photo.depth_m[y0 * w..y0 * w + px];
         let src = &photo.srgb[3 * y0 * w..3 * (y0 * w + px)];
-        let mine = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
         SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
-            let Scratch { pq, cover, t_row } = &mut *guard;
-            let rained = !mine.is_empty();
-            let k = if grey { 2 } else { 4 };
-            if rained {
-                pq.clear();
-                pq.resize(k * px, 0.0);
-                pq.iter_mut().step_by(k).for_each(|p| *p = 1.0);
-                cover.clear();
-                cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
-                if grey {
-                    raster_band::<2>(&streaks, mine, y0, rows, w, depth, r, pq, cover);
-                } else {
-                    raster_band::<4>(&streaks, mine, y0, rows, w, depth, r, pq, cover);
-                }
-            }
+            let Scratch { p, q, cover, t_row } = &mut *guard;
+            // Sized for the band; a tile initialises its own columns before drawing (a tile's
+            // windows may spill a few columns into a neighbour's: they write those back
+            // unchanged, a = 0).
+            p.resize(px, 1.0);
+            q.resize(k * px, 0.0);
+            cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
             t_row.clear();
             t_row.resize(w, 1.0);
-            for row in 0..rows {
-                let i0 = row * w;
-                if let Some(h) = haze {
-                    transmittance_row(h, &u2, cam.row_slope_sq((y0 + row) as u32), &depth[i0..i0 + w], t_row);
-                }
-                let (src_row, out_row) = (&src[3 * i0..3 * (i0 + w)], &mut out_band[3 * i0..3 * (i0 + w)]);
-                match (rained, grey) {
-                    (false, _) => shade_row::<2>(photo.decode, enc, air, t_row, None, src_row, out_row),
-                    (true, true) => shade_row::<2>(photo.decode, enc, air, t_row, Some(&pq[2 * i0..2 * (i0 + w)]), src_row, out_row),
-                    (true, false) => shade_row::<4>(photo.decode, enc, air, t_row, Some(&pq[4 * i0..4 * (i0 + w)]), src_row, out_row),
-                }
-            }
-            if let Some(a) = alpha.as_deref_mut() {
+            for tx in 0..tiles_x {
+                let t = bi * tiles_x + tx;
+                let mine = &indices[offsets[t] as usize..offsets[t + 1] as usize];
+                let cols = tx * TILE_W..((tx + 1) * TILE_W).min(w);
+                let rained = !mine.is_empty();
                 if rained {
-                    for (o, c) in a.iter_mut().zip(cover.iter()) {
-                        *o = 1.0 - c;
+                    for row in 0..rows {
+                        let seg = row * w + cols.start..row * w + cols.end;
+                        p[seg.clone()].fill(1.0);
+                        for c in 0..k {
+                            q[c * px + seg.start..c * px + seg.end].fill(0.0);
+                        }
+                        if let Some(c) = cover.get_mut(seg) {
+                            c.fill(1.0);
+                        }
                     }
-                } else {
-                    a.fill(0.0);
+                    if grey {
+                        raster_tile::<1>(&streaks, mine, y0, rows, w, cols.clone(), depth, r, p, q, cover);
+                    } else {
+                        raster_tile::<3>(&streaks, mine, y0, rows, w, cols.clone(), depth, r, p, q, cover);
+                    }
+                }
+                let t_seg = &mut t_row[..cols.len()];
+                for row in 0..rows {
+                    let seg = row * w + cols.start..row * w + cols.end;
+                    if let Some(h) = haze {
+                        transmittance_row(h, &u2[cols.clone()], cam.row_slope_sq((y0 + row) as u32), &depth[seg.clone()], t_seg);
+                    }
+                    let (src_row, out_row) = (&src[3 * seg.start..3 * seg.end], &mut out_band[3 * seg.start..3 * seg.end]);
+                    let maps = || Some((&p[seg.clone()], &q[seg.start..], px));
+                    match (rained, grey) {
+                        (false, _) => shade_row::<1>(photo.decode, enc, air, t_seg, None, src_row, out_row),
+                        (true, true) => shade_row::<1>(photo.decode, enc, air, t_seg, maps(), src_row, out_row),
+                        (true, false) => shade_row::<3>(photo.decode, enc, air, t_seg, maps(), src_row, out_row),
+                    }
+                    if let Some(a) = alpha.as_deref_mut() {
+                        let a = &mut a[seg.clone()];
+                        if rained {
+                            for (o, c) in a.iter_mut().zip(&cover[seg]) {
+                                *o = 1.0 - c;
+                            }
+                        } else {
+                            a.fill(0.0);
+                        }
+                    }
                 }
             }
         });
@@ -169,25 +194,59 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
     Ok(stats)
 }
 
-/// Rasterises a band's streaks (`mine`, indices into `streaks`, far to near) into the affine map (P, Q) per pixel, `K` floats
-/// each (P, then Q grey for K = 2 or per channel for K = 4), and the coverage product into
-/// `cover` when it is not empty.
+/// Rasterises a tile's streaks (`mine`, indices into `streaks`, far to near; the tile: the
+/// band's rows, columns `cols`) into the affine map per pixel: P in `p`, Q in `q` (one plane
+/// when every light is grey, `K` = 1; three, one per channel, for `K` = 3), and the coverage
+/// product into `cover` when it is not empty. Band-sized buffers, indexed as the band.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
-fn raster_band<const K: usize>(streaks: &[ScreenStreak], mine: &[u32], y0: usize, rows: usize, w: usize, depth: &[f32], r: f32, pq: &mut [f32], cover: &mut [f32]) {
+fn raster_tile<const K: usize>(
+    streaks: &[ScreenStreak],
+    mine: &[u32],
+    y0: usize,
+    rows: usize,
+    w: usize,
+    cols: std::ops::Range<usize>,
+    depth: &[f32],
+    r: f32,
+    p: &mut [f32],
+    q: &mut [f32],
+    cover: &mut [f32],
+) {
     let want_alpha = !cover.is_empty();
+    let px = p.len();
     for s in mine.iter().map(|&k| &streaks[k as usize]) {
         let l = s.light().to_array();
-        for_each_fragment(s, y0, rows, w, |i, a, inv_z| {
+        // Four pixels of a row at a time for the steep streaks (nearly all).
+        let walked = for_each_fragment_x4(s, y0, rows, w, cols.clone(), |i, a, inv_z| {
             // Hidden where z ≥ depth (1 ≥ depth/z, without the division); a = 0 leaves the
-            // pixel as it is, so there is no branch on it.
+            // pixels as they are, so there is no branch on it.
+            let d = Vec4::from_slice(&depth[i..i + 4]);
+            let a = Vec4::select((d * inv_z).cmple(Vec4::ONE), Vec4::ZERO, a);
+            let ar = a * r;
+            let keep = Vec4::ONE - ar;
+            (Vec4::from_slice(&p[i..i + 4]) * keep).write_to_slice(&mut p[i..i + 4]);
+            for (c, &lc) in l.iter().enumerate().take(K) {
+                let j = c * px + i;
+                (Vec4::from_slice(&q[j..j + 4]) * keep + ar * lc).write_to_slice(&mut q[j..j + 4]);
+            }
+            if want_alpha {
+                (Vec4::from_slice(&cover[i..i + 4]) * (Vec4::ONE - a)).write_to_slice(&mut cover[i..i + 4]);
+            }
+        });
+        if walked {
+            continue;
+        }
+        for_each_fragment(s, y0, rows, w, |i, a, inv_z| {
+            if !cols.contains(&(i % w)) {
+                return;
+            }
             let a = if 1.0 >= depth[i] * inv_z { 0.0 } else { a };
             let ar = a * r;
             let keep = 1.0 - ar;
-            let m = &mut pq[K * i..K * i + K];
-            m[0] *= keep;
-            for c in 1..K {
-                m[c] = m[c] * keep + ar * l[c - 1];
+            p[i] *= keep;
+            for (c, &lc) in l.iter().enumerate().take(K) {
+                q[c * px + i] = q[c * px + i] * keep + ar * lc;
             }
             if want_alpha {
                 cover[i] *= 1.0 - a;
@@ -205,9 +264,10 @@ fn transmittance_row(h: &Haze, u2: &[f32], v2: f32, depth: &[f32], t: &mut [f32]
 }
 
 /// A row's bytes: decoded, hazed (eq. 2; t = 1 without haze), mapped by the rain's P·C + Q
-/// (`K` floats per pixel, see [`raster_band`]), encoded.
+/// (`p`, and `q` with `K` planes `stride` apart, see [`raster_band`]), encoded.
+#[allow(clippy::too_many_arguments)]
 #[inline(never)]
-fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<&[f32]>, src: &[u8], out: &mut [u8]) {
+fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<(&[f32], &[f32], usize)>, src: &[u8], out: &mut [u8]) {
     // Zipped iterators, one loop per case: no bounds check and no branch per pixel.
     let pixels = out.chunks_exact_mut(3).zip(src.chunks_exact(3)).zip(t);
     let hazed = |s: &[u8], t: f32| -> [f32; 3] { std::array::from_fn(|ch| decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t)) };
@@ -220,11 +280,21 @@ fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 
                 }
             }
         }
-        Some(pq) => {
-            for (((o, s), &t), m) in pixels.zip(pq.chunks_exact(K)) {
+        Some((p, q, _)) if K == 1 => {
+            for ((((o, s), &t), &p), &q) in pixels.zip(p).zip(q) {
                 let v = hazed(s, t);
                 for ch in 0..3 {
-                    o[ch] = enc.encode(v[ch] * m[0] + m[1 + ch.min(K - 2)]);
+                    o[ch] = enc.encode(v[ch] * p + q);
+                }
+            }
+        }
+        Some((p, q, stride)) => {
+            let (qr, qg, qb) = (&q[..p.len()], &q[stride..stride + p.len()], &q[2 * stride..2 * stride + p.len()]);
+            for (((((o, s), &t), &p), &r), (&g, &b)) in pixels.zip(p).zip(qr).zip(qg.iter().zip(qb)) {
+                let v = hazed(s, t);
+                let q = [r, g, b];
+                for ch in 0..3 {
+                    o[ch] = enc.encode(v[ch] * p + q[ch]);
                 }
             }
         }
@@ -251,8 +321,9 @@ mod tests {
         })
     }
 
-    /// A 96x61 photo (61 rows: the last band is short) with a near wall on the left, a far
-    /// street and sky, and bytes that sweep 0..255.
+    /// A photo with a near wall on the left, a far street and sky, and bytes that sweep
+    /// 0..255. The tests use 61 rows (the last band is short) and 300 columns (three tiles,
+    /// the last narrow).
     fn photo(w: usize, h: usize) -> (Vec<u8>, Vec<f32>) {
         let srgb = (0..w * h * 3).map(|i| ((i * 37 + i / 7) % 256) as u8).collect();
         let depth = (0..w * h)
@@ -268,8 +339,8 @@ mod tests {
     /// The fused frame against the float frame encoded: bytes within 1 code and nearly all
     /// equal, the same counts and the same coverage layer.
     fn check_against_the_float_frame(shading: &RainShading) {
-        let (w, h) = (96usize, 61usize);
-        let cam = Camera::new(w as u32, h as u32, [60.0, 60.0, 48.0, 30.5], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY).unwrap();
+        let (w, h) = (300usize, 61usize);
+        let cam = Camera::new(w as u32, h as u32, [60.0, 60.0, 150.0, 30.5], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY).unwrap();
         let (srgb, depth) = photo(w, h);
         let dec = decode_table();
         let linear: Vec<f32> = srgb.iter().map(|&b| dec[usize::from(b)]).collect();

@@ -26,7 +26,7 @@ use crate::scene::camera::Camera;
 use crate::scene::lights::Light;
 use crate::sky::ambient::AmbientMap;
 use std::sync::Arc;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 /// Streak ends nearer than this (m along the axis) are clipped.
@@ -248,6 +248,26 @@ impl ScreenStreak {
     }
 }
 
+impl ScreenStreak {
+    /// [`Self::coverage`] for four pixels, lane for lane the same bits.
+    #[inline(always)]
+    fn coverage_x4<const THIN: bool>(&self, along: Vec4, across: Vec4) -> (Vec4, Vec4) {
+        let (zero, one, half) = (Vec4::ZERO, Vec4::ONE, Vec4::splat(0.5));
+        let clamp01 = |x: Vec4| x.max(zero).min(one);
+        let k = clamp01(along * self.inv_len);
+        let width = Vec4::splat(self.wa) + Vec4::splat(self.wb - self.wa) * k;
+        let cov_across = if THIN {
+            width * (one - across).max(zero)
+        } else {
+            let wide = clamp01(half * width + half - across);
+            let thin = width * clamp01(one - across);
+            Vec4::select(width.cmpge(one), wide, thin)
+        };
+        let cov_along = clamp01(along.min(Vec4::splat(self.len) - along) + half);
+        (Vec4::splat(self.alpha) * cov_across * cov_along, Vec4::splat(self.inv_za) + Vec4::splat(self.inv_zb - self.inv_za) * k)
+    }
+}
+
 /// Streak indices per `tile` × `tile` pixel tile, in list order (see [`bin_by_tiles`]). For the
 /// GPU pass.
 pub fn bin_by_tile(streaks: &[ScreenStreak], width: u32, height: u32, tile: u32) -> (Vec<u32>, Vec<u32>) {
@@ -329,14 +349,22 @@ pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainSh
 /// ⌊v⌋ for v ≥ 0 (as an index; no libm call on targets without a rounding instruction).
 #[inline]
 fn floor_nonneg(v: f32) -> usize {
-    v as usize
+    // Through i32: one truncating conversion (f32 → u64 has no instruction before AVX-512).
+    v as i32 as usize
+}
+
+/// A pixel index as f32 (exact below 2²⁴): through u32, one conversion instruction where
+/// usize → f32 takes a branchy sequence.
+#[inline(always)]
+fn idx_f32(v: usize) -> f32 {
+    v as u32 as f32
 }
 
 /// ⌈v⌉ for v ≥ 0.
 #[inline]
 fn ceil_nonneg(v: f32) -> usize {
-    let t = v as usize;
-    t + usize::from((t as f32) < v)
+    let t = floor_nonneg(v);
+    t + usize::from(idx_f32(t) < v)
 }
 
 /// Calls `f(i, a, inv_z)` for the pixels of rows `y0..y0 + rows` (a band of a `w`-wide
@@ -350,10 +378,10 @@ fn ceil_nonneg(v: f32) -> usize {
 /// span mispredict on nearly every row of a thin streak.
 #[inline]
 pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut f: impl FnMut(usize, f32, f32)) {
-    if s.max.y <= y0 as f32 || s.min.y >= (y0 + rows) as f32 || s.max.x <= 0.0 || s.min.x >= w as f32 {
+    if s.max.y <= idx_f32(y0) || s.min.y >= idx_f32(y0 + rows) || s.max.x <= 0.0 || s.min.x >= idx_f32(w) {
         return;
     }
-    let (ya, yb) = (floor_nonneg(s.min.y.max(y0 as f32)), ceil_nonneg(s.max.y.min((y0 + rows) as f32)));
+    let (ya, yb) = (floor_nonneg(s.min.y.max(idx_f32(y0))), ceil_nonneg(s.max.y.min(idx_f32(y0 + rows))));
     let steep = s.half > 0.0;
     if steep {
         let (slope, half) = (s.slope, s.half);
@@ -371,15 +399,112 @@ pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut
             (false, _) => rows_of.run::<false, 0>(ya..yb, span, &mut f),
         }
     } else {
-        let (x0, x1) = (floor_nonneg(s.min.x.max(0.0)), ceil_nonneg(s.max.x.min(w as f32)));
+        let (x0, x1) = (floor_nonneg(s.min.x.max(0.0)), ceil_nonneg(s.max.x.min(idx_f32(w))));
         let (dx, dy) = (s.dir.x, s.dir.y);
         for y in ya..yb {
-            let qy = y as f32 + 0.5 - s.a.y;
+            let qy = idx_f32(y) + 0.5 - s.a.y;
             for x in x0..x1 {
-                let qx = x as f32 + 0.5 - s.a.x;
+                let qx = idx_f32(x) + 0.5 - s.a.x;
                 let (a, inv_z) = s.coverage::<false>(qy * dy + qx * dx, (qx * dy - qy * dx).abs());
                 f((y - y0) * w + x, a, inv_z);
             }
+        }
+    }
+}
+
+/// [`for_each_fragment`] four pixels at a time, within the columns `cols`: calls
+/// `f(i, a, inv_z)` with `i` the band index of the first of four consecutive pixels of a row
+/// and `a`, `inv_z` theirs, the same values lane for lane (a = 0 where the streak misses a
+/// pixel or the pixel is outside `cols`; `f` must treat it as nothing). Every pixel in `cols`
+/// the streak covers is in exactly one call; the four pixels may reach up to three columns
+/// past `cols` (always within the row). For steep streaks in frames at
+/// least a window wide, which are nearly all of them; returns false, having called nothing,
+/// for the others (walk those with [`for_each_fragment`]).
+#[inline]
+pub fn for_each_fragment_x4(s: &ScreenStreak, y0: usize, rows: usize, w: usize, cols: std::ops::Range<usize>, mut f: impl FnMut(usize, Vec4, Vec4)) -> bool {
+    if s.half <= 0.0 {
+        return false;
+    }
+    // Windows of ⌈2·half⌉ pixels (see for_each_fragment), in chunks of four.
+    let chunks = ceil_nonneg(2.0 * s.half).max(1).div_ceil(4);
+    if 4 * chunks > w {
+        return false;
+    }
+    let cols = cols.start..cols.end.min(w);
+    if s.max.y <= idx_f32(y0) || s.min.y >= idx_f32(y0 + rows) || s.max.x <= idx_f32(cols.start) || s.min.x >= idx_f32(cols.end) {
+        return true;
+    }
+    let (ya, yb) = (floor_nonneg(s.min.y.max(idx_f32(y0))), ceil_nonneg(s.max.y.min(idx_f32(y0 + rows))));
+    let thin = s.wa.max(s.wb) < 1.0;
+    let c = (idx_f32(cols.start), idx_f32(cols.end));
+    match (thin, chunks) {
+        (true, 1) => steep_x4::<true, 1>(s, ya..yb, y0, w, c, &mut f),
+        (false, 1) => steep_x4::<false, 1>(s, ya..yb, y0, w, c, &mut f),
+        (false, 2) => steep_x4::<false, 2>(s, ya..yb, y0, w, c, &mut f),
+        (_, _) => steep_x4::<false, 0>(s, ya..yb, y0, w, c, &mut f),
+    }
+    true
+}
+
+/// The rows `ys` of a steep streak, `f` per chunk of four pixels of each row's window
+/// (`CHUNKS` chunks; 0: as many as the window needs), lanes outside the columns
+/// [`cols.0`, `cols.1`) zeroed. `THIN`: under a pixel wide all along.
+#[inline(always)]
+fn steep_x4<const THIN: bool, const CHUNKS: usize>(s: &ScreenStreak, ys: std::ops::Range<usize>, y0: usize, w: usize, cols: (f32, f32), f: &mut impl FnMut(usize, Vec4, Vec4)) {
+    let (c0, c1) = (Vec4::splat(cols.0), Vec4::splat(cols.1));
+    let inside = |x: Vec4, a: Vec4| Vec4::select(x.cmpge(c0) & x.cmplt(c1), a, Vec4::ZERO);
+    let chunks = if CHUNKS > 0 { CHUNKS } else { ceil_nonneg(2.0 * s.half).max(1).div_ceil(4) };
+    let (dx, dy) = (s.dir.x, s.dir.y);
+    let last = w - 4 * chunks;
+    let lanes = Vec4::new(0.0, 1.0, 2.0, 3.0);
+    let mut ys = ys;
+    if THIN && CHUNKS == 1 {
+        // Four rows at a time, one per lane: the rows' windows and coverages are computed
+        // side by side (a row alone is a chain of dependent steps, float to integer and back,
+        // that leaves the core mostly waiting), then transposed to four pixels per row.
+        let (ax, ay) = (Vec4::splat(s.a.x), Vec4::splat(s.a.y));
+        let lastf = idx_f32(last);
+        while ys.len() >= 4 {
+            let y = ys.start;
+            let qy = Vec4::splat(idx_f32(y)) + lanes + Vec4::splat(0.5) - ay;
+            let xc = ax + qy * s.slope;
+            let x0 = (xc - Vec4::splat(s.half) + Vec4::splat(0.5)).max(Vec4::ZERO).floor().min(Vec4::splat(lastf));
+            let qx0 = x0 + Vec4::splat(0.5) - ax;
+            let (along0, across0) = (qy * dy + qx0 * dx, qx0 * dy - qy * dx);
+            let mut cov = [Vec4::ZERO; 4];
+            let mut inv = [Vec4::ZERO; 4];
+            for j in 0..4 {
+                let jf = idx_f32(j);
+                (cov[j], inv[j]) = s.coverage_x4::<true>(along0 + Vec4::splat(jf * dx), (across0 + Vec4::splat(jf * dy)).abs());
+            }
+            // (pixel j, row l) → (row l, pixel j)
+            let cov = glam::Mat4::from_cols(cov[0], cov[1], cov[2], cov[3]).transpose();
+            let inv = glam::Mat4::from_cols(inv[0], inv[1], inv[2], inv[3]).transpose();
+            // x0 holds whole numbers in [0, 2²³): adding 2²³ puts each in the low mantissa
+            // bits, read without a float-to-integer conversion.
+            let x0f = x0;
+            let x0 = (x0 + Vec4::splat(8_388_608.0)).to_array();
+            for l in 0..4 {
+                let x = Vec4::splat(x0f[l]) + lanes;
+                f((y + l - y0) * w + (x0[l].to_bits() - 0x4B00_0000) as usize, inside(x, cov.col(l)), inv.col(l));
+            }
+            ys.start += 4;
+        }
+    }
+    for y in ys {
+        let qy = idx_f32(y) + 0.5 - s.a.y;
+        let xc = s.a.x + qy * s.slope;
+        let x0 = floor_nonneg((xc - s.half + 0.5).max(0.0)).min(last);
+        let qx0 = idx_f32(x0) + 0.5 - s.a.x;
+        let (along0, across0) = (qy * dy + qx0 * dx, qx0 * dy - qy * dx);
+        let row = (y - y0) * w + x0;
+        for c in 0..chunks {
+            // j·dx and j·dy as the scalar walk forms them (same bits).
+            let j = lanes + Vec4::splat(idx_f32(4 * c));
+            let along = Vec4::splat(along0) + j * dx;
+            let across = (Vec4::splat(across0) + j * dy).abs();
+            let (a, inv_z) = s.coverage_x4::<THIN>(along, across);
+            f(row + 4 * c, inside(Vec4::splat(idx_f32(x0 + 4 * c)) + lanes, a), inv_z);
         }
     }
 }
@@ -410,16 +535,16 @@ impl SteepRows<'_> {
                 let mut row = [0usize; 4];
                 let (mut along0, mut across0) = ([0.0f32; 4], [0.0f32; 4]);
                 for l in 0..4 {
-                    let qy = (y + l) as f32 + 0.5 - s.a.y;
+                    let qy = idx_f32(y + l) + 0.5 - s.a.y;
                     let xc = s.a.x + qy * self.slope;
                     let x0 = floor_nonneg((xc - self.half + 0.5).max(0.0)).min(self.w - N);
-                    let qx0 = x0 as f32 + 0.5 - s.a.x;
+                    let qx0 = idx_f32(x0) + 0.5 - s.a.x;
                     along0[l] = qy * dy + qx0 * dx;
                     across0[l] = qx0 * dy - qy * dx;
                     row[l] = (y + l - self.y0) * self.w + x0;
                 }
                 for j in 0..N {
-                    let jf = j as f32;
+                    let jf = idx_f32(j);
                     let (mut a, mut inv_z) = ([0.0f32; 4], [0.0f32; 4]);
                     for l in 0..4 {
                         let c = s.coverage::<true>(along0[l] + jf * dx, (across0[l] + jf * dy).abs());
@@ -439,14 +564,14 @@ impl SteepRows<'_> {
             }
         }
         for y in ys {
-            let qy = y as f32 + 0.5 - s.a.y;
+            let qy = idx_f32(y) + 0.5 - s.a.y;
             let xc = s.a.x + qy * self.slope;
             let x0 = floor_nonneg((xc - self.half + 0.5).max(0.0)).min(self.w - span);
-            let qx0 = x0 as f32 + 0.5 - s.a.x;
+            let qx0 = idx_f32(x0) + 0.5 - s.a.x;
             let (along0, across0) = (qy * dy + qx0 * dx, qx0 * dy - qy * dx);
             let row = (y - self.y0) * self.w + x0;
             for j in 0..span {
-                let jf = j as f32;
+                let jf = idx_f32(j);
                 let (a, inv_z) = s.coverage::<THIN>(along0 + jf * dx, (across0 + jf * dy).abs());
                 f(row + j, a, inv_z);
             }
@@ -553,6 +678,55 @@ mod tests {
             checked += 1;
         }
         assert!(checked > 100, "{checked}");
+    }
+
+    #[test]
+    fn the_four_wide_walk_visits_every_covered_pixel_of_its_columns_once() {
+        // Against ScreenStreak::fragment at every pixel, walked in bands of 7 rows and tiles
+        // of 13 columns (so windows cross tile edges and the frame's right edge): every pixel
+        // gets its coverage from exactly one tile, lanes outside a tile carry a = 0.
+        use rand::{Rng, SeedableRng};
+        let (w, h) = (64usize, 45usize);
+        let cam = Camera::new(w as u32, h as u32, [40.0, 40.0, 32.0, 22.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+        let (mut checked, mut thin) = (0, 0);
+        for _ in 0..600 {
+            let z: f32 = rng.random_range(0.1..6.0);
+            let p = Vec3::new(rng.random_range(-1.0..1.0) * z, rng.random_range(-0.8..0.8) * z, -z);
+            let v = Vec3::new(rng.random_range(-4.0..4.0), rng.random_range(-9.0..1.0), rng.random_range(-3.0..3.0));
+            let d = Drop { position_m: p, velocity_m_s: v, diameter_m: rng.random_range(0.5e-3..6e-3), id: [0; 5] };
+            let Some(s) = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO) else { continue };
+            let mut walked = vec![0.0f32; w * h];
+            let mut all = true;
+            for y0 in (0..h).step_by(7) {
+                let rows = 7.min(h - y0);
+                for c0 in (0..w).step_by(13) {
+                    let cols = c0..(c0 + 13).min(w);
+                    all &= for_each_fragment_x4(&s, y0, rows, w, cols.clone(), |i, a, inv_z| {
+                        let (row, x) = (i / w, i % w);
+                        assert!(row < rows && x + 4 <= w, "{i}");
+                        for l in 0..4 {
+                            if a[l] > 0.0 {
+                                assert!(cols.contains(&(x + l)), "lane {l} at x = {} outside {cols:?}", x + l);
+                                let (_, z) = s.fragment(Vec2::new((x + l) as f32 + 0.5, (y0 + row) as f32 + 0.5)).unwrap_or((0.0, f32::NAN));
+                                assert!((1.0 / inv_z[l] - z).abs() <= 1e-4 * z, "{} vs {z}", 1.0 / inv_z[l]);
+                            }
+                            walked[(y0 + row) * w + x + l] += a[l];
+                        }
+                    });
+                }
+            }
+            if !all {
+                continue; // not steep: the scalar walk's case
+            }
+            for (i, got) in walked.iter().enumerate() {
+                let want = s.fragment(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5)).map_or(0.0, |f| f.0);
+                assert!((got - want).abs() <= 2e-4 * s.alpha, "pixel {i}: {got} vs {want} ({s:?})");
+            }
+            checked += 1;
+            thin += usize::from(s.wa.max(s.wb) < 1.0);
+        }
+        assert!(checked > 200 && thin > 50, "{checked} {thin}");
     }
 
     #[test]
