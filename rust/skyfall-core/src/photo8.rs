@@ -215,7 +215,12 @@ fn raster_tile<const K: usize>(
 ) {
     let want_alpha = !cover.is_empty();
     let px = p.len();
-    for s in mine.iter().map(|&k| &streaks[k as usize]) {
+    for (n, s) in mine.iter().map(|&k| &streaks[k as usize]).enumerate() {
+        // Touch a streak eight ahead: its cache line (the list is larger than L2) is then on
+        // its way while this one is drawn.
+        if let Some(&ahead) = mine.get(n + 8) {
+            std::hint::black_box(streaks[ahead as usize].touch());
+        }
         let l = s.light().to_array();
         // Four pixels of a row at a time for the steep streaks (nearly all).
         let walked = for_each_fragment_x4(s, y0, rows, w, cols.clone(), |i, a, inv_z| {

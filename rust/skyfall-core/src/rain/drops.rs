@@ -80,11 +80,62 @@ pub struct Drop {
 }
 
 fn wrap(x: f64) -> f64 {
-    x - x.floor()
+    x - floor(x)
+}
+
+/// ⌊x⌋ for |x| < 2⁶³ by truncation (the same value as `f64::floor`, which is a libm call on
+/// targets without a rounding instruction).
+#[inline]
+pub(crate) fn floor(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t > x { t - 1.0 } else { t }
+}
+
+/// Fall speeds per diameter bin, tabulated: Beard's law (a logarithm, a polynomial and an
+/// exponential per call) at `SPEED_STEPS` + 1 evenly spaced diameters of each bin, read back by
+/// linear interpolation; the cells holding one of the law's regime boundaries (19 µm, 1.07 mm)
+/// call the law itself. Relative error under 1e-6 (tested), against Beard's own ~2 % from
+/// measured speeds.
+pub(crate) struct BinSpeeds {
+    law: FallSpeed,
+    /// Per bin: lowest diameter (mm), 1/step (1/mm), the speeds, and the cell (if any) that
+    /// straddles a regime boundary.
+    tables: Vec<(f64, f64, Vec<f64>, [usize; 2])>,
+}
+
+const SPEED_STEPS: usize = 1024;
+
+impl BinSpeeds {
+    pub(crate) fn new(bins: &[(f64, f64)]) -> Self {
+        let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+        let tables = bins
+            .iter()
+            .map(|&(lo, hi)| {
+                let step = (hi - lo) / SPEED_STEPS as f64;
+                let inv_step = if step > 0.0 { 1.0 / step } else { 0.0 };
+                let cell = |d: f64| if d > lo && d < hi { ((d - lo) * inv_step) as usize } else { usize::MAX };
+                (lo, inv_step, (0..=SPEED_STEPS).map(|k| law.m_s(lo + step * k as f64)).collect(), [cell(19e-3), cell(1.07)])
+            })
+            .collect();
+        BinSpeeds { law, tables }
+    }
+
+    /// The fall speed, m/s, of a drop of `d_mm` in bin `bin` (clamped to the bin).
+    #[inline]
+    pub(crate) fn m_s(&self, bin: usize, d_mm: f64) -> f64 {
+        let (lo, inv_step, v, kinks) = &self.tables[bin];
+        let x = ((d_mm - lo) * inv_step).clamp(0.0, SPEED_STEPS as f64);
+        let k = (x as usize).min(SPEED_STEPS - 1);
+        if kinks.contains(&k) {
+            return self.law.m_s(d_mm);
+        }
+        let f = x - k as f64;
+        v[k] + (v[k + 1] - v[k]) * f
+    }
 }
 
 /// The drops of one voxel and bin.
-fn voxel_drops(region: &RainRegion, law: &FallSpeed, voxel: [i64; 3], bin: usize, out: &mut Vec<Drop>) {
+fn voxel_drops(region: &RainRegion, speeds: &BinSpeeds, voxel: [i64; 3], bin: usize, out: &mut Vec<Drop>) {
     let (lo, hi) = region.bins[bin];
     let expected = drops_per_m3(region.rain_rate_mm_h, lo, hi);
     if expected <= 0.0 {
@@ -99,7 +150,7 @@ fn voxel_drops(region: &RainRegion, law: &FallSpeed, voxel: [i64; 3], bin: usize
     let base = DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64);
     for k in 0..n {
         let d_mm = (lo - (-rng.random::<f64>() * tail).ln_1p() / lam).min(hi);
-        let v = law.m_s(d_mm);
+        let v = speeds.m_s(bin, d_mm);
         let vel = DVec3::new(region.wind_m_s.x, -v, region.wind_m_s.z);
         let p0 = DVec3::new(rng.random(), rng.random(), rng.random());
         let p = p0 + vel * region.time_s;
@@ -140,10 +191,10 @@ impl RainMethod {
 /// Every drop within `region.near_m` of `center_m` (voxels at or above the ground only when
 /// `ground` is set), in a deterministic order.
 pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop> {
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let speeds = BinSpeeds::new(&region.bins);
     voxels_where(region, center_m, ground, |_| true, |voxel, out| {
         for bin in 0..region.bins.len() {
-            voxel_drops(region, &law, voxel, bin, out);
+            voxel_drops(region, &speeds, voxel, bin, out);
         }
     })
 }
@@ -178,10 +229,10 @@ pub fn voxel_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_
 /// voxels that cannot are skipped without drawing their drops. The drops kept are exactly
 /// those of [`drops_near`] in those voxels.
 pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64, ground: bool) -> Vec<Drop> {
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let speeds = BinSpeeds::new(&region.bins);
     voxels_where(region, cam.position_m, ground, voxel_in_view(region, cam, exposure_s, camera_speed_m_s), |voxel, out| {
         for bin in 0..region.bins.len() {
-            voxel_drops(region, &law, voxel, bin, out);
+            voxel_drops(region, &speeds, voxel, bin, out);
         }
     })
 }
@@ -230,6 +281,34 @@ mod tests {
 
     fn region(t: f64) -> RainRegion {
         RainRegion::new(20.0, &[1.0, 1.5, 2.0], 3.0, [1.0, 0.0, 0.0], t, 9).unwrap()
+    }
+
+    #[test]
+    fn tabulated_speeds_follow_beards_law() {
+        use rand::{Rng, SeedableRng};
+        let bins = [(0.01, 0.03), (0.1, 0.3), (1.0, 1.2), (1.8, 2.0), (2.0, 3.0), (5.0, 6.0)];
+        let t = BinSpeeds::new(&bins);
+        let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        let mut worst = 0.0f64;
+        for (b, &(lo, hi)) in bins.iter().enumerate() {
+            for _ in 0..20_000 {
+                let d = rng.random_range(lo..=hi);
+                let e = (t.m_s(b, d) / law.m_s(d) - 1.0).abs();
+                assert!(e < 1e-6, "bin {b} d = {d}: {e:e}");
+                worst = worst.max(e);
+            }
+            assert_eq!(t.m_s(b, lo), law.m_s(lo));
+            assert!((t.m_s(b, hi) / law.m_s(hi) - 1.0).abs() < 1e-12);
+        }
+        assert!(worst < 1e-6, "{worst:e}");
+    }
+
+    #[test]
+    fn floor_by_truncation_is_floor() {
+        for x in [-3.5, -3.0, -0.0, 0.0, -1e-300, 1e-300, 0.999_999, 2.0, -2.000_001, 9e15, -9e15, 123_456.789] {
+            assert_eq!(floor(x), x.floor(), "{x}");
+        }
     }
 
     #[test]

@@ -188,6 +188,12 @@ pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_
 }
 
 impl ScreenStreak {
+    /// One value of the streak (to pull its cache line in ahead of use).
+    #[inline(always)]
+    pub fn touch(&self) -> f32 {
+        self.half
+    }
+
     /// The drop's received light I_R, per channel (relative units).
     pub fn light(&self) -> Vec3 {
         self.light
@@ -204,8 +210,10 @@ impl ScreenStreak {
     /// Pixel rows and columns the streak may touch: (x0, x1, y0, y1), end-exclusive, clipped
     /// to a `width` × `height` frame.
     pub fn pixel_bounds(&self, width: u32, height: u32) -> (u32, u32, u32, u32) {
-        let c = |v: f32, hi: u32| v.clamp(0.0, hi as f32) as u32;
-        (c(self.min.x.floor(), width), c(self.max.x.ceil(), width), c(self.min.y.floor(), height), c(self.max.y.ceil(), height))
+        // Clamped first, so truncation is the floor (no libm floor/ceil on SSE2 targets).
+        let lo = |v: f32, hi: u32| floor_nonneg(v.clamp(0.0, hi as f32)) as u32;
+        let up = |v: f32, hi: u32| ceil_nonneg(v.clamp(0.0, hi as f32)) as u32;
+        (lo(self.min.x, width), up(self.max.x, width), lo(self.min.y, height), up(self.max.y, height))
     }
 
     /// Coverage of the pixel centred at `p` and the depth there: (α·coverage, depth m), or
