@@ -15,7 +15,7 @@ use crate::error::{Error, Param, Result};
 use crate::frame::check_frame_size;
 use crate::haze::Haze;
 use crate::rain::splat::{bin_by_tiles, for_each_fragment, for_each_fragment_x4, RainFrame, RainStats, ScreenStreak};
-use glam::Vec4;
+use glam::{Vec4, Vec4Swizzles};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
 use std::cell::RefCell;
@@ -215,6 +215,12 @@ fn raster_tile<const K: usize>(
 ) {
     let want_alpha = !cover.is_empty();
     let px = p.len();
+    // Every buffer cut to the band's px (Q into its planes): one check per four pixels below
+    // (i + 4 ≤ px) then covers every slice.
+    let depth = &depth[..px];
+    let mut planes = q.chunks_exact_mut(px);
+    let mut qs: [&mut [f32]; K] = std::array::from_fn(|_| planes.next().unwrap_or_default());
+    let cover_x4 = if want_alpha { &mut cover[..px] } else { &mut cover[..0] };
     for (n, s) in mine.iter().map(|&k| &streaks[k as usize]).enumerate() {
         // Touch a streak eight ahead: its cache line (the list is larger than L2) is then on
         // its way while this one is drawn.
@@ -226,17 +232,17 @@ fn raster_tile<const K: usize>(
         let walked = for_each_fragment_x4(s, y0, rows, w, cols.clone(), |i, a, inv_z| {
             // Hidden where z ≥ depth (1 ≥ depth/z, without the division); a = 0 leaves the
             // pixels as they are, so there is no branch on it.
-            let d = Vec4::from_slice(&depth[i..i + 4]);
+            let Some(end) = i.checked_add(4).filter(|&e| e <= px) else { return };
+            let d = Vec4::from_slice(&depth[i..end]);
             let a = Vec4::select((d * inv_z).cmple(Vec4::ONE), Vec4::ZERO, a);
             let ar = a * r;
             let keep = Vec4::ONE - ar;
-            (Vec4::from_slice(&p[i..i + 4]) * keep).write_to_slice(&mut p[i..i + 4]);
-            for (c, &lc) in l.iter().enumerate().take(K) {
-                let j = c * px + i;
-                (Vec4::from_slice(&q[j..j + 4]) * keep + ar * lc).write_to_slice(&mut q[j..j + 4]);
+            (Vec4::from_slice(&p[i..end]) * keep).write_to_slice(&mut p[i..end]);
+            for (q, &lc) in qs.iter_mut().zip(&l) {
+                (Vec4::from_slice(&q[i..end]) * keep + ar * lc).write_to_slice(&mut q[i..end]);
             }
-            if want_alpha {
-                (Vec4::from_slice(&cover[i..i + 4]) * (Vec4::ONE - a)).write_to_slice(&mut cover[i..i + 4]);
+            if want_alpha && end <= cover_x4.len() {
+                (Vec4::from_slice(&cover_x4[i..end]) * (Vec4::ONE - a)).write_to_slice(&mut cover_x4[i..end]);
             }
         });
         if walked {
@@ -250,11 +256,11 @@ fn raster_tile<const K: usize>(
             let ar = a * r;
             let keep = 1.0 - ar;
             p[i] *= keep;
-            for (c, &lc) in l.iter().enumerate().take(K) {
-                q[c * px + i] = q[c * px + i] * keep + ar * lc;
+            for (q, &lc) in qs.iter_mut().zip(&l) {
+                q[i] = q[i] * keep + ar * lc;
             }
             if want_alpha {
-                cover[i] *= 1.0 - a;
+                cover_x4[i] *= 1.0 - a;
             }
         });
     }
@@ -269,10 +275,63 @@ fn transmittance_row(h: &Haze, u2: &[f32], v2: f32, depth: &[f32], t: &mut [f32]
 }
 
 /// A row's bytes: decoded, hazed (eq. 2; t = 1 without haze), mapped by the rain's P·C + Q
-/// (`p`, and `q` with `K` planes `stride` apart, see [`raster_band`]), encoded.
+/// (`p`, and `q` with `K` planes `stride` apart, see [`raster_tile`]), encoded.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<(&[f32], &[f32], usize)>, src: &[u8], out: &mut [u8]) {
+    if K == 1 {
+        // Four pixels at a time: their twelve values in three vectors (R G B R | G B R G |
+        // B R G B), the arithmetic and the clamp vectorised, the same operations in the same
+        // order as one by one below (same bits); the tail pixels one by one.
+        let n4 = t.len() / 4 * 4;
+        let (t4, t_tail) = t.split_at(n4);
+        let (src4, src_tail) = src.split_at(3 * n4);
+        let (out4, out_tail) = out.split_at_mut(3 * n4);
+        let air4 = [Vec4::new(air[0], air[1], air[2], air[0]), Vec4::new(air[1], air[2], air[0], air[1]), Vec4::new(air[2], air[0], air[1], air[2])];
+        let groups = out4.chunks_exact_mut(12).zip(src4.chunks_exact(12)).zip(t4.chunks_exact(4));
+        let maps = pq.map(|(p, q, _)| (p.split_at(n4), q.split_at(n4)));
+        match maps {
+            None => groups.for_each(|((o, s), tc)| shade4(decode, enc, &air4, o, s, tc, None)),
+            Some(((p4, _), (q4, _))) => {
+                groups.zip(p4.chunks_exact(4).zip(q4.chunks_exact(4))).for_each(|(((o, s), tc), (p, q))| shade4(decode, enc, &air4, o, s, tc, Some((p, q))));
+            }
+        }
+        let tail = maps.map(|((_, p), (_, q))| (p, q, 0));
+        return shade_row_x1::<K>(decode, enc, air, t_tail, tail, src_tail, out_tail);
+    }
+    shade_row_x1::<K>(decode, enc, air, t, pq, src, out);
+}
+
+/// Four pixels of [`shade_row`] (`K` = 1): twelve bytes of `s` into `o`, `tc` their
+/// transmittances, `map` their P and Q.
+#[inline(always)]
+fn shade4(decode: &[f32; 256], enc: Srgb8Encoder, air4: &[Vec4; 3], o: &mut [u8], s: &[u8], tc: &[f32], map: Option<(&[f32], &[f32])>) {
+    let d = |k: usize| decode[usize::from(s[k])];
+    let v = [Vec4::new(d(0), d(1), d(2), d(3)), Vec4::new(d(4), d(5), d(6), d(7)), Vec4::new(d(8), d(9), d(10), d(11))];
+    let tv = Vec4::from_slice(tc);
+    let ts = [tv.xxxy(), tv.yyzz(), tv.zwww()];
+    let pqs = map.map(|(p, q)| {
+        let (p, q) = (Vec4::from_slice(p), Vec4::from_slice(q));
+        ([p.xxxy(), p.yyzz(), p.zwww()], [q.xxxy(), q.yyzz(), q.zwww()])
+    });
+    for m in 0..3 {
+        let mut h = v[m] * ts[m] + air4[m] * (Vec4::ONE - ts[m]);
+        if let Some((ps, qs)) = &pqs {
+            h = h * ps[m] + qs[m];
+        }
+        // The encoder's clamp: NaN and x ≤ 0 to 0 (maxps keeps its second operand then),
+        // above 1 to 1.
+        let h = h.max(Vec4::ZERO).min(Vec4::ONE).to_array();
+        for (b, x) in o[4 * m..4 * m + 4].iter_mut().zip(h) {
+            *b = enc.encode_unit(x);
+        }
+    }
+}
+
+/// [`shade_row`] one pixel at a time.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn shade_row_x1<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<(&[f32], &[f32], usize)>, src: &[u8], out: &mut [u8]) {
     // Zipped iterators, one loop per case: no bounds check and no branch per pixel.
     let pixels = out.chunks_exact_mut(3).zip(src.chunks_exact(3)).zip(t);
     let hazed = |s: &[u8], t: f32| -> [f32; 3] { std::array::from_fn(|ch| decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t)) };
@@ -381,6 +440,28 @@ mod tests {
         let lit = RainShading { lights: vec![lamp], ..RainShading::open_sky() };
         assert!(lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).x > 2.0 * lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).z);
         check_against_the_float_frame(&lit);
+    }
+
+    #[test]
+    fn four_pixels_at_a_time_give_the_one_by_one_bits() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(21);
+        let dec = decode_table();
+        let enc = Srgb8Encoder::new();
+        for n in (0..=13).chain([128, 131]) {
+            let src: Vec<u8> = (0..3 * n).map(|_| rng.random()).collect();
+            let t: Vec<f32> = (0..n).map(|_| if rng.random_bool(0.2) { 1.0 } else { rng.random() }).collect();
+            let p: Vec<f32> = (0..n).map(|_| rng.random()).collect();
+            let q: Vec<f32> = (0..n).map(|_| rng.random_range(0.0..2.0)).collect();
+            for air in [[0.3, 1.5, 0.0], [0.0; 3]] {
+                for maps in [None, Some((&p[..], &q[..], n))] {
+                    let (mut a, mut b) = (vec![0u8; 3 * n], vec![0u8; 3 * n]);
+                    shade_row::<1>(&dec, enc, air, &t, maps, &src, &mut a);
+                    shade_row_x1::<1>(&dec, enc, air, &t, maps, &src, &mut b);
+                    assert_eq!(a, b, "n = {n}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -24,8 +24,12 @@ pub fn encode_srgb8_formula(x: f32) -> u8 {
 /// the table is built and by the tests), so one comparison finishes the lookup.
 struct Srgb8Table {
     thresholds: [f32; 256],
-    coarse: Vec<u8>,
+    /// Per block of 2¹⁶ float bit patterns up to 1.0 (0x3F80 blocks), the first value's code;
+    /// sized to a power of two the index is masked to, so lookups need no bounds check.
+    coarse: Box<[u8; COARSE]>,
 }
+
+const COARSE: usize = 1 << 14;
 
 fn srgb8_table() -> &'static Srgb8Table {
     static TABLE: OnceLock<Srgb8Table> = OnceLock::new();
@@ -41,7 +45,10 @@ fn srgb8_table() -> &'static Srgb8Table {
             }
             *t = f32::from_bits(lo);
         }
-        let coarse: Vec<u8> = (0..=(one >> 16)).map(|b| encode_srgb8_formula(f32::from_bits(b << 16))).collect();
+        let mut coarse = Box::new([255u8; COARSE]);
+        for (b, c) in coarse.iter_mut().enumerate().take((one >> 16) as usize + 1) {
+            *c = encode_srgb8_formula(f32::from_bits((b as u32) << 16));
+        }
         debug_assert!(thresholds.windows(2).all(|p| p[0].to_bits() >> 16 < p[1].to_bits() >> 16 || p[1].is_infinite()));
         Srgb8Table { thresholds, coarse }
     })
@@ -66,6 +73,14 @@ impl Srgb8Encoder {
         // NaN and negatives (−0 included: max may keep it) to 0, ≥ 1 to the last block.
         let x = if x > 0.0 { x.min(1.0) } else { 0.0 };
         let c = t.coarse[(x.to_bits() >> 16) as usize];
+        c + u8::from(x >= t.thresholds[usize::from(c)])
+    }
+
+    /// [`Self::encode`] of a value already in [0, 1] (clamped by the caller, NaN as 0).
+    #[inline]
+    pub fn encode_unit(self, x: f32) -> u8 {
+        let t = self.0;
+        let c = t.coarse[(x.to_bits() >> 16) as usize & (COARSE - 1)];
         c + u8::from(x >= t.thresholds[usize::from(c)])
     }
 }
