@@ -266,6 +266,13 @@ fn raster_tile<const K: usize>(
     }
 }
 
+/// The first four values of `s` as a vector, in one unaligned load (glam's `from_slice`
+/// assembles it from four scalars); zeros if `s` is shorter (callers pass four or more).
+#[inline(always)]
+fn load4(s: &[f32]) -> Vec4 {
+    s.first_chunk::<4>().map_or(Vec4::ZERO, |a| Vec4::from(*a))
+}
+
 /// A row's haze transmittance (branch-free: the loop vectorises).
 #[inline(never)]
 fn transmittance_row(h: &Haze, u2: &[f32], v2: f32, depth: &[f32], t: &mut [f32]) {
@@ -308,10 +315,10 @@ fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 
 fn shade4(decode: &[f32; 256], enc: Srgb8Encoder, air4: &[Vec4; 3], o: &mut [u8], s: &[u8], tc: &[f32], map: Option<(&[f32], &[f32])>) {
     let d = |k: usize| decode[usize::from(s[k])];
     let v = [Vec4::new(d(0), d(1), d(2), d(3)), Vec4::new(d(4), d(5), d(6), d(7)), Vec4::new(d(8), d(9), d(10), d(11))];
-    let tv = Vec4::from_slice(tc);
+    let tv = load4(tc);
     let ts = [tv.xxxy(), tv.yyzz(), tv.zwww()];
     let pqs = map.map(|(p, q)| {
-        let (p, q) = (Vec4::from_slice(p), Vec4::from_slice(q));
+        let (p, q) = (load4(p), load4(q));
         ([p.xxxy(), p.yyzz(), p.zwww()], [q.xxxy(), q.yyzz(), q.zwww()])
     });
     for m in 0..3 {
