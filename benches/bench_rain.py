@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from timing import median_s
+from timing import interleaved_medians_s, median_s
 
 from skyfall import GpuUnavailableError, PhotoScene, Renderer, Weather, io, scenes
 
@@ -36,8 +36,6 @@ def main() -> None:
 
     rows: list[dict[str, object]] = []
     rain_aug = A.RandomRain(p=1.0)
-    t_alb = median_s(lambda: rain_aug(image=photo8)["image"])
-    rows.append({"impl": "albumentations 2.0.8 RandomRain (uint8 in, uint8 out; flat, no depth)", "s": t_alb})
 
     def skyfall_uint8() -> np.ndarray:
         scene = PhotoScene(photo8, depth, camera=street.camera)
@@ -50,9 +48,22 @@ def main() -> None:
     def skyfall_fused_haze() -> np.ndarray:
         return cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), Weather(rain_rate_mm_h=10.0, rain_streaks=False))
 
-    t_fused = median_s(skyfall_fused, 15)
-    t_fused_haze = median_s(skyfall_fused_haze, 15)
+    # The peer and the fused paths timed in alternation (the machine is shared and its speed
+    # drifts): every ratio below compares times taken in the same rounds.
+    out8 = np.empty_like(photo8)
+    t = interleaved_medians_s(
+        {
+            "alb": lambda: rain_aug(image=photo8)["image"],
+            "fused": skyfall_fused,
+            "fused_out": lambda: cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), weather, out=out8),
+            "haze": skyfall_fused_haze,
+        },
+        rounds=21,
+    )
+    t_alb, t_fused, t_fused_out, t_fused_haze = t["alb"], t["fused"], t["fused_out"], t["haze"]
+    rows.append({"impl": "albumentations 2.0.8 RandomRain (uint8 in, uint8 out; flat, no depth)", "s": t_alb})
     rows.append({"impl": "skyfall CPU, Renderer.render_srgb8: fused 8-bit path, drops method + haze (uint8 in, uint8 out)", "s": t_fused})
+    rows.append({"impl": "skyfall CPU, Renderer.render_srgb8 as above, writing into a reused out= array", "s": t_fused_out})
     rows.append({"impl": "skyfall CPU, Renderer.render_srgb8, haze only (rain_streaks=False): the floor without streaks", "s": t_fused_haze})
     scene_f = PhotoScene(photo8, depth, camera=street.camera)
     t_u8 = median_s(skyfall_uint8, 5)
@@ -155,7 +166,8 @@ def main() -> None:
         "render_srgb8 fuses decode, haze, the streaks (as a per-pixel P·C + Q, rasterised per band of",
         "rows) and the encode into one pass with no frame-sized float buffers; its bytes are within one",
         f"code of the float frame's. The streaks cost {(t_fused - t_fused_haze) * 1e3:.1f} ms of its {t_fused * 1e3:.1f} ms: the goal of",
-        f"2× albumentations ({t_alb * 500:.1f} ms) is not reached; the haze alone, depth-aware, is {t_alb / t_fused_haze:.2f}× its throughput.",
+        f"2× albumentations ({t_alb * 500:.1f} ms) is {'reached' if t_alb / t_fused >= 2 else 'not reached'}; the haze alone, depth-aware, is {t_alb / t_fused_haze:.2f}× its throughput.",
+        "albumentations and the three render_srgb8 rows were timed in alternation, 21 rounds.",
     ]
     lines += [
         "",

@@ -30,10 +30,10 @@ def _finite_vec3(name: str, value: Any) -> NDArray[np.float64]:
 
 def _rotation_from_yaw_pitch(yaw_deg: float, pitch_deg: float) -> NDArray[np.float64]:
     y, p = math.radians(yaw_deg), math.radians(pitch_deg)
-    ry = np.array([[math.cos(y), 0, math.sin(y)], [0, 1, 0], [-math.sin(y), 0, math.cos(y)]])
-    rx = np.array([[1, 0, 0], [0, math.cos(p), -math.sin(p)], [0, math.sin(p), math.cos(p)]])
-    out: NDArray[np.float64] = ry @ rx
-    return out
+    # R_y(yaw) · R_x(pitch) written out (a 3x3 matmul would go through BLAS, whose worker
+    # threads then spin on the cores the renderer uses).
+    cy, sy, cp, sp = math.cos(y), math.sin(y), math.cos(p), math.sin(p)
+    return np.array([[cy, sy * sp, sy * cp], [0.0, cp, -sp], [-sy, cy * sp, cy * cp]])
 
 
 class Camera:

@@ -106,6 +106,14 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
         }
         None => (Vec::new(), None),
     };
+    if haze.is_none() && streaks.is_empty() {
+        // Nothing to draw: encode(decode(b)) = b for every byte (tested), so the bytes as they are.
+        out.srgb.copy_from_slice(photo.srgb);
+        if let Some(a) = out.rain_alpha {
+            a.fill(0.0);
+        }
+        return Ok(stats);
+    }
     let r = rain.map_or(0.0, |rf| rf.shading.reflectance);
     // Each band of rows is cut into tiles of TILE_W columns, rasterised and shaded one after
     // the other: a tile's scratch and depth stay in the core's L1.
