@@ -6,14 +6,20 @@ Writes benches/results/rain.md and rain.json. Run with `make bench`.
 
 from __future__ import annotations
 
-import json
 import os
+
+# numpy's OpenBLAS keeps worker threads spinning after a BLAS call (the scene set-up makes some);
+# on a 2-core machine they take cycles from both peers' timed work. Neither peer's timed work
+# uses BLAS, so one BLAS thread changes nothing but the noise.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import json
 import platform
 import time
 from pathlib import Path
 
 import numpy as np
-from timing import interleaved_medians_s, median_s
+from timing import block_medians_s, median_s
 
 from skyfall import GpuUnavailableError, PhotoScene, Renderer, Weather, io, scenes
 
@@ -48,17 +54,18 @@ def main() -> None:
     def skyfall_fused_haze() -> np.ndarray:
         return cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), Weather(rain_rate_mm_h=10.0, rain_streaks=False))
 
-    # The peer and the fused paths timed in alternation (the machine is shared and its speed
-    # drifts): every ratio below compares times taken in the same rounds.
+    # The peer and the fused paths timed in alternating blocks (the machine is shared and its
+    # speed drifts): the ratios below compare times taken in the same rounds.
     out8 = np.empty_like(photo8)
-    t = interleaved_medians_s(
+    t = block_medians_s(
         {
             "alb": lambda: rain_aug(image=photo8)["image"],
             "fused": skyfall_fused,
             "fused_out": lambda: cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), weather, out=out8),
             "haze": skyfall_fused_haze,
         },
-        rounds=21,
+        blocks=7,
+        per_block=5,
     )
     t_alb, t_fused, t_fused_out, t_fused_haze = t["alb"], t["fused"], t["fused_out"], t["haze"]
     rows.append({"impl": "albumentations 2.0.8 RandomRain (uint8 in, uint8 out; flat, no depth)", "s": t_alb})
@@ -167,7 +174,9 @@ def main() -> None:
         "rows) and the encode into one pass with no frame-sized float buffers; its bytes are within one",
         f"code of the float frame's. The streaks cost {(t_fused - t_fused_haze) * 1e3:.1f} ms of its {t_fused * 1e3:.1f} ms: the goal of",
         f"2× albumentations ({t_alb * 500:.1f} ms) is {'reached' if t_alb / t_fused >= 2 else 'not reached'}; the haze alone, depth-aware, is {t_alb / t_fused_haze:.2f}× its throughput.",
-        "albumentations and the three render_srgb8 rows were timed in alternation, 21 rounds.",
+        "albumentations and the three render_srgb8 rows were timed in alternating blocks (7 rounds of 5",
+        "calls each, after a pause and an untimed call: each library's worker threads spin for a while",
+        "after its last call and would take the cores from the other's first calls).",
     ]
     lines += [
         "",

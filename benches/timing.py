@@ -18,16 +18,20 @@ def median_s(fn: Callable[[], object], repeat: int = 7) -> float:
     return statistics.median(times)
 
 
-def interleaved_medians_s(fns: dict[str, Callable[[], object]], rounds: int = 15) -> dict[str, float]:
-    """Median wall time of each function, seconds, timed in alternation: every round calls each
-    once, so a slow spell of a shared machine weighs on all of them alike (after one warm-up
-    call each)."""
-    for fn in fns.values():
-        fn()
+
+def block_medians_s(fns: dict[str, Callable[[], object]], blocks: int = 5, per_block: int = 5) -> dict[str, float]:
+    """Median wall time of each function, seconds, timed in alternating blocks: every round
+    times ``per_block`` calls of each function in turn, so a slow spell of a shared machine
+    weighs on all of them alike. Each block starts after a 50 ms pause and one untimed call:
+    a library's worker threads (OpenCV's, rayon's) spin for a while after its last call and
+    would otherwise take cores from the next function's first calls."""
     times: dict[str, list[float]] = {k: [] for k in fns}
-    for _ in range(rounds):
+    for _ in range(blocks):
         for k, fn in fns.items():
-            t0 = time.perf_counter()
+            time.sleep(0.05)
             fn()
-            times[k].append(time.perf_counter() - t0)
+            for _ in range(per_block):
+                t0 = time.perf_counter()
+                fn()
+                times[k].append(time.perf_counter() - t0)
     return {k: statistics.median(v) for k, v in times.items()}

@@ -94,8 +94,8 @@ pub(crate) fn floor(x: f64) -> f64 {
 /// Fall speeds per diameter bin, tabulated: Beard's law (a logarithm, a polynomial and an
 /// exponential per call) at `SPEED_STEPS` + 1 evenly spaced diameters of each bin, read back by
 /// linear interpolation; the cells holding one of the law's regime boundaries (19 µm, 1.07 mm)
-/// call the law itself. Relative error under 1e-6 (tested), against Beard's own ~2 % from
-/// measured speeds.
+/// call the law itself. Relative error under 3e-5 (3e-7 over 0.5 mm, in bins up to 1 mm wide;
+/// tested), against Beard's own ~2 % from measured speeds. Built per frame: 257 calls per bin.
 pub(crate) struct BinSpeeds {
     law: FallSpeed,
     /// Per bin: lowest diameter (mm), 1/step (1/mm), the speeds, and the cell (if any) that
@@ -103,7 +103,7 @@ pub(crate) struct BinSpeeds {
     tables: Vec<(f64, f64, Vec<f64>, [usize; 2])>,
 }
 
-const SPEED_STEPS: usize = 1024;
+const SPEED_STEPS: usize = 256;
 
 impl BinSpeeds {
     pub(crate) fn new(bins: &[(f64, f64)]) -> Self {
@@ -295,13 +295,13 @@ mod tests {
             for _ in 0..20_000 {
                 let d = rng.random_range(lo..=hi);
                 let e = (t.m_s(b, d) / law.m_s(d) - 1.0).abs();
-                assert!(e < 1e-6, "bin {b} d = {d}: {e:e}");
+                assert!(e < if lo < 0.5 { 3e-5 } else { 3e-7 }, "bin {b} d = {d}: {e:e}");
                 worst = worst.max(e);
             }
             assert_eq!(t.m_s(b, lo), law.m_s(lo));
             assert!((t.m_s(b, hi) / law.m_s(hi) - 1.0).abs() < 1e-12);
         }
-        assert!(worst < 1e-6, "{worst:e}");
+        assert!(worst < 3e-5, "{worst:e}");
     }
 
     #[test]
