@@ -466,10 +466,11 @@ fn steep_x4<const THIN: bool, const CHUNKS: usize>(s: &ScreenStreak, ys: std::op
     let last = w - 4 * chunks;
     let lanes = Vec4::new(0.0, 1.0, 2.0, 3.0);
     let mut ys = ys;
-    if THIN && CHUNKS == 1 {
-        // Four rows at a time, one per lane: the rows' windows and coverages are computed
-        // side by side (a row alone is a chain of dependent steps, float to integer and back,
-        // that leaves the core mostly waiting), then transposed to four pixels per row.
+    if CHUNKS == 1 {
+        // Windows of up to four pixels (nearly every streak): four rows at a time, one per
+        // lane. The rows' windows and coverages are computed side by side (a row alone is a
+        // chain of dependent steps, float to integer and back, that leaves the core mostly
+        // waiting), then transposed to four pixels per row.
         let (ax, ay) = (Vec4::splat(s.a.x), Vec4::splat(s.a.y));
         let lastf = idx_f32(last);
         while ys.len() >= 4 {
@@ -483,7 +484,7 @@ fn steep_x4<const THIN: bool, const CHUNKS: usize>(s: &ScreenStreak, ys: std::op
             let mut inv = [Vec4::ZERO; 4];
             for j in 0..4 {
                 let jf = idx_f32(j);
-                (cov[j], inv[j]) = s.coverage_x4::<true>(along0 + Vec4::splat(jf * dx), (across0 + Vec4::splat(jf * dy)).abs());
+                (cov[j], inv[j]) = s.coverage_x4::<THIN>(along0 + Vec4::splat(jf * dx), (across0 + Vec4::splat(jf * dy)).abs());
             }
             // (pixel j, row l) → (row l, pixel j)
             let cov = glam::Mat4::from_cols(cov[0], cov[1], cov[2], cov[3]).transpose();
