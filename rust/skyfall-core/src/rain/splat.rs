@@ -772,13 +772,13 @@ mod tests {
         // random frame and depth, against the definition: every pixel, every streak in order,
         // ScreenStreak::fragment.
         use rand::{Rng, SeedableRng};
-        let (w, h) = (70usize, 45usize);
-        let cam = Camera::new(w as u32, h as u32, [40.0, 40.0, 35.0, 22.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let (w, h) = (300usize, 45usize); // three column tiles, the last narrow
+        let cam = Camera::new(w as u32, h as u32, [40.0, 40.0, 150.0, 22.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
-        let drops: Vec<Drop> = (0..300)
+        let drops: Vec<Drop> = (0..600)
             .map(|k| {
                 let z: f32 = rng.random_range(0.2..6.0);
-                let p = Vec3::new(rng.random_range(-1.0..1.0) * z, rng.random_range(-0.8..0.8) * z, -z);
+                let p = Vec3::new(rng.random_range(-4.0..4.0) * z, rng.random_range(-0.8..0.8) * z, -z);
                 let v = Vec3::new(rng.random_range(-4.0..4.0), rng.random_range(-9.0..1.0), rng.random_range(-3.0..3.0));
                 Drop { position_m: p, velocity_m_s: v, diameter_m: rng.random_range(0.5e-3..5e-3), id: [k, 0, 0, 0, 0] }
             })
@@ -786,7 +786,7 @@ mod tests {
         let mut shading = RainShading::open_sky();
         shading.drop_radiance = 1.3;
         let (streaks, _) = prepare(&cam, &drops, 1.0 / 30.0, Vec3::ZERO, &shading);
-        assert!(streaks.len() > 150);
+        assert!(streaks.len() > 300);
         let n = w * h;
         let background: Vec<f32> = (0..3 * n).map(|_| rng.random()).collect();
         let depth: Vec<f32> = (0..n).map(|_| if rng.random_bool(0.3) { f32::INFINITY } else { rng.random_range(0.3..5.0) }).collect();
@@ -813,7 +813,7 @@ mod tests {
             assert!(rd[i] == near || (rd[i] - near).abs() < 1e-3 * near, "pixel {i}: {} vs {near}", rd[i]);
         }
         let rained = alpha.iter().filter(|&&a| a > 1e-3).count();
-        assert!(rained > n / 10, "{rained}");
+        assert!(rained > n / 20, "{rained}");
     }
 
     #[test]
