@@ -284,35 +284,54 @@ pub fn bin_by_tile(streaks: &[ScreenStreak], width: u32, height: u32, tile: u32)
 
 /// Streak indices per `tile_w` × `tile_h` pixel tile (row-major tiles), in list order:
 /// (offsets, indices) with the tile t's streaks at `indices[offsets[t]..offsets[t + 1]]`.
+/// The two halves of the list are binned in parallel and joined tile by tile.
 pub fn bin_by_tiles(streaks: &[ScreenStreak], width: u32, height: u32, tile_w: u32, tile_h: u32) -> (Vec<u32>, Vec<u32>) {
-    let (tx, ty) = (width.div_ceil(tile_w), height.div_ceil(tile_h));
-    let mut counts = vec![0u32; (tx * ty) as usize + 1];
-    let mut ranges = Vec::with_capacity(streaks.len());
-    for s in streaks {
-        let (x0, x1, y0, y1) = s.pixel_bounds(width, height);
-        let r = (x0 / tile_w, x1.div_ceil(tile_w), y0 / tile_h, y1.div_ceil(tile_h));
-        for j in r.2..r.3 {
-            for i in r.0..r.1 {
-                counts[(j * tx + i) as usize + 1] += 1;
+    let tx = width.div_ceil(tile_w);
+    let tiles = (tx * height.div_ceil(tile_h)) as usize;
+    let half = streaks.len() / 2;
+    let bin = |first: usize, part: &[ScreenStreak]| {
+        let ranges: Vec<(u32, u32, u32, u32)> = part
+            .iter()
+            .map(|s| {
+                let (x0, x1, y0, y1) = s.pixel_bounds(width, height);
+                (x0 / tile_w, x1.div_ceil(tile_w), y0 / tile_h, y1.div_ceil(tile_h))
+            })
+            .collect();
+        let mut counts = vec![0u32; tiles + 1];
+        for r in &ranges {
+            for j in r.2..r.3 {
+                for i in r.0..r.1 {
+                    counts[(j * tx + i) as usize + 1] += 1;
+                }
             }
         }
-        ranges.push(r);
-    }
-    for t in 1..counts.len() {
-        counts[t] += counts[t - 1];
-    }
-    let mut fill = counts.clone();
-    let mut indices = vec![0u32; counts[counts.len() - 1] as usize];
-    for (k, r) in ranges.iter().enumerate() {
-        for j in r.2..r.3 {
-            for i in r.0..r.1 {
-                let t = (j * tx + i) as usize;
-                indices[fill[t] as usize] = k as u32;
-                fill[t] += 1;
+        for t in 1..counts.len() {
+            counts[t] += counts[t - 1];
+        }
+        let mut fill = counts.clone();
+        let mut indices = vec![0u32; counts[tiles] as usize];
+        for (k, r) in ranges.iter().enumerate() {
+            for j in r.2..r.3 {
+                for i in r.0..r.1 {
+                    let t = (j * tx + i) as usize;
+                    indices[fill[t] as usize] = (first + k) as u32;
+                    fill[t] += 1;
+                }
             }
         }
+        (counts, indices)
+    };
+    let ((oa, ia), (ob, ib)) = rayon::join(|| bin(0, &streaks[..half]), || bin(half, &streaks[half..]));
+    // Tile t: the first half's streaks, then the second's (list order).
+    let mut offsets = Vec::with_capacity(tiles + 1);
+    let mut indices = Vec::with_capacity(ia.len() + ib.len());
+    offsets.push(0u32);
+    for t in 0..tiles {
+        indices.extend_from_slice(&ia[oa[t] as usize..oa[t + 1] as usize]);
+        indices.extend_from_slice(&ib[ob[t] as usize..ob[t + 1] as usize]);
+        offsets.push(indices.len() as u32);
     }
-    (counts, indices)
+    (offsets, indices)
 }
 
 /// The rain a frame draws.
@@ -814,6 +833,38 @@ mod tests {
         }
         let rained = alpha.iter().filter(|&&a| a > 1e-3).count();
         assert!(rained > n / 20, "{rained}");
+    }
+
+    #[test]
+    fn binning_lists_each_tiles_streaks_in_order() {
+        // Against the definition: per tile, the streaks whose pixel bounds meet it, in list
+        // order (the halves are binned in parallel and joined).
+        use rand::{Rng, SeedableRng};
+        let (w, h) = (200u32, 90u32);
+        let cam = Camera::new(w, h, [80.0, 80.0, 100.0, 45.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(8);
+        let streaks: Vec<ScreenStreak> = (0..301)
+            .filter_map(|_| {
+                let z: f32 = rng.random_range(0.2..6.0);
+                let p = Vec3::new(rng.random_range(-1.5..1.5) * z, rng.random_range(-0.8..0.8) * z, -z);
+                let v = Vec3::new(rng.random_range(-4.0..4.0), rng.random_range(-9.0..1.0), 0.0);
+                screen_streak(&cam, &Drop { position_m: p, velocity_m_s: v, diameter_m: 2e-3, id: [0; 5] }, 1.0 / 30.0, Vec3::ZERO)
+            })
+            .collect();
+        for (tw, th) in [(16, 16), (128, 16), (200, 7)] {
+            let (offsets, indices) = bin_by_tiles(&streaks, w, h, tw, th);
+            let tx = w.div_ceil(tw);
+            for t in 0..(tx * h.div_ceil(th)) {
+                let (x, y) = ((t % tx) * tw, (t / tx) * th);
+                let want: Vec<u32> = (0..streaks.len() as u32)
+                    .filter(|&k| {
+                        let (x0, x1, y0, y1) = streaks[k as usize].pixel_bounds(w, h);
+                        x0 < x + tw && x1 > x && y0 < y + th && y1 > y
+                    })
+                    .collect();
+                assert_eq!(&indices[offsets[t as usize] as usize..offsets[t as usize + 1] as usize], &want[..], "tile {t}");
+            }
+        }
     }
 
     #[test]

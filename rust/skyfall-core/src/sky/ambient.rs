@@ -157,12 +157,17 @@ impl AmbientMap {
     /// cell's open corners; over all of them when every corner with weight is solid.
     #[inline]
     pub fn sample(&self, p: Vec3) -> [f32; CHANNELS] {
+        if let Ok(only) = <[f32; CHANNELS]>::try_from(&self.values[..]) {
+            // One node (the open sky of a scene without occluders): its values everywhere.
+            return only;
+        }
         let mut base = [0usize; 3];
         let mut frac = [0.0f32; 3];
         for a in 0..3 {
             let n = self.dims[a];
             let g = ((p[a] - self.origin_m[a]) / self.spacing_m).clamp(0.0, (n - 1) as f32);
-            let i0 = (g.floor() as usize).min(n.saturating_sub(2));
+            // g ≥ 0: truncation is the floor (f32::floor is a libm call on SSE2 targets).
+            let i0 = (g as usize).min(n.saturating_sub(2));
             base[a] = i0;
             frac[a] = if n > 1 { g - i0 as f32 } else { 0.0 };
         }
