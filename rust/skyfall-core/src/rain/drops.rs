@@ -199,16 +199,21 @@ pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop
     })
 }
 
-/// Whether a voxel (by its centre) can draw into `cam`'s frame during `exposure_s`: its
-/// bounding sphere, grown by the farthest a drop moves relative to the camera (moving at
-/// `camera_speed_m_s`) in the exposure, meets the view frustum.
-pub fn voxel_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64) -> impl Fn(Vec3) -> bool + Sync + use<> {
+/// Whether a voxel (by its centre) can draw into `cam`'s frame during `exposure_s`: the voxel's
+/// box, grown by the farthest a drop moves relative to the camera (moving at
+/// `camera_speed_m_s`) in the exposure plus `slack_m`, and by the reach of a streak's
+/// anti-aliasing beyond the frame's edge (a drop's radius plus two pixels at the region's far
+/// side), meets the view frustum. Box against plane: the box is outside a plane when its
+/// corner farthest inside is outside.
+pub fn voxel_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64, slack_m: f64) -> impl Fn(Vec3) -> bool + Sync + use<> {
     let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
     let d_max = region.bins.last().map_or(0.0, |b| b.1);
     let speed = (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
-    let margin = (3f64.sqrt() / 2.0 + (speed + camera_speed_m_s) * exposure_s) as f32;
+    let edge = 2.0 * (region.near_m + 2.0) / f64::from(cam.fx.min(cam.fy)) + 0.5e-3 * d_max;
+    let margin = ((speed + camera_speed_m_s) * exposure_s + slack_m + edge) as f32;
     let (w, h) = (cam.width as f32, cam.height as f32);
-    // Inward side planes of the frustum in camera space (the camera looks along −z).
+    // Inward side planes of the frustum in camera space (the camera looks along −z), turned
+    // into the world.
     let planes = [
         Vec3::new(1.0, 0.0, -cam.cx / cam.fx),
         Vec3::new(-1.0, 0.0, -(w - cam.cx) / cam.fx),
@@ -216,12 +221,11 @@ pub fn voxel_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_
         Vec3::new(0.0, 1.0, -(h - cam.cy) / cam.fy),
         Vec3::new(0.0, 0.0, -1.0),
     ]
-    .map(|n| n.normalize());
-    let to_cam = cam.rotation.transpose();
+    .map(|n| cam.rotation * n.normalize());
     let position = cam.position_m;
     move |centre: Vec3| {
-        let pc = to_cam * (centre - position);
-        planes.iter().all(|n| n.dot(pc) >= -margin)
+        let c = centre - position;
+        planes.iter().all(|n| n.dot(c) + 0.5 * n.abs().element_sum() >= -margin)
     }
 }
 
@@ -230,7 +234,7 @@ pub fn voxel_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_
 /// those of [`drops_near`] in those voxels.
 pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64, ground: bool) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
-    voxels_where(region, cam.position_m, ground, voxel_in_view(region, cam, exposure_s, camera_speed_m_s), |voxel, out| {
+    voxels_where(region, cam.position_m, ground, voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0), |voxel, out| {
         for bin in 0..region.bins.len() {
             voxel_drops(region, &speeds, voxel, bin, out);
         }
