@@ -19,7 +19,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from timing import block_medians_s, median_s
+import statistics
+
+from timing import block_times_s, median_s
 
 from skyfall import GpuUnavailableError, PhotoScene, Renderer, Weather, io, scenes
 
@@ -57,24 +59,28 @@ def main() -> None:
     # The peer and the fused paths timed in alternating blocks (the machine is shared and its
     # speed drifts): the ratios below compare times taken in the same rounds.
     out8 = np.empty_like(photo8)
-    t = block_medians_s(
+    scene_f = PhotoScene(photo8, depth, camera=street.camera)
+    rounds = block_times_s(
         {
             "alb": lambda: rain_aug(image=photo8)["image"],
             "fused": skyfall_fused,
             "fused_out": lambda: cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), weather, out=out8),
             "haze": skyfall_fused_haze,
+            "float_u8": skyfall_uint8,
+            "float": lambda: cpu.render(scene_f, weather),
         },
         blocks=7,
         per_block=5,
     )
-    t_alb, t_fused, t_fused_out, t_fused_haze = t["alb"], t["fused"], t["fused_out"], t["haze"]
+    t = {k: statistics.median(v) for k, v in rounds.items()}
+    t_alb, t_fused, t_fused_out, t_fused_haze, t_u8, t_f = (t[k] for k in ("alb", "fused", "fused_out", "haze", "float_u8", "float"))
+    # The fused path's throughput against albumentations round by round: how much the ratio
+    # itself moves on this machine.
+    per_round = sorted(a / f for a, f in zip(rounds["alb"], rounds["fused"]))
     rows.append({"impl": "albumentations 2.0.8 RandomRain (uint8 in, uint8 out; flat, no depth)", "s": t_alb})
     rows.append({"impl": "skyfall CPU, Renderer.render_srgb8: fused 8-bit path, drops method + haze (uint8 in, uint8 out)", "s": t_fused})
     rows.append({"impl": "skyfall CPU, Renderer.render_srgb8 as above, writing into a reused out= array", "s": t_fused_out})
     rows.append({"impl": "skyfall CPU, Renderer.render_srgb8, haze only (rain_streaks=False): the floor without streaks", "s": t_fused_haze})
-    scene_f = PhotoScene(photo8, depth, camera=street.camera)
-    t_u8 = median_s(skyfall_uint8, 5)
-    t_f = median_s(lambda: cpu.render(scene_f, weather), 5)
     rows.append({"impl": "skyfall CPU, Renderer.render (float frame) + io.to_srgb8 (uint8 in, uint8 out)", "s": t_u8})
     rows.append({"impl": "skyfall CPU, drops method + haze, linear float32 in and out", "s": t_f})
     stats = cpu.render(scene_f, weather).stats
@@ -153,7 +159,7 @@ def main() -> None:
     RESULTS.mkdir(parents=True, exist_ok=True)
     env = {"cpus": os.cpu_count(), "machine": platform.machine(), "date": time.strftime("%Y-%m-%d")}
     (RESULTS / "rain.json").write_text(
-        json.dumps({"env": env, "frame": [W, H], "stats": stats, "rows": rows, "methods": methods, "bins": bins_rows, "culling": culling}, indent=2)
+        json.dumps({"env": env, "frame": [W, H], "stats": stats, "rows": rows, "fused_vs_alb_per_round": per_round, "methods": methods, "bins": bins_rows, "culling": culling}, indent=2)
     )
     lines = [
         "# Rain benchmark: a 1920x1080 photo with depth, 10 mm/h",
@@ -175,9 +181,11 @@ def main() -> None:
         f"code of the float frame's. The streaks cost {(t_fused - t_fused_haze) * 1e3:.1f} ms of its {t_fused * 1e3:.1f} ms: the goal of",
         f"2× albumentations ({t_alb * 500:.1f} ms) is {'reached' if t_alb / t_fused >= 2 else 'not reached'}; the haze alone, depth-aware, is {t_alb / t_fused_haze:.2f}× its throughput",
         f"(decoding, hazing and encoding every pixel take {t_fused_haze / (t_alb / 2):.0%} of the 2× budget by themselves).",
-        "albumentations and the three render_srgb8 rows were timed in alternating blocks (7 rounds of 5",
+        f"Round by round the fused path's throughput against albumentations' ranged {per_round[0]:.2f}–{per_round[-1]:.2f}× (median {statistics.median(per_round):.2f}×).",
+        "albumentations and the CPU rows were timed in alternating blocks (7 rounds of 5",
         "calls each, after a pause and an untimed call: each library's worker threads spin for a while",
-        "after its last call and would take the cores from the other's first calls).",
+        "after its last call and would take the cores from the other's first calls). The GPU row was timed",
+        "after them, so its ratio also carries the machine's drift.",
     ]
     lines += [
         "",

@@ -19,19 +19,22 @@ def median_s(fn: Callable[[], object], repeat: int = 7) -> float:
 
 
 
-def block_medians_s(fns: dict[str, Callable[[], object]], blocks: int = 5, per_block: int = 5) -> dict[str, float]:
-    """Median wall time of each function, seconds, timed in alternating blocks: every round
-    times ``per_block`` calls of each function in turn, so a slow spell of a shared machine
-    weighs on all of them alike. Each block starts after a 50 ms pause and one untimed call:
-    a library's worker threads (OpenCV's, rayon's) spin for a while after its last call and
-    would otherwise take cores from the next function's first calls."""
-    times: dict[str, list[float]] = {k: [] for k in fns}
+def block_times_s(fns: dict[str, Callable[[], object]], blocks: int = 5, per_block: int = 5) -> dict[str, list[float]]:
+    """Per function, the median wall time of each block, seconds, timed in alternating blocks:
+    every round times ``per_block`` calls of each function in turn, so a slow spell of a
+    shared machine weighs on all of them alike, and ratios can be taken round by round. Each
+    block starts after a 50 ms pause and one untimed call: a library's worker threads (OpenCV's,
+    rayon's) spin for a while after its last call and would otherwise take cores from the next
+    function's first calls."""
+    out: dict[str, list[float]] = {k: [] for k in fns}
     for _ in range(blocks):
         for k, fn in fns.items():
             time.sleep(0.05)
             fn()
+            times = []
             for _ in range(per_block):
                 t0 = time.perf_counter()
                 fn()
-                times[k].append(time.perf_counter() - t0)
-    return {k: statistics.median(v) for k, v in times.items()}
+                times.append(time.perf_counter() - t0)
+            out[k].append(statistics.median(times))
+    return out
