@@ -1,14 +1,16 @@
 //! The CPU backend's fast path for 8-bit photos: sRGB bytes in, sRGB bytes out, with the
-//! haze and the rain streaks of [`crate::frame::render`] fused into one pass per band of rows.
+//! haze and the rain streaks of [`crate::frame::render`] fused into one pass: bands of rows in
+//! parallel, each cut into tiles of 128 columns drawn one after the other.
 //!
 //! The rain is composited far to near as in [`crate::rain::splat::composite_streaks`], but
 //! into a per-pixel affine map instead of the colour: each streak does C ← (1 − a r) C + a r L,
 //! so the whole ordered stack is C ↦ P·C + Q with P = ∏(1 − a r) and Q accumulated as
 //! Q ← (1 − a r) Q + a r L. P and Q depend only on the streaks and the depth test, not on the
-//! background, so a band's streaks are rasterised into P and Q first (a band-sized scratch that
-//! stays in cache, no frame-sized float buffers; Q is one value when every light is grey),
-//! then each pixel is decoded, hazed, mapped and encoded once. The result equals the float frame encoded to 8 bits up to the rounding of
-//! the reassociated sums (tests: every byte within 1 code, nearly all identical).
+//! background, so a tile's streaks are rasterised into P and Q first (a tile's share of a
+//! band-sized scratch, in L1 while the tile is drawn; no frame-sized float buffers; Q is one
+//! value when every light is grey), then each of its pixels is decoded, hazed, mapped and
+//! encoded once, four at a time. The result equals the float frame encoded to 8 bits up to the
+//! rounding of the reassociated sums (tests: every byte within 1 code, nearly all identical).
 
 use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
@@ -20,8 +22,7 @@ use crate::scene::camera::Camera;
 use rayon::prelude::*;
 use std::cell::RefCell;
 
-/// Rows per band: a band's scratch (8 B per pixel, 16 with coloured lights) stays in a core's
-/// L2 up to 4k-wide frames.
+/// Rows per band (a task): a band's scratch is 8 B per pixel, 16 with coloured lights.
 const BAND_ROWS: usize = 16;
 /// Columns per tile: a tile's scratch (P, Q, depth: 16 rows × 128 × 12 B) fits a core's L1.
 const TILE_W: usize = 128;
