@@ -18,7 +18,6 @@ def median_s(fn: Callable[[], object], repeat: int = 7) -> float:
     return statistics.median(times)
 
 
-
 def block_times_s(fns: dict[str, Callable[[], object]], blocks: int = 5, per_block: int = 5) -> dict[str, list[float]]:
     """Per function, the median wall time of each block, seconds, timed in alternating blocks:
     every round times ``per_block`` calls of each function in turn, so a slow spell of a
@@ -29,12 +28,6 @@ def block_times_s(fns: dict[str, Callable[[], object]], blocks: int = 5, per_blo
     out: dict[str, list[float]] = {k: [] for k in fns}
     for _ in range(blocks):
         for k, fn in fns.items():
-            time.sleep(0.05)
-            fn()
-            times = []
-            for _ in range(per_block):
-                t0 = time.perf_counter()
-                fn()
-                times.append(time.perf_counter() - t0)
-            out[k].append(statistics.median(times))
+            time.sleep(0.05)  # then median_s's own untimed call
+            out[k].append(median_s(fn, per_block))
     return out

@@ -69,11 +69,8 @@ impl Srgb8Encoder {
     /// branch on the value.
     #[inline]
     pub fn encode(self, x: f32) -> u8 {
-        let t = self.0;
         // NaN and negatives (−0 included: max may keep it) to 0, ≥ 1 to the last block.
-        let x = if x > 0.0 { x.min(1.0) } else { 0.0 };
-        let c = t.coarse[(x.to_bits() >> 16) as usize];
-        c + u8::from(x >= t.thresholds[usize::from(c)])
+        self.encode_unit(if x > 0.0 { x.min(1.0) } else { 0.0 })
     }
 
     /// [`Self::encode`] of a value already in [0, 1] (clamped by the caller, NaN as 0).

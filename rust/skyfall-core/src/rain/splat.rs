@@ -417,13 +417,12 @@ pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, mut
         // at ⌊xc − half + ½⌋.
         let span = ceil_nonneg(2.0 * half).clamp(1, w);
         let rows_of = SteepRows { s, y0, w, slope, half };
-        // Monomorphised on the common cases: a thin streak (w < 1 px all along: the coverage
-        // across is w·(1 − d)) in a window of 2 or 3 pixels, whose loops then unroll.
-        match (s.wa.max(s.wb) < 1.0, span) {
-            (true, 2) => rows_of.run::<true, 2>(ya..yb, span, &mut f),
-            (true, 3) => rows_of.run::<true, 3>(ya..yb, span, &mut f),
-            (true, _) => rows_of.run::<true, 0>(ya..yb, span, &mut f),
-            (false, _) => rows_of.run::<false, 0>(ya..yb, span, &mut f),
+        // Thin (w < 1 px all along): the coverage across is w·(1 − d). The drawing paths walk
+        // steep streaks with for_each_fragment_x4; this walk is their fallback and reference.
+        if s.wa.max(s.wb) < 1.0 {
+            rows_of.run::<true>(ya..yb, span, &mut f);
+        } else {
+            rows_of.run::<false>(ya..yb, span, &mut f);
         }
     } else {
         let (x0, x1) = (floor_nonneg(s.min.x.max(0.0)), ceil_nonneg(s.max.x.min(idx_f32(w))));
@@ -547,50 +546,12 @@ struct SteepRows<'a> {
 }
 
 impl SteepRows<'_> {
-    /// Visits the window of `span` pixels (`N` when it is not 0) on each row of `ys`;
-    /// `THIN`: the streak is under a pixel wide all along.
+    /// Visits the window of `span` pixels on each row of `ys`; `THIN`: the streak is under a
+    /// pixel wide all along.
     #[inline(always)]
-    fn run<const THIN: bool, const N: usize>(&self, ys: std::ops::Range<usize>, span: usize, f: &mut impl FnMut(usize, f32, f32)) {
+    fn run<const THIN: bool>(&self, ys: std::ops::Range<usize>, span: usize, f: &mut impl FnMut(usize, f32, f32)) {
         let s = self.s;
-        let span = if N > 0 { N } else { span };
         let (dx, dy) = (s.dir.x, s.dir.y);
-        let mut ys = ys;
-        if THIN && N > 0 {
-            // Four rows at a time, one per lane: the arithmetic is element-wise over arrays
-            // and vectorises; the rest of the rows go one by one below.
-            while ys.len() >= 4 {
-                let y = ys.start;
-                let mut row = [0usize; 4];
-                let (mut along0, mut across0) = ([0.0f32; 4], [0.0f32; 4]);
-                for l in 0..4 {
-                    let qy = idx_f32(y + l) + 0.5 - s.a.y;
-                    let xc = s.a.x + qy * self.slope;
-                    let x0 = floor_nonneg((xc - self.half + 0.5).max(0.0)).min(self.w - N);
-                    let qx0 = idx_f32(x0) + 0.5 - s.a.x;
-                    along0[l] = qy * dy + qx0 * dx;
-                    across0[l] = qx0 * dy - qy * dx;
-                    row[l] = (y + l - self.y0) * self.w + x0;
-                }
-                for j in 0..N {
-                    let jf = idx_f32(j);
-                    let (mut a, mut inv_z) = ([0.0f32; 4], [0.0f32; 4]);
-                    for l in 0..4 {
-                        let c = s.coverage::<true>(along0[l] + jf * dx, (across0[l] + jf * dy).abs());
-                        a[l] = c.0;
-                        inv_z[l] = c.1;
-                    }
-                    // The window's last pixel is often uncovered (an open interval of 2·half
-                    // just over 2 px holds a third centre only now and then): skip the call,
-                    // a branch that near-vertical streaks predict well.
-                    for l in 0..4 {
-                        if j + 1 < N || a[l] > 0.0 {
-                            f(row[l] + j, a[l], inv_z[l]);
-                        }
-                    }
-                }
-                ys.start += 4;
-            }
-        }
         for y in ys {
             let qy = idx_f32(y) + 0.5 - s.a.y;
             let xc = s.a.x + qy * self.slope;
