@@ -38,7 +38,8 @@ def test_opacity_area_matches_the_drops_seen(cpu):
     # Every streak adds alpha * w * L = w^2 px^2 of coverage, w = D f / z its projected width:
     # summed over the drops in view (computed here from the drops' positions), it is the
     # frame's total rain_alpha, up to the capsule caps, overlaps and the frame edges (5 %).
-    weather = Weather(rain_rate_mm_h=20.0, rain_near_m=4.0)
+    # The per-drop reference draws exactly the drops rain.drops lists.
+    weather = Weather(rain_rate_mm_h=20.0, rain_near_m=4.0, rain_method="drops")
     scene = open_air()
     frame = cpu.render(scene, weather, seed=2)
     cam = scene.camera
@@ -53,12 +54,17 @@ def test_opacity_area_matches_the_drops_seen(cpu):
     assert got == pytest.approx(np.sum(w**2), rel=0.1)
 
 
-def test_streaks_hide_behind_the_scene(cpu):
-    near = cpu.render(open_air(depth=0.3), Weather(rain_rate_mm_h=50.0), seed=1)
-    far = cpu.render(open_air(), Weather(rain_rate_mm_h=50.0), seed=1)
+@pytest.mark.parametrize(("method", "depth"), [("drops", 0.3), ("billboards", 0.8)])
+def test_streaks_hide_behind_the_scene(cpu, method, depth):
+    # Behind a photo `depth` m away only streaks nearer than that show. Drops fill the space
+    # up to 0.3 m; billboards stand on planes through voxel centres, which reach 0.3 m only off
+    # to the side of this camera, out of its view.
+    w = Weather(rain_rate_mm_h=50.0, rain_method=method)
+    near = cpu.render(open_air(depth=depth), w, seed=1)
+    far = cpu.render(open_air(), w, seed=1)
     lit = near.layers["rain_alpha"] > 0
     assert lit.any()
-    assert near.layers["rain_depth_m"][lit].max() < 0.3
+    assert near.layers["rain_depth_m"][lit].max() < depth
     assert np.isinf(near.layers["rain_depth_m"][~lit]).all()
     assert near.layers["rain_alpha"].mean() < 0.2 * far.layers["rain_alpha"].mean()
 
@@ -254,18 +260,20 @@ def test_a_moving_camera_sees_the_drops_relative_motion(cpu):
         Camera(velocity_m_s=(2000.0, 0.0, 0.0))
 
 
-def test_billboards_approximate_the_drops_from_below(cpu):
+def test_billboards_carry_the_drops_mean_opacity(cpu):
     # Billboards draw each voxel's streaks at the voxel centre's depth. A streak's opacity-area
     # goes as 1/z^2, which is convex, so by Jensen's inequality moving drops to their voxel's
-    # centre plane loses opacity: billboards must come out a few percent under the reference.
+    # centre plane loses opacity (8 % here), and the camera's own voxel shows no billboard at
+    # all. The billboards widen their streaks to carry the drops' expected opacity: over 24
+    # seeds the two means agree to within their noise (1.1 % std of the ratio at this size).
     img = np.full((H, W, 3), 0.1, np.float32)
     scene = PhotoScene(img, np.full((H, W), np.inf, np.float32), camera=Camera((0.3, 1.6, 0.2)))
 
     def mean_alpha(method: str) -> float:
         w = Weather(rain_rate_mm_h=20.0, rain_method=method)
-        return float(np.mean([cpu.render(scene, w, seed=s).layers["rain_alpha"].mean() for s in range(6)]))
+        return float(np.mean([cpu.render(scene, w, seed=s).layers["rain_alpha"].mean() for s in range(24)]))
 
     drops, boards = mean_alpha("drops"), mean_alpha("billboards")
-    assert -0.15 < boards / drops - 1 < 0.0
+    assert -0.05 < boards / drops - 1 < 0.06
     with pytest.raises(ValueError, match="rain_method"):
         Weather(rain_method="sprites")

@@ -214,14 +214,16 @@ def drops(
     ground: bool = True,
     scene: BoxScene | PhotoScene | None = None,
 ) -> Drops:
-    """The raindrops a frame draws: every drop within ``weather.rain_near_m`` of ``center_m``.
+    """The raindrops a ``rain_method="drops"`` frame draws: every drop within
+    ``weather.rain_near_m`` of ``center_m``.
 
     Drops live in 1 m world voxels at integer coordinates; each voxel's drops come from a
     generator seeded by (seed, voxel, diameter bin), with Marshall-Palmer counts and sizes and
     Beard fall speeds, and move with (wind_x, -v, wind_z), wrapping inside their voxel. So
     the same seed gives the same drops for any camera, frame or process: ground truth for
     stereo and video. With ``ground`` no drops lie below y = 0. These are always the
-    individual drops (``weather.rain_method`` only changes how frames draw them).
+    individual drops: the default billboards draw each voxel's rain texture instead, facing the
+    camera, with the same counts and sizes per voxel.
 
     Parameters
     ----------

@@ -59,11 +59,12 @@ class Weather:
         :func:`skyfall.rain.diameter_bins`); the seed's 1.0-2.0 mm by default.
     rain_streaks : bool
         Draw the drops near the camera as streaks (default). False leaves rain as haze only.
-    rain_method : {"drops", "billboards"}
-        ``"drops"`` (default): every drop drawn at its own place, the reference.
-        ``"billboards"``: seed 000's method, the bin's rain texture on a billboard through each
-        voxel's centre facing the camera (every streak of a voxel at one depth); drawn sparsely
-        here it costs the same as the drops, so it serves to measure the seed's approximation.
+    rain_method : {"billboards", "drops"}
+        ``"billboards"`` (default): seed 000's method, the bin's rain texture on a billboard
+        through each voxel's centre facing the camera (every streak of a voxel at one depth),
+        its streaks widened so that they carry, in expectation, the opacity of the voxel's drops.
+        ``"drops"``: every drop drawn at its own place, the reference the billboards are measured
+        against (and the drops :func:`skyfall.rain.drops` lists).
     """
 
     rain_rate_mm_h: float = 0.0
@@ -73,7 +74,7 @@ class Weather:
     rain_near_m: float = 5.0
     rain_diameters_mm: tuple[float, ...] = field(default=(1.0, 1.2, 1.4, 1.6, 1.8, 2.0))
     rain_streaks: bool = True
-    rain_method: str = "drops"
+    rain_method: str = "billboards"
     rain_sheltered: bool = True
     sky: str | int = "overcast"
     sun_elevation_deg: float | None = None

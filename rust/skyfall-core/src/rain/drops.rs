@@ -251,32 +251,44 @@ pub(crate) fn voxels_where(
     keep_voxel: impl Fn(Vec3) -> bool + Sync,
     fill: impl Fn([i64; 3], &mut Vec<Drop>) + Sync,
 ) -> Vec<Drop> {
+    let columns = map_voxel_columns(region, center_m, ground, keep_voxel, |voxels| {
+        let mut out = Vec::new();
+        for v in voxels {
+            fill(v, &mut out);
+        }
+        out
+    });
+    columns.concat()
+}
+
+/// `per_column` of the voxels within the region around `center_m` that `keep_voxel` accepts
+/// (by its centre), one call per column of constant x (voxels in y, then z order), columns in
+/// parallel; the drops each call returns are cut to those within the region. The columns come
+/// back in x order, so the result is the same in every run.
+pub(crate) fn map_voxel_columns<T: Send + AsMut<Vec<Drop>>>(
+    region: &RainRegion,
+    center_m: Vec3,
+    ground: bool,
+    keep_voxel: impl Fn(Vec3) -> bool + Sync,
+    per_column: impl Fn(&mut dyn Iterator<Item = [i64; 3]>) -> T + Sync,
+) -> Vec<T> {
     let c = center_m.as_dvec3();
     let r = region.near_m;
     let lo = (c - DVec3::splat(r)).floor();
     let hi = (c + DVec3::splat(r)).floor();
-    let columns: Vec<Vec<Drop>> = (lo.x as i64..=hi.x as i64)
+    (lo.x as i64..=hi.x as i64)
         .into_par_iter()
         .map(|ix| {
-            let mut out = Vec::new();
-            for iy in lo.y as i64..=hi.y as i64 {
-                if ground && iy < 0 {
-                    continue;
-                }
-                for iz in lo.z as i64..=hi.z as i64 {
-                    // nearest point of the voxel to the centre
-                    let q = DVec3::new(c.x.clamp(ix as f64, ix as f64 + 1.0), c.y.clamp(iy as f64, iy as f64 + 1.0), c.z.clamp(iz as f64, iz as f64 + 1.0));
-                    if q.distance(c) > r || !keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5)) {
-                        continue;
-                    }
-                    fill([ix, iy, iz], &mut out);
-                }
-            }
-            out.retain(|d| d.position_m.as_dvec3().distance(c) <= r);
+            let mut voxels = (lo.y as i64..=hi.y as i64).filter(|&iy| !(ground && iy < 0)).flat_map(|iy| (lo.z as i64..=hi.z as i64).map(move |iz| [ix, iy, iz])).filter(|&[ix, iy, iz]| {
+                // nearest point of the voxel to the centre
+                let q = DVec3::new(c.x.clamp(ix as f64, ix as f64 + 1.0), c.y.clamp(iy as f64, iy as f64 + 1.0), c.z.clamp(iz as f64, iz as f64 + 1.0));
+                q.distance(c) <= r && keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5))
+            });
+            let mut out = per_column(&mut voxels);
+            out.as_mut().retain(|d| d.position_m.as_dvec3().distance(c) <= r);
             out
         })
-        .collect();
-    columns.concat()
+        .collect()
 }
 
 #[cfg(test)]
