@@ -64,7 +64,9 @@ class Weather:
         through each voxel's centre facing the camera (every streak of a voxel at one depth),
         its streaks widened so that they carry, in expectation, the opacity of the voxel's drops.
         ``"drops"``: every drop drawn at its own place, the reference the billboards are measured
-        against (and the drops :func:`skyfall.rain.drops` lists).
+        against (and the drops :func:`skyfall.rain.drops` lists). Billboards turn to face each
+        camera, so two views of one seed share the voxels' streaks only approximately; stereo
+        ground truth that must match drop for drop wants ``"drops"``.
     """
 
     rain_rate_mm_h: float = 0.0

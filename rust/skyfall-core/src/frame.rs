@@ -75,19 +75,70 @@ pub fn check_photo(cam: &Camera, rgb: &[f32], depth_m: &[f32]) -> Result<()> {
     check_depth(depth_m)
 }
 
+/// Where [`render_into`] writes a frame: buffers the caller owns, every value overwritten
+/// (the Python binding passes numpy's arrays, so a frame's megabytes come from numpy's
+/// allocator, which asks for huge pages: a fresh frame then costs a few dozen page faults
+/// instead of one per 4 KiB).
+pub struct FrameOut<'a> {
+    /// Linear RGB, H·W·3.
+    pub rgb: &'a mut [f32],
+    /// Depth along the optical axis, m, H·W.
+    pub depth_m: &'a mut [f32],
+    /// Haze transmittance, H·W: given exactly when there is haze.
+    pub transmittance: Option<&'a mut [f32]>,
+    /// Rain coverage and nearest streak depth, H·W each: given exactly when it rains.
+    pub rain: Option<(&'a mut [f32], &'a mut [f32])>,
+}
+
+/// What [`render_into`] reports of the rain: streaks drawn and culled, drops generated.
+pub type RainReport = (RainStats, usize);
+
 /// Renders a frame on the CPU: scene (ray cast under `light`, or photo copy) and haze fused
 /// row by row, then the rain streaks over the result.
 pub fn render(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers> {
+    check_frame_size(cam)?;
+    let n = cam.pixels();
+    let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
+    let mut trans = haze.map(|_| vec![0.0f32; n]);
+    let mut layers = rain.map(|_| (vec![0.0f32; n], vec![0.0f32; n]));
+    let out = FrameOut {
+        rgb: &mut rgb,
+        depth_m: &mut depth,
+        transmittance: trans.as_deref_mut(),
+        rain: layers.as_mut().map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
+    };
+    let report = render_into(scene, cam, light, haze, rain, out)?;
+    let rain = layers.zip(report).map(|((alpha, depth_m), (stats, drops))| RainBuffers { alpha, depth_m, stats, drops });
+    Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans, rain })
+}
+
+/// [`render`] into the caller's buffers (see [`FrameOut`]); the rain's report when it rains.
+pub fn render_into(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>, out: FrameOut<'_>) -> Result<Option<RainReport>> {
     check_frame_size(cam)?;
     if let SceneRef::Photo { rgb, depth_m } = scene {
         check_photo(cam, rgb, depth_m)?;
     }
     let w = cam.width as usize;
     let n = cam.pixels();
-    let mut rgb = vec![0.0f32; 3 * n];
-    let mut depth = vec![0.0f32; n];
-    let mut trans = haze.map(|_| vec![0.0f32; n]);
-    let mut t_rows: Vec<Option<&mut [f32]>> = match trans.as_mut() {
+    let length = |name: &'static str, len: usize, expected: usize| Error::Length { param: Param { name, index: None }, len, expected };
+    let FrameOut { rgb, depth_m: depth, transmittance, rain: layers } = out;
+    if rgb.len() != 3 * n {
+        return Err(length("rgb", rgb.len(), 3 * n));
+    }
+    if depth.len() != n {
+        return Err(length("depth_m", depth.len(), n));
+    }
+    let trans = match (haze, transmittance) {
+        (Some(_), Some(t)) if t.len() == n => Some(t),
+        (None, None) => None,
+        (_, t) => return Err(length("transmittance", t.map_or(0, |t| t.len()), if haze.is_some() { n } else { 0 })),
+    };
+    let layers = match (rain, layers) {
+        (Some(_), Some((a, d))) if a.len() == n && d.len() == n => Some((a, d)),
+        (None, None) => None,
+        (_, l) => return Err(length("rain_alpha", l.map_or(0, |l| l.0.len()), if rain.is_some() { n } else { 0 })),
+    };
+    let mut t_rows: Vec<Option<&mut [f32]>> = match trans {
         Some(t) => t.chunks_mut(w).map(Some).collect(),
         None => (0..cam.height).map(|_| None).collect(),
     };
@@ -116,19 +167,11 @@ pub fn render(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: O
                 apply_row(h, &u2, cam.row_slope_sq(y as u32), rgb_row, depth_row, t_row);
             }
         });
-    let rain = rain.map(|rf| {
+    Ok(rain.zip(layers).map(|(rf, (alpha, rain_depth))| {
         let (streaks, stats, drops) = rf.streaks(cam);
-        let mut alpha = vec![0.0f32; n];
-        let mut rain_depth = vec![0.0f32; n];
-        composite_streaks(
-            cam,
-            &streaks,
-            rf.shading.reflectance,
-            RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rain_depth },
-        );
-        RainBuffers { alpha, depth_m: rain_depth, stats, drops }
-    });
-    Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans, rain })
+        composite_streaks(cam, &streaks, rf.shading.reflectance, RainTargets { rgb, depth_m: depth, alpha, rain_depth_m: rain_depth });
+        (stats, drops)
+    }))
 }
 
 #[cfg(test)]
@@ -166,6 +209,44 @@ mod tests {
         let plain = render(SceneRef::Photo { rgb: &fused.rgb, depth_m: &fused.depth_m }, &cam, &light, None, None).unwrap();
         assert_eq!(plain.rgb, fused.rgb);
         assert!(plain.transmittance.is_none());
+    }
+
+    #[test]
+    fn render_into_overwrites_every_value_and_checks_its_buffers() {
+        // Buffers full of NaN (numpy's np.empty could hold anything) come out as render's
+        // frame, bit for bit, rain and haze included.
+        use crate::rain::drops::RainRegion;
+        use crate::rain::splat::RainShading;
+        let cam = Camera::new(48, 32, [40.0, 40.0, 24.0, 16.0], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY).unwrap();
+        let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+        let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
+        let light = SceneLight { sky: &sky, ambient: &amb };
+        let n = cam.pixels();
+        let (photo, depth) = (vec![0.2f32; 3 * n], vec![3.0f32; n]);
+        let scene = SceneRef::Photo { rgb: &photo, depth_m: &depth };
+        let h = Haze { extinction_per_m: 0.02, airlight: [0.43; 3] };
+        let region = RainRegion::new(40.0, &[1.0, 1.5, 2.0], 3.0, [0.0; 3], 0.0, 4).unwrap();
+        let shading = RainShading::open_sky();
+        let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::ZERO, ground: true, shelter: &[], shading: &shading };
+        let want = render(scene, &cam, &light, Some(&h), Some(&rf)).unwrap();
+        let (mut rgb, mut d, mut t, mut a, mut rd) = (vec![f32::NAN; 3 * n], vec![f32::NAN; n], vec![f32::NAN; n], vec![f32::NAN; n], vec![f32::NAN; n]);
+        let out = FrameOut { rgb: &mut rgb, depth_m: &mut d, transmittance: Some(&mut t), rain: Some((&mut a, &mut rd)) };
+        let (stats, drops) = render_into(scene, &cam, &light, Some(&h), Some(&rf), out).unwrap().unwrap();
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let rain = want.rain.unwrap();
+        assert!(stats.streaks > 0 && drops == rain.drops && stats == rain.stats);
+        assert_eq!(bits(&rgb), bits(&want.rgb));
+        assert_eq!(bits(&d), bits(&want.depth_m));
+        assert_eq!(bits(&t), bits(&want.transmittance.unwrap()));
+        assert_eq!(bits(&a), bits(&rain.alpha));
+        assert_eq!(bits(&rd), bits(&rain.depth_m));
+        // Buffers that do not match the request are named.
+        let short = FrameOut { rgb: &mut rgb[1..], depth_m: &mut d, transmittance: None, rain: None };
+        assert!(matches!(render_into(scene, &cam, &light, None, None, short), Err(Error::Length { param: Param { name: "rgb", .. }, .. })));
+        let missing = FrameOut { rgb: &mut rgb, depth_m: &mut d, transmittance: None, rain: None };
+        assert!(matches!(render_into(scene, &cam, &light, Some(&h), None, missing), Err(Error::Length { param: Param { name: "transmittance", .. }, .. })));
+        let extra = FrameOut { rgb: &mut rgb, depth_m: &mut d, transmittance: None, rain: Some((&mut a, &mut rd)) };
+        assert!(matches!(render_into(scene, &cam, &light, None, None, extra), Err(Error::Length { param: Param { name: "rain_alpha", .. }, .. })));
     }
 
     #[test]

@@ -182,9 +182,34 @@ pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_
     // process, without moving the streaks around.
     let mut order: Vec<(f32, u32)> = streaks.iter().enumerate().map(|(i, s)| (s.inv_za + s.inv_zb, i as u32)).collect();
     order.par_sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
-    let streaks: Vec<ScreenStreak> = order.iter().map(|&(_, i)| streaks[i as usize]).collect();
+    permute_in_place(&mut streaks, order.into_iter().map(|(_, i)| i).collect());
     stats.streaks = streaks.len();
     (streaks, stats)
+}
+
+/// Reorders `v` so that `v[j]` becomes the old `v[from[j]]` (`from` a permutation of the
+/// indices), cycle by cycle, without a second buffer: a frame's streak list is megabytes, and
+/// a fresh copy of it per frame costs as many page faults when the allocator hands the memory
+/// back to the system between frames.
+fn permute_in_place<T: Copy>(v: &mut [T], mut from: Vec<u32>) {
+    const DONE: u32 = u32::MAX;
+    for start in 0..from.len() {
+        if from[start] == DONE {
+            continue;
+        }
+        let first = v[start];
+        let mut j = start;
+        loop {
+            let k = from[j] as usize;
+            from[j] = DONE;
+            if k == start {
+                v[j] = first;
+                break;
+            }
+            v[j] = v[k];
+            j = k;
+        }
+    }
 }
 
 impl ScreenStreak {
@@ -690,6 +715,22 @@ pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], reflectance: f3
 mod tests {
     use super::*;
     use glam::{Mat3, Vec3};
+
+    #[test]
+    fn permuting_in_place_is_the_gathered_copy() {
+        use rand::seq::SliceRandom;
+        use rand::SeedableRng;
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        for n in [0usize, 1, 2, 7, 1000] {
+            let v: Vec<u64> = (0..n as u64).map(|k| k * 7919 % 1009).collect();
+            let mut from: Vec<u32> = (0..n as u32).collect();
+            from.shuffle(&mut rng);
+            let want: Vec<u64> = from.iter().map(|&i| v[i as usize]).collect();
+            let mut got = v.clone();
+            permute_in_place(&mut got, from);
+            assert_eq!(got, want);
+        }
+    }
 
     #[test]
     fn opacity_area_is_the_sum_of_the_pixels_coverage() {
