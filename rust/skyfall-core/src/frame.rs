@@ -93,6 +93,33 @@ pub struct FrameOut<'a> {
 /// What [`render_into`] reports of the rain: streaks drawn and culled, drops generated.
 pub type RainReport = (RainStats, usize);
 
+impl FrameOut<'_> {
+    /// Checks the buffers against a `cam` frame with or without haze and rain: every length,
+    /// and the layers given exactly when they are drawn.
+    pub fn check(&self, cam: &Camera, haze: bool, rain: bool) -> Result<()> {
+        let n = cam.pixels();
+        let length = |name: &'static str, len: usize, expected: usize| Error::Length { param: Param { name, index: None }, len, expected };
+        if self.rgb.len() != 3 * n {
+            return Err(length("rgb", self.rgb.len(), 3 * n));
+        }
+        if self.depth_m.len() != n {
+            return Err(length("depth_m", self.depth_m.len(), n));
+        }
+        let t = self.transmittance.as_ref().map_or(0, |t| t.len());
+        if t != if haze { n } else { 0 } || haze != self.transmittance.is_some() {
+            return Err(length("transmittance", t, if haze { n } else { 0 }));
+        }
+        let (a, d) = self.rain.as_ref().map_or((0, 0), |(a, d)| (a.len(), d.len()));
+        if a != if rain { n } else { 0 } || rain != self.rain.is_some() {
+            return Err(length("rain_alpha", a, if rain { n } else { 0 }));
+        }
+        if d != a {
+            return Err(length("rain_depth_m", d, a));
+        }
+        Ok(())
+    }
+}
+
 /// Renders a frame on the CPU: scene (ray cast under `light`, or photo copy) and haze fused
 /// row by row, then the rain streaks over the result.
 pub fn render(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers> {
@@ -118,26 +145,9 @@ pub fn render_into(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, ha
     if let SceneRef::Photo { rgb, depth_m } = scene {
         check_photo(cam, rgb, depth_m)?;
     }
+    out.check(cam, haze.is_some(), rain.is_some())?;
     let w = cam.width as usize;
-    let n = cam.pixels();
-    let length = |name: &'static str, len: usize, expected: usize| Error::Length { param: Param { name, index: None }, len, expected };
-    let FrameOut { rgb, depth_m: depth, transmittance, rain: layers } = out;
-    if rgb.len() != 3 * n {
-        return Err(length("rgb", rgb.len(), 3 * n));
-    }
-    if depth.len() != n {
-        return Err(length("depth_m", depth.len(), n));
-    }
-    let trans = match (haze, transmittance) {
-        (Some(_), Some(t)) if t.len() == n => Some(t),
-        (None, None) => None,
-        (_, t) => return Err(length("transmittance", t.map_or(0, |t| t.len()), if haze.is_some() { n } else { 0 })),
-    };
-    let layers = match (rain, layers) {
-        (Some(_), Some((a, d))) if a.len() == n && d.len() == n => Some((a, d)),
-        (None, None) => None,
-        (_, l) => return Err(length("rain_alpha", l.map_or(0, |l| l.0.len()), if rain.is_some() { n } else { 0 })),
-    };
+    let FrameOut { rgb, depth_m: depth, transmittance: trans, rain: layers } = out;
     let mut t_rows: Vec<Option<&mut [f32]>> = match trans {
         Some(t) => t.chunks_mut(w).map(Some).collect(),
         None => (0..cam.height).map(|_| None).collect(),

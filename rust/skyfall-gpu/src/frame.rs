@@ -4,9 +4,9 @@ use crate::context::{AdapterChoice, GpuContext, GpuError};
 use crate::haze::HazePass;
 use crate::rain::{RainPass, RainTargets};
 use crate::pass::{storage, storage_init};
-use crate::readback::read_f32;
+use crate::readback::read_f32_into;
 use crate::scene_raycast::SceneRaycastPass;
-use skyfall_core::frame::{check_frame_size, check_photo, FrameBuffers, RainBuffers, SceneRef};
+use skyfall_core::frame::{check_frame_size, check_photo, FrameBuffers, FrameOut, RainBuffers, RainReport, SceneRef};
 use skyfall_core::rain::splat::RainFrame;
 use skyfall_core::haze::Haze;
 use skyfall_core::scene::boxes::SceneLight;
@@ -34,6 +34,26 @@ impl GpuRenderer {
     /// then readback.
     pub fn render(&self, scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers, GpuError> {
         check_frame_size(cam)?;
+        let n = cam.pixels();
+        let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
+        let mut trans = haze.map(|_| vec![0.0f32; n]);
+        let mut layers = rain.map(|_| (vec![0.0f32; n], vec![0.0f32; n]));
+        let out = FrameOut {
+            rgb: &mut rgb,
+            depth_m: &mut depth,
+            transmittance: trans.as_deref_mut(),
+            rain: layers.as_mut().map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
+        };
+        let report = self.render_into(scene, cam, light, haze, rain, out)?;
+        let rain = layers.zip(report).map(|((alpha, depth_m), (stats, drops))| RainBuffers { alpha, depth_m, stats, drops });
+        Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans, rain })
+    }
+
+    /// [`Self::render`] read back into the caller's buffers (see [`FrameOut`]); the rain's
+    /// report when it rains.
+    pub fn render_into(&self, scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>, out: FrameOut<'_>) -> Result<Option<RainReport>, GpuError> {
+        check_frame_size(cam)?;
+        out.check(cam, haze.is_some(), rain.is_some())?;
         let n = cam.pixels();
         self.ctx.check_buffer(&format!("a {}x{} RGB frame", cam.width, cam.height), (3 * n * 4) as u64)?;
         let ctx = &self.ctx;
@@ -66,16 +86,20 @@ impl GpuRenderer {
                 (alpha, rain_depth, stats, drops)
             });
             ctx.queue.submit([enc.finish()]);
-            Ok(FrameBuffers {
-                rgb: read_f32(ctx, &rgb, 3 * n)?,
-                depth_m: read_f32(ctx, &depth, n)?,
-                transmittance: trans.map(|t| read_f32(ctx, &t, n)).transpose()?,
-                rain: rain_out
-                    .map(|(alpha, rd, stats, drops)| -> Result<RainBuffers, GpuError> {
-                        Ok(RainBuffers { alpha: read_f32(ctx, &alpha, n)?, depth_m: read_f32(ctx, &rd, n)?, stats, drops })
-                    })
-                    .transpose()?,
-            })
+            let FrameOut { rgb: rgb_out, depth_m: depth_out, transmittance: trans_out, rain: layers_out } = out;
+            read_f32_into(ctx, &rgb, rgb_out)?;
+            read_f32_into(ctx, &depth, depth_out)?;
+            if let (Some(t), Some(t_out)) = (&trans, trans_out) {
+                read_f32_into(ctx, t, t_out)?;
+            }
+            match (rain_out, layers_out) {
+                (Some((alpha, rd, stats, drops)), Some((a_out, d_out))) => {
+                    read_f32_into(ctx, &alpha, a_out)?;
+                    read_f32_into(ctx, &rd, d_out)?;
+                    Ok(Some((stats, drops)))
+                }
+                _ => Ok(None),
+            }
         })
     }
 }

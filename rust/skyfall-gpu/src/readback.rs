@@ -2,9 +2,13 @@
 
 use crate::context::{GpuContext, GpuError};
 
-/// Copies `buffer` (f32 values, `len` of them) into a new Vec through a mappable staging buffer.
-pub fn read_f32(ctx: &GpuContext, buffer: &wgpu::Buffer, len: usize) -> Result<Vec<f32>, GpuError> {
-    let bytes = (len * 4) as u64;
+/// Copies the first `out.len()` f32 values of `buffer` into `out` through a mappable staging
+/// buffer (the caller's memory: numpy's arrays, from the Python binding).
+pub fn read_f32_into(ctx: &GpuContext, buffer: &wgpu::Buffer, out: &mut [f32]) -> Result<(), GpuError> {
+    let bytes = (out.len() * 4) as u64;
+    if bytes > buffer.size() {
+        return Err(GpuError::Readback(format!("{} values asked of a buffer of {} bytes", out.len(), buffer.size())));
+    }
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
         size: bytes,
@@ -25,10 +29,18 @@ pub fn read_f32(ctx: &GpuContext, buffer: &wgpu::Buffer, len: usize) -> Result<V
     rx.recv()
         .map_err(|e| GpuError::Readback(e.to_string()))?
         .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let out = {
+    {
         let view = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
-        bytemuck::pod_collect_to_vec::<u8, f32>(&view)
-    };
+        // The mapped range is 4-byte aligned in practice; value by value if it is not.
+        match bytemuck::try_cast_slice::<u8, f32>(&view) {
+            Ok(values) if values.len() == out.len() => out.copy_from_slice(values),
+            _ => {
+                for (o, b) in out.iter_mut().zip(view.chunks_exact(4)) {
+                    *o = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                }
+            }
+        }
+    }
     staging.unmap();
-    Ok(out)
+    Ok(())
 }

@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use glam::{Mat3, Vec3};
-use skyfall_core::frame::{render, SceneRef};
+use skyfall_core::frame::{render, FrameOut, SceneRef};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
 use skyfall_core::rain::splat::{RainFrame, RainShading};
@@ -102,6 +102,19 @@ fn gpu_rain_matches_cpu_rain() {
     assert!(worst_rgb < 1e-4, "rgb max abs diff {worst_rgb}");
     let (worst_z, _) = max_abs(&cr.depth_m, &gr.depth_m);
     assert!(worst_z < 1e-3, "rain depth max abs diff {worst_z}");
+    // Read back into the caller's buffers (numpy's, from Python): every value overwritten.
+    let n = cam.pixels();
+    let (mut rgb, mut d, mut a, mut rd) = (vec![f32::NAN; 3 * n], vec![f32::NAN; n], vec![f32::NAN; n], vec![f32::NAN; n]);
+    let out = FrameOut { rgb: &mut rgb, depth_m: &mut d, transmittance: None, rain: Some((&mut a, &mut rd)) };
+    let (stats, drops) = gpu.render_into(photo, &cam, &light, None, Some(&rf), out).unwrap().unwrap();
+    assert_eq!((stats, drops), (gr.stats, gr.drops));
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&rgb), bits(&g.rgb));
+    assert_eq!(bits(&d), bits(&g.depth_m));
+    assert_eq!(bits(&a), bits(&gr.alpha));
+    assert_eq!(bits(&rd), bits(&gr.depth_m));
+    let short = FrameOut { rgb: &mut rgb[3..], depth_m: &mut d, transmittance: None, rain: Some((&mut a, &mut rd)) };
+    assert!(gpu.render_into(photo, &cam, &light, None, Some(&rf), short).is_err());
 }
 
 #[test]

@@ -3,11 +3,10 @@
 
 use crate::errors::{gpu_error, CoreError};
 use glam::{Mat3, Vec3};
-use numpy::ndarray::{Array2, Array3};
-use numpy::{IntoPyArray, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods};
+use numpy::{PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use skyfall_core::frame::{check_frame_size, render_into, FrameBuffers, FrameOut, SceneRef};
+use skyfall_core::frame::{check_frame_size, render_into, FrameOut, SceneRef};
 use skyfall_core::photo8::{render_photo8 as render_photo8_core, Photo8, Photo8Out};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::{RainMethod, RainRegion};
@@ -180,20 +179,6 @@ impl<'a> Request<'a> {
     }
 }
 
-fn to_py<'py>(py: Python<'py>, cam: &Camera, f: FrameBuffers) -> PyResult<FrameTuple<'py>> {
-    let (h, w) = (cam.height as usize, cam.width as usize);
-    let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
-    let plane = |v: Vec<f32>| Array2::from_shape_vec((h, w), v).map(|a| a.into_pyarray(py)).map_err(err);
-    let rgb = Array3::from_shape_vec((h, w, 3), f.rgb).map_err(err)?.into_pyarray(py);
-    let depth = plane(f.depth_m)?;
-    let t = f.transmittance.map(plane).transpose()?;
-    let rain = match f.rain {
-        None => None,
-        Some(r) => Some((plane(r.alpha)?, plane(r.depth_m)?, r.drops, r.stats.streaks, r.stats.culled)),
-    };
-    Ok((rgb, depth, t, rain))
-}
-
 /// Renders a frame on `device` (the GPU backend), or on the CPU backend when it is None.
 #[pyfunction]
 #[pyo3(signature = (
@@ -225,38 +210,33 @@ pub fn render_frame<'py>(
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
     let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain.as_ref(), &lit.ambient)?;
     let (scene, cam, haze, rain) = (req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame());
-    match device.as_ref().map(|d| &d.get().inner) {
-        Some(gpu) => {
-            let frame = py.detach(|| gpu.render(scene, cam, &light, haze, rain.as_ref())).map_err(gpu_error)?;
-            to_py(py, cam, frame)
+    // Into numpy's arrays (see `FrameOut`), sized once the frame is known to fit.
+    check_frame_size(cam).map_err(CoreError)?;
+    let (h, w) = (cam.height as usize, cam.width as usize);
+    let plane = || PyArray2::<f32>::zeros(py, [h, w], false);
+    let (rgb, depth) = (PyArray3::<f32>::zeros(py, [h, w, 3], false), plane());
+    let trans = haze.map(|_| plane());
+    let layers = rain.as_ref().map(|_| (plane(), plane()));
+    let report = {
+        let (mut rgb_w, mut depth_w) = (rgb.readwrite(), depth.readwrite());
+        let mut trans_w = trans.as_ref().map(|t| t.readwrite());
+        let mut layers_w = layers.as_ref().map(|(a, d)| (a.readwrite(), d.readwrite()));
+        let out = FrameOut {
+            rgb: rgb_w.as_slice_mut()?,
+            depth_m: depth_w.as_slice_mut()?,
+            transmittance: trans_w.as_mut().map(|t| t.as_slice_mut()).transpose()?,
+            rain: match layers_w.as_mut() {
+                Some((a, d)) => Some((a.as_slice_mut()?, d.as_slice_mut()?)),
+                None => None,
+            },
+        };
+        match device.as_ref().map(|d| &d.get().inner) {
+            Some(gpu) => py.detach(|| gpu.render_into(scene, cam, &light, haze, rain.as_ref(), out)).map_err(gpu_error)?,
+            None => py.detach(|| render_into(scene, cam, &light, haze, rain.as_ref(), out)).map_err(CoreError)?,
         }
-        None => {
-            // Into numpy's arrays (see `FrameOut`), sized once the frame is known to fit.
-            check_frame_size(cam).map_err(CoreError)?;
-            let (h, w) = (cam.height as usize, cam.width as usize);
-            let plane = || PyArray2::<f32>::zeros(py, [h, w], false);
-            let (rgb, depth) = (PyArray3::<f32>::zeros(py, [h, w, 3], false), plane());
-            let trans = haze.map(|_| plane());
-            let layers = rain.as_ref().map(|_| (plane(), plane()));
-            let report = {
-                let (mut rgb_w, mut depth_w) = (rgb.readwrite(), depth.readwrite());
-                let mut trans_w = trans.as_ref().map(|t| t.readwrite());
-                let mut layers_w = layers.as_ref().map(|(a, d)| (a.readwrite(), d.readwrite()));
-                let out = FrameOut {
-                    rgb: rgb_w.as_slice_mut()?,
-                    depth_m: depth_w.as_slice_mut()?,
-                    transmittance: trans_w.as_mut().map(|t| t.as_slice_mut()).transpose()?,
-                    rain: match layers_w.as_mut() {
-                        Some((a, d)) => Some((a.as_slice_mut()?, d.as_slice_mut()?)),
-                        None => None,
-                    },
-                };
-                py.detach(|| render_into(scene, cam, &light, haze, rain.as_ref(), out)).map_err(CoreError)?
-            };
-            let rain = layers.zip(report).map(|((a, d), (stats, drops))| (a, d, drops, stats.streaks, stats.culled));
-            Ok((rgb, depth, trans, rain))
-        }
-    }
+    };
+    let rain = layers.zip(report).map(|((a, d), (stats, drops))| (a, d, drops, stats.streaks, stats.culled));
+    Ok((rgb, depth, trans, rain))
 }
 
 /// The sky and its ambient-light map for a frame: the given ones, or the overcast sky and its
