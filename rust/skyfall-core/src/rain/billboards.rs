@@ -124,7 +124,9 @@ pub fn billboards_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, ca
     let (area_at, probe_len) = probe_area(region, cam, exposure_s, camera_velocity_m_s);
     // A billboard's streak can end up to its own length below the voxel (the texture wraps).
     let longest = region.bins.last().map_or(0.0, |b| law.m_s(b.1)) * exposure_s;
+    let per_voxel: usize = textures.iter().map(Vec::len).sum();
     let board_streaks = |voxel: [i64; 3], column: &mut Column| {
+        column.drops.reserve(per_voxel);
         let centre = Vec3::new(voxel[0] as f32 + 0.5, voxel[1] as f32 + 0.5, voxel[2] as f32 + 0.5);
         let to_eye = Vec3::new(eye.x - centre.x, 0.0, eye.z - centre.z);
         let n = if to_eye.length_squared() > 1e-12 { to_eye.normalize() } else { Vec3::Z };
