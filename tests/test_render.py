@@ -104,6 +104,36 @@ def test_clear_weather_returns_the_input_and_thin_haze_converges_to_it(backend, 
     np.testing.assert_allclose(thin.rgb[finite], scene.image[finite], atol=1e-6)
 
 
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_rendering_into_a_previous_frame_reuses_its_arrays(backend, cpu, gpu):
+    # out= overwrites a previous frame's arrays with exactly the frame a fresh render gives.
+    r = {"cpu": cpu, "gpu": gpu}[backend]
+    scene = photo(3)
+    rainy = Weather(rain_rate_mm_h=40.0, visibility_m=800.0)
+    want = r.render(scene, rainy, seed=5)
+    old = r.render(scene, rainy, seed=6)
+    got = r.render(scene, rainy, seed=5, out=old)
+    for a, b, name in [(got.rgb, old.rgb, "rgb"), (got.depth_m, old.depth_m, "depth")] + [(got.layers[k], old.layers[k], k) for k in want.layers]:
+        assert a is b, name
+    assert got.rgb.tobytes() == want.rgb.tobytes() and got.stats == want.stats
+    for k, v in want.layers.items():
+        assert got.layers[k].tobytes() == v.tobytes(), k
+    # a frame without rain keeps only the layers it draws; one with them gets new arrays
+    hazy = r.render(scene, Weather(visibility_m=800.0), out=got)
+    assert sorted(hazy.layers) == ["transmittance"] and hazy.layers["transmittance"] is got.layers["transmittance"]
+    again = r.render(scene, rainy, seed=5, out=r.render(scene, Weather()))
+    assert again.layers["rain_alpha"].tobytes() == want.layers["rain_alpha"].tobytes()
+    # bad arrays and inputs used as outputs are named
+    with pytest.raises(ValueError, match="out's rgb"):
+        r.render(scene, rainy, out=skyfall.Frame(rgb=np.zeros((H, W, 3), np.float64), depth_m=want.depth_m.copy()))
+    with pytest.raises(ValueError, match="out's rain_alpha"):
+        r.render(scene, rainy, out=skyfall.Frame(rgb=want.rgb.copy(), depth_m=want.depth_m.copy(), layers={"rain_alpha": np.zeros((H, W + 1), np.float32)}))
+    with pytest.raises(ValueError, match="out rgb is in use"):
+        r.render(PhotoScene(want.rgb, want.depth_m, vertical_fov_deg=50.0), rainy, out=want)
+    with pytest.raises(TypeError, match="out must be a skyfall.Frame"):
+        r.render(scene, rainy, out=want.rgb)  # type: ignore[arg-type]
+
+
 def test_koschmieder_contrast_at_the_visibility_distance(cpu):
     # A black object at the visibility distance on the optical axis keeps 2 % contrast.
     cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=40.0)

@@ -58,6 +58,13 @@ class _RainArgs(TypedDict):
     shelter: bool
 
 _RainTuple = tuple[NDArray[np.float32], NDArray[np.float32], int, int, int]
+class _OutArrays(TypedDict):
+    rgb: NDArray[np.float32] | None
+    depth_m: NDArray[np.float32] | None
+    transmittance: NDArray[np.float32] | None
+    rain_alpha: NDArray[np.float32] | None
+    rain_depth_m: NDArray[np.float32] | None
+
 _FrameTuple = tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32] | None, _RainTuple | None]
 
 def render_frame(
@@ -75,6 +82,7 @@ def render_frame(
     rain: _RainArgs | None = None,
     sky: SkyModel | None = None,
     ambient: AmbientLightMap | None = None,
+    out: _OutArrays | None = None,
 ) -> _FrameTuple: ...
 def render_photo8(
     width: int,

@@ -179,11 +179,23 @@ impl<'a> Request<'a> {
     }
 }
 
+/// A previous frame's arrays to render into (`out=`), each optional: the frame's own arrays
+/// where one is missing or its layer is not drawn this time.
+#[derive(FromPyObject, Default)]
+#[pyo3(from_item_all)]
+pub struct OutArrays<'py> {
+    rgb: Option<Bound<'py, PyArray3<f32>>>,
+    depth_m: Option<F2<'py>>,
+    transmittance: Option<F2<'py>>,
+    rain_alpha: Option<F2<'py>>,
+    rain_depth_m: Option<F2<'py>>,
+}
+
 /// Renders a frame on `device` (the GPU backend), or on the CPU backend when it is None.
 #[pyfunction]
 #[pyo3(signature = (
     width, height, camera_params, *, device=None, boxes=None, ground=true, ground_albedo=[0.0; 3], photo_rgb=None,
-    photo_depth_m=None, haze_params=None, rain=None, sky=None, ambient=None
+    photo_depth_m=None, haze_params=None, rain=None, sky=None, ambient=None, out=None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn render_frame<'py>(
@@ -201,6 +213,7 @@ pub fn render_frame<'py>(
     rain: Option<RainArgs<'py>>,
     sky: Option<Bound<'py, SkyModel>>,
     ambient: Option<Bound<'py, AmbientLightMap>>,
+    out: Option<OutArrays<'py>>,
 ) -> PyResult<FrameTuple<'py>> {
     let lit = Lighting::new(sky.as_ref(), ambient.as_ref())?;
     let light = SceneLight { sky: &lit.sky, ambient: &lit.ambient };
@@ -210,17 +223,27 @@ pub fn render_frame<'py>(
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
     let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain.as_ref(), &lit.ambient)?;
     let (scene, cam, haze, rain) = (req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame());
-    // Into numpy's arrays (see `FrameOut`), sized once the frame is known to fit.
+    // Into numpy's arrays (see `FrameOut`): the caller's (`out`) where given, else new ones,
+    // sized once the frame is known to fit.
     check_frame_size(cam).map_err(CoreError)?;
     let (h, w) = (cam.height as usize, cam.width as usize);
     let plane = || PyArray2::<f32>::zeros(py, [h, w], false);
-    let (rgb, depth) = (PyArray3::<f32>::zeros(py, [h, w, 3], false), plane());
-    let trans = haze.map(|_| plane());
-    let layers = rain.as_ref().map(|_| (plane(), plane()));
+    let out = out.unwrap_or_default();
+    let rgb = out.rgb.unwrap_or_else(|| PyArray3::<f32>::zeros(py, [h, w, 3], false));
+    let depth = out.depth_m.unwrap_or_else(plane);
+    let trans = haze.map(|_| out.transmittance.unwrap_or_else(plane));
+    let layers = rain.as_ref().map(|_| (out.rain_alpha.unwrap_or_else(plane), out.rain_depth_m.unwrap_or_else(plane)));
     let report = {
-        let (mut rgb_w, mut depth_w) = (rgb.readwrite(), depth.readwrite());
-        let mut trans_w = trans.as_ref().map(|t| t.readwrite());
-        let mut layers_w = layers.as_ref().map(|(a, d)| (a.readwrite(), d.readwrite()));
+        // A given array may also be an input (a photo rendered over itself): name it.
+        fn busy(name: &'static str) -> impl Fn(numpy::BorrowError) -> PyErr {
+            move |_| PyValueError::new_err(format!("out {name} is in use by another argument (an input?): pass a separate array"))
+        }
+        let (mut rgb_w, mut depth_w) = (rgb.try_readwrite().map_err(busy("rgb"))?, depth.try_readwrite().map_err(busy("depth_m"))?);
+        let mut trans_w = trans.as_ref().map(|t| t.try_readwrite().map_err(busy("transmittance"))).transpose()?;
+        let mut layers_w = match layers.as_ref() {
+            Some((a, d)) => Some((a.try_readwrite().map_err(busy("rain_alpha"))?, d.try_readwrite().map_err(busy("rain_depth_m"))?)),
+            None => None,
+        };
         let out = FrameOut {
             rgb: rgb_w.as_slice_mut()?,
             depth_m: depth_w.as_slice_mut()?,
