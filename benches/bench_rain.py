@@ -61,6 +61,7 @@ def main() -> None:
     # speed drifts): the ratios below compare times taken in the same rounds.
     out8 = np.empty_like(photo8)
     scene_f = PhotoScene(photo8, depth, camera=street.camera)
+    frame_out = cpu.render(scene_f, weather)  # the arrays the out= row renders into
     rounds = block_times_s(
         {
             "alb": lambda: rain_aug(image=photo8)["image"],
@@ -70,13 +71,14 @@ def main() -> None:
             "haze": skyfall_fused_haze,
             "float_u8": skyfall_uint8,
             "float": lambda: cpu.render(scene_f, weather),
+            "float_out": lambda: cpu.render(scene_f, weather, out=frame_out),
         },
         blocks=7,
         per_block=5,
     )
     t = {k: statistics.median(v) for k, v in rounds.items()}
-    t_alb, t_fused, t_fused_drops, t_fused_out, t_fused_haze, t_u8, t_f = (
-        t[k] for k in ("alb", "fused", "fused_drops", "fused_out", "haze", "float_u8", "float")
+    t_alb, t_fused, t_fused_drops, t_fused_out, t_fused_haze, t_u8, t_f, t_f_out = (
+        t[k] for k in ("alb", "fused", "fused_drops", "fused_out", "haze", "float_u8", "float", "float_out")
     )
     # The fused path's throughput against albumentations round by round: how much the ratio
     # itself moves on this machine.
@@ -88,6 +90,7 @@ def main() -> None:
     rows.append({"impl": "skyfall CPU, Renderer.render_srgb8, haze only (rain_streaks=False): the floor without streaks", "s": t_fused_haze})
     rows.append({"impl": "skyfall CPU, Renderer.render (float frame) + io.to_srgb8 (uint8 in, uint8 out)", "s": t_u8})
     rows.append({"impl": "skyfall CPU, billboards + haze, linear float32 in and out", "s": t_f})
+    rows.append({"impl": "skyfall CPU, as above, rendered into a previous frame's arrays (out=)", "s": t_f_out})
     stats = cpu.render(scene_f, weather).stats
     try:
         gpu = Renderer(W, H, backend="gpu")
