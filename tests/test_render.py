@@ -128,7 +128,7 @@ def test_rendering_into_a_previous_frame_reuses_its_arrays(backend, cpu, gpu):
         r.render(scene, rainy, out=skyfall.Frame(rgb=np.zeros((H, W, 3), np.float64), depth_m=want.depth_m.copy()))
     with pytest.raises(ValueError, match="out's rain_alpha"):
         r.render(scene, rainy, out=skyfall.Frame(rgb=want.rgb.copy(), depth_m=want.depth_m.copy(), layers={"rain_alpha": np.zeros((H, W + 1), np.float32)}))
-    with pytest.raises(ValueError, match="out rgb is in use"):
+    with pytest.raises(ValueError, match="out rgb is in use elsewhere"):
         r.render(PhotoScene(want.rgb, want.depth_m, vertical_fov_deg=50.0), rainy, out=want)
     with pytest.raises(TypeError, match="out must be a skyfall.Frame"):
         r.render(scene, rainy, out=want.rgb)  # type: ignore[arg-type]

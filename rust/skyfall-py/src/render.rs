@@ -236,7 +236,7 @@ pub fn render_frame<'py>(
     let report = {
         // A given array may also be an input (a photo rendered over itself): name it.
         fn busy(name: &'static str) -> impl Fn(numpy::BorrowError) -> PyErr {
-            move |_| PyValueError::new_err(format!("out {name} is in use by another argument (an input?): pass a separate array"))
+            move |_| PyValueError::new_err(format!("out {name} is in use elsewhere (an input of this render, or another render): pass a separate array"))
         }
         let (mut rgb_w, mut depth_w) = (rgb.try_readwrite().map_err(busy("rgb"))?, depth.try_readwrite().map_err(busy("depth_m"))?);
         let mut trans_w = trans.as_ref().map(|t| t.try_readwrite().map_err(busy("transmittance"))).transpose()?;
