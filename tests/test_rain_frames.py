@@ -66,7 +66,11 @@ def test_streaks_hide_behind_the_scene(cpu, method, depth):
     assert lit.any()
     assert near.layers["rain_depth_m"][lit].max() < depth
     assert np.isinf(near.layers["rain_depth_m"][~lit]).all()
-    assert near.layers["rain_alpha"].mean() < 0.2 * far.layers["rain_alpha"].mean()
+    # Opacity is spread evenly in depth (a drop's opacity-area goes as 1/z², the drops in a
+    # shell as z² dz), so a wall at `depth` keeps about depth / rain_near_m of it: twice that
+    # bounds it.
+    ratio = near.layers["rain_alpha"].mean() / far.layers["rain_alpha"].mean()
+    assert ratio < 2 * depth / w.rain_near_m, ratio
 
 
 def test_no_rain_beyond_a_near_wall(cpu):
