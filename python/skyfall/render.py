@@ -66,8 +66,9 @@ class Frame:
     luminance_scale_cd_m2 : float
         E/pi of the weather's sky illuminance, cd/m^2.
     stats : dict
-        Counters of the passes that ran: ``rain_drops`` (drops of the rain region in the voxels
-        whose streaks can reach the view; the others are never generated), ``rain_streaks``
+        Counters of the passes that ran: ``rain_drops`` (drops generated: the rain region's
+        drops, or with billboards the textures' streaks, in the voxels whose streaks can reach
+        the view; the others are never generated), ``rain_streaks``
         (streaks drawn), ``rain_culled`` (drops on screen skipped by ``cull_threshold``).
     """
 
