@@ -120,23 +120,31 @@ impl FrameOut<'_> {
     }
 }
 
+impl FrameBuffers {
+    /// A `cam` frame's buffers (with the transmittance layer when `haze`, the rain layers when
+    /// `rain`), sized after the frame is checked to fit, filled by a backend's `render_into`.
+    pub fn filled<E: From<Error>>(cam: &Camera, haze: bool, rain: bool, render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>) -> std::result::Result<Self, E> {
+        check_frame_size(cam)?;
+        let n = cam.pixels();
+        let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
+        let mut trans = haze.then(|| vec![0.0f32; n]);
+        let mut layers = rain.then(|| (vec![0.0f32; n], vec![0.0f32; n]));
+        let out = FrameOut {
+            rgb: &mut rgb,
+            depth_m: &mut depth,
+            transmittance: trans.as_deref_mut(),
+            rain: layers.as_mut().map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
+        };
+        let report = render_into(out)?;
+        let rain = layers.zip(report).map(|((alpha, depth_m), (stats, drops))| RainBuffers { alpha, depth_m, stats, drops });
+        Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans, rain })
+    }
+}
+
 /// Renders a frame on the CPU: scene (ray cast under `light`, or photo copy) and haze fused
 /// row by row, then the rain streaks over the result.
 pub fn render(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers> {
-    check_frame_size(cam)?;
-    let n = cam.pixels();
-    let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
-    let mut trans = haze.map(|_| vec![0.0f32; n]);
-    let mut layers = rain.map(|_| (vec![0.0f32; n], vec![0.0f32; n]));
-    let out = FrameOut {
-        rgb: &mut rgb,
-        depth_m: &mut depth,
-        transmittance: trans.as_deref_mut(),
-        rain: layers.as_mut().map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
-    };
-    let report = render_into(scene, cam, light, haze, rain, out)?;
-    let rain = layers.zip(report).map(|((alpha, depth_m), (stats, drops))| RainBuffers { alpha, depth_m, stats, drops });
-    Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans, rain })
+    FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), |out| render_into(scene, cam, light, haze, rain, out))
 }
 
 /// [`render`] into the caller's buffers (see [`FrameOut`]); the rain's report when it rains.

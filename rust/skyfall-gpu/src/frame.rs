@@ -6,7 +6,7 @@ use crate::rain::{RainPass, RainTargets};
 use crate::pass::{storage, storage_init};
 use crate::readback::read_f32_into;
 use crate::scene_raycast::SceneRaycastPass;
-use skyfall_core::frame::{check_frame_size, check_photo, FrameBuffers, FrameOut, RainBuffers, RainReport, SceneRef};
+use skyfall_core::frame::{check_frame_size, check_photo, FrameBuffers, FrameOut, RainReport, SceneRef};
 use skyfall_core::rain::splat::RainFrame;
 use skyfall_core::haze::Haze;
 use skyfall_core::scene::boxes::SceneLight;
@@ -33,20 +33,7 @@ impl GpuRenderer {
     /// Renders a frame: the scene (ray cast under `light`, or the photo uploaded), haze, rain,
     /// then readback.
     pub fn render(&self, scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers, GpuError> {
-        check_frame_size(cam)?;
-        let n = cam.pixels();
-        let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
-        let mut trans = haze.map(|_| vec![0.0f32; n]);
-        let mut layers = rain.map(|_| (vec![0.0f32; n], vec![0.0f32; n]));
-        let out = FrameOut {
-            rgb: &mut rgb,
-            depth_m: &mut depth,
-            transmittance: trans.as_deref_mut(),
-            rain: layers.as_mut().map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
-        };
-        let report = self.render_into(scene, cam, light, haze, rain, out)?;
-        let rain = layers.zip(report).map(|((alpha, depth_m), (stats, drops))| RainBuffers { alpha, depth_m, stats, drops });
-        Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans, rain })
+        FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), |out| self.render_into(scene, cam, light, haze, rain, out))
     }
 
     /// [`Self::render`] read back into the caller's buffers (see [`FrameOut`]); the rain's
