@@ -25,7 +25,7 @@
 //! camera moving forward at 15 m/s. A billboard frame's mean opacity varies more from seed to
 //! seed than the drops' (the sampled balance varies with the seed too).
 
-use super::drops::{map_voxel_columns, voxel_in_view, Drop, RainRegion};
+use super::drops::{map_voxel_columns, voxel_in_view, wrap, Drop, RainRegion};
 use super::splat::{screen_streak, ScreenStreak};
 use super::texture::{draw_streaks, Streak};
 use crate::physics::air::Air;
@@ -35,13 +35,6 @@ use crate::seed::derive;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
-
-/// x − ⌊x⌋, the same bits as with `f64::floor` (a libm call on SSE2 targets, twice per
-/// streak) for |x| < 2⁶³: positions and scrolls are metres.
-fn wrap(x: f64) -> f64 {
-    let t = (x as i64 as f64).copysign(x);
-    x - if t > x { t - 1.0 } else { t }
-}
 
 /// Largest widening of one voxel's streaks (a billboard that barely shows would otherwise
 /// draw its few visible streaks many times too wide; what it cannot show goes to the frame).
@@ -190,14 +183,6 @@ mod tests {
     use super::*;
     use crate::rain::drops::drops_in_view;
     use glam::Mat3;
-
-    #[test]
-    fn wrap_is_x_minus_its_floor_bit_for_bit() {
-        let xs = [0.0, -0.0, 0.25, 1.0, -1.0, -0.25, 3.999_999_999, -2.5e-17, 1e-300, 7.3e9, -7.3e9, 123.456, -123.456];
-        for x in xs.into_iter().chain((0..2000).map(|k| (k as f64 - 1000.0) * 0.013_7)) {
-            assert_eq!(wrap(x).to_bits(), (x - x.floor()).to_bits(), "{x}");
-        }
-    }
 
     #[test]
     fn the_balance_of_a_voxel_straight_ahead_is_jensens_ratio() {

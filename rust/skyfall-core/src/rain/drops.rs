@@ -79,15 +79,17 @@ pub struct Drop {
     pub id: [i64; 5],
 }
 
-fn wrap(x: f64) -> f64 {
+/// x − ⌊x⌋ (in [0, 1] for |x| < 2⁶³: positions and scrolls are metres).
+#[inline]
+pub(crate) fn wrap(x: f64) -> f64 {
     x - floor(x)
 }
 
-/// ⌊x⌋ for |x| < 2⁶³ by truncation (the same value as `f64::floor`, which is a libm call on
-/// targets without a rounding instruction).
+/// ⌊x⌋ for |x| < 2⁶³ by truncation, the same bits as `f64::floor` (−0 included), which is a
+/// libm call on targets without a rounding instruction.
 #[inline]
 pub(crate) fn floor(x: f64) -> f64 {
-    let t = x as i64 as f64;
+    let t = (x as i64 as f64).copysign(x);
     if t > x { t - 1.0 } else { t }
 }
 
@@ -318,6 +320,14 @@ mod tests {
             assert!((t.m_s(b, hi) / law.m_s(hi) - 1.0).abs() < 1e-12);
         }
         assert!(worst < 3e-5, "{worst:e}");
+    }
+
+    #[test]
+    fn wrap_is_x_minus_its_floor_bit_for_bit() {
+        let xs = [0.0, -0.0, 0.25, 1.0, -1.0, -0.25, 3.999_999_999, -2.5e-17, 1e-300, 7.3e9, -7.3e9, 123.456, -123.456];
+        for x in xs.into_iter().chain((0..2000).map(|k| (k as f64 - 1000.0) * 0.013_7)) {
+            assert_eq!(wrap(x).to_bits(), (x - x.floor()).to_bits(), "{x}");
+        }
     }
 
     #[test]
