@@ -44,6 +44,12 @@ def _gpu_device(require_hardware: bool) -> _core.GpuDevice:
         return _devices[require_hardware]
 
 
+def _writable(a: Any, dtype: type, shape: tuple[int, ...]) -> bool:
+    """Whether ``a`` is an array Rust can write a frame into: ``dtype``, ``shape``,
+    C-contiguous, writable."""
+    return isinstance(a, np.ndarray) and a.dtype == dtype and a.shape == shape and a.flags.c_contiguous and a.flags.writeable
+
+
 @dataclass
 class Frame:
     """A rendered frame.
@@ -254,15 +260,9 @@ class Renderer:
         shape = (self.height, self.width)
         if out is None:
             out = np.empty((*shape, 3), np.uint8)
-        elif not (isinstance(out, np.ndarray) and out.dtype == np.uint8 and out.shape == (*shape, 3) and out.flags.c_contiguous and out.flags.writeable):
+        elif not _writable(out, np.uint8, (*shape, 3)):
             raise ValueError(f"out must be a writable C-contiguous uint8 array of shape {(*shape, 3)}")
-        if rain_alpha_out is not None and not (
-            isinstance(rain_alpha_out, np.ndarray)
-            and rain_alpha_out.dtype == np.float32
-            and rain_alpha_out.shape == shape
-            and rain_alpha_out.flags.c_contiguous
-            and rain_alpha_out.flags.writeable
-        ):
+        if rain_alpha_out is not None and not _writable(rain_alpha_out, np.float32, shape):
             raise ValueError(f"rain_alpha_out must be a writable C-contiguous float32 array of shape {shape}")
         if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
             cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
@@ -292,9 +292,7 @@ class Renderer:
         arrays = {"rgb": out.rgb, "depth_m": out.depth_m, **{k: out.layers.get(k) for k in ("transmittance", "rain_alpha", "rain_depth_m")}}
         for name, a in arrays.items():
             want = (*shape, 3) if name == "rgb" else shape
-            if a is not None and not (
-                isinstance(a, np.ndarray) and a.dtype == np.float32 and a.shape == want and a.flags.c_contiguous and a.flags.writeable
-            ):
+            if a is not None and not _writable(a, np.float32, want):
                 raise ValueError(f"out's {name} must be a writable C-contiguous float32 array of shape {want}")
         return arrays
 
