@@ -1,4 +1,4 @@
-"""Rain streaks in frames (drawn drop by drop): physics, depth, stereo, time, ground truth."""
+"""Rain streaks in frames, on both backends: physics, depth, stereo, time, lights, ground truth."""
 
 from __future__ import annotations
 
@@ -10,9 +10,11 @@ from skyfall import Camera, PhotoScene, Renderer, Weather, rain, scenes
 W, H = 200, 120
 
 
-@pytest.fixture(scope="module")
-def cpu() -> Renderer:
-    return Renderer(W, H, backend="cpu")
+@pytest.fixture(scope="module", params=["cpu", "gpu"])
+def renderer(request: pytest.FixtureRequest) -> Renderer:
+    # Every frame test on both backends (the GPU's on lavapipe in CI): streaks are prepared on
+    # the CPU and composited by either backend, so each property must hold on both.
+    return Renderer(W, H, backend=request.param)
 
 
 def open_air(depth: float = np.inf) -> PhotoScene:
@@ -21,27 +23,27 @@ def open_air(depth: float = np.inf) -> PhotoScene:
     return PhotoScene(img, np.full((H, W), depth, np.float32), camera=cam)
 
 
-def test_no_rain_is_the_haze_only_frame(cpu):
+def test_no_rain_is_the_haze_only_frame(renderer):
     hazy = Weather(visibility_m=500.0)
-    a = cpu.render(scenes.street(), hazy)
-    b = cpu.render(scenes.street(), Weather(visibility_m=500.0, rain_rate_mm_h=0.0, wind_m_s=(5.0, 0.0, 0.0)))
+    a = renderer.render(scenes.street(), hazy)
+    b = renderer.render(scenes.street(), Weather(visibility_m=500.0, rain_rate_mm_h=0.0, wind_m_s=(5.0, 0.0, 0.0)))
     assert a.rgb.tobytes() == b.rgb.tobytes()
     assert "rain_alpha" not in b.layers and b.stats == {}
 
 
-def test_heavier_rain_covers_more(cpu):
-    means = [cpu.render(open_air(), Weather(rain_rate_mm_h=r), seed=4).layers["rain_alpha"].mean() for r in (1, 5, 20, 100)]
+def test_heavier_rain_covers_more(renderer):
+    means = [renderer.render(open_air(), Weather(rain_rate_mm_h=r), seed=4).layers["rain_alpha"].mean() for r in (1, 5, 20, 100)]
     assert np.all(np.diff(means) > 0), means
 
 
-def test_opacity_area_matches_the_drops_seen(cpu):
+def test_opacity_area_matches_the_drops_seen(renderer):
     # Every streak adds alpha * w * L = w^2 px^2 of coverage, w = D f / z its projected width:
     # summed over the drops in view (computed here from the drops' positions), it is the
     # frame's total rain_alpha, up to the capsule caps, overlaps and the frame edges (5 %).
     # The per-drop reference draws exactly the drops rain.drops lists.
     weather = Weather(rain_rate_mm_h=20.0, rain_near_m=4.0, rain_method="drops")
     scene = open_air()
-    frame = cpu.render(scene, weather, seed=2)
+    frame = renderer.render(scene, weather, seed=2)
     cam = scene.camera
     d = rain.drops(cam.position_m, weather, seed=2, ground=False)
     px, z = cam.project(d.position_m)
@@ -55,13 +57,13 @@ def test_opacity_area_matches_the_drops_seen(cpu):
 
 
 @pytest.mark.parametrize(("method", "depth"), [("drops", 0.3), ("billboards", 0.8)])
-def test_streaks_hide_behind_the_scene(cpu, method, depth):
+def test_streaks_hide_behind_the_scene(renderer, method, depth):
     # Behind a photo `depth` m away only streaks nearer than that show. Drops fill the space
     # up to 0.3 m; billboards stand on planes through voxel centres, which reach 0.3 m only off
     # to the side of this camera, out of its view.
     w = Weather(rain_rate_mm_h=50.0, rain_method=method)
-    near = cpu.render(open_air(depth=depth), w, seed=1)
-    far = cpu.render(open_air(), w, seed=1)
+    near = renderer.render(open_air(depth=depth), w, seed=1)
+    far = renderer.render(open_air(), w, seed=1)
     lit = near.layers["rain_alpha"] > 0
     assert lit.any()
     assert near.layers["rain_depth_m"][lit].max() < depth
@@ -73,10 +75,10 @@ def test_streaks_hide_behind_the_scene(cpu, method, depth):
     assert ratio < 2 * depth / w.rain_near_m, ratio
 
 
-def test_no_rain_beyond_a_near_wall(cpu):
+def test_no_rain_beyond_a_near_wall(renderer):
     cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0)
     wall = scenes.boxes([{"min": (-20, 0, -2.5), "max": (20, 20, -2.0)}], camera=cam)
-    f = cpu.render(wall, Weather(rain_rate_mm_h=50.0), seed=3)
+    f = renderer.render(wall, Weather(rain_rate_mm_h=50.0), seed=3)
     on_wall = np.isfinite(f.depth_m)
     lit = (f.layers["rain_alpha"] > 0) & on_wall
     assert lit.sum() > 100
@@ -114,24 +116,24 @@ def test_rain_is_coherent_in_time_and_follows_the_wind():
     assert np.all((speeds > 3.5) & (speeds < 7.5))  # Beard speeds of 0.9-2.1 mm drops
 
 
-def test_sequences_are_deterministic_and_move(cpu):
+def test_sequences_are_deterministic_and_move(renderer):
     w = Weather(rain_rate_mm_h=20.0)
-    seq = cpu.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9)
-    again = cpu.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9)
+    seq = renderer.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9)
+    again = renderer.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9)
     assert len(seq) == 3
     for a, b in zip(seq, again):
         assert a.rgb.tobytes() == b.rgb.tobytes()
     assert not np.array_equal(seq[0].layers["rain_alpha"], seq[1].layers["rain_alpha"])
 
 
-def test_longer_exposures_give_longer_streaks_of_the_same_opacity_area(cpu):
+def test_longer_exposures_give_longer_streaks_of_the_same_opacity_area(renderer):
     w = Weather(rain_rate_mm_h=20.0)
     short = Camera((0.0, 1.6, 0.0), exposure_s=1 / 250)
     long = Camera((0.0, 1.6, 0.0), exposure_s=1 / 30)
     img = np.full((H, W, 3), 0.1, np.float32)
     inf = np.full((H, W), np.inf, np.float32)
-    a = cpu.render(PhotoScene(img, inf, camera=short), w, seed=1).layers["rain_alpha"]
-    b = cpu.render(PhotoScene(img, inf, camera=long), w, seed=1).layers["rain_alpha"]
+    a = renderer.render(PhotoScene(img, inf, camera=short), w, seed=1).layers["rain_alpha"]
+    b = renderer.render(PhotoScene(img, inf, camera=long), w, seed=1).layers["rain_alpha"]
 
     def vertical_correlation(x: np.ndarray, lag: int = 6) -> float:
         x = x - x.mean()
@@ -143,15 +145,15 @@ def test_longer_exposures_give_longer_streaks_of_the_same_opacity_area(cpu):
 
 
 @pytest.mark.parametrize("background", [0.1, 2.0])
-def test_streaks_are_lit_by_the_sky(cpu, background):
+def test_streaks_are_lit_by_the_sky(renderer, background):
     # I_v = r I_R + (1 - r) I_T with r = 0.5, I_R = 1: rain brightens a dark background and
     # darkens one brighter than I_R; where one streak covers a pixel with a, the change is
     # a r (I_R - C). Background 20 m away, behind the 5 m rain region.
     img = np.full((H, W, 3), background, np.float32)
     scene = PhotoScene(img, np.full((H, W), 20.0, np.float32), camera=Camera((0.0, 1.6, 0.0)))
     w = Weather(rain_rate_mm_h=50.0)
-    clear = cpu.render(scene, Weather(rain_rate_mm_h=50.0, rain_near_m=1e-3), seed=1)  # haze, (almost) no streaks
-    wet = cpu.render(scene, w, seed=1)
+    clear = renderer.render(scene, Weather(rain_rate_mm_h=50.0, rain_near_m=1e-3), seed=1)  # haze, (almost) no streaks
+    wet = renderer.render(scene, w, seed=1)
     a = wet.layers["rain_alpha"]
     c = clear.rgb[..., 0]
     change = wet.rgb[..., 0] - c
@@ -189,16 +191,15 @@ def dusk_scene(lights=()):
     return PhotoScene(img, np.full((H, W), 30.0, np.float32), camera=cam, lights=tuple(lights))
 
 
-def test_streaks_near_a_lamp_are_brighter():
+def test_streaks_near_a_lamp_are_brighter(renderer):
     # One 2000 cd lamp 2 m ahead and 1.5 m to the left; dusk sky of 20 lux. Rain brightens the
     # dark background far more around the lamp's image than on the other side of the frame.
     from skyfall import PointLight
 
-    cpu = Renderer(W, H, backend="cpu")
     lamp = PointLight((-1.5, 1.6, -2.0), 2000.0)
     w = Weather(rain_rate_mm_h=30.0, sky_illuminance_lux=20.0, rain_near_m=4.0)
-    lit = cpu.render(dusk_scene([lamp]), w, seed=2)
-    dark = cpu.render(dusk_scene(), w, seed=2)
+    lit = renderer.render(dusk_scene([lamp]), w, seed=2)
+    dark = renderer.render(dusk_scene(), w, seed=2)
     np.testing.assert_array_equal(lit.layers["rain_alpha"], dark.layers["rain_alpha"])  # same drops
     gain = (lit.rgb - dark.rgb)[..., 0]
     px, _ = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0, width=W, height=H).project([lamp.position_m])
@@ -209,41 +210,40 @@ def test_streaks_near_a_lamp_are_brighter():
     assert near > 3 * far > 0
     # the lamp's share of the drop light is linear in its intensity (inverse square in
     # distance is checked on the light itself in the Rust tests)
-    half = cpu.render(dusk_scene([PointLight((-1.5, 1.6, -2.0), 500.0)]), w, seed=2)
+    half = renderer.render(dusk_scene([PointLight((-1.5, 1.6, -2.0), 500.0)]), w, seed=2)
     g_half = (half.rgb - dark.rgb)[..., 0][:, max(0, x - 20) : x + 20].mean()
     assert g_half == pytest.approx(near / 4, rel=0.15)
 
 
-def test_a_light_of_zero_intensity_changes_nothing_and_culling_counts():
+def test_a_light_of_zero_intensity_changes_nothing_and_culling_counts(renderer):
     from skyfall import PointLight, SpotLight
 
-    cpu = Renderer(W, H, backend="cpu")
     w = Weather(rain_rate_mm_h=30.0, sky_illuminance_lux=20.0)
-    base = cpu.render(dusk_scene(), w, seed=5)
-    off = cpu.render(dusk_scene([PointLight((0.0, 2.0, -2.0), 0.0)]), w, seed=5)
+    base = renderer.render(dusk_scene(), w, seed=5)
+    off = renderer.render(dusk_scene([PointLight((0.0, 2.0, -2.0), 0.0)]), w, seed=5)
     assert off.rgb.tobytes() == base.rgb.tobytes()
     assert base.stats["rain_culled"] == 0
     # threshold 0 culls nothing: the same bits as no culling
-    zero = cpu.render(dusk_scene(), w, seed=5, cull_threshold=0.0)
+    zero = renderer.render(dusk_scene(), w, seed=5, cull_threshold=0.0)
     assert zero.rgb.tobytes() == base.rgb.tobytes() and zero.stats == base.stats
     # a headlight lights a cone; a threshold above the sky's 1.0 keeps only lit drops
     head = SpotLight((0.0, 0.7, -6.0), (0.0, 0.0, 1.0), 15000.0, cone_deg=20.0)
-    lit = cpu.render(dusk_scene([head]), w, seed=5)
-    culled = cpu.render(dusk_scene([head]), w, seed=5, cull_threshold=1.5)
+    lit = renderer.render(dusk_scene([head]), w, seed=5)
+    culled = renderer.render(dusk_scene([head]), w, seed=5, cull_threshold=1.5)
     assert culled.stats["rain_culled"] > 0
     assert culled.stats["rain_culled"] + culled.stats["rain_streaks"] == lit.stats["rain_streaks"]
     # what culling drops is faint: the image changes far less than the rain itself
-    rain_change = np.abs(lit.rgb - cpu.render(dusk_scene([head]), Weather(sky_illuminance_lux=20.0, visibility_m=1e9, rain_rate_mm_h=30.0, rain_streaks=False), seed=5).rgb).mean()
+    rain_change = np.abs(lit.rgb - renderer.render(dusk_scene([head]), Weather(sky_illuminance_lux=20.0, visibility_m=1e9, rain_rate_mm_h=30.0, rain_streaks=False), seed=5).rgb).mean()
     assert np.abs(culled.rgb - lit.rgb).mean() < 0.5 * rain_change
     with pytest.raises(ValueError, match="cull_threshold"):
-        cpu.render(dusk_scene(), w, cull_threshold=-1.0)
+        renderer.render(dusk_scene(), w, cull_threshold=-1.0)
     with pytest.raises(ValueError, match="cone_deg"):
         SpotLight((0, 0, 0), (0, 0, 1), 1.0, cone_deg=120.0)
     with pytest.raises(ValueError, match="intensity_cd"):
         PointLight((0, 0, 0), -5.0)
 
 
-def test_a_moving_camera_sees_the_drops_relative_motion(cpu):
+def test_a_moving_camera_sees_the_drops_relative_motion(renderer):
     # Drops fall at 4-7 m/s; a camera moving sideways at 25 m/s sees them sweep across the
     # frame: streaks turn from vertical to nearly horizontal.
     def lag_corr(x: np.ndarray, axis: int, lag: int = 4) -> float:
@@ -255,16 +255,16 @@ def test_a_moving_camera_sees_the_drops_relative_motion(cpu):
     img = np.full((H, W, 3), 0.1, np.float32)
     inf = np.full((H, W), np.inf, np.float32)
     w = Weather(rain_rate_mm_h=30.0, rain_near_m=3.0)
-    still = cpu.render(PhotoScene(img, inf, camera=Camera((0.0, 1.6, 0.0))), w, seed=6).layers["rain_alpha"]
+    still = renderer.render(PhotoScene(img, inf, camera=Camera((0.0, 1.6, 0.0))), w, seed=6).layers["rain_alpha"]
     moving_cam = Camera((0.0, 1.6, 0.0), velocity_m_s=(25.0, 0.0, 0.0))
-    moving = cpu.render(PhotoScene(img, inf, camera=moving_cam), w, seed=6).layers["rain_alpha"]
+    moving = renderer.render(PhotoScene(img, inf, camera=moving_cam), w, seed=6).layers["rain_alpha"]
     assert lag_corr(still, 0) > lag_corr(still, 1)
     assert lag_corr(moving, 1) > lag_corr(moving, 0)
     with pytest.raises(ValueError, match="velocity_m_s"):
         Camera(velocity_m_s=(2000.0, 0.0, 0.0))
 
 
-def test_billboards_carry_the_drops_mean_opacity(cpu):
+def test_billboards_carry_the_drops_mean_opacity(renderer):
     # Billboards draw each voxel's streaks at the voxel centre's depth. A streak's opacity-area
     # goes as 1/z^2, which is convex, so by Jensen's inequality moving drops to their voxel's
     # centre plane loses opacity (8 % here), and the camera's own voxel shows no billboard at
@@ -275,7 +275,7 @@ def test_billboards_carry_the_drops_mean_opacity(cpu):
 
     def mean_alpha(method: str) -> float:
         w = Weather(rain_rate_mm_h=20.0, rain_method=method)
-        return float(np.mean([cpu.render(scene, w, seed=s).layers["rain_alpha"].mean() for s in range(24)]))
+        return float(np.mean([renderer.render(scene, w, seed=s).layers["rain_alpha"].mean() for s in range(24)]))
 
     drops, boards = mean_alpha("drops"), mean_alpha("billboards")
     assert -0.05 < boards / drops - 1 < 0.06

@@ -224,11 +224,15 @@ impl ScreenStreak {
         self.light
     }
 
-    /// The streak as 12 floats: a.xy, b.xy | 1/z_a, 1/z_b, w_a, w_b | α, light rgb.
-    pub fn packed(&self) -> [f32; 12] {
+    /// The streak as 16 floats for the GPU pass: a.xy, the unit direction | length, reach
+    /// (the distance from the axis beyond which a pixel gets no coverage), w_a, w_b | 1/z_a,
+    /// 1/z_b, α, 0 | light rgb, 0. Direction, length and reach are the values
+    /// [`Self::fragment`] uses, so the shader does not compute its own.
+    pub fn packed(&self) -> [f32; 16] {
+        let reach = (0.5 * self.wa.max(self.wb) + 0.5).max(1.0);
         [
-            self.a.x, self.a.y, self.b.x, self.b.y, self.inv_za, self.inv_zb, self.wa, self.wb, self.alpha, self.light.x,
-            self.light.y, self.light.z,
+            self.a.x, self.a.y, self.dir.x, self.dir.y, self.len, reach, self.wa, self.wb, self.inv_za, self.inv_zb, self.alpha, 0.0,
+            self.light.x, self.light.y, self.light.z, 0.0,
         ]
     }
 

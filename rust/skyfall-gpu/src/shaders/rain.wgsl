@@ -5,13 +5,13 @@
 struct RainParams {
     reflectance: f32,
     tiles_x: u32,
-    tile: u32,
-    pad: u32,
+    tile_w: u32,
+    tile_h: u32,
 }
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<uniform> params: RainParams;
-@group(0) @binding(2) var<storage, read> streaks: array<vec4<f32>>;  // 3 per streak
+@group(0) @binding(2) var<storage, read> streaks: array<vec4<f32>>;  // 4 per streak (ScreenStreak::packed)
 @group(0) @binding(3) var<storage, read> offsets: array<u32>;
 @group(0) @binding(4) var<storage, read> indices: array<u32>;
 @group(0) @binding(5) var<storage, read_write> rgb: array<f32>;
@@ -27,26 +27,26 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let i = gid.y * w + gid.x;
     let p = vec2<f32>(f32(gid.x) + 0.5, f32(gid.y) + 0.5);
-    let t = (gid.y / params.tile) * params.tiles_x + gid.x / params.tile;
+    let t = (gid.y / params.tile_h) * params.tiles_x + gid.x / params.tile_w;
     var c = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);
     var keep = 1.0;
     var z_min = infinity();
     let scene_depth = depth[i];
     for (var j = offsets[t]; j < offsets[t + 1u]; j++) {
         let k = indices[j];
-        let s0 = streaks[3u * k];
-        let s1 = streaks[3u * k + 1u];
-        let s2 = streaks[3u * k + 2u];
-        let a = s0.xy;
-        let ab = s0.zw - a;
-        let len = length(ab);
-        var dir = vec2<f32>(0.0, 1.0);
-        if len > 1e-6 {
-            dir = ab / len;
-        }
-        let q = p - a;
+        let s0 = streaks[4u * k];
+        let s1 = streaks[4u * k + 1u];
+        let dir = s0.zw;
+        let len = s1.x;
+        let q = p - s0.xy;
         let along = dot(q, dir);
         let across = abs(q.x * dir.y - q.y * dir.x);
+        // Beyond the streak's reach across (its widest half-width plus half a pixel, at least
+        // one pixel) or half a pixel beyond either end along, the coverage below is 0: such
+        // pixels skip the rest (1e-3 px to spare for rounding; the same result).
+        if across >= s1.y + 1e-3 || along <= -0.5 - 1e-3 || along >= len + 0.5 + 1e-3 {
+            continue;
+        }
         var kk = 0.0;
         if len > 1e-6 {
             kk = clamp(along / len, 0.0, 1.0);
@@ -63,13 +63,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if cov <= 0.0 {
             continue;
         }
-        let z = 1.0 / (s1.x + (s1.y - s1.x) * kk);
+        let s2 = streaks[4u * k + 2u];
+        let z = 1.0 / (s2.x + (s2.y - s2.x) * kk);
         if z >= scene_depth {
             continue;
         }
-        let fa = s2.x * cov;
+        let light = streaks[4u * k + 3u].xyz;
+        let fa = s2.z * cov;
         let ar = fa * params.reflectance;
-        c += ar * (s2.yzw - c);
+        c += ar * (light - c);
         keep *= 1.0 - fa;
         z_min = min(z_min, z);
     }
