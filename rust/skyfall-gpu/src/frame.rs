@@ -69,9 +69,10 @@ impl GpuRenderer {
                 let alpha = storage(ctx, "rain_alpha", n);
                 let rain_depth = storage(ctx, "rain_depth", n);
                 let targets = RainTargets { rgb: &rgb, depth: &depth, alpha: &alpha, rain_depth: &rain_depth };
-                self.rain.encode(ctx, &mut enc, cam, &streaks, rf.shading.reflectance, targets);
-                (alpha, rain_depth, stats, drops)
+                self.rain.encode(ctx, &mut enc, cam, &streaks, rf.shading.reflectance, targets)?;
+                Ok::<_, GpuError>((alpha, rain_depth, stats, drops))
             });
+            let rain_out = rain_out.transpose()?;
             ctx.queue.submit([enc.finish()]);
             let FrameOut { rgb: rgb_out, depth_m: depth_out, transmittance: trans_out, rain: layers_out } = out;
             read_f32_into(ctx, &rgb, rgb_out)?;

@@ -10,7 +10,7 @@
 //! several tiles; on a real GPU that costs some divergence, which is unmeasured here.
 
 use crate::camera::camera_words;
-use crate::context::GpuContext;
+use crate::context::{GpuContext, GpuError};
 use crate::pass::{storage_init, uniform, Binding, ComputePass};
 use skyfall_core::rain::splat::{bin_by_tiles, ScreenStreak};
 use skyfall_core::scene::camera::Camera;
@@ -50,9 +50,15 @@ impl RainPass {
         ))
     }
 
-    /// Records the pass over prepared `streaks` (far to near).
-    pub fn encode(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, cam: &Camera, streaks: &[ScreenStreak], reflectance: f32, t: RainTargets<'_>) {
+    /// Records the pass over prepared `streaks` (far to near); [`GpuError::TooLarge`] when the
+    /// streaks or the tiles' lists of them do not fit one of the device's storage buffers.
+    pub fn encode(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, cam: &Camera, streaks: &[ScreenStreak], reflectance: f32, t: RainTargets<'_>) -> Result<(), GpuError> {
         let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H);
+        // rain_near_m and the rain rate set how many streaks there are (the region's volume
+        // goes as rain_near_m³).
+        let why = "(fewer with a smaller rain_near_m or rain rate)";
+        ctx.check_buffer(&format!("the rain's {} streaks {why}", streaks.len()), (streaks.len() * 16 * 4) as u64)?;
+        ctx.check_buffer(&format!("the rain's tile lists ({} entries) {why}", indices.len()), (indices.len() * 4) as u64)?;
         let mut packed: Vec<f32> = streaks.iter().flat_map(|s| s.packed()).collect();
         // Bindings may not be empty; the offsets keep padding unread.
         if packed.is_empty() {
@@ -74,5 +80,6 @@ impl RainPass {
             cam.width,
             cam.height,
         );
+        Ok(())
     }
 }

@@ -15,6 +15,7 @@ use skyfall_core::sky::illuminance::SkyTable;
 use skyfall_core::sky::{sun_direction, Sky};
 use skyfall_core::scene::camera::Camera;
 use skyfall_gpu::frame::GpuRenderer;
+use skyfall_gpu::context::GpuError;
 use skyfall_gpu::AdapterChoice;
 
 fn street() -> (BoxScene, Camera) {
@@ -115,6 +116,15 @@ fn gpu_rain_matches_cpu_rain() {
     assert_eq!(bits(&rd), bits(&gr.depth_m));
     let short = FrameOut { rgb: &mut rgb[3..], depth_m: &mut d, transmittance: None, rain: Some((&mut a, &mut rd)) };
     assert!(gpu.render_into(photo, &cam, &light, None, Some(&rf), short).is_err());
+    // Rain that does not fit the device's storage buffers is an error that names the streaks,
+    // not a wgpu failure: the frame's buffers fit this limit, the streak list does not.
+    let mut small = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let frame_bytes = (3 * n * 4) as u64;
+    small.ctx.limits.max_storage_buffer_binding_size = frame_bytes;
+    assert!(small.render(photo, &cam, &light, None, None).is_ok());
+    assert!((gr.stats.streaks * 64) as u64 > frame_bytes);
+    let err = small.render(photo, &cam, &light, None, Some(&rf)).unwrap_err();
+    assert!(matches!(err, GpuError::TooLarge { .. }) && err.to_string().contains("streaks"), "{err}");
 }
 
 #[test]
