@@ -16,7 +16,7 @@ use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
 use crate::frame::check_frame_size;
 use crate::haze::Haze;
-use crate::rain::splat::{bin_by_tiles, for_each_fragment, for_each_fragment_x4, RainFrame, RainStats, ScreenStreak};
+use crate::rain::splat::{bin_by_tiles, for_each_fragment_in, for_each_fragment_x4, RainFrame, RainStats, ScreenStreak};
 use glam::{Vec4, Vec4Swizzles};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
@@ -257,7 +257,7 @@ fn raster_tile<const K: usize>(
         if walked {
             continue;
         }
-        for_each_fragment(s, y0, rows, w, |i, a, inv_z| {
+        for_each_fragment_in(s, y0, rows, w, cols.clone(), |i, a, inv_z| {
             if !cols.contains(&(i % w)) {
                 return;
             }
