@@ -37,13 +37,18 @@ def test_heavier_rain_covers_more(renderer):
     assert np.all(np.diff(means) > 0), means
 
 
-def test_opacity_area_matches_the_drops_seen(renderer):
+@pytest.mark.parametrize("exposure_s", [1 / 30, 1e-3, 1e-4])
+def test_opacity_area_matches_the_drops_seen(renderer, exposure_s):
     # Every streak adds alpha * w * L = w^2 px^2 of coverage, w = D f / z its projected width:
     # summed over the drops in view (computed here from the drops' positions), it is the
     # frame's total rain_alpha, up to the capsule caps, overlaps and the frame edges (5 %).
-    # The per-drop reference draws exactly the drops rain.drops lists.
+    # The per-drop reference draws exactly the drops rain.drops lists. Short exposures too:
+    # drops that move less than a pixel (most here at 1e-4 s) still carry w^2 (they carried
+    # 1.6x and 3.7x that at 1e-3 and 1e-4 s before paths were lengthened to a pixel).
     weather = Weather(rain_rate_mm_h=20.0, rain_near_m=4.0, rain_method="drops")
-    scene = open_air()
+    img = np.full((H, W, 3), 0.1, np.float32)
+    cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0, exposure_s=exposure_s)
+    scene = PhotoScene(img, np.full((H, W), np.inf, np.float32), camera=cam)
     frame = renderer.render(scene, weather, seed=2)
     cam = scene.camera
     d = rain.drops(cam.position_m, weather, seed=2, ground=False)

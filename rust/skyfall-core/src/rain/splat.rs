@@ -124,11 +124,23 @@ pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_
     }
     let (za, zb) = (-pa.z, -pb.z);
     let f = 0.5 * (cam.fx + cam.fy);
-    let (a, b) = (project(cam, pa), project(cam, pb));
+    let (mut a, mut b) = (project(cam, pa), project(cam, pb));
     let (wa, wb) = (d.diameter_m * f / za, d.diameter_m * f / zb);
-    let len = a.distance(b);
+    let mut len = a.distance(b);
     let w_mid = 0.5 * (wa + wb);
-    let alpha = w_mid / len.max(w_mid);
+    // Every streak carries w² of opacity-area, whatever the exposure: its pixels' coverage
+    // sums to α·w·L for L ≥ 1 px, wherever it falls on the pixel grid (the anti-aliased ends
+    // are one pixel long), so α = w / L. A path shorter than a pixel or than the drop is wide
+    // (a near drop in a short exposure, a drop moving with the camera) is lengthened about its
+    // middle to max(w, 1 px): opaque when w ≥ 1 px, as the drop's disc is.
+    let l = len.max(w_mid).max(1.0);
+    if l > len {
+        let dir = if len > 1e-6 { (b - a) / len } else { Vec2::Y };
+        let grow = 0.5 * (l - len);
+        (a, b) = (a - dir * grow, b + dir * grow);
+        len = l;
+    }
+    let alpha = w_mid / l;
     let r = 0.5 * wa.max(wb) + 1.0;
     let min = a.min(b) - Vec2::splat(r);
     let max = a.max(b) + Vec2::splat(r);
@@ -237,9 +249,9 @@ impl ScreenStreak {
     }
 
     /// The streak's opacity-area inside a `width` × `height` frame, px²: α times the length of
-    /// its axis inside the frame times its mean width there (a dot inside the frame: α·w²), the
-    /// sum of its pixels' α·coverage up to the anti-aliased ends. Over the whole axis it is
-    /// α·w·L = min(w, L)·w, which goes as 1/z² with the drop's depth z.
+    /// its axis inside the frame times its mean width there, the sum of its pixels' α·coverage
+    /// up to the anti-aliased ends. Over the whole axis it is w² (streaks are at least a pixel
+    /// long, see [`screen_streak`]), which goes as 1/z² with the drop's depth z.
     pub fn opacity_area_in(&self, width: f32, height: f32) -> f32 {
         let inside = |p: Vec2| p.x >= 0.0 && p.y >= 0.0 && p.x <= width && p.y <= height;
         if self.len <= 1e-6 {
@@ -1055,9 +1067,21 @@ mod tests {
         let culling = RainShading { cull_threshold: Some(1.5), ..white.clone() };
         let stats = composite(&cam, &[d], 1.0 / 30.0, &culling, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha2, rain_depth_m: &mut rd });
         assert_eq!(stats, RainStats { streaks: 0, culled: 1 });
-        // a camera moving with the drop sees a dot (the drop's disc), not a streak
+        // a camera moving with the drop sees a dot (the drop's disc), not a streak: a pixel
+        // long, at α = w, so that it still carries w²
         let s = screen_streak(&cam, &d, 1.0 / 30.0, d.velocity_m_s).unwrap();
-        assert!(s.a.distance(s.b) < 1e-4 && s.alpha == 1.0);
+        assert!((s.len - 1.0).abs() < 1e-6 && (s.alpha - w).abs() < 1e-6, "{} {}", s.len, s.alpha);
+        assert!((s.opacity_area_in(400.0, 400.0) / (w * w) - 1.0).abs() < 1e-4);
+        // whatever the exposure, the pixels sum to w² (a still drop: a dot; a near drop in a
+        // short exposure: lengthened; 1/30 s: a streak)
+        for (v, z, t) in [(0.0, 1.0, 1.0 / 30.0), (0.0, 0.1, 1.0 / 30.0), (6.5, 0.3, 1e-4), (6.5, 1.0, 1e-3), (6.5, 1.0, 3e-3), (6.5, 5.0, 1e-4)] {
+            let d = Drop { position_m: Vec3::new(0.05, 0.0, -z), velocity_m_s: Vec3::new(0.0, -v, 0.0), ..d };
+            let w = 2e-3 * 300.0 / z;
+            let mut alpha = vec![0.0; n];
+            composite(&cam, &[d], t, &white, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rd });
+            let sum: f32 = alpha.iter().sum();
+            assert!((sum / (w * w) - 1.0).abs() < 0.02, "v {v} z {z} T {t}: {sum} vs {}", w * w);
+        }
         // a camera moving up at 6.5 m/s doubles the streak
         let still = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO).unwrap();
         let up = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::new(0.0, 6.5, 0.0)).unwrap();
