@@ -113,3 +113,26 @@ def test_bad_outputs_are_refused(cpu):
         Renderer(W + 2, H, backend="cpu").render_srgb8(scene)
     with pytest.raises(TypeError, match="weather"):
         cpu.render_srgb8(scene, "rain")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_outputs_that_overlap_the_inputs_are_refused(backend):
+    # A photo's arrays are the caller's: writing into them would change the scene itself (on
+    # the GPU path rain_alpha_out=depth used to overwrite the depth map silently).
+    r = Renderer(W, H, backend=backend)
+    img = np.random.default_rng(1).integers(0, 256, (H, W, 3), dtype=np.uint8)
+    depth = np.full((H, W), 5.0, np.float32)
+    scene = PhotoScene(img, depth, camera=Camera((0.0, 1.6, 0.0)))
+    rain = Weather(rain_rate_mm_h=10.0)
+    before = (img.copy(), depth.copy())
+    with pytest.raises(ValueError, match="out overlaps the scene's image"):
+        r.render_srgb8(scene, rain, out=img)
+    with pytest.raises(ValueError, match="rain_alpha_out overlaps the scene's depth_m"):
+        r.render_srgb8(scene, rain, rain_alpha_out=depth)
+    buf = np.empty(H * W * 4, np.float32)
+    with pytest.raises(ValueError, match="out overlaps rain_alpha_out"):
+        r.render_srgb8(scene, rain, out=buf.view(np.uint8)[: H * W * 3].reshape(H, W, 3), rain_alpha_out=buf[: H * W].reshape(H, W))
+    assert np.array_equal(img, before[0]) and np.array_equal(depth, before[1])
+    float_scene = PhotoScene(io.decode_srgb8(img), depth, camera=Camera((0.0, 1.6, 0.0)))
+    with pytest.raises(ValueError, match="rain_alpha_out overlaps the scene's image"):
+        r.render_srgb8(float_scene, rain, rain_alpha_out=float_scene.image.reshape(-1)[: H * W].reshape(H, W))

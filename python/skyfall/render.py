@@ -44,6 +44,19 @@ def _gpu_device(require_hardware: bool) -> _core.GpuDevice:
         return _devices[require_hardware]
 
 
+def _check_apart(scene: BoxScene | PhotoScene, outputs: dict[str, NDArray[Any] | None]) -> None:
+    """Refuse output arrays that overlap the scene's photo or depth map, or each other: the
+    renderer reads its inputs while it writes (a photo's arrays are the caller's, not copies)."""
+    inputs: dict[str, NDArray[Any] | None] = {}
+    if isinstance(scene, PhotoScene):
+        inputs = {"the scene's image": scene.srgb8 if scene.srgb8 is not None else scene.__dict__.get("image"), "the scene's depth_m": scene.depth_m}
+    given = [(name, a) for name, a in outputs.items() if a is not None]
+    for i, (name, a) in enumerate(given):
+        for other, b in [*inputs.items(), *given[i + 1 :]]:
+            if b is not None and np.may_share_memory(a, b):
+                raise ValueError(f"{name} overlaps {other}: pass a separate array")
+
+
 def _writable(a: Any, dtype: type, shape: tuple[int, ...]) -> bool:
     """Whether ``a`` is an array Rust can write a frame into: ``dtype``, ``shape``,
     C-contiguous, writable."""
@@ -251,6 +264,12 @@ class Renderer:
             Filled with the rain's coverage (``frame.layers["rain_alpha"]``; zeros without
             rain) when given: the ground truth of a deraining dataset.
 
+        Raises
+        ------
+        ValueError
+            When ``out`` or ``rain_alpha_out`` has the wrong dtype, shape or layout, or overlaps
+            the scene's photo, its depth map or the other output.
+
         Returns
         -------
         ndarray of uint8, shape (H, W, 3)
@@ -264,6 +283,7 @@ class Renderer:
             raise ValueError(f"out must be a writable C-contiguous uint8 array of shape {(*shape, 3)}")
         if rain_alpha_out is not None and not _writable(rain_alpha_out, np.float32, shape):
             raise ValueError(f"rain_alpha_out must be a writable C-contiguous float32 array of shape {shape}")
+        _check_apart(scene, {"out": out, "rain_alpha_out": rain_alpha_out})
         if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
             cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
             args = (self.width, self.height, cam.core_params(), scene.srgb8, scene.depth_m, io.srgb8_table(), out)
