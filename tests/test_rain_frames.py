@@ -253,6 +253,23 @@ def test_a_light_of_zero_intensity_changes_nothing_and_culling_counts(renderer):
         PointLight((0, 0, 0), -5.0)
 
 
+def test_lights_across_their_documented_ranges(renderer):
+    from skyfall import PointLight, SpotLight
+
+    # intensities up to 1e9 cd render (the core once refused anything over 1e7 as "not finite")
+    w = Weather(rain_rate_mm_h=30.0, sky_illuminance_lux=20.0)
+    bright = renderer.render(dusk_scene([PointLight((0.0, 1.6, -3.0), 2e7)]), w, seed=5)
+    assert np.isfinite(bright.rgb).all()
+    # a huge or tiny direction still normalises (its norm used to overflow to a zero vector)
+    for scale in (1e308, 1e-300):
+        d = SpotLight((0, 0, 0), (scale, scale, 0.0), 100.0).direction
+        np.testing.assert_allclose(d, (np.sqrt(0.5), np.sqrt(0.5), 0.0))
+    with pytest.raises(ValueError, match=r"position_m .*\[-1e7, 1e7\] m"):
+        PointLight((2e7, 0.0, 0.0), 1.0)
+    with pytest.raises(ValueError, match="direction must not be zero"):
+        SpotLight((0, 0, 0), (0.0, 0.0, 0.0), 1.0)
+
+
 def test_a_moving_camera_sees_the_drops_relative_motion(renderer):
     # Drops fall at 4-7 m/s; a camera moving sideways at 25 m/s sees them sweep across the
     # frame: streaks turn from vertical to nearly horizontal.

@@ -26,6 +26,24 @@ def _vec3(name: str, value: Any) -> tuple[float, float, float]:
     return float(v[0]), float(v[1]), float(v[2])
 
 
+def _position(value: Any) -> tuple[float, float, float]:
+    p = _vec3("position_m", value)
+    if max(abs(c) for c in p) > 1e7:
+        raise ValueError(f"position_m = {p} is outside the valid range [-1e7, 1e7] m per coordinate")
+    return p
+
+
+def _unit(name: str, value: Any) -> tuple[float, float, float]:
+    d = np.asarray(_vec3(name, value))
+    # scaled by its largest component first, so that huge or tiny vectors normalise too
+    m = float(np.max(np.abs(d)))
+    if m == 0.0:
+        raise ValueError(f"{name} must not be zero")
+    d = d / m
+    d = d / np.linalg.norm(d)
+    return float(d[0]), float(d[1]), float(d[2])
+
+
 @dataclass(frozen=True)
 class PointLight:
     """A light shining equally in all directions.
@@ -33,7 +51,7 @@ class PointLight:
     Parameters
     ----------
     position_m : 3 floats
-        Position, m.
+        Position, m, each coordinate within ±1e7.
     intensity_cd : float
         Luminous intensity, cd, in [0, 1e9] (a street lamp: about 1000-3000 cd).
     color : 3 floats
@@ -45,7 +63,7 @@ class PointLight:
     color: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "position_m", _vec3("position_m", self.position_m))
+        object.__setattr__(self, "position_m", _position(self.position_m))
         object.__setattr__(self, "color", _vec3("color", self.color))
         if not 0.0 <= float(self.intensity_cd) <= 1e9:
             raise ValueError(f"intensity_cd = {self.intensity_cd} is outside the valid range [0, 1e9] cd")
@@ -64,7 +82,7 @@ class SpotLight:
     Parameters
     ----------
     position_m : 3 floats
-        Position, m.
+        Position, m, each coordinate within ±1e7.
     direction : 3 floats
         Axis of the cone (normalised here).
     intensity_cd : float
@@ -85,11 +103,8 @@ class SpotLight:
     color: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "position_m", _vec3("position_m", self.position_m))
-        d = np.asarray(_vec3("direction", self.direction))
-        if np.linalg.norm(d) == 0:
-            raise ValueError("direction must not be zero")
-        object.__setattr__(self, "direction", tuple(float(x) for x in d / np.linalg.norm(d)))
+        object.__setattr__(self, "position_m", _position(self.position_m))
+        object.__setattr__(self, "direction", _unit("direction", self.direction))
         object.__setattr__(self, "color", _vec3("color", self.color))
         if not 0.0 <= float(self.intensity_cd) <= 1e9:
             raise ValueError(f"intensity_cd = {self.intensity_cd} is outside the valid range [0, 1e9] cd")

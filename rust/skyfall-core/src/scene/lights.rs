@@ -23,17 +23,18 @@ impl Light {
     /// cos_inner]`; a zero direction makes a point light.
     pub fn from_row(row: &[f32], index: usize) -> Result<Self> {
         let i = Some(index);
-        let finite = Range::closed(-1e7, 1e7, "");
         for (k, &v) in row.iter().enumerate() {
-            finite.check("lights", i, f64::from(v)).map_err(|_| Error::Invalid {
-                param: Param { name: "lights", index: i },
-                message: format!("value {k} = {v} is not finite"),
-            })?;
+            if !v.is_finite() {
+                return Err(Error::Invalid { param: Param { name: "lights", index: i }, message: format!("value {k} = {v} is not finite") });
+            }
         }
         let [x, y, z, r, g, b, intensity, dx, dy, dz, cos_outer, cos_inner] = <[f32; 12]>::try_from(row).map_err(|_| Error::Invalid {
             param: Param { name: "lights", index: i },
             message: format!("needs 12 values, got {}", row.len()),
         })?;
+        for c in [x, y, z] {
+            Range::closed(-1e7, 1e7, "m").check("position_m", i, f64::from(c))?;
+        }
         Range::closed(0.0, 1e9, "cd").check("intensity_cd", i, f64::from(intensity))?;
         for c in [r, g, b] {
             Range::closed(0.0, 1e3, "").check("color", i, f64::from(c))?;
