@@ -214,6 +214,20 @@ def test_bad_inputs_give_clear_errors(cpu):
         Weather(rain_rate_mm_h=-1.0)
     with pytest.raises(ValueError, match="visibility_m"):
         Weather(visibility_m=0.0)
+    # the documented lower ends are the ones the core takes (they were "> 0" and failed later
+    # with the core's names: extinction_per_m, fx, exposure_s = 0 ...)
+    with pytest.raises(ValueError, match=r"visibility_m = 0.001 .*\[0.01, inf\]"):
+        Weather(visibility_m=1e-3)
+    with pytest.raises(ValueError, match=r"sky_illuminance_lux .*\[1e-4, 150000\]"):
+        Weather(sky_illuminance_lux=1e-300)
+    with pytest.raises(ValueError, match=r"exposure_s .*\[1e-6, 0.1\]"):
+        Camera(exposure_s=1e-300)
+    with pytest.raises(ValueError, match=r"vertical_fov_deg .*\[0.001, 179\)"):
+        Camera(vertical_fov_deg=1e-6)
+    tiny = Renderer(16, 12, backend="cpu")
+    for ok in (Weather(visibility_m=0.01, sky_illuminance_lux=1e-4, rain_rate_mm_h=10.0), Weather()):
+        cam = Camera((0.0, 1.6, 0.0), exposure_s=1e-6, vertical_fov_deg=0.001)
+        assert np.isfinite(tiny.render(scenes.street(), ok, camera=cam).rgb).all()
     with pytest.raises(ValueError, match="sky_illuminance_lux"):
         Weather(sky_illuminance_lux=float("nan"))
     with pytest.raises(TypeError, match="rain_rate_mm_h"):
@@ -251,3 +265,19 @@ def test_without_vulkan_gpu_is_a_clear_error_and_auto_falls_back():
     env = dict(os.environ, VK_ICD_FILENAMES="/nonexistent.json", VK_DRIVER_FILES="/nonexistent.json")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
     assert "mesa-vulkan-drivers" in out and 'backend="cpu"' in out
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+@pytest.mark.parametrize("weather", [Weather(visibility_m=60.0), Weather(visibility_m=0.01), Weather(rain_rate_mm_h=50.0, cloud_base_m=20000.0, rain_streaks=False)])
+def test_dense_fog_shows_the_airlight_in_the_sky(backend, weather):
+    # Optical depths of hundreds below the cloud base: the cloud base must be e^(sigma H) times
+    # brighter than E to light the ground through it (1e44 at 60 m visibility; these frames
+    # were NaN in the sky, or refused with "airlight = NaN"). Sky pixels (d = inf) are the
+    # airlight, AIRLIGHT_RELATIVE times the sky illuminance at the camera (1 in the open).
+    r = Renderer(32, 24, backend=backend)
+    f = r.render(scenes.street(), weather)
+    assert np.isfinite(f.rgb).all()
+    sky = np.isinf(f.depth_m) & (f.layers.get("rain_alpha", 0.0) == 0)  # streaks aside
+    assert sky.any()
+    np.testing.assert_allclose(f.rgb[sky], skyfall._core.AIRLIGHT_RELATIVE, rtol=1e-3)
+    assert np.isfinite(r.render(scenes.empty(), weather).rgb).all()

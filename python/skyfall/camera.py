@@ -50,14 +50,14 @@ class Camera:
     look_at_m : sequence of 3 float, optional
         A world point to look at; overrides yaw and pitch (the horizon stays level).
     vertical_fov_deg : float
-        Vertical field of view, degrees in (0, 179), used when ``fy`` is not given.
+        Vertical field of view, degrees in [0.001, 179), used when ``fy`` is not given.
     width, height : int, optional
         Resolution, px. Left out, the renderer's resolution is used.
     fx, fy, cx, cy : float, optional
         Intrinsics in px (need ``width`` and ``height``). Defaults: square pixels from the
         field of view, principal point at the image centre.
     exposure_s : float
-        Shutter time, s, in (0, 0.1]: streak length of moving drops (rain frames).
+        Shutter time, s, in [1e-6, 0.1]: streak length of moving drops (rain frames).
     velocity_m_s : sequence of 3 float
         The camera's own velocity, m/s (at most 1000 m/s): streaks follow the drops' motion
         relative to the camera, e.g. a car driving into the rain.
@@ -85,12 +85,12 @@ class Camera:
         if float(np.linalg.norm(self.velocity_m_s)) > 1000.0:
             raise ValueError(f"velocity_m_s = {self.velocity_m_s.tolist()} is faster than 1000 m/s")
         fov = real("vertical_fov_deg", vertical_fov_deg)
-        if not 0.0 < fov < 179.0:
-            raise ValueError(f"vertical_fov_deg = {fov} is outside the valid range (0, 179) degrees")
+        if not 0.001 <= fov < 179.0:
+            raise ValueError(f"vertical_fov_deg = {fov} is outside the valid range [0.001, 179) degrees")
         self.vertical_fov_deg = fov
         exp = real("exposure_s", exposure_s)
-        if not 0.0 < exp <= 0.1:
-            raise ValueError(f"exposure_s = {exp} is outside the valid range (0, 0.1] s")
+        if not 1e-6 <= exp <= 0.1:
+            raise ValueError(f"exposure_s = {exp} is outside the valid range [1e-6, 0.1] s")
         self.exposure_s = exp
         if look_at_m is not None:
             target = _finite_vec3("look_at_m", look_at_m)

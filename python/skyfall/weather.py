@@ -27,10 +27,10 @@ class Weather:
     rain_rate_mm_h : float
         Rain rate, mm/h, in [0, 500].
     visibility_m : float
-        Meteorological visibility of the air without rain, m, > 0 (``inf``: perfectly clear).
+        Meteorological visibility of the air without rain, m, in [0.01, inf] (``inf``: perfectly clear).
         Enters as Koschmieder extinction 3.912 / visibility_m.
     sky_illuminance_lux : float
-        Horizontal illuminance E of the open sky at the ground, lux, in (0, 150000] (what a
+        Horizontal illuminance E of the open sky at the ground, lux, in [1e-4, 150000] (what a
         lux meter reads, rain included). Frames are in units of E/pi (a white surface under
         the open sky is 1.0); ``Frame.luminance_scale_cd_m2`` converts to cd/m^2.
     rain_sheltered : bool
@@ -88,11 +88,11 @@ class Weather:
         if not 0.0 <= r <= _core.MAX_RAIN_RATE_MM_H:
             raise ValueError(f"rain_rate_mm_h = {r} is outside the valid range [0, 500] mm/h")
         v = real("visibility_m", self.visibility_m)
-        if not v > 0.0:
-            raise ValueError(f"visibility_m = {v} is outside the valid range (0, inf] m")
+        if not v >= 0.01:
+            raise ValueError(f"visibility_m = {v} is outside the valid range [0.01, inf] m")
         e = real("sky_illuminance_lux", self.sky_illuminance_lux)
-        if not 0.0 < e <= 150000.0:
-            raise ValueError(f"sky_illuminance_lux = {e} is outside the valid range (0, 150000] lx")
+        if not 1e-4 <= e <= 150000.0:
+            raise ValueError(f"sky_illuminance_lux = {e} is outside the valid range [1e-4, 150000] lx")
         wind = np.asarray(self.wind_m_s, dtype=np.float64).reshape(-1)
         if wind.size != 3 or not np.all(np.abs(wind) <= 60.0):
             raise ValueError(f"wind_m_s = {self.wind_m_s!r} must be 3 components in [-60, 60] m/s")
