@@ -193,6 +193,25 @@ def test_bad_rain_parameters():
         Weather(rain_diameters_mm=(2.0, 1.0))
     with pytest.raises(ValueError, match="n_frames"):
         Renderer(8, 8, backend="cpu").render_sequence(open_air(), n_frames=0)
+    # non-numbers and wrong objects are TypeErrors that name the argument
+    with pytest.raises(TypeError, match="wind_m_s"):
+        Weather(wind_m_s="abc")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="rain_diameters_mm"):
+        Weather(rain_diameters_mm="abc")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="weather"):
+        rain.drops((0.0, 1.6, 0.0), None)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="camera"):
+        Renderer(8, 8, backend="cpu").render(scenes.street(), camera={})  # type: ignore[arg-type]
+    assert Weather(rain_streaks=np.bool_(False)).rain_streaks is False
+    # a region whose drops would not fit in memory is refused before any is made (50 m at
+    # 200 mm/h: 8e8 drops, 55 GiB)
+    with pytest.raises(ValueError, match=r"rain_near_m = 50"):
+        rain.drops((0.0, 1.6, 0.0), Weather(rain_rate_mm_h=200.0, rain_near_m=50.0))
+
+
+def test_rain_beyond_the_memory_budget_is_refused(renderer):
+    with pytest.raises(ValueError, match=r"rain_near_m = 50 m at 200"):
+        renderer.render(open_air(), Weather(rain_rate_mm_h=200.0, rain_near_m=50.0))
 
 
 def dusk_scene(lights=()):
@@ -251,6 +270,8 @@ def test_a_light_of_zero_intensity_changes_nothing_and_culling_counts(renderer):
         SpotLight((0, 0, 0), (0, 0, 1), 1.0, cone_deg=120.0)
     with pytest.raises(ValueError, match="intensity_cd"):
         PointLight((0, 0, 0), -5.0)
+    with pytest.raises(TypeError, match="intensity_cd"):
+        PointLight((0, 0, 0), "bright")  # type: ignore[arg-type]
 
 
 def test_lights_across_their_documented_ranges(renderer):

@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from skyfall._validate import real
+
 __all__ = ["PointLight", "SpotLight", "pack"]
 
 
@@ -65,7 +67,7 @@ class PointLight:
     def __post_init__(self) -> None:
         object.__setattr__(self, "position_m", _position(self.position_m))
         object.__setattr__(self, "color", _vec3("color", self.color))
-        if not 0.0 <= float(self.intensity_cd) <= 1e9:
+        if not 0.0 <= real("intensity_cd", self.intensity_cd) <= 1e9:
             raise ValueError(f"intensity_cd = {self.intensity_cd} is outside the valid range [0, 1e9] cd")
         if not all(0.0 <= c <= 1000.0 for c in self.color):
             raise ValueError(f"color = {self.color} must be in [0, 1000] per channel")
@@ -106,7 +108,7 @@ class SpotLight:
         object.__setattr__(self, "position_m", _position(self.position_m))
         object.__setattr__(self, "direction", _unit("direction", self.direction))
         object.__setattr__(self, "color", _vec3("color", self.color))
-        if not 0.0 <= float(self.intensity_cd) <= 1e9:
+        if not 0.0 <= real("intensity_cd", self.intensity_cd) <= 1e9:
             raise ValueError(f"intensity_cd = {self.intensity_cd} is outside the valid range [0, 1e9] cd")
         if not 0.0 < float(self.cone_deg) <= 90.0:
             raise ValueError(f"cone_deg = {self.cone_deg} is outside the valid range (0, 90] degrees")

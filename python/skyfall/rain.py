@@ -245,6 +245,10 @@ def drops(
     if c.size != 3 or not np.all(np.isfinite(c)):
         raise ValueError(f"center_m must be 3 finite numbers (m), got {center_m!r}")
     s = integer("seed", seed, 0, 2**64 - 1)
+    from skyfall.weather import Weather  # (a module-level import would be circular)
+
+    if not isinstance(weather, Weather):
+        raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
     args = weather.rain_region_args(real("time_s", time_s), s)[:6] + ("drops",)
     shelter = None
     if scene is not None and weather.rain_sheltered:

@@ -341,6 +341,8 @@ class Renderer:
                 raise ValueError(f"the photo is {scene.shape[1]}x{scene.shape[0]}, the renderer {self.width}x{self.height}")
             cam = scene.camera
         elif isinstance(scene, BoxScene):
+            if camera is not None and not isinstance(camera, Camera):
+                raise TypeError(f"camera must be a skyfall.Camera, got {type(camera).__name__}")
             cam = (camera if camera is not None else scene.camera).with_resolution(self.width, self.height)
             kwargs.update(boxes=scene.boxes, ground=scene.ground, ground_albedo=list(scene.ground_albedo))
         else:

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core, physics
-from skyfall._validate import choice, real
+from skyfall._validate import choice, float_array, real
 
 __all__ = ["Weather"]
 
@@ -93,13 +93,13 @@ class Weather:
         e = real("sky_illuminance_lux", self.sky_illuminance_lux)
         if not 1e-4 <= e <= 150000.0:
             raise ValueError(f"sky_illuminance_lux = {e} is outside the valid range [1e-4, 150000] lx")
-        wind = np.asarray(self.wind_m_s, dtype=np.float64).reshape(-1)
+        wind = float_array("wind_m_s", self.wind_m_s).reshape(-1)
         if wind.size != 3 or not np.all(np.abs(wind) <= 60.0):
             raise ValueError(f"wind_m_s = {self.wind_m_s!r} must be 3 components in [-60, 60] m/s")
         near = real("rain_near_m", self.rain_near_m)
         if not 0.0 < near <= 50.0:
             raise ValueError(f"rain_near_m = {near} is outside the valid range (0, 50] m")
-        diams = tuple(float(d) for d in np.asarray(self.rain_diameters_mm, dtype=np.float64).reshape(-1))
+        diams = tuple(float(d) for d in float_array("rain_diameters_mm", self.rain_diameters_mm).reshape(-1))
         if not diams or any(not 0.0 < d <= 8.0 for d in diams) or any(b <= a for a, b in zip(diams, diams[1:])):
             raise ValueError(f"rain_diameters_mm = {self.rain_diameters_mm!r} must be strictly increasing, in (0, 8] mm")
         object.__setattr__(self, "wind_m_s", (float(wind[0]), float(wind[1]), float(wind[2])))
@@ -107,8 +107,9 @@ class Weather:
         object.__setattr__(self, "rain_diameters_mm", diams)
         choice("rain_method", self.rain_method, ("drops", "billboards"))
         for flag in ("rain_streaks", "rain_sheltered"):
-            if not isinstance(getattr(self, flag), bool):
+            if not isinstance(getattr(self, flag), (bool, np.bool_)):
                 raise TypeError(f"{flag} must be a bool, got {type(getattr(self, flag)).__name__}")
+            object.__setattr__(self, flag, bool(getattr(self, flag)))
         object.__setattr__(self, "rain_rate_mm_h", r)
         object.__setattr__(self, "visibility_m", v)
         object.__setattr__(self, "sky_illuminance_lux", e)

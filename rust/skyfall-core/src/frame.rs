@@ -185,11 +185,13 @@ pub fn render_into(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, ha
                 apply_row(h, &u2, cam.row_slope_sq(y as u32), rgb_row, depth_row, t_row);
             }
         });
-    Ok(rain.zip(layers).map(|(rf, (alpha, rain_depth))| {
-        let (streaks, stats, drops) = rf.streaks(cam);
-        composite_streaks(cam, &streaks, rf.shading.reflectance, RainTargets { rgb, depth_m: depth, alpha, rain_depth_m: rain_depth });
-        (stats, drops)
-    }))
+    rain.zip(layers)
+        .map(|(rf, (alpha, rain_depth))| {
+            let (streaks, stats, drops) = rf.streaks(cam)?;
+            composite_streaks(cam, &streaks, rf.shading.reflectance, RainTargets { rgb, depth_m: depth, alpha, rain_depth_m: rain_depth });
+            Ok((stats, drops))
+        })
+        .transpose()
 }
 
 #[cfg(test)]

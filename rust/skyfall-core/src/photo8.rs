@@ -102,7 +102,7 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
 
     let (streaks, stats) = match rain {
         Some(rf) => {
-            let (s, st, drops) = rf.streaks(cam);
+            let (s, st, drops) = rf.streaks(cam)?;
             (s, Some(Photo8Stats { rain: st, drops }))
         }
         None => (Vec::new(), None),

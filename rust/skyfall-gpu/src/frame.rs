@@ -65,7 +65,7 @@ impl GpuRenderer {
                 t
             });
             let rain_out = rain.map(|rf| {
-                let (streaks, stats, drops) = rf.streaks(cam);
+                let (streaks, stats, drops) = rf.streaks(cam)?;
                 let alpha = storage(ctx, "rain_alpha", n);
                 let rain_depth = storage(ctx, "rain_depth", n);
                 let targets = RainTargets { rgb: &rgb, depth: &depth, alpha: &alpha, rain_depth: &rain_depth };

@@ -1,5 +1,6 @@
 //! The drops near a camera, as arrays: ground truth for stereo and video.
 
+use crate::errors::CoreError;
 use crate::render::{box_scene, region, RegionArgs};
 use glam::Vec3;
 use numpy::ndarray::Array2;
@@ -28,6 +29,7 @@ pub fn rain_drops<'py>(
         None => Vec::new(),
     };
     let c = Vec3::from(center_m);
+    reg.check_budget(1.0).map_err(CoreError)?;
     let drops: Vec<Drop> = py.detach(|| {
         let mut d = drops_near(&reg, c, ground);
         remove_sheltered(&mut d, &boxes, c, reg.near_m as f32);

@@ -10,7 +10,7 @@
 //! and rain is temporally coherent. Voxels below the ground (y < 0) hold no drops.
 
 use super::bins::diameter_bins;
-use crate::error::{Range, Result};
+use crate::error::{Error, Range, Result};
 use crate::physics::air::Air;
 use crate::physics::dsd::{drops_per_m3, mp_slope_per_mm, RAIN_RATE_MM_H};
 use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
@@ -63,6 +63,31 @@ impl RainRegion {
             seed,
             method: RainMethod::Drops,
         })
+    }
+}
+
+/// The most memory the drops of one call may take, bytes: the region's volume goes as
+/// rain_near_m³, and at 50 m and 200 mm/h its drops would need ~40 GiB.
+pub const DROP_BUDGET_BYTES: u64 = 2 << 30;
+
+impl RainRegion {
+    /// The drops expected in `fraction` of the region's sphere (grown by a voxel's diagonal,
+    /// for the voxels its surface cuts).
+    pub fn expected_drops(&self, fraction: f64) -> f64 {
+        let per_m3: f64 = self.bins.iter().map(|&(lo, hi)| drops_per_m3(self.rain_rate_mm_h, lo, hi)).sum();
+        per_m3 * 4.0 / 3.0 * std::f64::consts::PI * (self.near_m + 1.8).powi(3) * fraction
+    }
+
+    /// [`Error::TooLarge`] when the drops expected in `fraction` of the region would take more
+    /// than [`DROP_BUDGET_BYTES`]: refused before any is made, naming what sets their number.
+    pub fn check_budget(&self, fraction: f64) -> Result<()> {
+        let n = self.expected_drops(fraction);
+        let bytes = (n * std::mem::size_of::<Drop>() as f64) as u128;
+        if bytes > u128::from(DROP_BUDGET_BYTES) {
+            let what = format!("{n:.3e} drops (rain_near_m = {} m at {} mm/h; their number goes as rain_near_m³)", self.near_m, self.rain_rate_mm_h);
+            return Err(Error::too_large(what, bytes, DROP_BUDGET_BYTES));
+        }
+        Ok(())
     }
 }
 
@@ -395,5 +420,18 @@ mod tests {
         let sd = expected.sqrt();
         assert!((d.len() as f64 - expected).abs() < 4.0 * sd + 0.02 * expected, "{} vs {expected}", d.len());
         assert!(drops_near(&r, Vec3::new(0.0, -10.0, 0.0), true).is_empty());
+        // the budget's estimate holds them (it grows the sphere by a voxel's diagonal)
+        assert!(r.expected_drops(1.0) >= d.len() as f64);
+    }
+
+    #[test]
+    fn regions_over_the_drop_budget_are_refused_before_drawing() {
+        // 50 m at 200 mm/h: ~1.4e3 drops/m³ in 5.6e5 m³, ~55 GiB of drops.
+        let big = RainRegion::new(200.0, &[1.0, 1.5, 2.0], 50.0, [0.0; 3], 0.0, 1).unwrap();
+        let refused = big.check_budget(1.0);
+        assert!(matches!(&refused, Err(Error::TooLarge { what, .. }) if what.contains("rain_near_m = 50")), "{refused:?}");
+        // a frame sees a fraction of it; a 5 m region at any rate fits whole
+        assert!(big.check_budget(1e-3).is_ok());
+        assert!(RainRegion::new(500.0, &[0.5, 1.0, 2.0, 3.0], 5.0, [0.0; 3], 0.0, 1).unwrap().check_budget(1.0).is_ok());
     }
 }

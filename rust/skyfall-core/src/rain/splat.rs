@@ -22,6 +22,7 @@
 //! pixel are hidden.
 
 use super::drops::Drop;
+use crate::error::Result;
 use crate::scene::camera::Camera;
 use crate::scene::lights::Light;
 use crate::sky::ambient::AmbientMap;
@@ -462,7 +463,8 @@ pub struct RainFrame<'a> {
 impl RainFrame<'_> {
     /// The frame's streaks (see [`prepare`]), its stats, and how many drops there were (those
     /// of the voxels that can reach the view, less the sheltered ones).
-    pub fn streaks(&self, cam: &Camera) -> (Vec<ScreenStreak>, RainStats, usize) {
+    pub fn streaks(&self, cam: &Camera) -> Result<(Vec<ScreenStreak>, RainStats, usize)> {
+        self.region.check_budget(cam.view_solid_angle_sr() / (4.0 * std::f64::consts::PI))?;
         let (t, v) = (f64::from(self.exposure_s), f64::from(self.camera_velocity_m_s.length()));
         let mut drops = match self.region.method {
             super::drops::RainMethod::Drops => super::drops::drops_in_view(self.region, cam, t, v, self.ground),
@@ -470,7 +472,7 @@ impl RainFrame<'_> {
         };
         super::shelter::remove_sheltered(&mut drops, self.shelter, cam.position_m, self.region.near_m as f32);
         let (streaks, stats) = prepare(cam, &drops, self.exposure_s, self.camera_velocity_m_s, self.shading);
-        (streaks, stats, drops.len())
+        Ok((streaks, stats, drops.len()))
     }
 }
 

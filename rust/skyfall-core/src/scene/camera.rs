@@ -88,6 +88,15 @@ impl Camera {
         v * v
     }
 
+    /// Solid angle of a view pyramid that holds the frame, sr: 4·asin(sin α·sin β) with α, β
+    /// the half-angles to the frame's farther side and edge (≥ the frame's own, when the
+    /// principal point is off centre).
+    pub fn view_solid_angle_sr(&self) -> f64 {
+        let half = |c: f32, side: u32, f: f32| (f64::from(c.abs().max((side as f32 - c).abs())) / f64::from(f)).atan();
+        let (a, b) = (half(self.cx, self.width, self.fx), half(self.cy, self.height, self.fy));
+        4.0 * (a.sin() * b.sin()).min(1.0).asin()
+    }
+
     /// Pixel count.
     pub fn pixels(&self) -> usize {
         self.width as usize * self.height as usize
@@ -106,6 +115,16 @@ mod tests {
         let d = cam.ray_direction(1, 0);
         assert!((d - Vec3::new(-0.25, 0.25, -1.0)).length() < 1e-6);
         assert!((cam.distance_per_depth(1, 0) - d.length()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn view_solid_angle_is_the_pyramids() {
+        // 90° × 90°: 4·asin(sin 45°·sin 45°) = 2π/3; an off-centre principal point widens the
+        // pyramid to its farther side
+        let c = Camera::new(100, 100, [50.0, 50.0, 50.0, 50.0], Vec3::ZERO, Mat3::IDENTITY).unwrap_or_else(|_| unreachable_cam());
+        assert!((c.view_solid_angle_sr() - 2.0 * std::f64::consts::PI / 3.0).abs() < 1e-9);
+        let off = Camera::new(100, 100, [50.0, 50.0, 0.0, 50.0], Vec3::ZERO, Mat3::IDENTITY).unwrap_or_else(|_| unreachable_cam());
+        assert!(off.view_solid_angle_sr() > c.view_solid_angle_sr());
     }
 
     fn unreachable_cam() -> Camera {
