@@ -203,6 +203,15 @@ def test_bad_rain_parameters():
     with pytest.raises(TypeError, match="camera"):
         Renderer(8, 8, backend="cpu").render(scenes.street(), camera={})  # type: ignore[arg-type]
     assert Weather(rain_streaks=np.bool_(False)).rain_streaks is False
+    # the core's ±1e7 limits on times and positions, named where the user set them
+    with pytest.raises(ValueError, match=r"start_s = nan"):
+        Renderer(8, 8, backend="cpu").render_sequence(open_air(), n_frames=2, start_s=float("nan"))
+    with pytest.raises(ValueError, match=r"start_s = 0.0 and fps = 1e-300"):
+        Renderer(8, 8, backend="cpu").render_sequence(open_air(), n_frames=2, fps=1e-300)
+    with pytest.raises(ValueError, match=r"time_s = 20000000.0 is outside the valid range \[-1e7, 1e7\]"):
+        Renderer(8, 8, backend="cpu").render(open_air(), time_s=2e7)
+    with pytest.raises(ValueError, match=r"position_m .*\[-1e7, 1e7\]"):
+        Camera((2e7, 1.6, 0.0))
     # a region whose drops would not fit in memory is refused before any is made (50 m at
     # 200 mm/h: 8e8 drops, 55 GiB)
     with pytest.raises(ValueError, match=r"rain_near_m = 50"):

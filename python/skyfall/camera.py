@@ -42,7 +42,8 @@ class Camera:
     Parameters
     ----------
     position_m : sequence of 3 float
-        Camera centre in the world, m. Default (0, 1.6, 0): eye height.
+        Camera centre in the world, m, each coordinate within ±1e7. Default (0, 1.6, 0): eye
+        height.
     yaw_deg : float
         Heading about +Y, degrees; 0 looks along -Z, positive turns left (towards -X).
     pitch_deg : float
@@ -81,6 +82,8 @@ class Camera:
         velocity_m_s: Sequence[float] = (0.0, 0.0, 0.0),
     ) -> None:
         self.position_m = _finite_vec3("position_m", position_m)
+        if float(np.max(np.abs(self.position_m))) > 1e7:
+            raise ValueError(f"position_m = {self.position_m.tolist()} is outside the valid range [-1e7, 1e7] m per coordinate")
         self.velocity_m_s = _finite_vec3("velocity_m_s", velocity_m_s)
         if float(np.linalg.norm(self.velocity_m_s)) > 1000.0:
             raise ValueError(f"velocity_m_s = {self.velocity_m_s.tolist()} is faster than 1000 m/s")

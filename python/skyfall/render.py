@@ -180,7 +180,7 @@ class Renderer:
         camera : Camera, optional
             Overrides a box scene's camera (photos keep the camera that took them).
         time_s : float
-            Time of the frame, s: drops have fallen v * time_s (wrapping in their 1 m voxels),
+            Time of the frame, s, in [-1e7, 1e7]: drops have fallen v * time_s (wrapping in their 1 m voxels),
             so consecutive times give temporally coherent rain. The haze is static.
         seed : int
             Seed of the rain, in [0, 2^64). Drops are anchored in the world: two cameras or
@@ -332,8 +332,8 @@ class Renderer:
         if not isinstance(weather, Weather):
             raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
         t = real("time_s", time_s)
-        if not np.isfinite(t):
-            raise ValueError(f"time_s = {t} must be finite")
+        if not abs(t) <= 1e7:
+            raise ValueError(f"time_s = {t} is outside the valid range [-1e7, 1e7] s")
         integer("seed", seed, 0, 2**64 - 1)
         kwargs: dict[str, Any] = {}
         if isinstance(scene, PhotoScene):
@@ -412,5 +412,8 @@ class Renderer:
             raise ValueError(f"fps = {rate} is outside the valid range (0, 10000]")
         from tqdm import tqdm  # type: ignore[import-untyped]
 
-        times = [real("start_s", start_s) + k / rate for k in range(n)]
+        start = real("start_s", start_s)
+        times = [start + k / rate for k in range(n)]
+        if not (abs(start) <= 1e7 and abs(times[-1]) <= 1e7):
+            raise ValueError(f"start_s = {start_s} and fps = {fps} put frame times at [{start}, {times[-1]}] s, outside the valid range [-1e7, 1e7] s")
         return [self.render(scene, weather, camera=camera, time_s=t, seed=seed) for t in tqdm(times, disable=not progress, unit="frame")]
