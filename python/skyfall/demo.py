@@ -12,16 +12,16 @@ terminal_velocity.png
 street.exr, street.png
     The bundled street scene at 1280 x 720 in 10 mm/h rain haze (EXR: rgb, depth_m and the
     transmittance layer; PNG: 8-bit sRGB).
-street_rain.exr, street_rain.png, street_rain_alpha.png
-    The street in 50 mm/h rain with a 3 m/s cross wind: streaks of every drop within 5 m,
+street_rain_day.exr, street_rain_day.png, street_rain_day_alpha.png
+    The street by day in 50 mm/h rain with a 3 m/s cross wind: streaks of every drop within 5 m,
     and the rain_alpha ground-truth layer (stretched for viewing). Drops under the awning
     on the right see less sky and are dimmer (the ambient-light map, seed 002).
 ambient_light.png
     The street's ambient-light map in that rain: horizontal sky illuminance 1.5 m up, and a
     section across the street 20 m ahead showing the awning's shade.
-street_rain_dusk.png
-    The street at dusk (30 lx of sky) in 20 mm/h rain with its lamps lit and an oncoming
-    car's headlights: lit drops shine (saved at exposure 0.25).
+street_rain.exr, street_rain.png
+    The rainy street at dusk (30 lx of sky) in 20 mm/h rain with its lamps lit and an oncoming
+    car's headlights: lit drops shine (the PNG saved at exposure 0.25).
 """
 
 from __future__ import annotations
@@ -142,16 +142,17 @@ def main(argv: list[str] | None = None) -> int:
     e = sky.ambient_light_map(scenes.street(), weather=wet_weather).sample([[5.5, 1.5, -3.0], [0.0, 1.5, -3.0]])
     print(f"sky light on a drop under the awning: {e[0] / e[1]:.0%} of one in the middle of the street")
     ambient_plot(wet_weather).savefig(out / "ambient_light.png", dpi=100)
-    wet.save(out / "street_rain.exr")
-    wet.save(out / "street_rain.png")
+    wet.save(out / "street_rain_day.exr")
+    wet.save(out / "street_rain_day.png")
     alpha = wet.layers["rain_alpha"]
-    io.write_image(out / "street_rain_alpha.png", np.clip(alpha / max(float(alpha.max()), 1e-6), 0, 1))
+    io.write_image(out / "street_rain_day_alpha.png", np.clip(alpha / max(float(alpha.max()), 1e-6), 0, 1))
     dusk = renderer.render(
         scenes.street(lamps=True, headlights=True), Weather(rain_rate_mm_h=20.0, sky_illuminance_lux=30.0), seed=0
     )
-    dusk.save(out / "street_rain_dusk.png", exposure=0.25)
+    dusk.save(out / "street_rain.exr")
+    dusk.save(out / "street_rain.png", exposure=0.25)
     names = ("rain_textures.exr", "rain_textures.png", "terminal_velocity.png", "street.exr", "street.png")
-    for name in (*names, "street_rain.exr", "street_rain.png", "street_rain_alpha.png", "street_rain_dusk.png", "ambient_light.png"):
+    for name in (*names, "street_rain_day.exr", "street_rain_day.png", "street_rain_day_alpha.png", "ambient_light.png", "street_rain.exr", "street_rain.png"):
         print(f"wrote {out / name}")
     return 0
 
