@@ -379,6 +379,29 @@ impl ScreenStreak {
     }
 }
 
+/// Per row of `tile_w` × `tile_h` tiles that a streak may touch, `f(row, first column, end
+/// column)` (end-exclusive), rows in order: its bounding box's columns when the box is a single
+/// column of tiles, else per row the columns it can reach there (see
+/// [`ScreenStreak::columns_in_rows`]: a slanted streak meets far fewer tiles than its box).
+#[inline]
+fn tile_spans(s: &ScreenStreak, width: u32, height: u32, tile_w: u32, tile_h: u32, mut f: impl FnMut(u32, u32, u32)) {
+    let (x0, x1, y0, y1) = s.pixel_bounds(width, height);
+    let (i0, i1) = (x0 / tile_w, x1.div_ceil(tile_w));
+    if i1 <= i0 + 1 {
+        for j in y0 / tile_h..y1.div_ceil(tile_h) {
+            f(j, i0, i1);
+        }
+        return;
+    }
+    for j in y0 / tile_h..y1.div_ceil(tile_h) {
+        let rows = (j * tile_h).max(y0)..((j + 1) * tile_h).min(y1);
+        let (c0, c1) = s.columns_in_rows(rows, width, height);
+        if c1 > c0 {
+            f(j, c0 / tile_w, c1.div_ceil(tile_w));
+        }
+    }
+}
+
 /// Streak indices per `tile` × `tile` pixel tile, in list order (see [`bin_by_tiles`]). For the
 /// GPU pass.
 pub fn bin_by_tile(streaks: &[ScreenStreak], width: u32, height: u32, tile: u32) -> (Vec<u32>, Vec<u32>) {
@@ -392,23 +415,10 @@ pub fn bin_by_tiles(streaks: &[ScreenStreak], width: u32, height: u32, tile_w: u
     let tx = width.div_ceil(tile_w);
     let tiles = (tx * height.div_ceil(tile_h)) as usize;
     let half = streaks.len() / 2;
-    // Per streak and row of tiles, the columns of tiles it may touch there (see
-    // [`ScreenStreak::columns_in_rows`]), visited twice: to count, then to fill.
-    let spans = |s: &ScreenStreak, mut f: &mut dyn FnMut(u32, u32, u32)| {
-        let (_, _, y0, y1) = s.pixel_bounds(width, height);
-        for j in y0 / tile_h..y1.div_ceil(tile_h) {
-            let rows = (j * tile_h).max(y0)..((j + 1) * tile_h).min(y1);
-            let (x0, x1) = s.columns_in_rows(rows, width, height);
-            if x1 > x0 {
-                f(j, x0 / tile_w, x1.div_ceil(tile_w));
-            }
-        }
-        let _ = &mut f;
-    };
     let bin = |first: usize, part: &[ScreenStreak]| {
         let mut counts = vec![0u32; tiles + 1];
         for s in part {
-            spans(s, &mut |j, i0, i1| {
+            tile_spans(s, width, height, tile_w, tile_h, |j, i0, i1| {
                 for i in i0..i1 {
                     counts[(j * tx + i) as usize + 1] += 1;
                 }
@@ -420,7 +430,7 @@ pub fn bin_by_tiles(streaks: &[ScreenStreak], width: u32, height: u32, tile_w: u
         let mut fill = counts.clone();
         let mut indices = vec![0u32; counts[tiles] as usize];
         for (k, s) in part.iter().enumerate() {
-            spans(s, &mut |j, i0, i1| {
+            tile_spans(s, width, height, tile_w, tile_h, |j, i0, i1| {
                 for i in i0..i1 {
                     let t = (j * tx + i) as usize;
                     indices[fill[t] as usize] = (first + k) as u32;
