@@ -39,7 +39,7 @@ impl SceneRaycastPass {
         let (p, sun) = light.sky.kind.params();
         let kind = if matches!(light.sky.kind, SkyKind::Overcast) { 0.0 } else { 1.0 };
         let p = if kind == 0.0 { [0.0; 5] } else { p };
-        let sky: [f32; 12] = [p[0], p[1], p[2], p[3], p[4], light.sky.scale as f32, kind, 0.0, sun.x, sun.y, sun.z, 0.0];
+        let sky: [f32; 12] = [p[0], p[1], p[2], p[3], p[4], light.sky.scale.min(skyfall_core::sky::SKY_PIXEL_MAX) as f32, kind, 0.0, sun.x, sun.y, sun.z, 0.0];
         let m = light.ambient;
         let o = m.origin_m;
         let mut amb = [o.x.to_bits(), o.y.to_bits(), o.z.to_bits(), m.spacing_m.to_bits(), 0, 0, 0, 0];

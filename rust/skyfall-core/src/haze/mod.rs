@@ -97,9 +97,7 @@ pub fn apply_row(haze: &Haze, u2: &[f32], v2: f32, rgb_row: &mut [f32], depth_ro
         let t = haze.transmittance(d * (u2[x] + v2 + 1.0).sqrt());
         *t_out = t;
         for (c, v) in rgb_row[3 * x..3 * x + 3].iter_mut().enumerate() {
-            // t = 0 (the sky, at d = ∞) gives the airlight even where the sky pixel is
-            // infinite (a cloud base seen through dense fog): no ∞·0.
-            *v = if t > 0.0 { *v * t + haze.airlight[c] * (1.0 - t) } else { haze.airlight[c] };
+            *v = *v * t + haze.airlight[c] * (1.0 - t);
         }
     }
 }

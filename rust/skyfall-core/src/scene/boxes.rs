@@ -154,7 +154,7 @@ pub fn shade_pixel(scene: &BoxScene, cam: &Camera, light: &SceneLight<'_>, x: u3
             let e = AmbientMap::channel(n).map_or(0.0, |c| light.ambient.sample(p)[c]);
             (a * e, t)
         }
-        None => (Vec3::splat(light.sky.emitted(dir.normalize()) as f32), f32::INFINITY),
+        None => (Vec3::splat(light.sky.sky_pixel(dir.normalize())), f32::INFINITY),
     }
 }
 

@@ -38,6 +38,11 @@ const AZIMUTHS: usize = 360;
 /// many times, which the single-scattering sky does not describe anyway.
 pub const MAX_SKY_OPTICAL_DEPTH: f64 = 200.0;
 
+/// The most a sky pixel shows, relative to E/π ([`Sky::sky_pixel`]): in dense fog the cloud base
+/// is e^(σH) times brighter than E, which overflows f32, and ∞·0 in the haze (t = 0 for the
+/// sky) would be NaN. A sky pixel that bright is always hazed to the airlight.
+pub const SKY_PIXEL_MAX: f64 = 1e30;
+
 /// A normalised sky with rain attenuation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sky {
@@ -122,6 +127,12 @@ impl Sky {
     #[inline]
     pub fn emitted(&self, dir: Vec3) -> f64 {
         self.scale * self.kind.relative_to_zenith(dir)
+    }
+
+    /// [`Sky::emitted`] as a frame's sky pixel shows it: at most [`SKY_PIXEL_MAX`].
+    #[inline]
+    pub fn sky_pixel(&self, dir: Vec3) -> f32 {
+        self.emitted(dir).min(SKY_PIXEL_MAX) as f32
     }
 
     /// Luminance reaching the ground along `dir`, relative to E/π: [`Sky::emitted`] · τ.

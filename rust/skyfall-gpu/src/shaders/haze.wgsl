@@ -33,7 +33,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = haze_transmittance(depth[i], distance_per_depth(cam, gid.x, gid.y));
     transmittance[i] = t;
     for (var k = 0u; k < 3u; k++) {
-        // t = 0 (the sky) gives the airlight even over an infinite sky pixel (dense fog)
-        rgb[3u * i + k] = select(haze.airlight[k], rgb[3u * i + k] * t + haze.airlight[k] * (1.0 - t), t > 0.0);
+        rgb[3u * i + k] = rgb[3u * i + k] * t + haze.airlight[k] * (1.0 - t);
     }
 }
