@@ -66,6 +66,24 @@ def choice(name: str, value: Any, options: Sequence[str]) -> str:
     return value
 
 
+def finite_vec3(name: str, value: Any) -> NDArray[np.float64]:
+    """Check three finite real numbers (TypeError for non-numbers)."""
+    v = float_array(name, value)
+    if v.shape != (3,):
+        raise ValueError(f"{name} must have 3 components, got shape {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} = {v.tolist()} must be finite")
+    return v
+
+
+def world_position(value: Any) -> NDArray[np.float64]:
+    """Check a world position, m: three finite numbers within the core's ±1e7 m."""
+    p = finite_vec3("position_m", value)
+    if float(np.max(np.abs(p))) > 1e7:
+        raise ValueError(f"position_m = {p.tolist()} is outside the valid range [-1e7, 1e7] m per coordinate")
+    return p
+
+
 def integer(name: str, value: Any, lo: int, hi: int) -> int:
     """Check an integer in [lo, hi]."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):

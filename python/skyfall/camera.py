@@ -14,18 +14,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skyfall._validate import float_array, integer, real
+from skyfall._validate import finite_vec3, float_array, integer, real, world_position
 
 __all__ = ["Camera"]
-
-
-def _finite_vec3(name: str, value: Any) -> NDArray[np.float64]:
-    v = float_array(name, value)
-    if v.shape != (3,):
-        raise ValueError(f"{name} must have 3 components, got shape {v.shape}")
-    if not np.all(np.isfinite(v)):
-        raise ValueError(f"{name} = {v.tolist()} must be finite")
-    return v
 
 
 def _rotation_from_yaw_pitch(yaw_deg: float, pitch_deg: float) -> NDArray[np.float64]:
@@ -81,10 +72,8 @@ class Camera:
         exposure_s: float = 1.0 / 30.0,
         velocity_m_s: Sequence[float] = (0.0, 0.0, 0.0),
     ) -> None:
-        self.position_m = _finite_vec3("position_m", position_m)
-        if float(np.max(np.abs(self.position_m))) > 1e7:
-            raise ValueError(f"position_m = {self.position_m.tolist()} is outside the valid range [-1e7, 1e7] m per coordinate")
-        self.velocity_m_s = _finite_vec3("velocity_m_s", velocity_m_s)
+        self.position_m = world_position(position_m)
+        self.velocity_m_s = finite_vec3("velocity_m_s", velocity_m_s)
         if float(np.linalg.norm(self.velocity_m_s)) > 1000.0:
             raise ValueError(f"velocity_m_s = {self.velocity_m_s.tolist()} is faster than 1000 m/s")
         fov = real("vertical_fov_deg", vertical_fov_deg)
@@ -96,7 +85,7 @@ class Camera:
             raise ValueError(f"exposure_s = {exp} is outside the valid range [1e-6, 0.1] s")
         self.exposure_s = exp
         if look_at_m is not None:
-            target = _finite_vec3("look_at_m", look_at_m)
+            target = finite_vec3("look_at_m", look_at_m)
             d = target - self.position_m
             norm = float(np.linalg.norm(d))
             if norm == 0.0:

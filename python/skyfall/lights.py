@@ -16,23 +16,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skyfall._validate import real
+from skyfall._validate import finite_vec3, real, world_position
 
 __all__ = ["PointLight", "SpotLight", "pack"]
 
 
 def _vec3(name: str, value: Any) -> tuple[float, float, float]:
-    v = np.asarray(value, dtype=np.float64).reshape(-1)
-    if v.size != 3 or not np.all(np.isfinite(v)):
-        raise ValueError(f"{name} must be 3 finite numbers, got {value!r}")
-    return float(v[0]), float(v[1]), float(v[2])
+    x, y, z = finite_vec3(name, value)
+    return float(x), float(y), float(z)
 
 
 def _position(value: Any) -> tuple[float, float, float]:
-    p = _vec3("position_m", value)
-    if max(abs(c) for c in p) > 1e7:
-        raise ValueError(f"position_m = {p} is outside the valid range [-1e7, 1e7] m per coordinate")
-    return p
+    x, y, z = world_position(value)
+    return float(x), float(y), float(z)
 
 
 def _unit(name: str, value: Any) -> tuple[float, float, float]:

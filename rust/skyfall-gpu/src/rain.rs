@@ -56,10 +56,10 @@ impl RainPass {
         let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H);
         // rain_near_m and the rain rate set how many streaks there are (the region's volume
         // goes as rain_near_m³).
-        let why = "(fewer with a smaller rain_near_m or rain rate)";
-        ctx.check_buffer(&format!("the rain's {} streaks {why}", streaks.len()), (streaks.len() * 16 * 4) as u64)?;
-        ctx.check_buffer(&format!("the rain's tile lists ({} entries) {why}", indices.len()), (indices.len() * 4) as u64)?;
         let mut packed: Vec<f32> = streaks.iter().flat_map(|s| s.packed()).collect();
+        let why = "(fewer with a smaller rain_near_m or rain rate)";
+        ctx.check_buffer(&format!("the rain's {} streaks {why}", streaks.len()), (packed.len() * 4) as u64)?;
+        ctx.check_buffer(&format!("the rain's tile lists ({} entries) {why}", indices.len()), (indices.len() * 4) as u64)?;
         // Bindings may not be empty; the offsets keep padding unread.
         if packed.is_empty() {
             packed.resize(16, 0.0);

@@ -109,6 +109,13 @@ fn project(cam: &Camera, pc: glam::Vec3) -> Vec2 {
     Vec2::new(cam.cx + cam.fx * pc.x / z, cam.cy - cam.fy * pc.y / z)
 }
 
+/// The distance from a streak's axis beyond which a pixel gets no coverage, px: its widest
+/// half-width plus half a pixel, at least one pixel (see [`ScreenStreak::fragment`]).
+#[inline]
+fn reach(wa: f32, wb: f32) -> f32 {
+    (0.5 * wa.max(wb) + 0.5).max(1.0)
+}
+
 /// Projects a drop's exposure-long path relative to a camera moving at `camera_velocity_m_s`
 /// (the camera's pose is the one at the end of the exposure); None when it is behind.
 pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_s: Vec3) -> Option<ScreenStreak> {
@@ -153,7 +160,7 @@ pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_
     let inv_len = if len > 1e-6 { 1.0 / len } else { 0.0 };
     // Pixels farther than `reach` from the axis get no coverage; on a steep streak a row's
     // window is the pixels whose centre lies within `half` of the axis' crossing.
-    let reach = (0.5 * wa.max(wb) + 0.5).max(1.0);
+    let reach = reach(wa, wb);
     let (slope, half) = if dir.y.abs() > 0.5 { (dir.x / dir.y, reach / dir.y.abs()) } else { (0.0, 0.0) };
     Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max, light: Vec3::ONE, dir, len, inv_len, slope, half })
 }
@@ -242,9 +249,8 @@ impl ScreenStreak {
     /// 1/z_b, α, 0 | light rgb, 0. Direction, length and reach are the values
     /// [`Self::fragment`] uses, so the shader does not compute its own.
     pub fn packed(&self) -> [f32; 16] {
-        let reach = (0.5 * self.wa.max(self.wb) + 0.5).max(1.0);
         [
-            self.a.x, self.a.y, self.dir.x, self.dir.y, self.len, reach, self.wa, self.wb, self.inv_za, self.inv_zb, self.alpha, 0.0,
+            self.a.x, self.a.y, self.dir.x, self.dir.y, self.len, reach(self.wa, self.wb), self.wa, self.wb, self.inv_za, self.inv_zb, self.alpha, 0.0,
             self.light.x, self.light.y, self.light.z, 0.0,
         ]
     }
@@ -291,13 +297,12 @@ impl ScreenStreak {
     }
 
     /// Pixel columns (x0, x1), end-exclusive, that the streak may touch within pixel rows
-    /// `rows` (inside [`Self::pixel_bounds`]'s columns): a covered pixel's centre lies less
+    /// `rows`, inside its box's columns `bx0..bx1` ([`Self::pixel_bounds`]): a covered pixel's centre lies less
     /// than ½ px beyond either end and less than the reach (½·w + ½, at least 1) across, so
     /// within r = ½·max(w) + 1.5 of the axis segment; the segment's part within r of the rows'
     /// centres, widened by r and a pixel for rounding, holds every column it covers there. A
     /// slanted streak then meets far fewer tiles than its bounding box does.
-    pub fn columns_in_rows(&self, rows: std::ops::Range<u32>, width: u32, height: u32) -> (u32, u32) {
-        let (bx0, bx1, _, _) = self.pixel_bounds(width, height);
+    fn columns_in_rows(&self, rows: std::ops::Range<u32>, (bx0, bx1): (u32, u32), width: u32) -> (u32, u32) {
         let r = 0.5 * self.wa.max(self.wb) + 1.5;
         let (ylo, yhi) = (idx_f32(rows.start as usize) + 0.5 - r, idx_f32(rows.end as usize) - 0.5 + r);
         let dy = self.b.y - self.a.y;
@@ -395,7 +400,7 @@ fn tile_spans(s: &ScreenStreak, width: u32, height: u32, tile_w: u32, tile_h: u3
     }
     for j in y0 / tile_h..y1.div_ceil(tile_h) {
         let rows = (j * tile_h).max(y0)..((j + 1) * tile_h).min(y1);
-        let (c0, c1) = s.columns_in_rows(rows, width, height);
+        let (c0, c1) = s.columns_in_rows(rows, (x0, x1), width);
         if c1 > c0 {
             f(j, c0 / tile_w, c1.div_ceil(tile_w));
         }
@@ -560,7 +565,7 @@ pub fn for_each_fragment_in(s: &ScreenStreak, y0: usize, rows: usize, w: usize, 
         if bx1 <= bx0 {
             return;
         }
-        let reach = (0.5 * s.wa.max(s.wb) + 0.5).max(1.0);
+        let reach = reach(s.wa, s.wb);
         for y in ya..yb {
             let qy = idx_f32(y) + 0.5 - s.a.y;
             // along = qy·dy + qx·dx and across = qx·dy − qy·dx, with qx = x + ½ − a.x

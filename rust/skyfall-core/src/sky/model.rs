@@ -108,20 +108,6 @@ impl Sky {
         }
     }
 
-    /// τ for a direction of sine-elevation `mu`: exp(−σ·H/μ) (σH capped at
-    /// [`MAX_SKY_OPTICAL_DEPTH`]), 0 at and below the horizon (when σ > 0), 1 without
-    /// extinction.
-    #[inline]
-    pub fn transmittance(&self, mu: f64) -> f64 {
-        if self.extinction_per_m <= 0.0 {
-            1.0
-        } else if mu <= 0.0 {
-            0.0
-        } else {
-            (-self.optical_depth() / mu).exp()
-        }
-    }
-
     /// Luminance of the sky (the cloud base) along `dir`, relative to E/π, without the rain
     /// in between: what a sky pixel shows when there is no haze.
     #[inline]
