@@ -52,6 +52,7 @@ demo: build
 	$(PY) -m skyfall.demo --out $(OUT)
 
 test-rust: setup vulkan
+	cargo fmt --all --check
 	cargo test --workspace --locked
 	cargo clippy --workspace --all-targets --locked -- -D warnings
 
@@ -63,6 +64,7 @@ test-python: build vulkan
 test: test-rust test-python
 
 lint: setup
+	cargo fmt --all --check
 	cargo clippy --workspace --all-targets --locked -- -D warnings
 	$(PY) -m mypy
 

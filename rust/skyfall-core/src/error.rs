@@ -45,7 +45,9 @@ pub enum Error {
         message: String,
     },
     /// A request whose result would exceed the memory budget; refused before allocating.
-    #[error("{what} would need {bytes} bytes ({gib:.2} GiB), over the budget of {budget} bytes ({budget_gib:.2} GiB); ask for fewer or smaller items")]
+    #[error(
+        "{what} would need {bytes} bytes ({gib:.2} GiB), over the budget of {budget} bytes ({budget_gib:.2} GiB); ask for fewer or smaller items"
+    )]
     TooLarge {
         /// What was requested.
         what: String,
@@ -74,7 +76,13 @@ impl Error {
     /// Builds a [`Error::TooLarge`].
     pub fn too_large(what: String, bytes: u128, budget: u64) -> Self {
         const GIB: f64 = (1u64 << 30) as f64;
-        Error::TooLarge { what, bytes, gib: bytes as f64 / GIB, budget, budget_gib: budget as f64 / GIB }
+        Error::TooLarge {
+            what,
+            bytes,
+            gib: bytes as f64 / GIB,
+            budget,
+            budget_gib: budget as f64 / GIB,
+        }
     }
 }
 
@@ -94,20 +102,38 @@ pub struct Range {
 impl Range {
     /// `[lo, hi] unit`.
     pub const fn closed(lo: f64, hi: f64, unit: &'static str) -> Self {
-        Range { lo, hi, lo_open: false, unit }
+        Range {
+            lo,
+            hi,
+            lo_open: false,
+            unit,
+        }
     }
     /// `(lo, hi] unit`.
     pub const fn open_closed(lo: f64, hi: f64, unit: &'static str) -> Self {
-        Range { lo, hi, lo_open: true, unit }
+        Range {
+            lo,
+            hi,
+            lo_open: true,
+            unit,
+        }
     }
 
     /// Checks one value (NaN fails every comparison and so is rejected).
     pub fn check(&self, name: &'static str, index: Option<usize>, value: f64) -> Result<f64> {
-        let lo_ok = if self.lo_open { value > self.lo } else { value >= self.lo };
+        let lo_ok = if self.lo_open {
+            value > self.lo
+        } else {
+            value >= self.lo
+        };
         if lo_ok && value <= self.hi {
             Ok(value)
         } else {
-            Err(Error::OutOfRange { param: Param { name, index }, value, range: self.to_string() })
+            Err(Error::OutOfRange {
+                param: Param { name, index },
+                value,
+                range: self.to_string(),
+            })
         }
     }
 
@@ -134,7 +160,11 @@ pub fn broadcast_len(args: &[(&'static str, usize)]) -> Result<usize> {
     let n = args.iter().map(|&(_, l)| l).max().unwrap_or(1);
     for &(name, len) in args {
         if len != 1 && len != n {
-            return Err(Error::Length { param: Param { name, index: None }, len, expected: n });
+            return Err(Error::Length {
+                param: Param { name, index: None },
+                len,
+                expected: n,
+            });
         }
     }
     Ok(n)
@@ -143,5 +173,9 @@ pub fn broadcast_len(args: &[(&'static str, usize)]) -> Result<usize> {
 /// Element `i` of a slice broadcast from length 1.
 #[inline]
 pub fn at(values: &[f64], i: usize) -> f64 {
-    if values.len() == 1 { values[0] } else { values[i] }
+    if values.len() == 1 {
+        values[0]
+    } else {
+        values[i]
+    }
 }

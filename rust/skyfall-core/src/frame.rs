@@ -2,9 +2,9 @@
 //! while it is in cache.
 
 use crate::error::{Error, Param, Result};
-use crate::haze::{apply_row, check_depth, Haze};
-use crate::rain::splat::{composite_streaks, RainFrame, RainStats, RainTargets};
-use crate::scene::boxes::{shade_pixel, BoxScene, SceneLight};
+use crate::haze::{Haze, apply_row, check_depth};
+use crate::rain::splat::{RainFrame, RainStats, RainTargets, composite_streaks};
+use crate::scene::boxes::{BoxScene, SceneLight, shade_pixel};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
 
@@ -67,10 +67,24 @@ pub fn check_frame_size(cam: &Camera) -> Result<()> {
 pub fn check_photo(cam: &Camera, rgb: &[f32], depth_m: &[f32]) -> Result<()> {
     let n = cam.pixels();
     if rgb.len() != 3 * n {
-        return Err(Error::Length { param: Param { name: "image", index: None }, len: rgb.len(), expected: 3 * n });
+        return Err(Error::Length {
+            param: Param {
+                name: "image",
+                index: None,
+            },
+            len: rgb.len(),
+            expected: 3 * n,
+        });
     }
     if depth_m.len() != n {
-        return Err(Error::Length { param: Param { name: "depth_m", index: None }, len: depth_m.len(), expected: n });
+        return Err(Error::Length {
+            param: Param {
+                name: "depth_m",
+                index: None,
+            },
+            len: depth_m.len(),
+            expected: n,
+        });
     }
     check_depth(depth_m)
 }
@@ -98,7 +112,11 @@ impl FrameOut<'_> {
     /// and the layers given exactly when they are drawn.
     pub fn check(&self, cam: &Camera, haze: bool, rain: bool) -> Result<()> {
         let n = cam.pixels();
-        let length = |name: &'static str, len: usize, expected: usize| Error::Length { param: Param { name, index: None }, len, expected };
+        let length = |name: &'static str, len: usize, expected: usize| Error::Length {
+            param: Param { name, index: None },
+            len,
+            expected,
+        };
         if self.rgb.len() != 3 * n {
             return Err(length("rgb", self.rgb.len(), 3 * n));
         }
@@ -109,7 +127,10 @@ impl FrameOut<'_> {
         if t != if haze { n } else { 0 } || haze != self.transmittance.is_some() {
             return Err(length("transmittance", t, if haze { n } else { 0 }));
         }
-        let (a, d) = self.rain.as_ref().map_or((0, 0), |(a, d)| (a.len(), d.len()));
+        let (a, d) = self
+            .rain
+            .as_ref()
+            .map_or((0, 0), |(a, d)| (a.len(), d.len()));
         if a != if rain { n } else { 0 } || rain != self.rain.is_some() {
             return Err(length("rain_alpha", a, if rain { n } else { 0 }));
         }
@@ -123,7 +144,12 @@ impl FrameOut<'_> {
 impl FrameBuffers {
     /// A `cam` frame's buffers (with the transmittance layer when `haze`, the rain layers when
     /// `rain`), sized after the frame is checked to fit, filled by a backend's `render_into`.
-    pub fn filled<E: From<Error>>(cam: &Camera, haze: bool, rain: bool, render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>) -> std::result::Result<Self, E> {
+    pub fn filled<E: From<Error>>(
+        cam: &Camera,
+        haze: bool,
+        rain: bool,
+        render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
+    ) -> std::result::Result<Self, E> {
         check_frame_size(cam)?;
         let n = cam.pixels();
         let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
@@ -133,29 +159,63 @@ impl FrameBuffers {
             rgb: &mut rgb,
             depth_m: &mut depth,
             transmittance: trans.as_deref_mut(),
-            rain: layers.as_mut().map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
+            rain: layers
+                .as_mut()
+                .map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
         };
         let report = render_into(out)?;
-        let rain = layers.zip(report).map(|((alpha, depth_m), (stats, drops))| RainBuffers { alpha, depth_m, stats, drops });
-        Ok(FrameBuffers { rgb, depth_m: depth, transmittance: trans, rain })
+        let rain = layers
+            .zip(report)
+            .map(|((alpha, depth_m), (stats, drops))| RainBuffers {
+                alpha,
+                depth_m,
+                stats,
+                drops,
+            });
+        Ok(FrameBuffers {
+            rgb,
+            depth_m: depth,
+            transmittance: trans,
+            rain,
+        })
     }
 }
 
 /// Renders a frame on the CPU: scene (ray cast under `light`, or photo copy) and haze fused
 /// row by row, then the rain streaks over the result.
-pub fn render(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>) -> Result<FrameBuffers> {
-    FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), |out| render_into(scene, cam, light, haze, rain, out))
+pub fn render(
+    scene: SceneRef<'_>,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    haze: Option<&Haze>,
+    rain: Option<&RainFrame<'_>>,
+) -> Result<FrameBuffers> {
+    FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), |out| {
+        render_into(scene, cam, light, haze, rain, out)
+    })
 }
 
 /// [`render`] into the caller's buffers (see [`FrameOut`]); the rain's report when it rains.
-pub fn render_into(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>, out: FrameOut<'_>) -> Result<Option<RainReport>> {
+pub fn render_into(
+    scene: SceneRef<'_>,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    haze: Option<&Haze>,
+    rain: Option<&RainFrame<'_>>,
+    out: FrameOut<'_>,
+) -> Result<Option<RainReport>> {
     check_frame_size(cam)?;
     if let SceneRef::Photo { rgb, depth_m } = scene {
         check_photo(cam, rgb, depth_m)?;
     }
     out.check(cam, haze.is_some(), rain.is_some())?;
     let w = cam.width as usize;
-    let FrameOut { rgb, depth_m: depth, transmittance: trans, rain: layers } = out;
+    let FrameOut {
+        rgb,
+        depth_m: depth,
+        transmittance: trans,
+        rain: layers,
+    } = out;
     let mut t_rows: Vec<Option<&mut [f32]>> = match trans {
         Some(t) => t.chunks_mut(w).map(Some).collect(),
         None => (0..cam.height).map(|_| None).collect(),
@@ -182,13 +242,30 @@ pub fn render_into(scene: SceneRef<'_>, cam: &Camera, light: &SceneLight<'_>, ha
             }
             // Haze over the row while it is in cache: each pixel leaves memory once.
             if let (Some(h), Some(t_row)) = (haze, t_row.as_deref_mut()) {
-                apply_row(h, &u2, cam.row_slope_sq(y as u32), rgb_row, depth_row, t_row);
+                apply_row(
+                    h,
+                    &u2,
+                    cam.row_slope_sq(y as u32),
+                    rgb_row,
+                    depth_row,
+                    t_row,
+                );
             }
         });
     rain.zip(layers)
         .map(|(rf, (alpha, rain_depth))| {
             let (streaks, stats, drops) = rf.streaks(cam)?;
-            composite_streaks(cam, &streaks, rf.shading.reflectance, RainTargets { rgb, depth_m: depth, alpha, rain_depth_m: rain_depth });
+            composite_streaks(
+                cam,
+                &streaks,
+                rf.shading.reflectance,
+                RainTargets {
+                    rgb,
+                    depth_m: depth,
+                    alpha,
+                    rain_depth_m: rain_depth,
+                },
+            );
             Ok((stats, drops))
         })
         .transpose()
@@ -199,25 +276,46 @@ mod tests {
     use super::*;
     use crate::scene::boxes;
     use crate::sky::ambient::AmbientMap;
-    use crate::sky::{cie::SkyKind, Sky};
+    use crate::sky::{Sky, cie::SkyKind};
     use glam::{Mat3, Vec3};
 
     #[test]
     fn fused_frame_is_the_ray_cast_then_eq_2_per_pixel() {
-        let cam = Camera::new(40, 30, [30.0, 30.0, 20.0, 15.0], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY).unwrap();
-        let b = boxes::SceneBox { min_m: Vec3::new(-3.0, 0.0, -12.0), max_m: Vec3::new(3.0, 6.0, -8.0), albedo: Vec3::new(0.6, 0.5, 0.4) };
+        let cam = Camera::new(
+            40,
+            30,
+            [30.0, 30.0, 20.0, 15.0],
+            Vec3::new(0.0, 1.6, 0.0),
+            Mat3::IDENTITY,
+        )
+        .unwrap();
+        let b = boxes::SceneBox {
+            min_m: Vec3::new(-3.0, 0.0, -12.0),
+            max_m: Vec3::new(3.0, 6.0, -8.0),
+            albedo: Vec3::new(0.6, 0.5, 0.4),
+        };
         let scene = BoxScene::new(vec![b], true, Vec3::splat(0.1)).unwrap();
-        let h = Haze { extinction_per_m: 0.02, airlight: [0.43; 3] };
+        let h = Haze {
+            extinction_per_m: 0.02,
+            airlight: [0.43; 3],
+        };
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
-        let light = SceneLight { sky: &sky, ambient: &amb };
+        let light = SceneLight {
+            sky: &sky,
+            ambient: &amb,
+        };
         let fused = render(SceneRef::Boxes(&scene), &cam, &light, Some(&h), None).unwrap();
         let t_layer = fused.transmittance.clone().unwrap();
         for y in 0..30u32 {
             for x in 0..40u32 {
                 let i = (y * 40 + x) as usize;
                 let (c, d) = boxes::shade_pixel(&scene, &cam, &light, x, y);
-                let t = if d.is_infinite() { 0.0 } else { (-0.02 * d * cam.distance_per_depth(x, y)).exp() };
+                let t = if d.is_infinite() {
+                    0.0
+                } else {
+                    (-0.02 * d * cam.distance_per_depth(x, y)).exp()
+                };
                 assert_eq!(fused.depth_m[i], d);
                 assert!((t_layer[i] - t).abs() <= 1e-6, "{x},{y}");
                 for k in 0..3 {
@@ -226,7 +324,17 @@ mod tests {
             }
         }
         // A photo of that frame rendered without haze comes back unchanged.
-        let plain = render(SceneRef::Photo { rgb: &fused.rgb, depth_m: &fused.depth_m }, &cam, &light, None, None).unwrap();
+        let plain = render(
+            SceneRef::Photo {
+                rgb: &fused.rgb,
+                depth_m: &fused.depth_m,
+            },
+            &cam,
+            &light,
+            None,
+            None,
+        )
+        .unwrap();
         assert_eq!(plain.rgb, fused.rgb);
         assert!(plain.transmittance.is_none());
     }
@@ -237,21 +345,57 @@ mod tests {
         // frame, bit for bit, rain and haze included.
         use crate::rain::drops::RainRegion;
         use crate::rain::splat::RainShading;
-        let cam = Camera::new(48, 32, [40.0, 40.0, 24.0, 16.0], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            48,
+            32,
+            [40.0, 40.0, 24.0, 16.0],
+            Vec3::new(0.0, 1.6, 0.0),
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
-        let light = SceneLight { sky: &sky, ambient: &amb };
+        let light = SceneLight {
+            sky: &sky,
+            ambient: &amb,
+        };
         let n = cam.pixels();
         let (photo, depth) = (vec![0.2f32; 3 * n], vec![3.0f32; n]);
-        let scene = SceneRef::Photo { rgb: &photo, depth_m: &depth };
-        let h = Haze { extinction_per_m: 0.02, airlight: [0.43; 3] };
+        let scene = SceneRef::Photo {
+            rgb: &photo,
+            depth_m: &depth,
+        };
+        let h = Haze {
+            extinction_per_m: 0.02,
+            airlight: [0.43; 3],
+        };
         let region = RainRegion::new(40.0, &[1.0, 1.5, 2.0], 3.0, [0.0; 3], 0.0, 4).unwrap();
         let shading = RainShading::open_sky();
-        let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::ZERO, ground: true, shelter: &[], shading: &shading };
+        let rf = RainFrame {
+            region: &region,
+            exposure_s: 1.0 / 30.0,
+            camera_velocity_m_s: Vec3::ZERO,
+            ground: true,
+            shelter: &[],
+            shading: &shading,
+        };
         let want = render(scene, &cam, &light, Some(&h), Some(&rf)).unwrap();
-        let (mut rgb, mut d, mut t, mut a, mut rd) = (vec![f32::NAN; 3 * n], vec![f32::NAN; n], vec![f32::NAN; n], vec![f32::NAN; n], vec![f32::NAN; n]);
-        let out = FrameOut { rgb: &mut rgb, depth_m: &mut d, transmittance: Some(&mut t), rain: Some((&mut a, &mut rd)) };
-        let (stats, drops) = render_into(scene, &cam, &light, Some(&h), Some(&rf), out).unwrap().unwrap();
+        let (mut rgb, mut d, mut t, mut a, mut rd) = (
+            vec![f32::NAN; 3 * n],
+            vec![f32::NAN; n],
+            vec![f32::NAN; n],
+            vec![f32::NAN; n],
+            vec![f32::NAN; n],
+        );
+        let out = FrameOut {
+            rgb: &mut rgb,
+            depth_m: &mut d,
+            transmittance: Some(&mut t),
+            rain: Some((&mut a, &mut rd)),
+        };
+        let (stats, drops) = render_into(scene, &cam, &light, Some(&h), Some(&rf), out)
+            .unwrap()
+            .unwrap();
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let rain = want.rain.unwrap();
         assert!(stats.streaks > 0 && drops == rain.drops && stats == rain.stats);
@@ -261,20 +405,81 @@ mod tests {
         assert_eq!(bits(&a), bits(&rain.alpha));
         assert_eq!(bits(&rd), bits(&rain.depth_m));
         // Buffers that do not match the request are named.
-        let short = FrameOut { rgb: &mut rgb[1..], depth_m: &mut d, transmittance: None, rain: None };
-        assert!(matches!(render_into(scene, &cam, &light, None, None, short), Err(Error::Length { param: Param { name: "rgb", .. }, .. })));
-        let missing = FrameOut { rgb: &mut rgb, depth_m: &mut d, transmittance: None, rain: None };
-        assert!(matches!(render_into(scene, &cam, &light, Some(&h), None, missing), Err(Error::Length { param: Param { name: "transmittance", .. }, .. })));
-        let extra = FrameOut { rgb: &mut rgb, depth_m: &mut d, transmittance: None, rain: Some((&mut a, &mut rd)) };
-        assert!(matches!(render_into(scene, &cam, &light, None, None, extra), Err(Error::Length { param: Param { name: "rain_alpha", .. }, .. })));
+        let short = FrameOut {
+            rgb: &mut rgb[1..],
+            depth_m: &mut d,
+            transmittance: None,
+            rain: None,
+        };
+        assert!(matches!(
+            render_into(scene, &cam, &light, None, None, short),
+            Err(Error::Length {
+                param: Param { name: "rgb", .. },
+                ..
+            })
+        ));
+        let missing = FrameOut {
+            rgb: &mut rgb,
+            depth_m: &mut d,
+            transmittance: None,
+            rain: None,
+        };
+        assert!(matches!(
+            render_into(scene, &cam, &light, Some(&h), None, missing),
+            Err(Error::Length {
+                param: Param {
+                    name: "transmittance",
+                    ..
+                },
+                ..
+            })
+        ));
+        let extra = FrameOut {
+            rgb: &mut rgb,
+            depth_m: &mut d,
+            transmittance: None,
+            rain: Some((&mut a, &mut rd)),
+        };
+        assert!(matches!(
+            render_into(scene, &cam, &light, None, None, extra),
+            Err(Error::Length {
+                param: Param {
+                    name: "rain_alpha",
+                    ..
+                },
+                ..
+            })
+        ));
     }
 
     #[test]
     fn huge_frames_are_refused() {
-        let cam = Camera::new(16384, 16384, [1e4, 1e4, 8192.0, 8192.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            16384,
+            16384,
+            [1e4, 1e4, 8192.0, 8192.0],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0; 5]);
-        let light = SceneLight { sky: &sky, ambient: &amb };
-        assert!(matches!(render(SceneRef::Photo { rgb: &[], depth_m: &[] }, &cam, &light, None, None), Err(Error::TooLarge { .. })));
+        let light = SceneLight {
+            sky: &sky,
+            ambient: &amb,
+        };
+        assert!(matches!(
+            render(
+                SceneRef::Photo {
+                    rgb: &[],
+                    depth_m: &[]
+                },
+                &cam,
+                &light,
+                None,
+                None
+            ),
+            Err(Error::TooLarge { .. })
+        ));
     }
 }

@@ -22,7 +22,7 @@ pub mod photo8;
 pub mod physics;
 pub mod rain;
 pub mod scene;
-pub mod sky;
 mod seed;
+pub mod sky;
 
 pub use error::{Error, Result};

@@ -16,9 +16,11 @@ use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
 use crate::frame::check_frame_size;
 use crate::haze::Haze;
-use crate::rain::splat::{bin_by_tiles, for_each_fragment_in, for_each_fragment_x4, RainFrame, RainStats, ScreenStreak};
-use glam::{Vec4, Vec4Swizzles};
+use crate::rain::splat::{
+    RainFrame, RainStats, ScreenStreak, bin_by_tiles, for_each_fragment_in, for_each_fragment_x4,
+};
 use crate::scene::camera::Camera;
+use glam::{Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use std::cell::RefCell;
 
@@ -56,7 +58,11 @@ pub struct Photo8Stats {
 }
 
 fn length_error(name: &'static str, len: usize, expected: usize) -> Error {
-    Error::Length { param: Param { name, index: None }, len, expected }
+    Error::Length {
+        param: Param { name, index: None },
+        len,
+        expected,
+    }
 }
 
 /// Per-thread band scratch, reused across bands and frames.
@@ -81,7 +87,13 @@ thread_local! {
 
 /// Renders haze and rain over an 8-bit photo into `out` (same size), on the CPU. Returns the
 /// rain's counts when `rain` is given.
-pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain: Option<&RainFrame<'_>>, out: Photo8Out<'_>) -> Result<Option<Photo8Stats>> {
+pub fn render_photo8(
+    cam: &Camera,
+    photo: &Photo8<'_>,
+    haze: Option<&Haze>,
+    rain: Option<&RainFrame<'_>>,
+    out: Photo8Out<'_>,
+) -> Result<Option<Photo8Stats>> {
     check_frame_size(cam)?;
     let (w, n) = (cam.width as usize, cam.pixels());
     if photo.srgb.len() != 3 * n {
@@ -119,7 +131,13 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
     // Each band of rows is cut into tiles of TILE_W columns, rasterised and shaded one after
     // the other: a tile's scratch and depth stay in the core's L1.
     let tiles_x = w.div_ceil(TILE_W);
-    let (offsets, indices) = bin_by_tiles(&streaks, cam.width, cam.height, TILE_W as u32, BAND_ROWS as u32);
+    let (offsets, indices) = bin_by_tiles(
+        &streaks,
+        cam.width,
+        cam.height,
+        TILE_W as u32,
+        BAND_ROWS as u32,
+    );
     let u2 = cam.column_slopes_sq();
     let enc = Srgb8Encoder::new();
     let band = BAND_ROWS * w;
@@ -134,72 +152,133 @@ pub fn render_photo8(cam: &Camera, photo: &Photo8<'_>, haze: Option<&Haze>, rain
         l.x == l.y && l.y == l.z
     });
     let k = if grey { 1 } else { 3 };
-    out.srgb.par_chunks_mut(3 * band).zip(alpha_bands.par_iter_mut()).enumerate().for_each(|(bi, (out_band, alpha))| {
-        let y0 = bi * BAND_ROWS;
-        let rows = out_band.len() / (3 * w);
-        let px = rows * w;
-        let depth = &photo.depth_m[y0 * w..y0 * w + px];
-        let src = &photo.srgb[3 * y0 * w..3 * (y0 * w + px)];
-        SCRATCH.with(|cell| {
-            let mut guard = cell.borrow_mut();
-            let Scratch { p, q, cover, t_row } = &mut *guard;
-            // Sized for the band; a tile initialises its own columns before drawing (a tile's
-            // windows may spill a few columns into a neighbour's: they write those back
-            // unchanged, a = 0).
-            p.resize(px, 1.0);
-            q.resize(k * px, 0.0);
-            cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
-            t_row.clear();
-            t_row.resize(w, 1.0);
-            for tx in 0..tiles_x {
-                let t = bi * tiles_x + tx;
-                let mine = &indices[offsets[t] as usize..offsets[t + 1] as usize];
-                let cols = tx * TILE_W..((tx + 1) * TILE_W).min(w);
-                let rained = !mine.is_empty();
-                if rained {
+    out.srgb
+        .par_chunks_mut(3 * band)
+        .zip(alpha_bands.par_iter_mut())
+        .enumerate()
+        .for_each(|(bi, (out_band, alpha))| {
+            let y0 = bi * BAND_ROWS;
+            let rows = out_band.len() / (3 * w);
+            let px = rows * w;
+            let depth = &photo.depth_m[y0 * w..y0 * w + px];
+            let src = &photo.srgb[3 * y0 * w..3 * (y0 * w + px)];
+            SCRATCH.with(|cell| {
+                let mut guard = cell.borrow_mut();
+                let Scratch { p, q, cover, t_row } = &mut *guard;
+                // Sized for the band; a tile initialises its own columns before drawing (a tile's
+                // windows may spill a few columns into a neighbour's: they write those back
+                // unchanged, a = 0).
+                p.resize(px, 1.0);
+                q.resize(k * px, 0.0);
+                cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
+                t_row.clear();
+                t_row.resize(w, 1.0);
+                for tx in 0..tiles_x {
+                    let t = bi * tiles_x + tx;
+                    let mine = &indices[offsets[t] as usize..offsets[t + 1] as usize];
+                    let cols = tx * TILE_W..((tx + 1) * TILE_W).min(w);
+                    let rained = !mine.is_empty();
+                    if rained {
+                        for row in 0..rows {
+                            let seg = row * w + cols.start..row * w + cols.end;
+                            p[seg.clone()].fill(1.0);
+                            for c in 0..k {
+                                q[c * px + seg.start..c * px + seg.end].fill(0.0);
+                            }
+                            if let Some(c) = cover.get_mut(seg) {
+                                c.fill(1.0);
+                            }
+                        }
+                        if grey {
+                            raster_tile::<1>(
+                                &streaks,
+                                mine,
+                                y0,
+                                rows,
+                                w,
+                                cols.clone(),
+                                depth,
+                                r,
+                                p,
+                                q,
+                                cover,
+                            );
+                        } else {
+                            raster_tile::<3>(
+                                &streaks,
+                                mine,
+                                y0,
+                                rows,
+                                w,
+                                cols.clone(),
+                                depth,
+                                r,
+                                p,
+                                q,
+                                cover,
+                            );
+                        }
+                    }
+                    let t_seg = &mut t_row[..cols.len()];
                     for row in 0..rows {
                         let seg = row * w + cols.start..row * w + cols.end;
-                        p[seg.clone()].fill(1.0);
-                        for c in 0..k {
-                            q[c * px + seg.start..c * px + seg.end].fill(0.0);
+                        if let Some(h) = haze {
+                            transmittance_row(
+                                h,
+                                &u2[cols.clone()],
+                                cam.row_slope_sq((y0 + row) as u32),
+                                &depth[seg.clone()],
+                                t_seg,
+                            );
                         }
-                        if let Some(c) = cover.get_mut(seg) {
-                            c.fill(1.0);
+                        let (src_row, out_row) = (
+                            &src[3 * seg.start..3 * seg.end],
+                            &mut out_band[3 * seg.start..3 * seg.end],
+                        );
+                        let maps = || Some((&p[seg.clone()], &q[seg.start..], px));
+                        match (rained, grey) {
+                            (false, _) => shade_row::<1>(
+                                photo.decode,
+                                enc,
+                                air,
+                                t_seg,
+                                None,
+                                src_row,
+                                out_row,
+                            ),
+                            (true, true) => shade_row::<1>(
+                                photo.decode,
+                                enc,
+                                air,
+                                t_seg,
+                                maps(),
+                                src_row,
+                                out_row,
+                            ),
+                            (true, false) => shade_row::<3>(
+                                photo.decode,
+                                enc,
+                                air,
+                                t_seg,
+                                maps(),
+                                src_row,
+                                out_row,
+                            ),
                         }
-                    }
-                    if grey {
-                        raster_tile::<1>(&streaks, mine, y0, rows, w, cols.clone(), depth, r, p, q, cover);
-                    } else {
-                        raster_tile::<3>(&streaks, mine, y0, rows, w, cols.clone(), depth, r, p, q, cover);
-                    }
-                }
-                let t_seg = &mut t_row[..cols.len()];
-                for row in 0..rows {
-                    let seg = row * w + cols.start..row * w + cols.end;
-                    if let Some(h) = haze {
-                        transmittance_row(h, &u2[cols.clone()], cam.row_slope_sq((y0 + row) as u32), &depth[seg.clone()], t_seg);
-                    }
-                    let (src_row, out_row) = (&src[3 * seg.start..3 * seg.end], &mut out_band[3 * seg.start..3 * seg.end]);
-                    let maps = || Some((&p[seg.clone()], &q[seg.start..], px));
-                    match (rained, grey) {
-                        (false, _) => shade_row::<1>(photo.decode, enc, air, t_seg, None, src_row, out_row),
-                        (true, true) => shade_row::<1>(photo.decode, enc, air, t_seg, maps(), src_row, out_row),
-                        (true, false) => shade_row::<3>(photo.decode, enc, air, t_seg, maps(), src_row, out_row),
-                    }
-                    if let Some(a) = alpha.as_deref_mut() {
-                        let a = &mut a[seg.clone()];
-                        if rained {
-                            for (o, c) in a.iter_mut().zip(&cover[seg]) {
-                                *o = 1.0 - c;
+                        if let Some(a) = alpha.as_deref_mut() {
+                            let a = &mut a[seg.clone()];
+                            if rained {
+                                for (o, c) in a.iter_mut().zip(&cover[seg]) {
+                                    *o = 1.0 - c;
+                                }
+                            } else {
+                                a.fill(0.0);
                             }
-                        } else {
-                            a.fill(0.0);
                         }
                     }
                 }
-            }
+            });
         });
-    });
     Ok(stats)
 }
 
@@ -229,7 +308,11 @@ fn raster_tile<const K: usize>(
     let depth = &depth[..px];
     let mut planes = q.chunks_exact_mut(px);
     let mut qs: [&mut [f32]; K] = std::array::from_fn(|_| planes.next().unwrap_or_default());
-    let cover_x4 = if want_alpha { &mut cover[..px] } else { &mut cover[..0] };
+    let cover_x4 = if want_alpha {
+        &mut cover[..px]
+    } else {
+        &mut cover[..0]
+    };
     for (n, s) in mine.iter().map(|&k| &streaks[k as usize]).enumerate() {
         // Touch a streak eight ahead: its cache line (the list is larger than L2) is then on
         // its way while this one is drawn.
@@ -241,7 +324,9 @@ fn raster_tile<const K: usize>(
         let walked = for_each_fragment_x4(s, y0, rows, w, cols.clone(), |i, a, inv_z| {
             // Hidden where z ≥ depth (1 ≥ depth/z, without the division); a = 0 leaves the
             // pixels as they are, so there is no branch on it.
-            let Some(end) = i.checked_add(4).filter(|&e| e <= px) else { return };
+            let Some(end) = i.checked_add(4).filter(|&e| e <= px) else {
+                return;
+            };
             let d = Vec4::from_slice(&depth[i..end]);
             let a = Vec4::select((d * inv_z).cmple(Vec4::ONE), Vec4::ZERO, a);
             let ar = a * r;
@@ -251,7 +336,8 @@ fn raster_tile<const K: usize>(
                 (Vec4::from_slice(&q[i..end]) * keep + ar * lc).write_to_slice(&mut q[i..end]);
             }
             if want_alpha && end <= cover_x4.len() {
-                (Vec4::from_slice(&cover_x4[i..end]) * (Vec4::ONE - a)).write_to_slice(&mut cover_x4[i..end]);
+                (Vec4::from_slice(&cover_x4[i..end]) * (Vec4::ONE - a))
+                    .write_to_slice(&mut cover_x4[i..end]);
             }
         });
         if walked {
@@ -294,7 +380,15 @@ fn transmittance_row(h: &Haze, u2: &[f32], v2: f32, depth: &[f32], t: &mut [f32]
 /// (`p`, and `q` with `K` planes `stride` apart, see [`raster_tile`]), encoded.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
-fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<(&[f32], &[f32], usize)>, src: &[u8], out: &mut [u8]) {
+fn shade_row<const K: usize>(
+    decode: &[f32; 256],
+    enc: Srgb8Encoder,
+    air: [f32; 3],
+    t: &[f32],
+    pq: Option<(&[f32], &[f32], usize)>,
+    src: &[u8],
+    out: &mut [u8],
+) {
     if K == 1 {
         // Four pixels at a time: their twelve values in three vectors (R G B R | G B R G |
         // B R G B), the arithmetic and the clamp vectorised, the same operations in the same
@@ -303,13 +397,24 @@ fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 
         let (t4, t_tail) = t.split_at(n4);
         let (src4, src_tail) = src.split_at(3 * n4);
         let (out4, out_tail) = out.split_at_mut(3 * n4);
-        let air4 = [Vec4::new(air[0], air[1], air[2], air[0]), Vec4::new(air[1], air[2], air[0], air[1]), Vec4::new(air[2], air[0], air[1], air[2])];
-        let groups = out4.chunks_exact_mut(12).zip(src4.chunks_exact(12)).zip(t4.chunks_exact(4));
+        let air4 = [
+            Vec4::new(air[0], air[1], air[2], air[0]),
+            Vec4::new(air[1], air[2], air[0], air[1]),
+            Vec4::new(air[2], air[0], air[1], air[2]),
+        ];
+        let groups = out4
+            .chunks_exact_mut(12)
+            .zip(src4.chunks_exact(12))
+            .zip(t4.chunks_exact(4));
         let maps = pq.map(|(p, q, _)| (p.split_at(n4), q.split_at(n4)));
         match maps {
             None => groups.for_each(|((o, s), tc)| shade4(decode, enc, &air4, o, s, tc, None)),
             Some(((p4, _), (q4, _))) => {
-                groups.zip(p4.chunks_exact(4).zip(q4.chunks_exact(4))).for_each(|(((o, s), tc), (p, q))| shade4(decode, enc, &air4, o, s, tc, Some((p, q))));
+                groups
+                    .zip(p4.chunks_exact(4).zip(q4.chunks_exact(4)))
+                    .for_each(|(((o, s), tc), (p, q))| {
+                        shade4(decode, enc, &air4, o, s, tc, Some((p, q)))
+                    });
             }
         }
         let tail = maps.map(|((_, p), (_, q))| (p, q, 0));
@@ -321,14 +426,29 @@ fn shade_row<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 
 /// Four pixels of [`shade_row`] (`K` = 1): twelve bytes of `s` into `o`, `tc` their
 /// transmittances, `map` their P and Q.
 #[inline(always)]
-fn shade4(decode: &[f32; 256], enc: Srgb8Encoder, air4: &[Vec4; 3], o: &mut [u8], s: &[u8], tc: &[f32], map: Option<(&[f32], &[f32])>) {
+fn shade4(
+    decode: &[f32; 256],
+    enc: Srgb8Encoder,
+    air4: &[Vec4; 3],
+    o: &mut [u8],
+    s: &[u8],
+    tc: &[f32],
+    map: Option<(&[f32], &[f32])>,
+) {
     let d = |k: usize| decode[usize::from(s[k])];
-    let v = [Vec4::new(d(0), d(1), d(2), d(3)), Vec4::new(d(4), d(5), d(6), d(7)), Vec4::new(d(8), d(9), d(10), d(11))];
+    let v = [
+        Vec4::new(d(0), d(1), d(2), d(3)),
+        Vec4::new(d(4), d(5), d(6), d(7)),
+        Vec4::new(d(8), d(9), d(10), d(11)),
+    ];
     let tv = load4(tc);
     let ts = [tv.xxxy(), tv.yyzz(), tv.zwww()];
     let pqs = map.map(|(p, q)| {
         let (p, q) = (load4(p), load4(q));
-        ([p.xxxy(), p.yyzz(), p.zwww()], [q.xxxy(), q.yyzz(), q.zwww()])
+        (
+            [p.xxxy(), p.yyzz(), p.zwww()],
+            [q.xxxy(), q.yyzz(), q.zwww()],
+        )
     });
     for m in 0..3 {
         let mut h = v[m] * ts[m] + air4[m] * (Vec4::ONE - ts[m]);
@@ -347,10 +467,20 @@ fn shade4(decode: &[f32; 256], enc: Srgb8Encoder, air4: &[Vec4; 3], o: &mut [u8]
 /// [`shade_row`] one pixel at a time.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn shade_row_x1<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f32; 3], t: &[f32], pq: Option<(&[f32], &[f32], usize)>, src: &[u8], out: &mut [u8]) {
+fn shade_row_x1<const K: usize>(
+    decode: &[f32; 256],
+    enc: Srgb8Encoder,
+    air: [f32; 3],
+    t: &[f32],
+    pq: Option<(&[f32], &[f32], usize)>,
+    src: &[u8],
+    out: &mut [u8],
+) {
     // Zipped iterators, one loop per case: no bounds check and no branch per pixel.
     let pixels = out.chunks_exact_mut(3).zip(src.chunks_exact(3)).zip(t);
-    let hazed = |s: &[u8], t: f32| -> [f32; 3] { std::array::from_fn(|ch| decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t)) };
+    let hazed = |s: &[u8], t: f32| -> [f32; 3] {
+        std::array::from_fn(|ch| decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t))
+    };
     match pq {
         None => {
             for ((o, s), &t) in pixels {
@@ -369,8 +499,13 @@ fn shade_row_x1<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f3
             }
         }
         Some((p, q, stride)) => {
-            let (qr, qg, qb) = (&q[..p.len()], &q[stride..stride + p.len()], &q[2 * stride..2 * stride + p.len()]);
-            for (((((o, s), &t), &p), &r), (&g, &b)) in pixels.zip(p).zip(qr).zip(qg.iter().zip(qb)) {
+            let (qr, qg, qb) = (
+                &q[..p.len()],
+                &q[stride..stride + p.len()],
+                &q[2 * stride..2 * stride + p.len()],
+            );
+            for (((((o, s), &t), &p), &r), (&g, &b)) in pixels.zip(p).zip(qr).zip(qg.iter().zip(qb))
+            {
                 let v = hazed(s, t);
                 let q = [r, g, b];
                 for ch in 0..3 {
@@ -385,19 +520,23 @@ fn shade_row_x1<const K: usize>(decode: &[f32; 256], enc: Srgb8Encoder, air: [f3
 mod tests {
     use super::*;
     use crate::color::{encode_srgb8, encode_srgb8_formula};
-    use crate::frame::{render, SceneRef};
+    use crate::frame::{SceneRef, render};
     use crate::rain::drops::RainRegion;
     use crate::rain::splat::RainShading;
     use crate::scene::boxes::SceneLight;
     use crate::scene::lights::Light;
     use crate::sky::ambient::AmbientMap;
-    use crate::sky::{cie::SkyKind, Sky};
+    use crate::sky::{Sky, cie::SkyKind};
     use glam::{Mat3, Vec3};
 
     fn decode_table() -> [f32; 256] {
         std::array::from_fn(|k| {
             let v = k as f32 / 255.0;
-            if v <= 0.040_45 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+            if v <= 0.040_45 {
+                v / 12.92
+            } else {
+                ((v + 0.055) / 1.055).powf(2.4)
+            }
         })
     }
 
@@ -405,7 +544,9 @@ mod tests {
     /// 0..255. The tests use 61 rows (the last band is short) and 300 columns (three tiles,
     /// the last narrow).
     fn photo(w: usize, h: usize) -> (Vec<u8>, Vec<f32>) {
-        let srgb = (0..w * h * 3).map(|i| ((i * 37 + i / 7) % 256) as u8).collect();
+        let srgb = (0..w * h * 3)
+            .map(|i| ((i * 37 + i / 7) % 256) as u8)
+            .collect();
         let depth = (0..w * h)
             .map(|i| match (i % w, i / w) {
                 (x, _) if x < w / 4 => 0.6,
@@ -420,41 +561,110 @@ mod tests {
     /// equal, the same counts and the same coverage layer.
     fn check_against_the_float_frame(shading: &RainShading) {
         let (w, h) = (300usize, 61usize);
-        let cam = Camera::new(w as u32, h as u32, [60.0, 60.0, 150.0, 30.5], Vec3::new(0.0, 1.6, 0.0), Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            w as u32,
+            h as u32,
+            [60.0, 60.0, 150.0, 30.5],
+            Vec3::new(0.0, 1.6, 0.0),
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let (srgb, depth) = photo(w, h);
         let dec = decode_table();
         let linear: Vec<f32> = srgb.iter().map(|&b| dec[usize::from(b)]).collect();
         let haze = Haze::new(0.03, [0.4, 0.42, 0.45]).unwrap();
-        let region = RainRegion::new(60.0, &[1.0, 1.5, 2.0, 3.0], 4.0, [1.5, 0.0, 0.0], 0.3, 5).unwrap();
-        let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::ZERO, ground: false, shelter: &[], shading };
+        let region =
+            RainRegion::new(60.0, &[1.0, 1.5, 2.0, 3.0], 4.0, [1.5, 0.0, 0.0], 0.3, 5).unwrap();
+        let rf = RainFrame {
+            region: &region,
+            exposure_s: 1.0 / 30.0,
+            camera_velocity_m_s: Vec3::ZERO,
+            ground: false,
+            shelter: &[],
+            shading,
+        };
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
-        let light = SceneLight { sky: &sky, ambient: &amb };
-        let reference = render(SceneRef::Photo { rgb: &linear, depth_m: &depth }, &cam, &light, Some(&haze), Some(&rf)).unwrap();
+        let light = SceneLight {
+            sky: &sky,
+            ambient: &amb,
+        };
+        let reference = render(
+            SceneRef::Photo {
+                rgb: &linear,
+                depth_m: &depth,
+            },
+            &cam,
+            &light,
+            Some(&haze),
+            Some(&rf),
+        )
+        .unwrap();
         let mut expected = vec![0u8; srgb.len()];
         encode_srgb8(&reference.rgb, &mut expected);
         let mut out = vec![0u8; srgb.len()];
         let mut alpha = vec![0.0f32; w * h];
-        let photo = Photo8 { srgb: &srgb, depth_m: &depth, decode: &dec };
-        let stats = render_photo8(&cam, &photo, Some(&haze), Some(&rf), Photo8Out { srgb: &mut out, rain_alpha: Some(&mut alpha) }).unwrap().unwrap();
+        let photo = Photo8 {
+            srgb: &srgb,
+            depth_m: &depth,
+            decode: &dec,
+        };
+        let stats = render_photo8(
+            &cam,
+            &photo,
+            Some(&haze),
+            Some(&rf),
+            Photo8Out {
+                srgb: &mut out,
+                rain_alpha: Some(&mut alpha),
+            },
+        )
+        .unwrap()
+        .unwrap();
         let rain = reference.rain.unwrap();
         assert_eq!((stats.drops, stats.rain), (rain.drops, rain.stats));
         assert!(stats.rain.streaks > 50, "{stats:?}");
         // P·C + Q reassociates the float frame's sums: bytes within 1 code, nearly all equal.
-        let diff: Vec<i32> = out.iter().zip(&expected).map(|(a, b)| (i32::from(*a) - i32::from(*b)).abs()).collect();
+        let diff: Vec<i32> = out
+            .iter()
+            .zip(&expected)
+            .map(|(a, b)| (i32::from(*a) - i32::from(*b)).abs())
+            .collect();
         assert!(diff.iter().all(|&d| d <= 1));
-        assert!(diff.iter().filter(|&&d| d > 0).count() * 1000 <= diff.len(), "{} differ", diff.iter().filter(|&&d| d > 0).count());
-        let alpha_err = alpha.iter().zip(&rain.alpha).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
-        assert!(alpha_err < 1e-6 && rain.alpha.iter().any(|&a| a > 0.01), "{alpha_err}");
+        assert!(
+            diff.iter().filter(|&&d| d > 0).count() * 1000 <= diff.len(),
+            "{} differ",
+            diff.iter().filter(|&&d| d > 0).count()
+        );
+        let alpha_err = alpha
+            .iter()
+            .zip(&rain.alpha)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(
+            alpha_err < 1e-6 && rain.alpha.iter().any(|&a| a > 0.01),
+            "{alpha_err}"
+        );
     }
 
     #[test]
     fn the_fused_8_bit_path_is_the_float_frame_encoded() {
         // Grey light (Q one value per pixel) and a warm lamp by the camera (Q per channel).
         check_against_the_float_frame(&RainShading::open_sky());
-        let lamp = Light { position_m: Vec3::new(0.5, 1.8, -1.5), intensity_cd: 3e4, color: Vec3::new(1.0, 0.7, 0.4), spot: None };
-        let lit = RainShading { lights: vec![lamp], ..RainShading::open_sky() };
-        assert!(lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).x > 2.0 * lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).z);
+        let lamp = Light {
+            position_m: Vec3::new(0.5, 1.8, -1.5),
+            intensity_cd: 3e4,
+            color: Vec3::new(1.0, 0.7, 0.4),
+            spot: None,
+        };
+        let lit = RainShading {
+            lights: vec![lamp],
+            ..RainShading::open_sky()
+        };
+        assert!(
+            lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).x
+                > 2.0 * lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).z
+        );
         check_against_the_float_frame(&lit);
     }
 
@@ -466,7 +676,15 @@ mod tests {
         let enc = Srgb8Encoder::new();
         for n in (0..=13).chain([128, 131]) {
             let src: Vec<u8> = (0..3 * n).map(|_| rng.random()).collect();
-            let t: Vec<f32> = (0..n).map(|_| if rng.random_bool(0.2) { 1.0 } else { rng.random() }).collect();
+            let t: Vec<f32> = (0..n)
+                .map(|_| {
+                    if rng.random_bool(0.2) {
+                        1.0
+                    } else {
+                        rng.random()
+                    }
+                })
+                .collect();
             let p: Vec<f32> = (0..n).map(|_| rng.random()).collect();
             let q: Vec<f32> = (0..n).map(|_| rng.random_range(0.0..2.0)).collect();
             for air in [[0.3, 1.5, 0.0], [0.0; 3]] {
@@ -484,17 +702,48 @@ mod tests {
     fn without_haze_and_rain_the_bytes_come_back_unchanged() {
         // encode(decode(b)) = b for every byte, and no scratch state leaks from a hazy frame.
         let (w, h) = (96usize, 61usize);
-        let cam = Camera::new(w as u32, h as u32, [60.0, 60.0, 48.0, 30.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            w as u32,
+            h as u32,
+            [60.0, 60.0, 48.0, 30.5],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let (srgb, depth) = photo(w, h);
         let dec = decode_table();
         assert!((0..=255u8).all(|b| encode_srgb8_formula(dec[usize::from(b)]) == b));
-        let photo = Photo8 { srgb: &srgb, depth_m: &depth, decode: &dec };
+        let photo = Photo8 {
+            srgb: &srgb,
+            depth_m: &depth,
+            decode: &dec,
+        };
         let mut out = vec![0u8; srgb.len()];
         let haze = Haze::new(0.5, [0.4; 3]).unwrap();
-        render_photo8(&cam, &photo, Some(&haze), None, Photo8Out { srgb: &mut out, rain_alpha: None }).unwrap();
+        render_photo8(
+            &cam,
+            &photo,
+            Some(&haze),
+            None,
+            Photo8Out {
+                srgb: &mut out,
+                rain_alpha: None,
+            },
+        )
+        .unwrap();
         assert_ne!(out, srgb);
         let mut alpha = vec![1.0f32; w * h];
-        let stats = render_photo8(&cam, &photo, None, None, Photo8Out { srgb: &mut out, rain_alpha: Some(&mut alpha) }).unwrap();
+        let stats = render_photo8(
+            &cam,
+            &photo,
+            None,
+            None,
+            Photo8Out {
+                srgb: &mut out,
+                rain_alpha: Some(&mut alpha),
+            },
+        )
+        .unwrap();
         assert_eq!(stats, None);
         assert_eq!(out, srgb);
         assert!(alpha.iter().all(|&a| a == 0.0));
@@ -507,15 +756,60 @@ mod tests {
         let srgb = vec![0u8; 24];
         let mut depth = vec![1.0f32; 8];
         let mut out = vec![0u8; 24];
-        let short = Photo8 { srgb: &srgb[..23], depth_m: &depth, decode: &dec };
-        let e = render_photo8(&cam, &short, None, None, Photo8Out { srgb: &mut out, rain_alpha: None }).unwrap_err();
+        let short = Photo8 {
+            srgb: &srgb[..23],
+            depth_m: &depth,
+            decode: &dec,
+        };
+        let e = render_photo8(
+            &cam,
+            &short,
+            None,
+            None,
+            Photo8Out {
+                srgb: &mut out,
+                rain_alpha: None,
+            },
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("image"), "{e}");
         depth[5] = f32::NAN;
-        let bad = Photo8 { srgb: &srgb, depth_m: &depth, decode: &dec };
-        let e = render_photo8(&cam, &bad, None, None, Photo8Out { srgb: &mut out, rain_alpha: None }).unwrap_err();
-        assert!(e.to_string().contains("depth_m") && e.to_string().contains('5'), "{e}");
-        let ok = Photo8 { srgb: &srgb, depth_m: &[1.0; 8], decode: &dec };
-        let e = render_photo8(&cam, &ok, None, None, Photo8Out { srgb: &mut out[..3], rain_alpha: None }).unwrap_err();
+        let bad = Photo8 {
+            srgb: &srgb,
+            depth_m: &depth,
+            decode: &dec,
+        };
+        let e = render_photo8(
+            &cam,
+            &bad,
+            None,
+            None,
+            Photo8Out {
+                srgb: &mut out,
+                rain_alpha: None,
+            },
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().contains("depth_m") && e.to_string().contains('5'),
+            "{e}"
+        );
+        let ok = Photo8 {
+            srgb: &srgb,
+            depth_m: &[1.0; 8],
+            decode: &dec,
+        };
+        let e = render_photo8(
+            &cam,
+            &ok,
+            None,
+            None,
+            Photo8Out {
+                srgb: &mut out[..3],
+                rain_alpha: None,
+            },
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("out"), "{e}");
     }
 }

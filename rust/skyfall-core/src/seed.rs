@@ -11,7 +11,8 @@ pub(crate) fn splitmix64(mut z: u64) -> u64 {
 
 /// Mixes a user seed with keys into one 64-bit seed; order matters.
 pub(crate) fn derive(seed: u64, keys: &[u64]) -> u64 {
-    keys.iter().fold(splitmix64(seed), |acc, &k| splitmix64(acc ^ k))
+    keys.iter()
+        .fold(splitmix64(seed), |acc, &k| splitmix64(acc ^ k))
 }
 
 #[cfg(test)]

@@ -8,7 +8,12 @@ pub const CAMERA_WORDS: usize = 24;
 /// Packs a camera into 32-bit words in the shaders' layout.
 pub fn camera_words(cam: &Camera) -> [u32; CAMERA_WORDS] {
     let mut w = [0u32; CAMERA_WORDS];
-    let cols = [cam.rotation.x_axis, cam.rotation.y_axis, cam.rotation.z_axis, cam.position_m];
+    let cols = [
+        cam.rotation.x_axis,
+        cam.rotation.y_axis,
+        cam.rotation.z_axis,
+        cam.position_m,
+    ];
     for (i, c) in cols.iter().enumerate() {
         for k in 0..3 {
             w[4 * i + k] = c[k].to_bits();

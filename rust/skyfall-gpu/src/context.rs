@@ -31,7 +31,9 @@ pub enum GpuError {
     #[error("GPU readback failed: {0}")]
     Readback(String),
     /// A request beyond the device's limits.
-    #[error("{what} needs a {bytes}-byte buffer, over this GPU's limit of {limit} bytes; use backend=\"cpu\" or a smaller frame")]
+    #[error(
+        "{what} needs a {bytes}-byte buffer, over this GPU's limit of {limit} bytes; use backend=\"cpu\" or a smaller frame"
+    )]
     TooLarge {
         /// What was requested.
         what: String,
@@ -82,7 +84,9 @@ pub struct GpuContext {
 
 impl std::fmt::Debug for GpuContext {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("GpuContext").field("adapter", &self.adapter).finish()
+        f.debug_struct("GpuContext")
+            .field("adapter", &self.adapter)
+            .finish()
     }
 }
 
@@ -106,11 +110,15 @@ impl GpuContext {
         let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
         adapters.sort_by_key(|a| rank(a.get_info().device_type));
         let Some(adapter) = adapters.into_iter().next() else {
-            return Err(GpuError::NoAdapter { backends: format!("{backends:?}") });
+            return Err(GpuError::NoAdapter {
+                backends: format!("{backends:?}"),
+            });
         };
         let info = adapter.get_info();
         if choice == AdapterChoice::HardwareOnly && info.device_type == DeviceType::Cpu {
-            return Err(GpuError::NoHardwareAdapter { found: format!("{} ({:?})", info.name, info.backend) });
+            return Err(GpuError::NoHardwareAdapter {
+                found: format!("{} ({:?})", info.name, info.backend),
+            });
         }
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -133,7 +141,9 @@ impl GpuContext {
                 name: info.name,
                 backend: format!("{:?}", info.backend),
                 device_type: format!("{:?}", info.device_type),
-                driver: format!("{} {}", info.driver, info.driver_info).trim().to_string(),
+                driver: format!("{} {}", info.driver, info.driver_info)
+                    .trim()
+                    .to_string(),
             },
             limits,
             uncaptured,
@@ -161,9 +171,16 @@ impl GpuContext {
 
     /// Checks that a storage buffer of `bytes` fits the device's limits.
     pub fn check_buffer(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
-        let limit = self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size);
+        let limit = self
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size);
         if bytes > limit {
-            return Err(GpuError::TooLarge { what: what.to_string(), bytes, limit });
+            return Err(GpuError::TooLarge {
+                what: what.to_string(),
+                bytes,
+                limit,
+            });
         }
         Ok(())
     }

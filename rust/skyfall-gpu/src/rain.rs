@@ -11,8 +11,8 @@
 
 use crate::camera::camera_words;
 use crate::context::{GpuContext, GpuError};
-use crate::pass::{storage_init, uniform, Binding, ComputePass};
-use skyfall_core::rain::splat::{bin_by_tiles, ScreenStreak};
+use crate::pass::{Binding, ComputePass, storage_init, uniform};
+use skyfall_core::rain::splat::{ScreenStreak, bin_by_tiles};
 use skyfall_core::scene::camera::Camera;
 
 const SOURCE: &str = include_str!("shaders/rain.wgsl");
@@ -46,20 +46,37 @@ impl RainPass {
             ctx,
             "rain",
             SOURCE,
-            &[Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadOnly, ReadWrite, ReadWrite],
+            &[
+                Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadOnly, ReadWrite,
+                ReadWrite,
+            ],
         ))
     }
 
     /// Records the pass over prepared `streaks` (far to near); [`GpuError::TooLarge`] when the
     /// streaks or the tiles' lists of them do not fit one of the device's storage buffers.
-    pub fn encode(&self, ctx: &GpuContext, enc: &mut wgpu::CommandEncoder, cam: &Camera, streaks: &[ScreenStreak], reflectance: f32, t: RainTargets<'_>) -> Result<(), GpuError> {
+    pub fn encode(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        cam: &Camera,
+        streaks: &[ScreenStreak],
+        reflectance: f32,
+        t: RainTargets<'_>,
+    ) -> Result<(), GpuError> {
         let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H);
         // rain_near_m and the rain rate set how many streaks there are (the region's volume
         // goes as rain_near_m³).
         let mut packed: Vec<f32> = streaks.iter().flat_map(|s| s.packed()).collect();
         let why = "(fewer with a smaller rain_near_m or rain rate)";
-        ctx.check_buffer(&format!("the rain's {} streaks {why}", streaks.len()), (packed.len() * 4) as u64)?;
-        ctx.check_buffer(&format!("the rain's tile lists ({} entries) {why}", indices.len()), (indices.len() * 4) as u64)?;
+        ctx.check_buffer(
+            &format!("the rain's {} streaks {why}", streaks.len()),
+            (packed.len() * 4) as u64,
+        )?;
+        ctx.check_buffer(
+            &format!("the rain's tile lists ({} entries) {why}", indices.len()),
+            (indices.len() * 4) as u64,
+        )?;
         // Bindings may not be empty; the offsets keep padding unread.
         if packed.is_empty() {
             packed.resize(16, 0.0);
@@ -67,7 +84,12 @@ impl RainPass {
         if indices.is_empty() {
             indices.push(0);
         }
-        let params = [reflectance.to_bits(), cam.width.div_ceil(TILE_W), TILE_W, TILE_H];
+        let params = [
+            reflectance.to_bits(),
+            cam.width.div_ceil(TILE_W),
+            TILE_W,
+            TILE_H,
+        ];
         let cam_buf = uniform(ctx, "camera", &camera_words(cam));
         let params_buf = uniform(ctx, "rain", &params);
         let streak_buf = storage_init(ctx, "streaks", &packed);
@@ -76,7 +98,17 @@ impl RainPass {
         self.0.encode(
             ctx,
             enc,
-            &[&cam_buf, &params_buf, &streak_buf, &offsets_buf, &indices_buf, t.rgb, t.depth, t.alpha, t.rain_depth],
+            &[
+                &cam_buf,
+                &params_buf,
+                &streak_buf,
+                &offsets_buf,
+                &indices_buf,
+                t.rgb,
+                t.depth,
+                t.alpha,
+                t.rain_depth,
+            ],
             cam.width,
             cam.height,
         );

@@ -3,23 +3,27 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use glam::{Mat3, Vec3};
-use skyfall_core::frame::{render, FrameOut, SceneRef};
+use skyfall_core::frame::{FrameOut, SceneRef, render};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
 use skyfall_core::rain::splat::{RainFrame, RainShading};
-use skyfall_core::scene::lights::Light;
 use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
-use skyfall_core::sky::ambient::{scene_bounds, AmbientMap};
+use skyfall_core::scene::camera::Camera;
+use skyfall_core::scene::lights::Light;
+use skyfall_core::sky::ambient::{AmbientMap, scene_bounds};
 use skyfall_core::sky::cie::SkyKind;
 use skyfall_core::sky::illuminance::SkyTable;
-use skyfall_core::sky::{sun_direction, Sky};
-use skyfall_core::scene::camera::Camera;
-use skyfall_gpu::frame::GpuRenderer;
-use skyfall_gpu::context::GpuError;
+use skyfall_core::sky::{Sky, sun_direction};
 use skyfall_gpu::AdapterChoice;
+use skyfall_gpu::context::GpuError;
+use skyfall_gpu::frame::GpuRenderer;
 
 fn street() -> (BoxScene, Camera) {
-    let b = |min: [f32; 3], max: [f32; 3], a: [f32; 3]| SceneBox { min_m: Vec3::from(min), max_m: Vec3::from(max), albedo: Vec3::from(a) };
+    let b = |min: [f32; 3], max: [f32; 3], a: [f32; 3]| SceneBox {
+        min_m: Vec3::from(min),
+        max_m: Vec3::from(max),
+        albedo: Vec3::from(a),
+    };
     let boxes = vec![
         b([-12.0, 0.0, -60.0], [-5.0, 14.0, -8.0], [0.55, 0.5, 0.45]),
         b([5.0, 0.0, -50.0], [11.0, 9.0, -6.0], [0.4, 0.42, 0.5]),
@@ -28,7 +32,14 @@ fn street() -> (BoxScene, Camera) {
     let scene = BoxScene::new(boxes, true, Vec3::splat(0.12)).unwrap();
     let yaw = 0.1f32;
     let rot = Mat3::from_rotation_y(yaw) * Mat3::from_rotation_x(0.05);
-    let cam = Camera::new(96, 64, [70.0, 70.0, 48.0, 32.0], Vec3::new(0.5, 1.6, 0.0), rot).unwrap();
+    let cam = Camera::new(
+        96,
+        64,
+        [70.0, 70.0, 48.0, 32.0],
+        Vec3::new(0.5, 1.6, 0.0),
+        rot,
+    )
+    .unwrap();
     (scene, cam)
 }
 
@@ -43,7 +54,11 @@ fn max_abs(a: &[f32], b: &[f32]) -> (f32, usize) {
     let mut worst = 0.0f32;
     let mut big = 0;
     for (x, y) in a.iter().zip(b) {
-        let d = if x.is_infinite() && y.is_infinite() && x == y { 0.0 } else { (x - y).abs() };
+        let d = if x.is_infinite() && y.is_infinite() && x == y {
+            0.0
+        } else {
+            (x - y).abs()
+        };
         if d > 1e-3 {
             big += 1;
         }
@@ -54,26 +69,41 @@ fn max_abs(a: &[f32], b: &[f32]) -> (f32, usize) {
 
 #[test]
 fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
-    let gpu = GpuRenderer::new(AdapterChoice::Any).expect("a Vulkan adapter (lavapipe) is required: make test installs it");
+    let gpu = GpuRenderer::new(AdapterChoice::Any)
+        .expect("a Vulkan adapter (lavapipe) is required: make test installs it");
     let (scene, cam) = street();
     let haze = Haze::new(0.004, [3.0 / 7.0; 3]).unwrap();
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
-    let light = SceneLight { sky: &sky, ambient: &amb };
+    let light = SceneLight {
+        sky: &sky,
+        ambient: &amb,
+    };
     let c = render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None).unwrap();
-    let g = gpu.render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None).unwrap();
+    let g = gpu
+        .render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None)
+        .unwrap();
     // Silhouette pixels may pick another surface when f32 rounding differs (FMA): allow 0.5 %.
     let (_, rgb_big) = max_abs(&c.rgb, &g.rgb);
     let (_, depth_big) = max_abs(&c.depth_m, &g.depth_m);
     assert!(rgb_big * 200 <= c.rgb.len(), "{rgb_big} rgb values differ");
-    assert!(depth_big * 200 <= c.depth_m.len(), "{depth_big} depths differ");
+    assert!(
+        depth_big * 200 <= c.depth_m.len(),
+        "{depth_big} depths differ"
+    );
     // Haze alone on identical inputs: exp differs by a few ulps.
-    let photo = SceneRef::Photo { rgb: &c.rgb, depth_m: &c.depth_m };
+    let photo = SceneRef::Photo {
+        rgb: &c.rgb,
+        depth_m: &c.depth_m,
+    };
     let c2 = render(photo, &cam, &light, Some(&haze), None).unwrap();
     let g2 = gpu.render(photo, &cam, &light, Some(&haze), None).unwrap();
     let (worst, _) = max_abs(&c2.rgb, &g2.rgb);
     assert!(worst < 1e-5, "haze max abs diff {worst}");
-    let (worst_t, _) = max_abs(c2.transmittance.as_deref().unwrap(), g2.transmittance.as_deref().unwrap());
+    let (worst_t, _) = max_abs(
+        c2.transmittance.as_deref().unwrap(),
+        g2.transmittance.as_deref().unwrap(),
+    );
     assert!(worst_t < 1e-5, "transmittance max abs diff {worst_t}");
     assert_eq!(c2.depth_m, g2.depth_m);
 }
@@ -83,15 +113,38 @@ fn gpu_rain_matches_cpu_rain() {
     let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
     let (scene, cam) = street();
     let region = RainRegion::new(40.0, &[1.0, 1.4, 2.0], 4.0, [2.0, 0.0, 0.0], 0.7, 11).unwrap();
-    let lamp = Light::from_row(&[-1.0, 2.5, -3.0, 1.0, 0.8, 0.6, 800.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0).unwrap();
-    let shading = RainShading { lights: vec![lamp], sky_illuminance_lux: 50.0, ..RainShading::open_sky() };
-    let rf = RainFrame { region: &region, exposure_s: 1.0 / 30.0, camera_velocity_m_s: Vec3::new(0.0, 0.0, -8.0), ground: true, shelter: &scene.boxes, shading: &shading };
+    let lamp = Light::from_row(
+        &[
+            -1.0, 2.5, -3.0, 1.0, 0.8, 0.6, 800.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+        ],
+        0,
+    )
+    .unwrap();
+    let shading = RainShading {
+        lights: vec![lamp],
+        sky_illuminance_lux: 50.0,
+        ..RainShading::open_sky()
+    };
+    let rf = RainFrame {
+        region: &region,
+        exposure_s: 1.0 / 30.0,
+        camera_velocity_m_s: Vec3::new(0.0, 0.0, -8.0),
+        ground: true,
+        shelter: &scene.boxes,
+        shading: &shading,
+    };
     // Rain over identical backgrounds: a photo of the CPU's box frame.
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
-    let light = SceneLight { sky: &sky, ambient: &amb };
+    let light = SceneLight {
+        sky: &sky,
+        ambient: &amb,
+    };
     let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
-    let photo = SceneRef::Photo { rgb: &bg.rgb, depth_m: &bg.depth_m };
+    let photo = SceneRef::Photo {
+        rgb: &bg.rgb,
+        depth_m: &bg.depth_m,
+    };
     let c = render(photo, &cam, &light, None, Some(&rf)).unwrap();
     let g = gpu.render(photo, &cam, &light, None, Some(&rf)).unwrap();
     let (cr, gr) = (c.rain.unwrap(), g.rain.unwrap());
@@ -105,17 +158,38 @@ fn gpu_rain_matches_cpu_rain() {
     assert!(worst_z < 1e-3, "rain depth max abs diff {worst_z}");
     // Read back into the caller's buffers (numpy's, from Python): every value overwritten.
     let n = cam.pixels();
-    let (mut rgb, mut d, mut a, mut rd) = (vec![f32::NAN; 3 * n], vec![f32::NAN; n], vec![f32::NAN; n], vec![f32::NAN; n]);
-    let out = FrameOut { rgb: &mut rgb, depth_m: &mut d, transmittance: None, rain: Some((&mut a, &mut rd)) };
-    let (stats, drops) = gpu.render_into(photo, &cam, &light, None, Some(&rf), out).unwrap().unwrap();
+    let (mut rgb, mut d, mut a, mut rd) = (
+        vec![f32::NAN; 3 * n],
+        vec![f32::NAN; n],
+        vec![f32::NAN; n],
+        vec![f32::NAN; n],
+    );
+    let out = FrameOut {
+        rgb: &mut rgb,
+        depth_m: &mut d,
+        transmittance: None,
+        rain: Some((&mut a, &mut rd)),
+    };
+    let (stats, drops) = gpu
+        .render_into(photo, &cam, &light, None, Some(&rf), out)
+        .unwrap()
+        .unwrap();
     assert_eq!((stats, drops), (gr.stats, gr.drops));
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&rgb), bits(&g.rgb));
     assert_eq!(bits(&d), bits(&g.depth_m));
     assert_eq!(bits(&a), bits(&gr.alpha));
     assert_eq!(bits(&rd), bits(&gr.depth_m));
-    let short = FrameOut { rgb: &mut rgb[3..], depth_m: &mut d, transmittance: None, rain: Some((&mut a, &mut rd)) };
-    assert!(gpu.render_into(photo, &cam, &light, None, Some(&rf), short).is_err());
+    let short = FrameOut {
+        rgb: &mut rgb[3..],
+        depth_m: &mut d,
+        transmittance: None,
+        rain: Some((&mut a, &mut rd)),
+    };
+    assert!(
+        gpu.render_into(photo, &cam, &light, None, Some(&rf), short)
+            .is_err()
+    );
     // Rain that does not fit the device's storage buffers is an error that names the streaks,
     // not a wgpu failure: the frame's buffers fit this limit, the streak list does not.
     let mut small = GpuRenderer::new(AdapterChoice::Any).unwrap();
@@ -123,8 +197,13 @@ fn gpu_rain_matches_cpu_rain() {
     small.ctx.limits.max_storage_buffer_binding_size = frame_bytes;
     assert!(small.render(photo, &cam, &light, None, None).is_ok());
     assert!((gr.stats.streaks * 64) as u64 > frame_bytes);
-    let err = small.render(photo, &cam, &light, None, Some(&rf)).unwrap_err();
-    assert!(matches!(err, GpuError::TooLarge { .. }) && err.to_string().contains("streaks"), "{err}");
+    let err = small
+        .render(photo, &cam, &light, None, Some(&rf))
+        .unwrap_err();
+    assert!(
+        matches!(err, GpuError::TooLarge { .. }) && err.to_string().contains("streaks"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -135,14 +214,33 @@ fn gpu_matches_cpu_under_a_cie_sky_with_sky_visibility() {
     let kind = SkyKind::general(12, Some(sun_direction(25.0, 220.0))).unwrap();
     let sky = Sky::new(kind, 2e-3, 900.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
-    let light = SceneLight { sky: &sky, ambient: &amb };
+    let light = SceneLight {
+        sky: &sky,
+        ambient: &amb,
+    };
     let c = render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
-    let g = gpu.render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
+    let g = gpu
+        .render(SceneRef::Boxes(&scene), &cam, &light, None, None)
+        .unwrap();
     // Relative: the clear sky reaches 12 E/π and the WGSL evaluates it in f32 (the CPU in f64).
-    let rel = |tol: f32| c.rgb.iter().zip(&g.rgb).filter(|(x, y)| (*x - *y).abs() > tol * x.abs().max(1.0)).count();
-    assert!(rel(1e-3) * 200 <= c.rgb.len(), "{} rgb values differ by > 0.1 %", rel(1e-3));
+    let rel = |tol: f32| {
+        c.rgb
+            .iter()
+            .zip(&g.rgb)
+            .filter(|(x, y)| (*x - *y).abs() > tol * x.abs().max(1.0))
+            .count()
+    };
+    assert!(
+        rel(1e-3) * 200 <= c.rgb.len(),
+        "{} rgb values differ by > 0.1 %",
+        rel(1e-3)
+    );
     // Away from silhouettes the sky and the map's trilinear sample agree to f32 rounding.
-    assert!(rel(2e-4) * 100 <= c.rgb.len(), "{} rgb values differ by > 0.02 %", rel(2e-4));
+    assert!(
+        rel(2e-4) * 100 <= c.rgb.len(),
+        "{} rgb values differ by > 0.02 %",
+        rel(2e-4)
+    );
     // The map really shades: a wall's pixel differs from the open-sky vertical value somewhere.
     assert!(amb.values.chunks(5).any(|v| v[0] < 0.9));
 }

@@ -3,15 +3,22 @@
 
 fn validate(name: &str, source: &str) {
     let code = format!("{}\n{}", skyfall_gpu::pass::COMMON_WGSL, source);
-    let module = naga::front::wgsl::parse_str(&code).unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&code)));
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+    let module = naga::front::wgsl::parse_str(&code)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&code)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{name}: {e:?}"));
 }
 
 #[test]
 fn scene_raycast_wgsl_is_valid() {
-    validate("scene_raycast", include_str!("../src/shaders/scene_raycast.wgsl"));
+    validate(
+        "scene_raycast",
+        include_str!("../src/shaders/scene_raycast.wgsl"),
+    );
 }
 
 #[test]

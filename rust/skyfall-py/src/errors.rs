@@ -1,7 +1,7 @@
 //! The one place where core errors become Python exceptions.
 
-use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::PyErr;
+use pyo3::exceptions::{PyException, PyValueError};
 
 pyo3::create_exception!(
     skyfall,
@@ -22,7 +22,9 @@ pyo3::create_exception!(
 pub fn gpu_error(e: skyfall_gpu::GpuError) -> PyErr {
     use skyfall_gpu::GpuError as G;
     match e {
-        G::NoAdapter { .. } | G::NoHardwareAdapter { .. } | G::Device(_) => GpuUnavailableError::new_err(e.to_string()),
+        G::NoAdapter { .. } | G::NoHardwareAdapter { .. } | G::Device(_) => {
+            GpuUnavailableError::new_err(e.to_string())
+        }
         G::TooLarge { .. } => PyValueError::new_err(e.to_string()),
         G::Core(c) => CoreError(c).into(),
         G::Wgpu(_) | G::Readback(_) => SkyfallError::new_err(e.to_string()),
@@ -43,9 +45,10 @@ impl From<CoreError> for PyErr {
         use skyfall_core::Error as E;
         match e.0 {
             // Every core error today is about a value the caller passed.
-            err @ (E::OutOfRange { .. } | E::Invalid { .. } | E::TooLarge { .. } | E::Length { .. }) => {
-                PyValueError::new_err(err.to_string())
-            }
+            err @ (E::OutOfRange { .. }
+            | E::Invalid { .. }
+            | E::TooLarge { .. }
+            | E::Length { .. }) => PyValueError::new_err(err.to_string()),
         }
     }
 }

@@ -19,28 +19,40 @@ mod _core {
     use super::errors::{GpuUnavailableError, SkyfallError};
     #[pymodule_export]
     use super::physics::{
-        air_density_kg_m3, air_viscosity, drops_per_m3, marshall_palmer, rain_extinction_per_m, rain_rate_from_dsd,
-        terminal_velocity_m_s,
+        air_density_kg_m3, air_viscosity, drops_per_m3, marshall_palmer, rain_extinction_per_m,
+        rain_rate_from_dsd, terminal_velocity_m_s,
     };
     #[pymodule_export]
     use super::rain::{rain_diameter_bins, rain_textures};
     #[pymodule_export]
     use super::rain_frame::rain_drops;
     #[pymodule_export]
-    use super::render::{render_frame, render_photo8, GpuDevice};
+    use super::render::{GpuDevice, render_frame, render_photo8};
     #[pymodule_export]
-    use super::sky::{cloud_base_m, AmbientLightMap, SkyModel};
+    use super::sky::{AmbientLightMap, SkyModel, cloud_base_m};
 
     use pyo3::prelude::*;
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-        m.add("TEXTURE_BUDGET_BYTES", skyfall_core::rain::texture::TEXTURE_BUDGET_BYTES)?;
-        m.add("MAX_DIAMETER_MM", skyfall_core::physics::fall_speed::DIAMETER_MM.hi)?;
-        m.add("MAX_RAIN_RATE_MM_H", skyfall_core::physics::dsd::RAIN_RATE_MM_H.hi)?;
+        m.add(
+            "TEXTURE_BUDGET_BYTES",
+            skyfall_core::rain::texture::TEXTURE_BUDGET_BYTES,
+        )?;
+        m.add(
+            "MAX_DIAMETER_MM",
+            skyfall_core::physics::fall_speed::DIAMETER_MM.hi,
+        )?;
+        m.add(
+            "MAX_RAIN_RATE_MM_H",
+            skyfall_core::physics::dsd::RAIN_RATE_MM_H.hi,
+        )?;
         m.add("AIRLIGHT_RELATIVE", skyfall_core::haze::AIRLIGHT_RELATIVE)?;
-        m.add("FRAME_BUDGET_BYTES", skyfall_core::frame::FRAME_BUDGET_BYTES)?;
+        m.add(
+            "FRAME_BUDGET_BYTES",
+            skyfall_core::frame::FRAME_BUDGET_BYTES,
+        )?;
         Ok(())
     }
 }

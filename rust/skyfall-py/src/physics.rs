@@ -4,8 +4,8 @@ use crate::errors::CoreError;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use skyfall_core::error::{at, broadcast_len};
-use skyfall_core::physics::air::{air_viscosity_pa_s, Air, TEMPERATURE_C};
-use skyfall_core::physics::fall_speed::{terminal_velocity_many, AirArrays, FallSpeedModel};
+use skyfall_core::physics::air::{Air, TEMPERATURE_C, air_viscosity_pa_s};
+use skyfall_core::physics::fall_speed::{AirArrays, FallSpeedModel, terminal_velocity_many};
 use skyfall_core::physics::{dsd, extinction};
 
 type Arr<'py> = PyReadonlyArray1<'py, f64>;
@@ -17,10 +17,23 @@ fn done<'py>(py: Python<'py>, r: Result<Vec<f64>, skyfall_core::Error>) -> Out<'
 
 /// Moist-air density, kg/m³ (arrays of length 1 or n).
 #[pyfunction]
-pub fn air_density_kg_m3<'py>(py: Python<'py>, temperature_c: Arr<'py>, pressure_hpa: Arr<'py>, relative_humidity: Arr<'py>) -> Out<'py> {
-    let (t, p, rh) = (temperature_c.as_slice()?, pressure_hpa.as_slice()?, relative_humidity.as_slice()?);
+pub fn air_density_kg_m3<'py>(
+    py: Python<'py>,
+    temperature_c: Arr<'py>,
+    pressure_hpa: Arr<'py>,
+    relative_humidity: Arr<'py>,
+) -> Out<'py> {
+    let (t, p, rh) = (
+        temperature_c.as_slice()?,
+        pressure_hpa.as_slice()?,
+        relative_humidity.as_slice()?,
+    );
     let r = py.detach(|| {
-        let n = broadcast_len(&[("temperature_c", t.len()), ("pressure_hpa", p.len()), ("relative_humidity", rh.len())])?;
+        let n = broadcast_len(&[
+            ("temperature_c", t.len()),
+            ("pressure_hpa", p.len()),
+            ("relative_humidity", rh.len()),
+        ])?;
         (0..n)
             .map(|i| {
                 let idx = (n > 1).then_some(i);
@@ -54,14 +67,22 @@ pub fn terminal_velocity_m_s<'py>(
 ) -> Out<'py> {
     let model = FallSpeedModel::parse(model).map_err(CoreError)?;
     let d = diameter_mm.as_slice()?;
-    let air = AirArrays { temperature_c: temperature_c.as_slice()?, pressure_hpa: pressure_hpa.as_slice()?, relative_humidity: relative_humidity.as_slice()? };
+    let air = AirArrays {
+        temperature_c: temperature_c.as_slice()?,
+        pressure_hpa: pressure_hpa.as_slice()?,
+        relative_humidity: relative_humidity.as_slice()?,
+    };
     let r = py.detach(|| terminal_velocity_many(d, model, air));
     done(py, r)
 }
 
 /// Marshall–Palmer N(D), m⁻³ mm⁻¹.
 #[pyfunction]
-pub fn marshall_palmer<'py>(py: Python<'py>, diameter_mm: Arr<'py>, rain_rate_mm_h: Arr<'py>) -> Out<'py> {
+pub fn marshall_palmer<'py>(
+    py: Python<'py>,
+    diameter_mm: Arr<'py>,
+    rain_rate_mm_h: Arr<'py>,
+) -> Out<'py> {
     let (d, r) = (diameter_mm.as_slice()?, rain_rate_mm_h.as_slice()?);
     let res = py.detach(|| dsd::marshall_palmer_many(d, r));
     done(py, res)
@@ -69,8 +90,17 @@ pub fn marshall_palmer<'py>(py: Python<'py>, diameter_mm: Arr<'py>, rain_rate_mm
 
 /// Drops per m³ in a diameter interval.
 #[pyfunction]
-pub fn drops_per_m3<'py>(py: Python<'py>, rain_rate_mm_h: Arr<'py>, d_min_mm: Arr<'py>, d_max_mm: Arr<'py>) -> Out<'py> {
-    let (r, lo, hi) = (rain_rate_mm_h.as_slice()?, d_min_mm.as_slice()?, d_max_mm.as_slice()?);
+pub fn drops_per_m3<'py>(
+    py: Python<'py>,
+    rain_rate_mm_h: Arr<'py>,
+    d_min_mm: Arr<'py>,
+    d_max_mm: Arr<'py>,
+) -> Out<'py> {
+    let (r, lo, hi) = (
+        rain_rate_mm_h.as_slice()?,
+        d_min_mm.as_slice()?,
+        d_max_mm.as_slice()?,
+    );
     let res = py.detach(|| dsd::drops_per_m3_many(r, lo, hi));
     done(py, res)
 }
@@ -90,7 +120,11 @@ pub fn rain_rate_from_dsd<'py>(
 ) -> Out<'py> {
     let model = FallSpeedModel::parse(model).map_err(CoreError)?;
     let r = rain_rate_mm_h.as_slice()?;
-    let air = AirArrays { temperature_c: temperature_c.as_slice()?, pressure_hpa: pressure_hpa.as_slice()?, relative_humidity: relative_humidity.as_slice()? };
+    let air = AirArrays {
+        temperature_c: temperature_c.as_slice()?,
+        pressure_hpa: pressure_hpa.as_slice()?,
+        relative_humidity: relative_humidity.as_slice()?,
+    };
     let (lo, hi) = (d_min_mm.as_slice()?, d_max_mm.as_slice()?);
     let res = py.detach(|| dsd::rain_rate_from_dsd_many(r, model, air, lo, hi));
     done(py, res)

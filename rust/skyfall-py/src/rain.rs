@@ -6,7 +6,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray4, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use skyfall_core::rain::bins::diameter_bins;
-use skyfall_core::rain::texture::{render_textures, TextureRequest};
+use skyfall_core::rain::texture::{TextureRequest, render_textures};
 
 /// Rain textures, float32 (n_rates, n_diameters, size_px, size_px).
 #[pyfunction]
@@ -18,10 +18,22 @@ pub fn rain_textures<'py>(
     exposure_s: f64,
     seed: u64,
 ) -> PyResult<Bound<'py, PyArray4<f32>>> {
-    let req = TextureRequest { rain_rates_mm_h: rain_rates_mm_h.as_slice()?, diameters_mm: diameters_mm.as_slice()?, size_px, exposure_s, seed };
-    let shape = (req.rain_rates_mm_h.len(), req.diameters_mm.len(), size_px, size_px);
+    let req = TextureRequest {
+        rain_rates_mm_h: rain_rates_mm_h.as_slice()?,
+        diameters_mm: diameters_mm.as_slice()?,
+        size_px,
+        exposure_s,
+        seed,
+    };
+    let shape = (
+        req.rain_rates_mm_h.len(),
+        req.diameters_mm.len(),
+        size_px,
+        size_px,
+    );
     let data = py.detach(|| render_textures(&req)).map_err(CoreError)?;
-    let arr = Array4::from_shape_vec(shape, data).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let arr =
+        Array4::from_shape_vec(shape, data).map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(arr.into_pyarray(py))
 }
 

@@ -1,16 +1,21 @@
 //! The drops near a camera, as arrays: ground truth for stereo and video.
 
 use crate::errors::CoreError;
-use crate::render::{box_scene, region, RegionArgs};
+use crate::render::{RegionArgs, box_scene, region};
 use glam::Vec3;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use skyfall_core::rain::drops::{drops_near, Drop};
+use skyfall_core::rain::drops::{Drop, drops_near};
 use skyfall_core::rain::shelter::remove_sheltered;
 
-type DropArrays<'py> = (Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>, Bound<'py, PyArray1<f32>>, Bound<'py, PyArray2<i64>>);
+type DropArrays<'py> = (
+    Bound<'py, PyArray2<f32>>,
+    Bound<'py, PyArray2<f32>>,
+    Bound<'py, PyArray1<f32>>,
+    Bound<'py, PyArray2<i64>>,
+);
 
 /// Every drop within the region around `center_m`, less those `shelter` boxes (N, 9) keep
 /// dry: positions (N, 3), velocities (N, 3), diameters (N,) in m, ids (N, 5).
@@ -37,9 +42,26 @@ pub fn rain_drops<'py>(
     });
     let n = drops.len();
     let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
-    let pos = Array2::from_shape_vec((n, 3), drops.iter().flat_map(|d| d.position_m.to_array()).collect()).map_err(err)?;
-    let vel = Array2::from_shape_vec((n, 3), drops.iter().flat_map(|d| d.velocity_m_s.to_array()).collect()).map_err(err)?;
+    let pos = Array2::from_shape_vec(
+        (n, 3),
+        drops.iter().flat_map(|d| d.position_m.to_array()).collect(),
+    )
+    .map_err(err)?;
+    let vel = Array2::from_shape_vec(
+        (n, 3),
+        drops
+            .iter()
+            .flat_map(|d| d.velocity_m_s.to_array())
+            .collect(),
+    )
+    .map_err(err)?;
     let diam: Vec<f32> = drops.iter().map(|d| d.diameter_m).collect();
-    let ids = Array2::from_shape_vec((n, 5), drops.iter().flat_map(|d| d.id).collect()).map_err(err)?;
-    Ok((pos.into_pyarray(py), vel.into_pyarray(py), diam.into_pyarray(py), ids.into_pyarray(py)))
+    let ids =
+        Array2::from_shape_vec((n, 5), drops.iter().flat_map(|d| d.id).collect()).map_err(err)?;
+    Ok((
+        pos.into_pyarray(py),
+        vel.into_pyarray(py),
+        diam.into_pyarray(py),
+        ids.into_pyarray(py),
+    ))
 }

@@ -1,61 +1,95 @@
 //! Frame rendering: the CPU backend as a function, the GPU backend as a device object. Both
 //! take the same arguments, parsed once into a [`Request`].
 
-use crate::errors::{gpu_error, CoreError};
+use crate::errors::{CoreError, gpu_error};
+use crate::sky::{AmbientLightMap, SkyModel};
 use glam::{Mat3, Vec3};
-use numpy::{PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods};
+use numpy::{
+    PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use skyfall_core::frame::{check_frame_size, render_into, FrameOut, SceneRef};
-use skyfall_core::photo8::{render_photo8 as render_photo8_core, Photo8, Photo8Out};
+use skyfall_core::frame::{FrameOut, SceneRef, check_frame_size, render_into};
 use skyfall_core::haze::Haze;
+use skyfall_core::photo8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
 use skyfall_core::rain::drops::{RainMethod, RainRegion};
 use skyfall_core::rain::splat::{RainFrame, RainShading};
 use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
-use skyfall_core::sky::ambient::AmbientMap;
-use skyfall_core::sky::cie::SkyKind;
-use skyfall_core::sky::illuminance::{irradiance, SkyTable};
-use skyfall_core::sky::Sky;
-use crate::sky::{AmbientLightMap, SkyModel};
-use std::sync::Arc;
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;
-use skyfall_gpu::frame::GpuRenderer;
+use skyfall_core::sky::Sky;
+use skyfall_core::sky::ambient::AmbientMap;
+use skyfall_core::sky::cie::SkyKind;
+use skyfall_core::sky::illuminance::{SkyTable, irradiance};
 use skyfall_gpu::AdapterChoice;
+use skyfall_gpu::frame::GpuRenderer;
+use std::sync::Arc;
 
 type F2<'py> = Bound<'py, PyArray2<f32>>;
 /// (rain_alpha, rain_depth_m, drops generated, streaks drawn, drops culled).
 type RainTuple<'py> = (F2<'py>, F2<'py>, usize, usize, usize);
 /// (rgb (H, W, 3), depth_m (H, W), transmittance or None, rain or None).
-type FrameTuple<'py> = (Bound<'py, PyArray3<f32>>, F2<'py>, Option<F2<'py>>, Option<RainTuple<'py>>);
+type FrameTuple<'py> = (
+    Bound<'py, PyArray3<f32>>,
+    F2<'py>,
+    Option<F2<'py>>,
+    Option<RainTuple<'py>>,
+);
 /// (rain_rate_mm_h, diameters_mm, near_m, wind_m_s, time_s, seed, method).
-pub(crate) type RegionArgs<'py> = (f64, PyReadonlyArray1<'py, f64>, f64, [f64; 3], f64, u64, String);
+pub(crate) type RegionArgs<'py> = (
+    f64,
+    PyReadonlyArray1<'py, f64>,
+    f64,
+    [f64; 3],
+    f64,
+    u64,
+    String,
+);
 
 /// Camera from (width, height, [fx, fy, cx, cy, px, py, pz, r00, r01, …, r22]) with the
 /// world_from_camera rotation row-major.
 pub(crate) fn camera(width: u32, height: u32, p: [f32; 16]) -> Result<Camera, CoreError> {
     let rot = Mat3::from_cols_array(&[p[7], p[10], p[13], p[8], p[11], p[14], p[9], p[12], p[15]]);
-    Ok(Camera::new(width, height, [p[0], p[1], p[2], p[3]], Vec3::new(p[4], p[5], p[6]), rot)?)
+    Ok(Camera::new(
+        width,
+        height,
+        [p[0], p[1], p[2], p[3]],
+        Vec3::new(p[4], p[5], p[6]),
+        rot,
+    )?)
 }
 
 /// A rain region from Python's argument tuple.
 pub(crate) fn region(args: &RegionArgs<'_>) -> PyResult<RainRegion> {
     let (rate, diams, near, wind, time, seed, method) = args;
-    let mut region = RainRegion::new(*rate, diams.as_slice()?, *near, *wind, *time, *seed).map_err(CoreError)?;
+    let mut region =
+        RainRegion::new(*rate, diams.as_slice()?, *near, *wind, *time, *seed).map_err(CoreError)?;
     region.method = RainMethod::parse(method).map_err(CoreError)?;
     Ok(region)
 }
 
 /// Box scene from an (N, 9) array: min xyz, max xyz, albedo rgb per row.
-pub(crate) fn box_scene(boxes: &PyReadonlyArray2<'_, f32>, ground: bool, ground_albedo: [f32; 3]) -> PyResult<BoxScene> {
+pub(crate) fn box_scene(
+    boxes: &PyReadonlyArray2<'_, f32>,
+    ground: bool,
+    ground_albedo: [f32; 3],
+) -> PyResult<BoxScene> {
     let a = boxes.as_array();
     if a.ncols() != 9 {
-        return Err(PyValueError::new_err(format!("boxes must have shape (N, 9), got {:?}", a.shape())));
+        return Err(PyValueError::new_err(format!(
+            "boxes must have shape (N, 9), got {:?}",
+            a.shape()
+        )));
     }
     let rows = a
         .rows()
         .into_iter()
-        .map(|r| SceneBox { min_m: Vec3::new(r[0], r[1], r[2]), max_m: Vec3::new(r[3], r[4], r[5]), albedo: Vec3::new(r[6], r[7], r[8]) })
+        .map(|r| SceneBox {
+            min_m: Vec3::new(r[0], r[1], r[2]),
+            max_m: Vec3::new(r[3], r[4], r[5]),
+            albedo: Vec3::new(r[6], r[7], r[8]),
+        })
         .collect();
     Ok(BoxScene::new(rows, ground, Vec3::from(ground_albedo)).map_err(CoreError)?)
 }
@@ -96,7 +130,10 @@ impl<'a> Request<'a> {
         boxes: Option<&PyReadonlyArray2<'py, f32>>,
         ground: bool,
         ground_albedo: [f32; 3],
-        photo: Option<(&'a PyReadonlyArray3<'py, f32>, &'a PyReadonlyArray2<'py, f32>)>,
+        photo: Option<(
+            &'a PyReadonlyArray3<'py, f32>,
+            &'a PyReadonlyArray2<'py, f32>,
+        )>,
         haze_params: Option<(f32, [f32; 3])>,
         rain: Option<&RainArgs<'py>>,
         ambient: &Arc<AmbientMap>,
@@ -106,21 +143,42 @@ impl<'a> Request<'a> {
             (Some(b), None) => (Some(box_scene(b, ground, ground_albedo)?), None),
             (None, Some((rgb, depth))) => (None, Some((rgb.as_slice()?, depth.as_slice()?))),
             (None, None) => (None, None),
-            _ => return Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m")),
+            _ => {
+                return Err(PyValueError::new_err(
+                    "give either boxes, or photo_rgb and photo_depth_m",
+                ));
+            }
         };
-        let haze = haze_params.map(|(sigma, air)| Haze::new(sigma, air)).transpose().map_err(CoreError)?;
-        let (shelter_wanted, occluders) = (rain.is_some_and(|r| r.shelter), rain.and_then(|r| r.occluders.as_ref()));
+        let haze = haze_params
+            .map(|(sigma, air)| Haze::new(sigma, air))
+            .transpose()
+            .map_err(CoreError)?;
+        let (shelter_wanted, occluders) = (
+            rain.is_some_and(|r| r.shelter),
+            rain.and_then(|r| r.occluders.as_ref()),
+        );
         let rain = match rain {
             None => None,
             Some(rain) => {
                 if !(rain.exposure_s > 0.0 && rain.exposure_s <= 0.1) {
-                    return Err(PyValueError::new_err(format!("exposure_s = {} is outside the valid range (0, 0.1] s", rain.exposure_s)));
+                    return Err(PyValueError::new_err(format!(
+                        "exposure_s = {} is outside the valid range (0, 0.1] s",
+                        rain.exposure_s
+                    )));
                 }
                 if !(rain.sky_illuminance_lux > 0.0 && rain.sky_illuminance_lux.is_finite()) {
-                    return Err(PyValueError::new_err(format!("sky_illuminance_lux = {} must be positive and finite", rain.sky_illuminance_lux)));
+                    return Err(PyValueError::new_err(format!(
+                        "sky_illuminance_lux = {} must be positive and finite",
+                        rain.sky_illuminance_lux
+                    )));
                 }
-                if rain.cull_threshold.is_some_and(|t| !(t >= 0.0 && t.is_finite())) {
-                    return Err(PyValueError::new_err("cull_threshold must be a finite number >= 0, or None"));
+                if rain
+                    .cull_threshold
+                    .is_some_and(|t| !(t >= 0.0 && t.is_finite()))
+                {
+                    return Err(PyValueError::new_err(
+                        "cull_threshold must be a finite number >= 0, or None",
+                    ));
                 }
                 let lights = match &rain.lights {
                     None => Vec::new(),
@@ -142,9 +200,17 @@ impl<'a> Request<'a> {
                 };
                 let v = Vec3::from(rain.camera_velocity_m_s);
                 if !v.is_finite() || v.length() > 1000.0 {
-                    return Err(PyValueError::new_err(format!("camera velocity_m_s = {v} must be finite and at most 1000 m/s")));
+                    return Err(PyValueError::new_err(format!(
+                        "camera velocity_m_s = {v} must be finite and at most 1000 m/s"
+                    )));
                 }
-                Some((region(&rain.region)?, rain.exposure_s, v, rain.ground, shading))
+                Some((
+                    region(&rain.region)?,
+                    rain.exposure_s,
+                    v,
+                    rain.ground,
+                    shading,
+                ))
             }
         };
         let mut shelter = Vec::new();
@@ -156,26 +222,38 @@ impl<'a> Request<'a> {
                 shelter.extend_from_slice(&box_scene(o, false, [0.0; 3])?.boxes);
             }
         }
-        Ok(Request { cam, boxes, photo, haze, rain, shelter })
+        Ok(Request {
+            cam,
+            boxes,
+            photo,
+            haze,
+            rain,
+            shelter,
+        })
     }
 
     fn scene(&self) -> SceneRef<'_> {
         match (&self.boxes, self.photo) {
             (Some(b), _) => SceneRef::Boxes(b),
             (None, Some((rgb, depth_m))) => SceneRef::Photo { rgb, depth_m },
-            (None, None) => SceneRef::Photo { rgb: &[], depth_m: &[] },
+            (None, None) => SceneRef::Photo {
+                rgb: &[],
+                depth_m: &[],
+            },
         }
     }
 
     fn rain_frame(&self) -> Option<RainFrame<'_>> {
-        self.rain.as_ref().map(|(region, exposure_s, camera_velocity_m_s, ground, shading)| RainFrame {
-            region,
-            exposure_s: *exposure_s,
-            camera_velocity_m_s: *camera_velocity_m_s,
-            ground: *ground,
-            shelter: &self.shelter,
-            shading,
-        })
+        self.rain.as_ref().map(
+            |(region, exposure_s, camera_velocity_m_s, ground, shading)| RainFrame {
+                region,
+                exposure_s: *exposure_s,
+                camera_velocity_m_s: *camera_velocity_m_s,
+                ground: *ground,
+                shelter: &self.shelter,
+                shading,
+            },
+        )
     }
 }
 
@@ -216,12 +294,28 @@ pub fn render_frame<'py>(
     out: Option<OutArrays<'py>>,
 ) -> PyResult<FrameTuple<'py>> {
     let lit = Lighting::new(sky.as_ref(), ambient.as_ref())?;
-    let light = SceneLight { sky: &lit.sky, ambient: &lit.ambient };
+    let light = SceneLight {
+        sky: &lit.sky,
+        ambient: &lit.ambient,
+    };
     if boxes.is_none() && (photo_rgb.is_none() || photo_depth_m.is_none()) {
-        return Err(PyValueError::new_err("give either boxes, or photo_rgb and photo_depth_m"));
+        return Err(PyValueError::new_err(
+            "give either boxes, or photo_rgb and photo_depth_m",
+        ));
     }
     let photo = photo_rgb.as_ref().zip(photo_depth_m.as_ref());
-    let req = Request::parse(width, height, camera_params, boxes.as_ref(), ground, ground_albedo, photo, haze_params, rain.as_ref(), &lit.ambient)?;
+    let req = Request::parse(
+        width,
+        height,
+        camera_params,
+        boxes.as_ref(),
+        ground,
+        ground_albedo,
+        photo,
+        haze_params,
+        rain.as_ref(),
+        &lit.ambient,
+    )?;
     let (scene, cam, haze, rain) = (req.scene(), &req.cam, req.haze.as_ref(), req.rain_frame());
     // Into numpy's arrays (see `FrameOut`): the caller's (`out`) where given, else new ones,
     // sized once the frame is known to fit.
@@ -229,19 +323,39 @@ pub fn render_frame<'py>(
     let (h, w) = (cam.height as usize, cam.width as usize);
     let plane = || PyArray2::<f32>::zeros(py, [h, w], false);
     let out = out.unwrap_or_default();
-    let rgb = out.rgb.unwrap_or_else(|| PyArray3::<f32>::zeros(py, [h, w, 3], false));
+    let rgb = out
+        .rgb
+        .unwrap_or_else(|| PyArray3::<f32>::zeros(py, [h, w, 3], false));
     let depth = out.depth_m.unwrap_or_else(plane);
     let trans = haze.map(|_| out.transmittance.unwrap_or_else(plane));
-    let layers = rain.as_ref().map(|_| (out.rain_alpha.unwrap_or_else(plane), out.rain_depth_m.unwrap_or_else(plane)));
+    let layers = rain.as_ref().map(|_| {
+        (
+            out.rain_alpha.unwrap_or_else(plane),
+            out.rain_depth_m.unwrap_or_else(plane),
+        )
+    });
     let report = {
         // A given array may also be an input (a photo rendered over itself): name it.
         fn busy(name: &'static str) -> impl Fn(numpy::BorrowError) -> PyErr {
-            move |_| PyValueError::new_err(format!("out {name} is in use elsewhere (an input of this render, or another render): pass a separate array"))
+            move |_| {
+                PyValueError::new_err(format!(
+                    "out {name} is in use elsewhere (an input of this render, or another render): pass a separate array"
+                ))
+            }
         }
-        let (mut rgb_w, mut depth_w) = (rgb.try_readwrite().map_err(busy("rgb"))?, depth.try_readwrite().map_err(busy("depth_m"))?);
-        let mut trans_w = trans.as_ref().map(|t| t.try_readwrite().map_err(busy("transmittance"))).transpose()?;
+        let (mut rgb_w, mut depth_w) = (
+            rgb.try_readwrite().map_err(busy("rgb"))?,
+            depth.try_readwrite().map_err(busy("depth_m"))?,
+        );
+        let mut trans_w = trans
+            .as_ref()
+            .map(|t| t.try_readwrite().map_err(busy("transmittance")))
+            .transpose()?;
         let mut layers_w = match layers.as_ref() {
-            Some((a, d)) => Some((a.try_readwrite().map_err(busy("rain_alpha"))?, d.try_readwrite().map_err(busy("rain_depth_m"))?)),
+            Some((a, d)) => Some((
+                a.try_readwrite().map_err(busy("rain_alpha"))?,
+                d.try_readwrite().map_err(busy("rain_depth_m"))?,
+            )),
             None => None,
         };
         let out = FrameOut {
@@ -254,11 +368,17 @@ pub fn render_frame<'py>(
             },
         };
         match device.as_ref().map(|d| &d.get().inner) {
-            Some(gpu) => py.detach(|| gpu.render_into(scene, cam, &light, haze, rain.as_ref(), out)).map_err(gpu_error)?,
-            None => py.detach(|| render_into(scene, cam, &light, haze, rain.as_ref(), out)).map_err(CoreError)?,
+            Some(gpu) => py
+                .detach(|| gpu.render_into(scene, cam, &light, haze, rain.as_ref(), out))
+                .map_err(gpu_error)?,
+            None => py
+                .detach(|| render_into(scene, cam, &light, haze, rain.as_ref(), out))
+                .map_err(CoreError)?,
         }
     };
-    let rain = layers.zip(report).map(|((a, d), (stats, drops))| (a, d, drops, stats.streaks, stats.culled));
+    let rain = layers
+        .zip(report)
+        .map(|((a, d), (stats, drops))| (a, d, drops, stats.streaks, stats.culled));
     Ok((rgb, depth, trans, rain))
 }
 
@@ -270,14 +390,21 @@ struct Lighting {
 }
 
 impl Lighting {
-    fn new(sky: Option<&Bound<'_, SkyModel>>, ambient: Option<&Bound<'_, AmbientLightMap>>) -> PyResult<Self> {
+    fn new(
+        sky: Option<&Bound<'_, SkyModel>>,
+        ambient: Option<&Bound<'_, AmbientLightMap>>,
+    ) -> PyResult<Self> {
         let sky: Sky = match sky {
             Some(s) => s.get().sky,
             None => Sky::new(SkyKind::Overcast, 0.0, 1000.0).map_err(CoreError)?,
         };
         let ambient: Arc<AmbientMap> = match ambient {
             Some(a) => Arc::clone(&a.get().map),
-            None => Arc::new(AmbientMap::uniform(irradiance(&[], &SkyTable::new(&sky, 64).map_err(CoreError)?, Vec3::ZERO))),
+            None => Arc::new(AmbientMap::uniform(irradiance(
+                &[],
+                &SkyTable::new(&sky, 64).map_err(CoreError)?,
+                Vec3::ZERO,
+            ))),
         };
         Ok(Lighting { sky, ambient })
     }
@@ -308,16 +435,38 @@ pub fn render_photo8<'py>(
     ambient: Option<Bound<'py, AmbientLightMap>>,
 ) -> PyResult<Option<(usize, usize, usize)>> {
     let lit = Lighting::new(sky.as_ref(), ambient.as_ref())?;
-    let req = Request::parse(width, height, camera_params, None, false, [0.0; 3], None, haze_params, rain.as_ref(), &lit.ambient)?;
-    let decode: &[f32; 256] = decode_table
-        .as_slice()?
-        .try_into()
-        .map_err(|_| PyValueError::new_err(format!("decode_table must have 256 entries, got {}", decode_table.len())))?;
-    let photo = Photo8 { srgb: photo_srgb8.as_slice()?, depth_m: photo_depth_m.as_slice()?, decode };
+    let req = Request::parse(
+        width,
+        height,
+        camera_params,
+        None,
+        false,
+        [0.0; 3],
+        None,
+        haze_params,
+        rain.as_ref(),
+        &lit.ambient,
+    )?;
+    let decode: &[f32; 256] = decode_table.as_slice()?.try_into().map_err(|_| {
+        PyValueError::new_err(format!(
+            "decode_table must have 256 entries, got {}",
+            decode_table.len()
+        ))
+    })?;
+    let photo = Photo8 {
+        srgb: photo_srgb8.as_slice()?,
+        depth_m: photo_depth_m.as_slice()?,
+        decode,
+    };
     let mut alpha = rain_alpha_out;
-    let out = Photo8Out { srgb: out_srgb8.as_slice_mut()?, rain_alpha: alpha.as_mut().map(|a| a.as_slice_mut()).transpose()? };
+    let out = Photo8Out {
+        srgb: out_srgb8.as_slice_mut()?,
+        rain_alpha: alpha.as_mut().map(|a| a.as_slice_mut()).transpose()?,
+    };
     let (cam, haze, rain) = (&req.cam, req.haze.as_ref(), req.rain_frame());
-    let stats = py.detach(|| render_photo8_core(cam, &photo, haze, rain.as_ref(), out)).map_err(CoreError)?;
+    let stats = py
+        .detach(|| render_photo8_core(cam, &photo, haze, rain.as_ref(), out))
+        .map_err(CoreError)?;
     Ok(stats.map(|s| (s.drops, s.rain.streaks, s.rain.culled)))
 }
 
@@ -333,7 +482,11 @@ impl GpuDevice {
     #[new]
     #[pyo3(signature = (*, require_hardware))]
     fn new(py: Python<'_>, require_hardware: bool) -> PyResult<Self> {
-        let choice = if require_hardware { AdapterChoice::HardwareOnly } else { AdapterChoice::Any };
+        let choice = if require_hardware {
+            AdapterChoice::HardwareOnly
+        } else {
+            AdapterChoice::Any
+        };
         let inner = py.detach(|| GpuRenderer::new(choice)).map_err(gpu_error)?;
         Ok(GpuDevice { inner })
     }
@@ -342,6 +495,11 @@ impl GpuDevice {
     #[getter]
     fn adapter_info(&self) -> (String, String, String, String) {
         let a = &self.inner.ctx.adapter;
-        (a.name.clone(), a.backend.clone(), a.device_type.clone(), a.driver.clone())
+        (
+            a.name.clone(),
+            a.backend.clone(),
+            a.device_type.clone(),
+            a.driver.clone(),
+        )
     }
 }

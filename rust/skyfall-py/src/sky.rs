@@ -11,26 +11,37 @@ use rayon::prelude::*;
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::ambient::AmbientMap;
 use skyfall_core::sky::cie::SkyKind;
-use skyfall_core::sky::illuminance::{boxes_above, irradiance, SkyTable, CHANNELS};
-use skyfall_core::sky::{cloud_base_m as base_for_rate, sun_direction, Sky};
+use skyfall_core::sky::illuminance::{CHANNELS, SkyTable, boxes_above, irradiance};
+use skyfall_core::sky::{Sky, cloud_base_m as base_for_rate, sun_direction};
 use std::sync::Arc;
 
 /// Rows of an (N, 3) float32 array as points.
 fn points(a: &PyReadonlyArray2<'_, f32>, name: &str) -> PyResult<Vec<Vec3>> {
     let v = a.as_array();
     if v.ncols() != 3 {
-        return Err(PyValueError::new_err(format!("{name} must have shape (N, 3), got {:?}", v.shape())));
+        return Err(PyValueError::new_err(format!(
+            "{name} must have shape (N, 3), got {:?}",
+            v.shape()
+        )));
     }
-    let pts: Vec<Vec3> = v.rows().into_iter().map(|r| Vec3::new(r[0], r[1], r[2])).collect();
+    let pts: Vec<Vec3> = v
+        .rows()
+        .into_iter()
+        .map(|r| Vec3::new(r[0], r[1], r[2]))
+        .collect();
     if let Some(i) = pts.iter().position(|p| !p.is_finite()) {
         return Err(PyValueError::new_err(format!("{name}[{i}] is not finite")));
     }
     Ok(pts)
 }
 
-fn channels<'py>(py: Python<'py>, rows: Vec<[f32; CHANNELS]>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+fn channels<'py>(
+    py: Python<'py>,
+    rows: Vec<[f32; CHANNELS]>,
+) -> PyResult<Bound<'py, PyArray2<f32>>> {
     let n = rows.len();
-    let a = Array2::from_shape_vec((n, CHANNELS), rows.into_iter().flatten().collect()).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let a = Array2::from_shape_vec((n, CHANNELS), rows.into_iter().flatten().collect())
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(a.into_pyarray(py))
 }
 
@@ -45,22 +56,42 @@ impl SkyModel {
     /// `sky_type` 0 is the seed's overcast sky, 1–15 the CIE general skies.
     #[new]
     #[pyo3(signature = (sky_type, sun_elevation_deg, sun_azimuth_deg, extinction_per_m, cloud_base_m))]
-    fn new(sky_type: i64, sun_elevation_deg: Option<f64>, sun_azimuth_deg: Option<f64>, extinction_per_m: f64, cloud_base_m: f64) -> PyResult<Self> {
+    fn new(
+        sky_type: i64,
+        sun_elevation_deg: Option<f64>,
+        sun_azimuth_deg: Option<f64>,
+        extinction_per_m: f64,
+        cloud_base_m: f64,
+    ) -> PyResult<Self> {
         let sun = match (sun_elevation_deg, sun_azimuth_deg) {
             (Some(el), Some(az)) => {
                 if !(-90.0..=90.0).contains(&el) {
-                    return Err(PyValueError::new_err(format!("sun_elevation_deg = {el} is outside the valid range [-90, 90] deg")));
+                    return Err(PyValueError::new_err(format!(
+                        "sun_elevation_deg = {el} is outside the valid range [-90, 90] deg"
+                    )));
                 }
                 if !az.is_finite() {
-                    return Err(PyValueError::new_err(format!("sun_azimuth_deg = {az} must be finite")));
+                    return Err(PyValueError::new_err(format!(
+                        "sun_azimuth_deg = {az} must be finite"
+                    )));
                 }
                 Some(sun_direction(el, az))
             }
             (None, None) => None,
-            _ => return Err(PyValueError::new_err("give both sun_elevation_deg and sun_azimuth_deg, or neither")),
+            _ => {
+                return Err(PyValueError::new_err(
+                    "give both sun_elevation_deg and sun_azimuth_deg, or neither",
+                ));
+            }
         };
-        let kind = if sky_type == 0 { SkyKind::Overcast } else { SkyKind::general(sky_type, sun).map_err(CoreError)? };
-        Ok(SkyModel { sky: Sky::new(kind, extinction_per_m, cloud_base_m).map_err(CoreError)? })
+        let kind = if sky_type == 0 {
+            SkyKind::Overcast
+        } else {
+            SkyKind::general(sky_type, sun).map_err(CoreError)?
+        };
+        Ok(SkyModel {
+            sky: Sky::new(kind, extinction_per_m, cloud_base_m).map_err(CoreError)?,
+        })
     }
 
     /// π / ∫ (L/Lz) τ cos θ dω: L/Lz times this is the luminance relative to E/π.
@@ -72,13 +103,22 @@ impl SkyModel {
     /// Luminance relative to E/π along unit directions (N, 3): emitted by the cloud base, or
     /// `received` at the ground through the rain.
     #[pyo3(signature = (dirs, *, received))]
-    fn luminance_relative<'py>(&self, py: Python<'py>, dirs: PyReadonlyArray2<'py, f32>, received: bool) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn luminance_relative<'py>(
+        &self,
+        py: Python<'py>,
+        dirs: PyReadonlyArray2<'py, f32>,
+        received: bool,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let d = points(&dirs, "directions")?;
         let out: Vec<f64> = d
             .iter()
             .map(|v| {
                 let u = v.normalize_or_zero();
-                if received { self.sky.received(u) } else { self.sky.emitted(u) }
+                if received {
+                    self.sky.received(u)
+                } else {
+                    self.sky.emitted(u)
+                }
             })
             .collect();
         Ok(out.into_pyarray(py))
@@ -87,17 +127,35 @@ impl SkyModel {
     /// Illuminance relative to E on the five normals (up, +X, −X, +Z, −Z) at points (N, 3)
     /// among boxes (M, 9), points in parallel.
     #[pyo3(signature = (points_m, boxes, *, samples))]
-    fn illuminance<'py>(&self, py: Python<'py>, points_m: PyReadonlyArray2<'py, f32>, boxes: PyReadonlyArray2<'py, f32>, samples: usize) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    fn illuminance<'py>(
+        &self,
+        py: Python<'py>,
+        points_m: PyReadonlyArray2<'py, f32>,
+        boxes: PyReadonlyArray2<'py, f32>,
+        samples: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let pts = points(&points_m, "points_m")?;
         let scene = box_scene(&boxes, true, [0.0; 3])?;
         let s = SkyTable::new(&self.sky, samples).map_err(CoreError)?;
-        let rows: Vec<[f32; CHANNELS]> = py.detach(|| pts.par_iter().map(|&p| irradiance(&boxes_above(&scene, p.y), &s, p)).collect());
+        let rows: Vec<[f32; CHANNELS]> = py.detach(|| {
+            pts.par_iter()
+                .map(|&p| irradiance(&boxes_above(&scene, p.y), &s, p))
+                .collect()
+        });
         channels(py, rows)
     }
 
     /// The ambient-light map of boxes (M, 9) over `bounds_min_m`..`bounds_max_m`.
     #[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples))]
-    fn ambient_map(&self, py: Python<'_>, boxes: PyReadonlyArray2<'_, f32>, bounds_min_m: [f32; 3], bounds_max_m: [f32; 3], spacing_m: f64, samples: usize) -> PyResult<AmbientLightMap> {
+    fn ambient_map(
+        &self,
+        py: Python<'_>,
+        boxes: PyReadonlyArray2<'_, f32>,
+        bounds_min_m: [f32; 3],
+        bounds_max_m: [f32; 3],
+        spacing_m: f64,
+        samples: usize,
+    ) -> PyResult<AmbientLightMap> {
         let scene: BoxScene = box_scene(&boxes, true, [0.0; 3])?;
         let s = SkyTable::new(&self.sky, samples).map_err(CoreError)?;
         let (lo, hi) = (Vec3::from(bounds_min_m), Vec3::from(bounds_max_m));
@@ -105,7 +163,8 @@ impl SkyModel {
             AmbientMap::grid_dims(lo, hi, spacing_m).map_err(CoreError)?;
             AmbientMap::uniform(irradiance(&[], &s, Vec3::ZERO))
         } else {
-            py.detach(|| AmbientMap::build(&scene, &s, lo, hi, spacing_m)).map_err(CoreError)?
+            py.detach(|| AmbientMap::build(&scene, &s, lo, hi, spacing_m))
+                .map_err(CoreError)?
         };
         Ok(AmbientLightMap { map: Arc::new(map) })
     }
@@ -141,7 +200,8 @@ impl AmbientLightMap {
     #[getter]
     fn values<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray4<f32>>> {
         let [nx, ny, nz] = self.map.dims;
-        let a = Array4::from_shape_vec((nx, ny, nz, CHANNELS), self.map.values.clone()).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let a = Array4::from_shape_vec((nx, ny, nz, CHANNELS), self.map.values.clone())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(a.into_pyarray(py))
     }
 
@@ -149,12 +209,20 @@ impl AmbientLightMap {
     #[getter]
     fn solid<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<bool>>> {
         let [nx, ny, nz] = self.map.dims;
-        let a = Array3::from_shape_vec((nx, ny, nz), self.map.solid.iter().map(|&s| s != 0).collect()).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let a = Array3::from_shape_vec(
+            (nx, ny, nz),
+            self.map.solid.iter().map(|&s| s != 0).collect(),
+        )
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(a.into_pyarray(py))
     }
 
     /// Trilinear samples at points (N, 3): (N, 5) relative to E.
-    fn sample<'py>(&self, py: Python<'py>, points_m: PyReadonlyArray2<'py, f32>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    fn sample<'py>(
+        &self,
+        py: Python<'py>,
+        points_m: PyReadonlyArray2<'py, f32>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let pts = points(&points_m, "points_m")?;
         let rows: Vec<[f32; CHANNELS]> = pts.iter().map(|&p| self.map.sample(p)).collect();
         channels(py, rows)
@@ -165,7 +233,9 @@ impl AmbientLightMap {
 #[pyfunction]
 pub fn cloud_base_m(rain_rate_mm_h: f64) -> PyResult<f64> {
     if !(0.0..=1e4).contains(&rain_rate_mm_h) {
-        return Err(PyValueError::new_err(format!("rain_rate_mm_h = {rain_rate_mm_h} is outside the valid range [0, 10000] mm/h")));
+        return Err(PyValueError::new_err(format!(
+            "rain_rate_mm_h = {rain_rate_mm_h} is outside the valid range [0, 10000] mm/h"
+        )));
     }
     Ok(base_for_rate(rain_rate_mm_h))
 }

@@ -7,7 +7,11 @@ use std::sync::OnceLock;
 #[inline]
 pub fn encode_srgb(linear: f32) -> f32 {
     let x = linear.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 /// One value to 8-bit sRGB by the formula: round(255 · encode(x)). NaN encodes as 0.
@@ -41,7 +45,11 @@ fn srgb8_table() -> &'static Srgb8Table {
             let (mut lo, mut hi) = (0u32, one);
             while lo < hi {
                 let mid = lo + (hi - lo) / 2;
-                if usize::from(encode_srgb8_formula(f32::from_bits(mid))) > k { hi = mid } else { lo = mid + 1 }
+                if usize::from(encode_srgb8_formula(f32::from_bits(mid))) > k {
+                    hi = mid
+                } else {
+                    lo = mid + 1
+                }
             }
             *t = f32::from_bits(lo);
         }
@@ -49,7 +57,11 @@ fn srgb8_table() -> &'static Srgb8Table {
         for (b, c) in coarse.iter_mut().enumerate().take((one >> 16) as usize + 1) {
             *c = encode_srgb8_formula(f32::from_bits((b as u32) << 16));
         }
-        debug_assert!(thresholds.windows(2).all(|p| p[0].to_bits() >> 16 < p[1].to_bits() >> 16 || p[1].is_infinite()));
+        debug_assert!(
+            thresholds
+                .windows(2)
+                .all(|p| p[0].to_bits() >> 16 < p[1].to_bits() >> 16 || p[1].is_infinite())
+        );
         Srgb8Table { thresholds, coarse }
     })
 }
@@ -92,20 +104,24 @@ impl Default for Srgb8Encoder {
 /// the same bits as [`encode_srgb8_formula`], through [`Srgb8Encoder`].
 pub fn encode_srgb8(linear: &[f32], out: &mut [u8]) {
     let e = Srgb8Encoder::new();
-    out.par_chunks_mut(1 << 16).zip(linear.par_chunks(1 << 16)).for_each(|(o, l)| {
-        for (b, &x) in o.iter_mut().zip(l) {
-            *b = e.encode(x);
-        }
-    });
+    out.par_chunks_mut(1 << 16)
+        .zip(linear.par_chunks(1 << 16))
+        .for_each(|(o, l)| {
+            for (b, &x) in o.iter_mut().zip(l) {
+                *b = e.encode(x);
+            }
+        });
 }
 
 /// Maps bytes through a 256-entry table (8-bit decoding), in parallel.
 pub fn apply_lut8(bytes: &[u8], table: &[f32; 256], out: &mut [f32]) {
-    out.par_chunks_mut(1 << 16).zip(bytes.par_chunks(1 << 16)).for_each(|(o, b)| {
-        for (v, &x) in o.iter_mut().zip(b) {
-            *v = table[usize::from(x)];
-        }
-    });
+    out.par_chunks_mut(1 << 16)
+        .zip(bytes.par_chunks(1 << 16))
+        .for_each(|(o, b)| {
+            for (v, &x) in o.iter_mut().zip(b) {
+                *v = table[usize::from(x)];
+            }
+        });
 }
 
 #[cfg(test)]
@@ -128,14 +144,21 @@ mod tests {
         let bytes: Vec<u8> = (0..=255u8).rev().collect();
         let mut out = vec![0.0; 256];
         apply_lut8(&bytes, &table, &mut out);
-        assert!(out.iter().zip(&bytes).all(|(v, &b)| *v == f32::from(b) * 0.5));
+        assert!(
+            out.iter()
+                .zip(&bytes)
+                .all(|(v, &b)| *v == f32::from(b) * 0.5)
+        );
     }
 
     #[test]
     fn no_coarse_block_holds_two_thresholds() {
         // What lets the encoder finish with one comparison.
         let t = srgb8_table();
-        let blocks: Vec<u32> = t.thresholds[..255].iter().map(|v| v.to_bits() >> 16).collect();
+        let blocks: Vec<u32> = t.thresholds[..255]
+            .iter()
+            .map(|v| v.to_bits() >> 16)
+            .collect();
         assert!(blocks.windows(2).all(|p| p[0] < p[1]), "{blocks:?}");
     }
 
@@ -143,9 +166,30 @@ mod tests {
     fn the_table_gives_the_formula_bits() {
         // Every threshold and its neighbours, and a sweep of float bit patterns in [0, 1].
         let t = srgb8_table();
-        let mut xs: Vec<f32> = t.thresholds.iter().flat_map(|&v| [f32::from_bits(v.to_bits() - 1), v, f32::from_bits(v.to_bits() + 1)]).collect();
+        let mut xs: Vec<f32> = t
+            .thresholds
+            .iter()
+            .flat_map(|&v| {
+                [
+                    f32::from_bits(v.to_bits() - 1),
+                    v,
+                    f32::from_bits(v.to_bits() + 1),
+                ]
+            })
+            .collect();
         xs.extend((0..1_000_000u32).map(|i| f32::from_bits(i * (1.0f32.to_bits() / 1_000_000))));
-        xs.extend([-1.0, -0.0, f32::MIN_POSITIVE, 1e-40, 0.999_999_9, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY, f32::NAN]);
+        xs.extend([
+            -1.0,
+            -0.0,
+            f32::MIN_POSITIVE,
+            1e-40,
+            0.999_999_9,
+            1.0,
+            1.5,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ]);
         let mut out = vec![0u8; xs.len()];
         encode_srgb8(&xs, &mut out);
         for (x, b) in xs.iter().zip(&out) {

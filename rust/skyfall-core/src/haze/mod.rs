@@ -28,11 +28,18 @@ pub struct Haze {
 impl Haze {
     /// Validated haze parameters.
     pub fn new(extinction_per_m: f32, airlight: [f32; 3]) -> Result<Self> {
-        Range::closed(0.0, 1e3, "1/m").check("extinction_per_m", None, f64::from(extinction_per_m))?;
+        Range::closed(0.0, 1e3, "1/m").check(
+            "extinction_per_m",
+            None,
+            f64::from(extinction_per_m),
+        )?;
         for (i, a) in airlight.iter().enumerate() {
             Range::closed(0.0, 1e6, "").check("airlight", Some(i), f64::from(*a))?;
         }
-        Ok(Haze { extinction_per_m, airlight })
+        Ok(Haze {
+            extinction_per_m,
+            airlight,
+        })
     }
 
     /// Transmittance e^(−σ d) along `distance_m` (1 when σ = 0, 0 for d = ∞ when σ > 0),
@@ -64,7 +71,15 @@ pub fn exp_neg(x: f32) -> f32 {
     let n = shifted - ROUND;
     let r = (x - n * LN2_HI) - n * LN2_LO;
     let mut p = 1.0 / 5040.0;
-    for c in [1.0 / 720.0, 1.0 / 120.0, 1.0 / 24.0, 1.0 / 6.0, 0.5, 1.0, 1.0] {
+    for c in [
+        1.0 / 720.0,
+        1.0 / 120.0,
+        1.0 / 24.0,
+        1.0 / 6.0,
+        0.5,
+        1.0,
+        1.0,
+    ] {
         p = p * r + c;
     }
     // n in [−126, 0] sits in the low mantissa bits of `shifted` (offset by 2²²): the
@@ -82,17 +97,37 @@ pub fn check_depth(depth_m: &[f32]) -> Result<()> {
     // `d >= 0` is false exactly for NaN and negatives; folded without an early exit over a
     // chunk, it vectorises (a clean map is the common case).
     let clean = |c: &[f32]| c.iter().fold(true, |ok, &d| ok & (d >= 0.0));
-    let Some(k) = depth_m.par_chunks(CHUNK).position_first(|c| !clean(c)) else { return Ok(()) };
-    let i = k * CHUNK + depth_m[k * CHUNK..].iter().position(|&d| bad(d)).unwrap_or(0);
+    let Some(k) = depth_m.par_chunks(CHUNK).position_first(|c| !clean(c)) else {
+        return Ok(());
+    };
+    let i = k * CHUNK
+        + depth_m[k * CHUNK..]
+            .iter()
+            .position(|&d| bad(d))
+            .unwrap_or(0);
     let d = depth_m[i];
-    Err(Error::OutOfRange { param: Param { name: "depth_m", index: Some(i) }, value: f64::from(d), range: "[0, inf] m (inf for sky)".into() })
+    Err(Error::OutOfRange {
+        param: Param {
+            name: "depth_m",
+            index: Some(i),
+        },
+        value: f64::from(d),
+        range: "[0, inf] m (inf for sky)".into(),
+    })
 }
 
 /// Applies haze to one row: `rgb_row` (W·3, in place), `t_row` (W) written, from
 /// `depth_row` (W); `u2` are the camera's squared column slopes and `v2` the row's
 /// (see [`crate::scene::camera::Camera::column_slopes_sq`]), so the ray length per unit depth is √(u² + v² + 1).
 #[inline]
-pub fn apply_row(haze: &Haze, u2: &[f32], v2: f32, rgb_row: &mut [f32], depth_row: &[f32], t_row: &mut [f32]) {
+pub fn apply_row(
+    haze: &Haze,
+    u2: &[f32],
+    v2: f32,
+    rgb_row: &mut [f32],
+    depth_row: &[f32],
+    t_row: &mut [f32],
+) {
     for (x, (&d, t_out)) in depth_row.iter().zip(t_row.iter_mut()).enumerate() {
         let t = haze.transmittance(d * (u2[x] + v2 + 1.0).sqrt());
         *t_out = t;
@@ -110,13 +145,23 @@ mod tests {
 
     #[test]
     fn haze_limits() {
-        let h = Haze::new(0.01, [0.4; 3]).unwrap_or(Haze { extinction_per_m: 0.0, airlight: [0.0; 3] });
+        let h = Haze::new(0.01, [0.4; 3]).unwrap_or(Haze {
+            extinction_per_m: 0.0,
+            airlight: [0.0; 3],
+        });
         assert_eq!(h.transmittance(f32::INFINITY), 0.0);
         assert!((h.transmittance(100.0) - (-1.0f32).exp()).abs() < 1e-7);
-        let clear = Haze { extinction_per_m: 0.0, airlight: [0.4; 3] };
+        let clear = Haze {
+            extinction_per_m: 0.0,
+            airlight: [0.4; 3],
+        };
         assert_eq!(clear.transmittance(f32::INFINITY), 1.0);
         assert!(Haze::new(f32::NAN, [0.0; 3]).is_err());
-        assert!(check_depth(&[1.0, f32::INFINITY]).is_ok() && check_depth(&[f32::NAN]).is_err() && check_depth(&[-1.0]).is_err());
+        assert!(
+            check_depth(&[1.0, f32::INFINITY]).is_ok()
+                && check_depth(&[f32::NAN]).is_err()
+                && check_depth(&[-1.0]).is_err()
+        );
         // the first bad value is named, past the first parallel chunk too
         let mut far = vec![1.0f32; 300_000];
         far[250_000] = -2.0;
@@ -148,11 +193,30 @@ mod tests {
     #[test]
     fn distance_uses_the_ray_not_the_depth() {
         let cam = Camera::new(3, 1, [1.0, 1.0, 1.5, 0.5], Vec3::ZERO, Mat3::IDENTITY);
-        let cam = cam.unwrap_or(Camera { width: 3, height: 1, fx: 1.0, fy: 1.0, cx: 1.5, cy: 0.5, position_m: Vec3::ZERO, rotation: Mat3::IDENTITY });
-        let h = Haze { extinction_per_m: 0.1, airlight: [1.0; 3] };
+        let cam = cam.unwrap_or(Camera {
+            width: 3,
+            height: 1,
+            fx: 1.0,
+            fy: 1.0,
+            cx: 1.5,
+            cy: 0.5,
+            position_m: Vec3::ZERO,
+            rotation: Mat3::IDENTITY,
+        });
+        let h = Haze {
+            extinction_per_m: 0.1,
+            airlight: [1.0; 3],
+        };
         let mut rgb = vec![0.0; 9];
         let mut t = vec![0.0; 3];
-        apply_row(&h, &cam.column_slopes_sq(), cam.row_slope_sq(0), &mut rgb, &[10.0; 3], &mut t);
+        apply_row(
+            &h,
+            &cam.column_slopes_sq(),
+            cam.row_slope_sq(0),
+            &mut rgb,
+            &[10.0; 3],
+            &mut t,
+        );
         // side pixels are 1 px off axis with f = 1: |ray| = sqrt(2).
         assert!((t[0] - (-0.1f32 * 10.0 * 2f32.sqrt()).exp()).abs() < 1e-6);
         assert!((t[1] - (-1.0f32).exp()).abs() < 1e-6);

@@ -44,7 +44,11 @@ pub struct AirProps {
 
 impl Air {
     /// Gunn & Kinzer's laboratory air: 20 °C, 1013.25 hPa, 50 % relative humidity.
-    pub const STANDARD: Air = Air { temperature_c: 20.0, pressure_hpa: 1013.25, relative_humidity: 0.5 };
+    pub const STANDARD: Air = Air {
+        temperature_c: 20.0,
+        pressure_hpa: 1013.25,
+        relative_humidity: 0.5,
+    };
 
     /// Validated air state.
     pub fn new(temperature_c: f64, pressure_hpa: f64, relative_humidity: f64) -> Result<Self> {
@@ -54,16 +58,28 @@ impl Air {
     /// Validated air state; `index` names the array element in messages.
     /// Besides the ranges, the water-vapour pressure RH·e_s(T) must stay below the total
     /// pressure (warm saturated air at high altitude does not exist: water boils).
-    pub fn checked(temperature_c: f64, pressure_hpa: f64, relative_humidity: f64, index: Option<usize>) -> Result<Self> {
+    pub fn checked(
+        temperature_c: f64,
+        pressure_hpa: f64,
+        relative_humidity: f64,
+        index: Option<usize>,
+    ) -> Result<Self> {
         let air = Air {
             temperature_c: TEMPERATURE_C.check("temperature_c", index, temperature_c)?,
             pressure_hpa: PRESSURE_HPA.check("pressure_hpa", index, pressure_hpa)?,
-            relative_humidity: RELATIVE_HUMIDITY.check("relative_humidity", index, relative_humidity)?,
+            relative_humidity: RELATIVE_HUMIDITY.check(
+                "relative_humidity",
+                index,
+                relative_humidity,
+            )?,
         };
         let e_hpa = relative_humidity * saturation_vapour_pressure_pa(temperature_c) / 100.0;
         if e_hpa >= pressure_hpa {
             return Err(Error::Invalid {
-                param: Param { name: "relative_humidity", index },
+                param: Param {
+                    name: "relative_humidity",
+                    index,
+                },
                 message: format!(
                     "relative_humidity = {relative_humidity} at {temperature_c} °C means a vapour pressure of {e_hpa:.1} hPa, \
                      not below pressure_hpa = {pressure_hpa}: no such air"
@@ -88,7 +104,9 @@ impl Air {
     /// Mean free path, m: l = l0 (η/η0)(p0/p)(T/T0)^½ with l0 = 6.62e-8 m at 20 °C, 1013.25 hPa.
     pub fn mean_free_path_m(&self) -> f64 {
         let eta0 = air_viscosity_pa_s(20.0);
-        6.62e-8 * (self.viscosity_pa_s() / eta0) * (1013.25 / self.pressure_hpa)
+        6.62e-8
+            * (self.viscosity_pa_s() / eta0)
+            * (1013.25 / self.pressure_hpa)
             * ((self.temperature_c + KELVIN) / 293.15).sqrt()
     }
 
@@ -108,7 +126,11 @@ impl Air {
 /// (1.721 + 0.00487 T)·1e-5 for T ≥ 0, (1.718 + 0.0049 T − 1.2e-5 T²)·1e-5 below.
 pub fn air_viscosity_pa_s(temperature_c: f64) -> f64 {
     let t = temperature_c;
-    if t >= 0.0 { (1.721 + 0.00487 * t) * 1e-5 } else { (1.718 + 0.0049 * t - 1.2e-5 * t * t) * 1e-5 }
+    if t >= 0.0 {
+        (1.721 + 0.00487 * t) * 1e-5
+    } else {
+        (1.718 + 0.0049 * t - 1.2e-5 * t * t) * 1e-5
+    }
 }
 
 /// Saturation vapour pressure over liquid water, Pa (Wexler 1976 in Hardy's ITS-90 form).
@@ -136,7 +158,9 @@ pub fn saturation_vapour_pressure_pa(temperature_c: f64) -> f64 {
 /// Density of liquid water, kg/m³ (Kell 1975), valid for supercooled water too.
 pub fn water_density_kg_m3(temperature_c: f64) -> f64 {
     let t = temperature_c;
-    let num = 999.83952 + t * (16.945176 + t * (-7.9870401e-3 + t * (-46.170461e-6 + t * (105.56302e-9 + t * -280.54253e-12))));
+    let num = 999.83952
+        + t * (16.945176
+            + t * (-7.9870401e-3 + t * (-46.170461e-6 + t * (105.56302e-9 + t * -280.54253e-12))));
     num / (1.0 + 16.879850e-3 * t)
 }
 
@@ -154,7 +178,11 @@ mod tests {
     #[test]
     fn standard_air_matches_reference() {
         let p = Air::STANDARD.props();
-        assert!((p.density_kg_m3 - 1.19891).abs() < 2e-4, "{}", p.density_kg_m3);
+        assert!(
+            (p.density_kg_m3 - 1.19891).abs() < 2e-4,
+            "{}",
+            p.density_kg_m3
+        );
         assert!((p.viscosity_pa_s - 1.8184e-5).abs() < 1e-9);
         assert!((p.water_density_kg_m3 - 998.204).abs() < 0.01);
         assert!((p.surface_tension_n_m - 0.0730).abs() < 1e-4);

@@ -16,7 +16,6 @@
 //! Newton iteration in ln Re (bisection fallback, at most [`MAX_ITERATIONS`]) in between.
 //! Where X falls in the gap of a jump the answer is the Reynolds number of the jump.
 
-
 /// Iteration cap of the Schiller–Naumann solve.
 pub const MAX_ITERATIONS: usize = 100;
 /// Relative tolerance on Re.
@@ -62,7 +61,11 @@ pub fn sphere_reynolds(best: f64) -> (f64, usize) {
         if f == 0.0 {
             return (re, it);
         }
-        if f < 0.0 { lo = re } else { hi = re }
+        if f < 0.0 {
+            lo = re
+        } else {
+            hi = re
+        }
         // d h / d ln Re = 24 Re (1 + 0.15 · 1.687 Re^0.687)
         let slope = 24.0 * re * (1.0 + 0.15 * 1.687 * re.powf(0.687));
         let mut next = re * (-f / slope).exp();
@@ -81,8 +84,8 @@ pub fn sphere_reynolds(best: f64) -> (f64, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::air::Air;
     use crate::physics::GRAVITY_M_S2;
+    use crate::physics::air::Air;
 
     #[test]
     fn schiller_naumann_at_re_200_matches_reference() {
@@ -92,12 +95,17 @@ mod tests {
 
     #[test]
     fn solution_satisfies_force_balance_in_every_regime() {
-        for &best in &[1e-9, 1.0, 23.9, 25.0, 27.0, 30.0, 1e3, 1e5, 4.3e5, 4.39e5, 1e6, 1e9] {
+        for &best in &[
+            1e-9, 1.0, 23.9, 25.0, 27.0, 30.0, 1e3, 1e5, 4.3e5, 4.39e5, 1e6, 1e9,
+        ] {
             let (re, it) = sphere_reynolds(best);
             assert!(re.is_finite() && re > 0.0 && it <= MAX_ITERATIONS);
             let lhs = sphere_drag_coefficient(re) * re * re;
             let in_gap = (re - 1.0).abs() < 1e-12 || (re - 1000.0).abs() < 1e-9;
-            assert!(in_gap || (lhs - best).abs() <= 1e-10 * best, "X={best} Re={re} lhs={lhs}");
+            assert!(
+                in_gap || (lhs - best).abs() <= 1e-10 * best,
+                "X={best} Re={re} lhs={lhs}"
+            );
         }
     }
 
@@ -106,8 +114,13 @@ mod tests {
         // Stokes: v = Δρ g D² / (18 η).
         let a = Air::STANDARD.props();
         let d = 10e-6;
-        let v = crate::physics::fall_speed::terminal_velocity_m_s(d * 1e3, crate::physics::fall_speed::FallSpeedModel::Sphere, &a);
-        let stokes = (a.water_density_kg_m3 - a.density_kg_m3) * GRAVITY_M_S2 * d * d / (18.0 * a.viscosity_pa_s);
+        let v = crate::physics::fall_speed::terminal_velocity_m_s(
+            d * 1e3,
+            crate::physics::fall_speed::FallSpeedModel::Sphere,
+            &a,
+        );
+        let stokes = (a.water_density_kg_m3 - a.density_kg_m3) * GRAVITY_M_S2 * d * d
+            / (18.0 * a.viscosity_pa_s);
         assert!((v / stokes - 1.0).abs() < 1e-12);
     }
 }

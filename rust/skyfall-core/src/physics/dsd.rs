@@ -4,9 +4,9 @@
 //! Λ = 4.1 R^−0.21 mm⁻¹ (R in mm/h, D in mm). R = 0 means no drops at all.
 
 use super::air::AirProps;
-use super::fall_speed::{AirArrays, FallSpeed, FallSpeedModel, DIAMETER_MM};
+use super::fall_speed::{AirArrays, DIAMETER_MM, FallSpeed, FallSpeedModel};
 use super::quadrature::integrate;
-use crate::error::{at, broadcast_len, Error, Param, Range, Result};
+use crate::error::{Error, Param, Range, Result, at, broadcast_len};
 
 /// N0, drops per m³ per mm.
 pub const MP_N0_PER_M3_MM: f64 = 8000.0;
@@ -17,12 +17,20 @@ pub const EDGE_MM: Range = Range::closed(0.0, f64::INFINITY, "mm");
 
 /// Slope Λ, mm⁻¹ (infinite for R = 0).
 pub fn mp_slope_per_mm(rain_rate_mm_h: f64) -> f64 {
-    if rain_rate_mm_h > 0.0 { 4.1 * rain_rate_mm_h.powf(-0.21) } else { f64::INFINITY }
+    if rain_rate_mm_h > 0.0 {
+        4.1 * rain_rate_mm_h.powf(-0.21)
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// N(D), drops per m³ per mm.
 pub fn marshall_palmer(diameter_mm: f64, rain_rate_mm_h: f64) -> f64 {
-    if rain_rate_mm_h > 0.0 { MP_N0_PER_M3_MM * (-mp_slope_per_mm(rain_rate_mm_h) * diameter_mm).exp() } else { 0.0 }
+    if rain_rate_mm_h > 0.0 {
+        MP_N0_PER_M3_MM * (-mp_slope_per_mm(rain_rate_mm_h) * diameter_mm).exp()
+    } else {
+        0.0
+    }
 }
 
 /// Drops per m³ with diameter in [d_min, d_max] mm: N0/Λ · (e^(−Λ d_min) − e^(−Λ d_max)),
@@ -43,7 +51,10 @@ fn check_edges(d_min: &[f64], d_max: &[f64], n: usize, hi: Range) -> Result<()> 
         if lo >= up {
             let index = (n > 1).then_some(i);
             return Err(Error::Invalid {
-                param: Param { name: "d_max_mm", index },
+                param: Param {
+                    name: "d_max_mm",
+                    index,
+                },
                 message: format!("d_max_mm = {up} must be greater than d_min_mm = {lo}"),
             });
         }
@@ -53,18 +64,33 @@ fn check_edges(d_min: &[f64], d_max: &[f64], n: usize, hi: Range) -> Result<()> 
 
 /// Vectorised [`marshall_palmer`]; arrays of length 1 or n.
 pub fn marshall_palmer_many(diameter_mm: &[f64], rain_rate_mm_h: &[f64]) -> Result<Vec<f64>> {
-    let n = broadcast_len(&[("diameter_mm", diameter_mm.len()), ("rain_rate_mm_h", rain_rate_mm_h.len())])?;
+    let n = broadcast_len(&[
+        ("diameter_mm", diameter_mm.len()),
+        ("rain_rate_mm_h", rain_rate_mm_h.len()),
+    ])?;
     DIAMETER_MM.check_all("diameter_mm", diameter_mm)?;
     RAIN_RATE_MM_H.check_all("rain_rate_mm_h", rain_rate_mm_h)?;
-    Ok((0..n).map(|i| marshall_palmer(at(diameter_mm, i), at(rain_rate_mm_h, i))).collect())
+    Ok((0..n)
+        .map(|i| marshall_palmer(at(diameter_mm, i), at(rain_rate_mm_h, i)))
+        .collect())
 }
 
 /// Vectorised [`drops_per_m3`]; arrays of length 1 or n.
-pub fn drops_per_m3_many(rain_rate_mm_h: &[f64], d_min_mm: &[f64], d_max_mm: &[f64]) -> Result<Vec<f64>> {
-    let n = broadcast_len(&[("rain_rate_mm_h", rain_rate_mm_h.len()), ("d_min_mm", d_min_mm.len()), ("d_max_mm", d_max_mm.len())])?;
+pub fn drops_per_m3_many(
+    rain_rate_mm_h: &[f64],
+    d_min_mm: &[f64],
+    d_max_mm: &[f64],
+) -> Result<Vec<f64>> {
+    let n = broadcast_len(&[
+        ("rain_rate_mm_h", rain_rate_mm_h.len()),
+        ("d_min_mm", d_min_mm.len()),
+        ("d_max_mm", d_max_mm.len()),
+    ])?;
     RAIN_RATE_MM_H.check_all("rain_rate_mm_h", rain_rate_mm_h)?;
     check_edges(d_min_mm, d_max_mm, n, EDGE_MM)?;
-    Ok((0..n).map(|i| drops_per_m3(at(rain_rate_mm_h, i), at(d_min_mm, i), at(d_max_mm, i))).collect())
+    Ok((0..n)
+        .map(|i| drops_per_m3(at(rain_rate_mm_h, i), at(d_min_mm, i), at(d_max_mm, i)))
+        .collect())
 }
 
 /// Panels per smooth piece of the rain-rate integral (8-point Gauss–Legendre each).
@@ -73,7 +99,13 @@ const PANELS: usize = 64;
 /// Rain rate carried by the distribution, mm/h: R' = 6π·10⁻⁴ ∫ N(D) D³ v(D) dD
 /// (D mm, v m/s, N m⁻³ mm⁻¹), integrated over [d_min, d_max] with the chosen fall-speed model.
 /// For a consistent model R' ≈ R; Marshall–Palmer with measured speeds gives 5–18 % more.
-pub fn rain_rate_from_dsd(rain_rate_mm_h: f64, model: FallSpeedModel, air: &AirProps, d_min_mm: f64, d_max_mm: f64) -> f64 {
+pub fn rain_rate_from_dsd(
+    rain_rate_mm_h: f64,
+    model: FallSpeedModel,
+    air: &AirProps,
+    d_min_mm: f64,
+    d_max_mm: f64,
+) -> f64 {
     if rain_rate_mm_h <= 0.0 {
         return 0.0;
     }
@@ -81,7 +113,10 @@ pub fn rain_rate_from_dsd(rain_rate_mm_h: f64, model: FallSpeedModel, air: &AirP
     let law = FallSpeed::new(model, air);
     let f = |d: f64| d.powi(3) * (-lam * d).exp() * law.m_s(d);
     // Beard changes regime at 19 µm and 1.07 mm; split there so every piece is smooth.
-    6.0 * std::f64::consts::PI * 1e-4 * MP_N0_PER_M3_MM * integrate(f, d_min_mm, d_max_mm, &[0.019, 1.07], PANELS)
+    6.0 * std::f64::consts::PI
+        * 1e-4
+        * MP_N0_PER_M3_MM
+        * integrate(f, d_min_mm, d_max_mm, &[0.019, 1.07], PANELS)
 }
 
 /// Vectorised [`rain_rate_from_dsd`]; arrays of length 1 or n.
@@ -92,14 +127,24 @@ pub fn rain_rate_from_dsd_many(
     d_min_mm: &[f64],
     d_max_mm: &[f64],
 ) -> Result<Vec<f64>> {
-    let n = air.broadcast_with(&[("rain_rate_mm_h", rain_rate_mm_h.len()), ("d_min_mm", d_min_mm.len()), ("d_max_mm", d_max_mm.len())])?;
+    let n = air.broadcast_with(&[
+        ("rain_rate_mm_h", rain_rate_mm_h.len()),
+        ("d_min_mm", d_min_mm.len()),
+        ("d_max_mm", d_max_mm.len()),
+    ])?;
     RAIN_RATE_MM_H.check_all("rain_rate_mm_h", rain_rate_mm_h)?;
     check_edges(d_min_mm, d_max_mm, n, DIAMETER_MM)?;
     let fixed = air.validate(n)?;
     Ok((0..n)
         .map(|i| {
             let props = fixed.unwrap_or_else(|| air.props_at(i));
-            rain_rate_from_dsd(at(rain_rate_mm_h, i), model, &props, at(d_min_mm, i), at(d_max_mm, i))
+            rain_rate_from_dsd(
+                at(rain_rate_mm_h, i),
+                model,
+                &props,
+                at(d_min_mm, i),
+                at(d_max_mm, i),
+            )
         })
         .collect())
 }
@@ -113,7 +158,10 @@ mod tests {
     fn zero_rain_has_no_drops() {
         assert_eq!(marshall_palmer(0.0, 0.0), 0.0);
         assert_eq!(drops_per_m3(0.0, 0.0, f64::INFINITY), 0.0);
-        assert_eq!(rain_rate_from_dsd(0.0, FallSpeedModel::Beard, &Air::STANDARD.props(), 0.0, 8.0), 0.0);
+        assert_eq!(
+            rain_rate_from_dsd(0.0, FallSpeedModel::Beard, &Air::STANDARD.props(), 0.0, 8.0),
+            0.0
+        );
     }
 
     #[test]
@@ -122,7 +170,9 @@ mod tests {
         let total = drops_per_m3(r, 0.0, f64::INFINITY);
         assert!((total - MP_N0_PER_M3_MM / mp_slope_per_mm(r)).abs() < 1e-9);
         // bins add up
-        let parts: f64 = (0..80).map(|k| drops_per_m3(r, k as f64 * 0.1, (k + 1) as f64 * 0.1)).sum();
+        let parts: f64 = (0..80)
+            .map(|k| drops_per_m3(r, k as f64 * 0.1, (k + 1) as f64 * 0.1))
+            .sum();
         assert!((parts - drops_per_m3(r, 0.0, 8.0)).abs() < 1e-9 * total);
     }
 

@@ -4,7 +4,7 @@
 //! peak counts as removed light): σ = ∫ N(D) · Q · π D²/4 dD over the Marshall–Palmer
 //! distribution, = π N0 / Λ³ (closed form over [0, ∞)), ≈ 0.365 R^0.63 km⁻¹.
 
-use super::dsd::{mp_slope_per_mm, MP_N0_PER_M3_MM, RAIN_RATE_MM_H};
+use super::dsd::{MP_N0_PER_M3_MM, RAIN_RATE_MM_H, mp_slope_per_mm};
 use crate::error::Result;
 
 /// Extinction coefficient of rain, 1/m (0 for R = 0).
@@ -20,7 +20,10 @@ pub fn rain_extinction_per_m(rain_rate_mm_h: f64) -> f64 {
 /// Vectorised [`rain_extinction_per_m`].
 pub fn rain_extinction_many(rain_rate_mm_h: &[f64]) -> Result<Vec<f64>> {
     RAIN_RATE_MM_H.check_all("rain_rate_mm_h", rain_rate_mm_h)?;
-    Ok(rain_rate_mm_h.iter().map(|&r| rain_extinction_per_m(r)).collect())
+    Ok(rain_rate_mm_h
+        .iter()
+        .map(|&r| rain_extinction_per_m(r))
+        .collect())
 }
 
 #[cfg(test)]

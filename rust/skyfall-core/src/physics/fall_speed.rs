@@ -14,10 +14,10 @@
 //! regime 3 is fitted to 7 mm and its formula is used unchanged from 7 to 8 mm, where it
 //! stays within 0.6 % of 9.15 m/s. D = 0 gives 0.
 
+use super::GRAVITY_M_S2;
 use super::air::{Air, AirProps};
 use super::drag::sphere_reynolds;
-use super::GRAVITY_M_S2;
-use crate::error::{at, broadcast_len, Error, Param, Range, Result};
+use crate::error::{Error, Param, Range, Result, at, broadcast_len};
 use rayon::prelude::*;
 
 /// Valid drop diameters, mm.
@@ -45,7 +45,10 @@ impl FallSpeedModel {
             "sphere" => Ok(Self::Sphere),
             "atlas" => Ok(Self::Atlas),
             other => Err(Error::Invalid {
-                param: Param { name: "model", index: None },
+                param: Param {
+                    name: "model",
+                    index: None,
+                },
                 message: format!("unknown model {other:?}; expected one of {:?}", Self::NAMES),
             }),
         }
@@ -53,9 +56,19 @@ impl FallSpeedModel {
 }
 
 /// Beard 1976 regime 2 coefficients (19 µm ≤ d < 1.07 mm): ln Re = Σ bₙ Xⁿ, X = ln(Cd Re²).
-const BEARD_B2: [f64; 7] = [-3.18657, 0.992696, -0.00153193, -0.000987059, -0.000578878, 8.55176e-5, -3.27815e-6];
+const BEARD_B2: [f64; 7] = [
+    -3.18657,
+    0.992696,
+    -0.00153193,
+    -0.000987059,
+    -0.000578878,
+    8.55176e-5,
+    -3.27815e-6,
+];
 /// Beard 1976 regime 3 coefficients (1.07 mm ≤ d ≤ 7 mm): Y = Σ bₙ Xⁿ, X = ln(Bo · Np^(1/6)).
-const BEARD_B3: [f64; 6] = [-5.00015, 5.23778, -2.04914, 0.475294, -0.0542819, 0.00238449];
+const BEARD_B3: [f64; 6] = [
+    -5.00015, 5.23778, -2.04914, 0.475294, -0.0542819, 0.00238449,
+];
 
 fn poly(b: &[f64], x: f64) -> f64 {
     b.iter().rev().fold(0.0, |acc, &c| acc * x + c)
@@ -110,7 +123,9 @@ impl FallSpeed {
         match self.model {
             FallSpeedModel::Sphere => self.nu * sphere_reynolds(self.best_per_d3 * d.powi(3)).0 / d,
             FallSpeedModel::Beard => self.beard(d),
-            FallSpeedModel::Atlas => (9.65 - 10.3 * (-0.6 * diameter_mm).exp()).max(0.0) * self.atlas_factor,
+            FallSpeedModel::Atlas => {
+                (9.65 - 10.3 * (-0.6 * diameter_mm).exp()).max(0.0) * self.atlas_factor
+            }
         }
     }
 
@@ -161,24 +176,42 @@ impl AirArrays<'_> {
     }
 
     fn is_scalar(&self) -> bool {
-        self.temperature_c.len() == 1 && self.pressure_hpa.len() == 1 && self.relative_humidity.len() == 1
+        self.temperature_c.len() == 1
+            && self.pressure_hpa.len() == 1
+            && self.relative_humidity.len() == 1
     }
 
     /// Validates every element; returns the properties when all three are scalars.
     pub fn validate(&self, n: usize) -> Result<Option<AirProps>> {
         if self.is_scalar() {
-            return Ok(Some(Air::new(self.temperature_c[0], self.pressure_hpa[0], self.relative_humidity[0])?.props()));
+            return Ok(Some(
+                Air::new(
+                    self.temperature_c[0],
+                    self.pressure_hpa[0],
+                    self.relative_humidity[0],
+                )?
+                .props(),
+            ));
         }
         for i in 0..n {
-            Air::checked(at(self.temperature_c, i), at(self.pressure_hpa, i), at(self.relative_humidity, i), Some(i))?;
+            Air::checked(
+                at(self.temperature_c, i),
+                at(self.pressure_hpa, i),
+                at(self.relative_humidity, i),
+                Some(i),
+            )?;
         }
         Ok(None)
     }
 
     /// Properties at element `i` (after [`AirArrays::validate`]).
     pub fn props_at(&self, i: usize) -> AirProps {
-        Air { temperature_c: at(self.temperature_c, i), pressure_hpa: at(self.pressure_hpa, i), relative_humidity: at(self.relative_humidity, i) }
-            .props()
+        Air {
+            temperature_c: at(self.temperature_c, i),
+            pressure_hpa: at(self.pressure_hpa, i),
+            relative_humidity: at(self.relative_humidity, i),
+        }
+        .props()
     }
 }
 
@@ -187,7 +220,11 @@ pub const PARALLEL_MIN_LEN: usize = 1 << 14;
 
 /// Terminal velocity, m/s, for arrays of length 1 or n (broadcast).
 /// Validates everything first; elementwise, so the result does not depend on threading.
-pub fn terminal_velocity_many(diameter_mm: &[f64], model: FallSpeedModel, air: AirArrays<'_>) -> Result<Vec<f64>> {
+pub fn terminal_velocity_many(
+    diameter_mm: &[f64],
+    model: FallSpeedModel,
+    air: AirArrays<'_>,
+) -> Result<Vec<f64>> {
     let n = air.broadcast_with(&[("diameter_mm", diameter_mm.len())])?;
     DIAMETER_MM.check_all("diameter_mm", diameter_mm)?;
     let fixed = air.validate(n)?.map(|props| FallSpeed::new(model, &props));
@@ -197,7 +234,9 @@ pub fn terminal_velocity_many(diameter_mm: &[f64], model: FallSpeedModel, air: A
     };
     let mut out = vec![0.0; n];
     if n >= PARALLEL_MIN_LEN {
-        out.par_iter_mut().enumerate().for_each(|(i, o)| *o = one(i));
+        out.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, o)| *o = one(i));
     } else {
         out.iter_mut().enumerate().for_each(|(i, o)| *o = one(i));
     }
@@ -215,7 +254,14 @@ mod tests {
     #[test]
     fn beard_matches_gunn_kinzer_spot_values() {
         // Gunn & Kinzer 1949 Table 2 (tests/data/gunn_kinzer_1949_fall_speed.csv).
-        for &(d, gk) in &[(0.5, 2.06), (1.0, 4.03), (2.0, 6.49), (3.0, 8.06), (4.0, 8.83), (5.8, 9.17)] {
+        for &(d, gk) in &[
+            (0.5, 2.06),
+            (1.0, 4.03),
+            (2.0, 6.49),
+            (3.0, 8.06),
+            (4.0, 8.83),
+            (5.8, 9.17),
+        ] {
             let rel = (v(d, FallSpeedModel::Beard) - gk) / gk;
             assert!(rel.abs() < 0.025, "D={d} rel={rel}");
         }
@@ -223,13 +269,23 @@ mod tests {
 
     #[test]
     fn every_model_is_finite_monotone_and_bounded() {
-        for m in [FallSpeedModel::Sphere, FallSpeedModel::Beard, FallSpeedModel::Atlas] {
+        for m in [
+            FallSpeedModel::Sphere,
+            FallSpeedModel::Beard,
+            FallSpeedModel::Atlas,
+        ] {
             let mut prev = 0.0;
             for k in 0..=8000 {
                 let d = k as f64 * 1e-3;
                 let s = v(d, m);
-                assert!(s.is_finite() && (0.0..20.0).contains(&s), "{m:?} D={d} v={s}");
-                assert!(s >= prev - 0.05 * prev, "{m:?} not monotone at D={d}: {prev} -> {s}");
+                assert!(
+                    s.is_finite() && (0.0..20.0).contains(&s),
+                    "{m:?} D={d} v={s}"
+                );
+                assert!(
+                    s >= prev - 0.05 * prev,
+                    "{m:?} not monotone at D={d}: {prev} -> {s}"
+                );
                 prev = s;
             }
         }
@@ -237,8 +293,14 @@ mod tests {
 
     #[test]
     fn thinner_air_falls_faster() {
-        let high = Air::new(0.0, 700.0, 0.5).map(|a| a.props()).unwrap_or(Air::STANDARD.props());
-        for m in [FallSpeedModel::Sphere, FallSpeedModel::Beard, FallSpeedModel::Atlas] {
+        let high = Air::new(0.0, 700.0, 0.5)
+            .map(|a| a.props())
+            .unwrap_or(Air::STANDARD.props());
+        for m in [
+            FallSpeedModel::Sphere,
+            FallSpeedModel::Beard,
+            FallSpeedModel::Atlas,
+        ] {
             assert!(terminal_velocity_m_s(2.0, m, &high) > v(2.0, m));
         }
     }
@@ -246,12 +308,27 @@ mod tests {
     #[test]
     fn broadcasting_and_validation() {
         let d = [1.0, 2.0, 3.0];
-        let air = AirArrays { temperature_c: &[20.0], pressure_hpa: &[1013.25, 900.0, 800.0], relative_humidity: &[0.5] };
+        let air = AirArrays {
+            temperature_c: &[20.0],
+            pressure_hpa: &[1013.25, 900.0, 800.0],
+            relative_humidity: &[0.5],
+        };
         let out = terminal_velocity_many(&d, FallSpeedModel::Beard, air);
         assert!(matches!(out, Ok(ref o) if o.len() == 3));
-        let bad = terminal_velocity_many(&[1.0, -1.0], FallSpeedModel::Beard, AirArrays { temperature_c: &[20.0], pressure_hpa: &[1013.25], relative_humidity: &[0.5] });
+        let bad = terminal_velocity_many(
+            &[1.0, -1.0],
+            FallSpeedModel::Beard,
+            AirArrays {
+                temperature_c: &[20.0],
+                pressure_hpa: &[1013.25],
+                relative_humidity: &[0.5],
+            },
+        );
         let msg = bad.err().map(|e| e.to_string()).unwrap_or_default();
-        assert!(msg.contains("diameter_mm[1]") && msg.contains("[0, 8] mm"), "{msg}");
+        assert!(
+            msg.contains("diameter_mm[1]") && msg.contains("[0, 8] mm"),
+            "{msg}"
+        );
         assert!(FallSpeedModel::parse("nope").is_err());
     }
 }

@@ -1,12 +1,28 @@
 //! Composite Gauss–Legendre quadrature with breakpoints at known kinks.
 
 /// 8-point Gauss–Legendre nodes (positive half) on [-1, 1].
-const NODES: [f64; 4] = [0.183_434_642_495_649_8, 0.525_532_409_916_329, 0.796_666_477_413_626_7, 0.960_289_856_497_536_3];
+const NODES: [f64; 4] = [
+    0.183_434_642_495_649_8,
+    0.525_532_409_916_329,
+    0.796_666_477_413_626_7,
+    0.960_289_856_497_536_3,
+];
 /// Matching weights.
-const WEIGHTS: [f64; 4] = [0.362_683_783_378_362, 0.313_706_645_877_887_3, 0.222_381_034_453_374_5, 0.101_228_536_290_376_3];
+const WEIGHTS: [f64; 4] = [
+    0.362_683_783_378_362,
+    0.313_706_645_877_887_3,
+    0.222_381_034_453_374_5,
+    0.101_228_536_290_376_3,
+];
 
 /// ∫ f over [a, b], split at the `breaks` that fall inside, each piece into `panels` panels.
-pub(crate) fn integrate<F: Fn(f64) -> f64>(f: F, a: f64, b: f64, breaks: &[f64], panels: usize) -> f64 {
+pub(crate) fn integrate<F: Fn(f64) -> f64>(
+    f: F,
+    a: f64,
+    b: f64,
+    breaks: &[f64],
+    panels: usize,
+) -> f64 {
     let mut edges: Vec<f64> = std::iter::once(a)
         .chain(breaks.iter().copied().filter(|&x| x > a && x < b))
         .chain(std::iter::once(b))

@@ -25,9 +25,9 @@
 //! camera moving forward at 15 m/s. A billboard frame's mean opacity varies more from seed to
 //! seed than the drops' (the sampled balance varies with the seed too).
 
-use super::drops::{map_voxel_columns, voxel_in_view, wrap, Drop, RainRegion};
-use super::splat::{screen_streak, ScreenStreak};
-use super::texture::{draw_streaks, Streak};
+use super::drops::{Drop, RainRegion, map_voxel_columns, voxel_in_view, wrap};
+use super::splat::{ScreenStreak, screen_streak};
+use super::texture::{Streak, draw_streaks};
 use crate::physics::air::Air;
 use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
 use crate::scene::camera::Camera;
@@ -60,7 +60,15 @@ const NEAR_FINER: usize = 3;
 /// length. Stratified sampling, one jittered point per stratum ((3·`finer`)³ and
 /// (6·`finer`)²): unbiased for each voxel, so the frame's sums converge as voxels add up;
 /// `rng` makes it deterministic.
-fn opacity_balance(area_at: &impl Fn(Vec3) -> f32, rng: &mut Pcg64Mcg, corner: Vec3, centre: Vec3, right: Vec3, length_m: f32, finer: usize) -> (f64, f64) {
+fn opacity_balance(
+    area_at: &impl Fn(Vec3) -> f32,
+    rng: &mut Pcg64Mcg,
+    corner: Vec3,
+    centre: Vec3,
+    right: Vec3,
+    length_m: f32,
+    finer: usize,
+) -> (f64, f64) {
     let mut at = |i: usize, n: usize| (i as f32 + rng.random::<f32>()) / n as f32;
     let (n, m) = (STRATA * finer, BOARD_STRATA * finer);
     let (mut drops, mut board) = (0.0f64, 0.0f64);
@@ -73,7 +81,9 @@ fn opacity_balance(area_at: &impl Fn(Vec3) -> f32, rng: &mut Pcg64Mcg, corner: V
     }
     for i in 0..m {
         for j in 0..m {
-            board += f64::from(area_at(centre + right * (at(i, m) - 0.5) + Vec3::Y * (0.5 - at(j, m) - length_m)));
+            board += f64::from(area_at(
+                centre + right * (at(i, m) - 0.5) + Vec3::Y * (0.5 - at(j, m) - length_m),
+            ));
         }
     }
     (drops / (n * n * n) as f64, board / (m * m) as f64)
@@ -82,18 +92,41 @@ fn opacity_balance(area_at: &impl Fn(Vec3) -> f32, rng: &mut Pcg64Mcg, corner: V
 /// The probe of [`opacity_balance`], a drop of the region's middle diameter falling at its
 /// speed in the wind: its on-screen opacity-area ending at a point (0 beyond the region), and
 /// its streak length, m.
-fn probe_area(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_velocity_m_s: Vec3) -> (impl Fn(Vec3) -> f32 + Sync, f32) {
+fn probe_area(
+    region: &RainRegion,
+    cam: &Camera,
+    exposure_s: f64,
+    camera_velocity_m_s: Vec3,
+) -> (impl Fn(Vec3) -> f32 + Sync, f32) {
     let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
-    let d_mid = region.bins.first().zip(region.bins.last()).map_or(1.5, |(a, b)| 0.5 * (a.0 + b.1));
-    let velocity = Vec3::new(region.wind_m_s.x as f32, -law.m_s(d_mid) as f32, region.wind_m_s.z as f32);
-    let (eye, near, frame) = (cam.position_m, region.near_m as f32, (cam.width as f32, cam.height as f32));
+    let d_mid = region
+        .bins
+        .first()
+        .zip(region.bins.last())
+        .map_or(1.5, |(a, b)| 0.5 * (a.0 + b.1));
+    let velocity = Vec3::new(
+        region.wind_m_s.x as f32,
+        -law.m_s(d_mid) as f32,
+        region.wind_m_s.z as f32,
+    );
+    let (eye, near, frame) = (
+        cam.position_m,
+        region.near_m as f32,
+        (cam.width as f32, cam.height as f32),
+    );
     let cam = *cam;
     let area_at = move |end: Vec3| -> f32 {
         if end.distance(eye) > near {
             return 0.0;
         }
-        let probe = Drop { position_m: end, velocity_m_s: velocity, diameter_m: (d_mid * 1e-3) as f32, id: [0; 5] };
-        screen_streak(&cam, &probe, exposure_s as f32, camera_velocity_m_s).map_or(0.0, |s: ScreenStreak| s.opacity_area_in(frame.0, frame.1))
+        let probe = Drop {
+            position_m: end,
+            velocity_m_s: velocity,
+            diameter_m: (d_mid * 1e-3) as f32,
+            id: [0; 5],
+        };
+        screen_streak(&cam, &probe, exposure_s as f32, camera_velocity_m_s)
+            .map_or(0.0, |s: ScreenStreak| s.opacity_area_in(frame.0, frame.1))
     };
     (area_at, (law.m_s(d_mid) * exposure_s) as f32)
 }
@@ -116,12 +149,25 @@ impl AsMut<Vec<Drop>> for Column {
 /// The billboards' streaks as drops, for the voxels that can draw into `cam`'s frame, widened
 /// to carry the drops' opacity (see the module docs; `camera_velocity_m_s` as in the drawn
 /// streaks).
-pub fn billboards_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_velocity_m_s: Vec3, ground: bool) -> Vec<Drop> {
+pub fn billboards_in_view(
+    region: &RainRegion,
+    cam: &Camera,
+    exposure_s: f64,
+    camera_velocity_m_s: Vec3,
+    ground: bool,
+) -> Vec<Drop> {
     let camera_speed_m_s = f64::from(camera_velocity_m_s.length());
     let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
-    let textures: Vec<Vec<Streak>> =
-        region.bins.iter().map(|&(lo, hi)| draw_streaks(region.rain_rate_mm_h, lo, hi, exposure_s, region.seed)).collect();
-    let scroll: Vec<f64> = region.bins.iter().map(|&(lo, hi)| law.m_s(0.5 * (lo + hi)) * region.time_s).collect();
+    let textures: Vec<Vec<Streak>> = region
+        .bins
+        .iter()
+        .map(|&(lo, hi)| draw_streaks(region.rain_rate_mm_h, lo, hi, exposure_s, region.seed))
+        .collect();
+    let scroll: Vec<f64> = region
+        .bins
+        .iter()
+        .map(|&(lo, hi)| law.m_s(0.5 * (lo + hi)) * region.time_s)
+        .collect();
     let eye = cam.position_m;
     let (area_at, probe_len) = probe_area(region, cam, exposure_s, camera_velocity_m_s);
     // A billboard's streak can end up to its own length below the voxel (the texture wraps).
@@ -129,19 +175,53 @@ pub fn billboards_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, ca
     let per_voxel: usize = textures.iter().map(Vec::len).sum();
     let board_streaks = |voxel: [i64; 3], column: &mut Column| {
         column.drops.reserve(per_voxel);
-        let centre = Vec3::new(voxel[0] as f32 + 0.5, voxel[1] as f32 + 0.5, voxel[2] as f32 + 0.5);
+        let centre = Vec3::new(
+            voxel[0] as f32 + 0.5,
+            voxel[1] as f32 + 0.5,
+            voxel[2] as f32 + 0.5,
+        );
         let to_eye = Vec3::new(eye.x - centre.x, 0.0, eye.z - centre.z);
-        let n = if to_eye.length_squared() > 1e-12 { to_eye.normalize() } else { Vec3::Z };
+        let n = if to_eye.length_squared() > 1e-12 {
+            to_eye.normalize()
+        } else {
+            Vec3::Z
+        };
         let right = Vec3::new(n.z, 0.0, -n.x);
         let corner = Vec3::new(voxel[0] as f32, voxel[1] as f32, voxel[2] as f32);
-        let mut rng = Pcg64Mcg::seed_from_u64(derive(region.seed, &[voxel[0] as u64, voxel[1] as u64, voxel[2] as u64, 0x0BA1_A4CE]));
-        let finer = if centre.distance(eye) < NEAR_VOXEL_M { NEAR_FINER } else { 1 };
-        let (want, board) = opacity_balance(&area_at, &mut rng, corner, centre, right, probe_len, finer);
-        let gain = if board > 0.0 { ((want / board).sqrt() as f32).min(MAX_GAIN) } else { 1.0 };
+        let mut rng = Pcg64Mcg::seed_from_u64(derive(
+            region.seed,
+            &[
+                voxel[0] as u64,
+                voxel[1] as u64,
+                voxel[2] as u64,
+                0x0BA1_A4CE,
+            ],
+        ));
+        let finer = if centre.distance(eye) < NEAR_VOXEL_M {
+            NEAR_FINER
+        } else {
+            1
+        };
+        let (want, board) =
+            opacity_balance(&area_at, &mut rng, corner, centre, right, probe_len, finer);
+        let gain = if board > 0.0 {
+            ((want / board).sqrt() as f32).min(MAX_GAIN)
+        } else {
+            1.0
+        };
         column.wanted += want;
         column.shown += f64::from(gain * gain) * board;
         for (bin, streaks) in textures.iter().enumerate() {
-            let key = derive(region.seed, &[voxel[0] as u64, voxel[1] as u64, voxel[2] as u64, bin as u64, 0xB111_B0A4D]);
+            let key = derive(
+                region.seed,
+                &[
+                    voxel[0] as u64,
+                    voxel[1] as u64,
+                    voxel[2] as u64,
+                    bin as u64,
+                    0xB111_B0A4D,
+                ],
+            );
             let mut rng = Pcg64Mcg::seed_from_u64(key);
             let (ox, oy): (f64, f64) = (rng.random(), rng.random());
             for (k, s) in streaks.iter().enumerate() {
@@ -152,7 +232,11 @@ pub fn billboards_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, ca
                 let fall = (s.length_m / exposure_s) as f32;
                 column.drops.push(Drop {
                     position_m: end,
-                    velocity_m_s: Vec3::new(region.wind_m_s.x as f32, -fall, region.wind_m_s.z as f32),
+                    velocity_m_s: Vec3::new(
+                        region.wind_m_s.x as f32,
+                        -fall,
+                        region.wind_m_s.z as f32,
+                    ),
                     diameter_m: s.diameter_m as f32 * gain,
                     id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
                 });
@@ -161,7 +245,11 @@ pub fn billboards_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, ca
     };
     let keep = voxel_in_view(region, cam, exposure_s, camera_speed_m_s, longest);
     let columns = map_voxel_columns(region, eye, ground, keep, |voxels| {
-        let mut column = Column { drops: Vec::new(), wanted: 0.0, shown: 0.0 };
+        let mut column = Column {
+            drops: Vec::new(),
+            wanted: 0.0,
+            shown: 0.0,
+        };
         for voxel in voxels {
             board_streaks(voxel, &mut column);
         }
@@ -169,11 +257,20 @@ pub fn billboards_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, ca
     });
     // What no billboard could show, spread over all of them (the sums in column order: the
     // same bits in every run).
-    let (wanted, shown) = columns.iter().fold((0.0, 0.0), |(w, s), c| (w + c.wanted, s + c.shown));
-    let spread = if shown > 0.0 { ((wanted / shown).sqrt() as f32).min(MAX_GAIN) } else { 1.0 };
+    let (wanted, shown) = columns
+        .iter()
+        .fold((0.0, 0.0), |(w, s), c| (w + c.wanted, s + c.shown));
+    let spread = if shown > 0.0 {
+        ((wanted / shown).sqrt() as f32).min(MAX_GAIN)
+    } else {
+        1.0
+    };
     let mut drops: Vec<Drop> = Vec::with_capacity(columns.iter().map(|c| c.drops.len()).sum());
     for c in columns {
-        drops.extend(c.drops.into_iter().map(|d| Drop { diameter_m: d.diameter_m * spread, ..d }));
+        drops.extend(c.drops.into_iter().map(|d| Drop {
+            diameter_m: d.diameter_m * spread,
+            ..d
+        }));
     }
     drops
 }
@@ -190,14 +287,28 @@ mod tests {
         // is uniform on [1, 2] m and its billboard stands at 1.5 m facing the camera, so with
         // opacity-area ∝ 1/z² the ratio is E[1/z²] · 1.5² = 1/(1·2) · 2.25 = 1.125.
         let r = RainRegion::new(10.0, &[1.0, 2.0], 5.0, [0.0; 3], 0.0, 1).unwrap();
-        let cam = Camera::new(400, 400, [100.0, 100.0, 200.0, 200.0], Vec3::new(0.5, 1.5, 1.0), Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            400,
+            400,
+            [100.0, 100.0, 200.0, 200.0],
+            Vec3::new(0.5, 1.5, 1.0),
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let (area_at, len) = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO);
         let (corner, centre) = (Vec3::new(0.0, 1.0, -1.0), Vec3::new(0.5, 1.5, -0.5));
         let mut rng = Pcg64Mcg::seed_from_u64(3);
         let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
         assert!((a / b - 1.125).abs() < 0.02, "{}", a / b);
         // far away the spread of depths no longer matters
-        let far = Camera::new(400, 400, [100.0, 100.0, 200.0, 200.0], Vec3::new(0.5, 1.5, 20.0), Mat3::IDENTITY).unwrap();
+        let far = Camera::new(
+            400,
+            400,
+            [100.0, 100.0, 200.0, 200.0],
+            Vec3::new(0.5, 1.5, 20.0),
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let r = RainRegion::new(10.0, &[1.0, 2.0], 30.0, [0.0; 3], 0.0, 1).unwrap();
         let (area_at, len) = probe_area(&r, &far, 1.0 / 30.0, Vec3::ZERO);
         let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
@@ -207,7 +318,14 @@ mod tests {
     #[test]
     fn billboards_hold_as_many_drops_as_the_reference_and_face_the_camera() {
         let r = RainRegion::new(20.0, &[1.0, 1.5, 2.0], 4.0, [0.0; 3], 0.3, 2).unwrap();
-        let cam = Camera::new(120, 80, [90.0, 90.0, 60.0, 40.0], Vec3::new(0.3, 1.6, 0.2), Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            120,
+            80,
+            [90.0, 90.0, 60.0, 40.0],
+            Vec3::new(0.3, 1.6, 0.2),
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let b = billboards_in_view(&r, &cam, 1.0 / 30.0, Vec3::ZERO, true);
         let d = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true);
         // Over the voxels both draw (billboards keep a few more at the frustum's edge: their
@@ -217,10 +335,18 @@ mod tests {
         let shared = b.iter().filter(|x| drawn.contains(&voxel(x))).count();
         assert!(shared <= b.len() && b.len() < 2 * shared);
         let ratio = shared as f64 / d.len() as f64;
-        assert!((ratio - 1.0).abs() < 0.1, "{shared} billboard drops vs {} drops", d.len());
+        assert!(
+            (ratio - 1.0).abs() < 0.1,
+            "{shared} billboard drops vs {} drops",
+            d.len()
+        );
         // every billboard drop lies on its voxel's plane through the centre, facing the camera
         for drop in b.iter().take(500) {
-            let c = Vec3::new(drop.id[0] as f32 + 0.5, drop.id[1] as f32 + 0.5, drop.id[2] as f32 + 0.5);
+            let c = Vec3::new(
+                drop.id[0] as f32 + 0.5,
+                drop.id[1] as f32 + 0.5,
+                drop.id[2] as f32 + 0.5,
+            );
             let n = Vec3::new(cam.position_m.x - c.x, 0.0, cam.position_m.z - c.z).normalize();
             assert!((drop.position_m - c).dot(n).abs() < 1e-4);
         }

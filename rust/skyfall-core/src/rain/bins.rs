@@ -14,14 +14,26 @@ pub const TEXTURE_DIAMETER_MM: Range = Range::open_closed(0.0, 8.0, "mm");
 /// (lower, upper) bin edges in mm for strictly increasing `diameters_mm`.
 pub fn diameter_bins(diameters_mm: &[f64]) -> Result<Vec<(f64, f64)>> {
     if diameters_mm.is_empty() {
-        return Err(Error::Invalid { param: Param { name: "diameters_mm", index: None }, message: "needs at least one diameter".into() });
+        return Err(Error::Invalid {
+            param: Param {
+                name: "diameters_mm",
+                index: None,
+            },
+            message: "needs at least one diameter".into(),
+        });
     }
     TEXTURE_DIAMETER_MM.check_all("diameters_mm", diameters_mm)?;
     for (i, w) in diameters_mm.windows(2).enumerate() {
         if w[1] <= w[0] {
             return Err(Error::Invalid {
-                param: Param { name: "diameters_mm", index: Some(i + 1) },
-                message: format!("diameters must be strictly increasing, got {} after {}", w[1], w[0]),
+                param: Param {
+                    name: "diameters_mm",
+                    index: Some(i + 1),
+                },
+                message: format!(
+                    "diameters must be strictly increasing, got {} after {}",
+                    w[1], w[0]
+                ),
             });
         }
     }
@@ -59,6 +71,9 @@ mod tests {
         }
         assert!(diameter_bins(&[1.0, 1.0]).is_err());
         assert!(diameter_bins(&[]).is_err());
-        assert_eq!(diameter_bins(&[0.05]).unwrap_or_default(), vec![(0.0, 0.15000000000000002)]);
+        assert_eq!(
+            diameter_bins(&[0.05]).unwrap_or_default(),
+            vec![(0.0, 0.15000000000000002)]
+        );
     }
 }

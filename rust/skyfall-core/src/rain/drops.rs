@@ -12,7 +12,7 @@
 use super::bins::diameter_bins;
 use crate::error::{Error, Range, Result};
 use crate::physics::air::Air;
-use crate::physics::dsd::{drops_per_m3, mp_slope_per_mm, RAIN_RATE_MM_H};
+use crate::physics::dsd::{RAIN_RATE_MM_H, drops_per_m3, mp_slope_per_mm};
 use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
 use crate::scene::camera::Camera;
 use crate::seed::derive;
@@ -47,7 +47,14 @@ pub struct RainRegion {
 
 impl RainRegion {
     /// Validated region from texture-style diameters (bins around them, see [`diameter_bins`]).
-    pub fn new(rain_rate_mm_h: f64, diameters_mm: &[f64], near_m: f64, wind_m_s: [f64; 3], time_s: f64, seed: u64) -> Result<Self> {
+    pub fn new(
+        rain_rate_mm_h: f64,
+        diameters_mm: &[f64],
+        near_m: f64,
+        wind_m_s: [f64; 3],
+        time_s: f64,
+        seed: u64,
+    ) -> Result<Self> {
         RAIN_RATE_MM_H.check("rain_rate_mm_h", None, rain_rate_mm_h)?;
         NEAR_M.check("rain_near_m", None, near_m)?;
         for (i, w) in wind_m_s.iter().enumerate() {
@@ -74,7 +81,11 @@ impl RainRegion {
     /// The drops expected in `fraction` of the region's sphere (grown by a voxel's diagonal,
     /// for the voxels its surface cuts).
     pub fn expected_drops(&self, fraction: f64) -> f64 {
-        let per_m3: f64 = self.bins.iter().map(|&(lo, hi)| drops_per_m3(self.rain_rate_mm_h, lo, hi)).sum();
+        let per_m3: f64 = self
+            .bins
+            .iter()
+            .map(|&(lo, hi)| drops_per_m3(self.rain_rate_mm_h, lo, hi))
+            .sum();
         per_m3 * 4.0 / 3.0 * std::f64::consts::PI * (self.near_m + 1.8).powi(3) * fraction
     }
 
@@ -84,7 +95,10 @@ impl RainRegion {
         let n = self.expected_drops(fraction);
         let bytes = (n * std::mem::size_of::<Drop>() as f64) as u128;
         if bytes > u128::from(DROP_BUDGET_BYTES) {
-            let what = format!("{n:.3e} drops (rain_near_m = {} m at {} mm/h; their number goes as rain_near_m³)", self.near_m, self.rain_rate_mm_h);
+            let what = format!(
+                "{n:.3e} drops (rain_near_m = {} m at {} mm/h; their number goes as rain_near_m³)",
+                self.near_m, self.rain_rate_mm_h
+            );
             return Err(Error::too_large(what, bytes, DROP_BUDGET_BYTES));
         }
         Ok(())
@@ -140,8 +154,21 @@ impl BinSpeeds {
             .map(|&(lo, hi)| {
                 let step = (hi - lo) / SPEED_STEPS as f64;
                 let inv_step = if step > 0.0 { 1.0 / step } else { 0.0 };
-                let cell = |d: f64| if d > lo && d < hi { ((d - lo) * inv_step) as usize } else { usize::MAX };
-                (lo, inv_step, (0..=SPEED_STEPS).map(|k| law.m_s(lo + step * k as f64)).collect(), [cell(19e-3), cell(1.07)])
+                let cell = |d: f64| {
+                    if d > lo && d < hi {
+                        ((d - lo) * inv_step) as usize
+                    } else {
+                        usize::MAX
+                    }
+                };
+                (
+                    lo,
+                    inv_step,
+                    (0..=SPEED_STEPS)
+                        .map(|k| law.m_s(lo + step * k as f64))
+                        .collect(),
+                    [cell(19e-3), cell(1.07)],
+                )
             })
             .collect();
         BinSpeeds { law, tables }
@@ -162,13 +189,29 @@ impl BinSpeeds {
 }
 
 /// The drops of one voxel and bin.
-fn voxel_drops(region: &RainRegion, speeds: &BinSpeeds, voxel: [i64; 3], bin: usize, out: &mut Vec<Drop>) {
+fn voxel_drops(
+    region: &RainRegion,
+    speeds: &BinSpeeds,
+    voxel: [i64; 3],
+    bin: usize,
+    out: &mut Vec<Drop>,
+) {
     let (lo, hi) = region.bins[bin];
     let expected = drops_per_m3(region.rain_rate_mm_h, lo, hi);
     if expected <= 0.0 {
         return;
     }
-    let key = derive(region.seed, &[voxel[0] as u64, voxel[1] as u64, voxel[2] as u64, bin as u64, lo.to_bits(), hi.to_bits()]);
+    let key = derive(
+        region.seed,
+        &[
+            voxel[0] as u64,
+            voxel[1] as u64,
+            voxel[2] as u64,
+            bin as u64,
+            lo.to_bits(),
+            hi.to_bits(),
+        ],
+    );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
     let whole = expected.floor();
     let n = whole as usize + usize::from(rng.random::<f64>() < expected - whole);
@@ -208,8 +251,13 @@ impl RainMethod {
             "drops" => Ok(Self::Drops),
             "billboards" => Ok(Self::Billboards),
             other => Err(crate::error::Error::Invalid {
-                param: crate::error::Param { name: "rain_method", index: None },
-                message: format!("unknown rain method {other:?}; expected \"drops\" or \"billboards\""),
+                param: crate::error::Param {
+                    name: "rain_method",
+                    index: None,
+                },
+                message: format!(
+                    "unknown rain method {other:?}; expected \"drops\" or \"billboards\""
+                ),
             }),
         }
     }
@@ -219,11 +267,17 @@ impl RainMethod {
 /// `ground` is set), in a deterministic order.
 pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
-    voxels_where(region, center_m, ground, |_| true, |voxel, out| {
-        for bin in 0..region.bins.len() {
-            voxel_drops(region, &speeds, voxel, bin, out);
-        }
-    })
+    voxels_where(
+        region,
+        center_m,
+        ground,
+        |_| true,
+        |voxel, out| {
+            for bin in 0..region.bins.len() {
+                voxel_drops(region, &speeds, voxel, bin, out);
+            }
+        },
+    )
 }
 
 /// Whether a voxel (by its centre) can draw into `cam`'s frame during `exposure_s`: the voxel's
@@ -232,10 +286,17 @@ pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop
 /// anti-aliasing beyond the frame's edge (a drop's radius plus two pixels at the region's far
 /// side), meets the view frustum. Box against plane: the box is outside a plane when its
 /// corner farthest inside is outside.
-pub fn voxel_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64, slack_m: f64) -> impl Fn(Vec3) -> bool + Sync + use<> {
+pub fn voxel_in_view(
+    region: &RainRegion,
+    cam: &Camera,
+    exposure_s: f64,
+    camera_speed_m_s: f64,
+    slack_m: f64,
+) -> impl Fn(Vec3) -> bool + Sync + use<> {
     let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
     let d_max = region.bins.last().map_or(0.0, |b| b.1);
-    let speed = (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
+    let speed =
+        (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
     let edge = 2.0 * (region.near_m + 2.0) / f64::from(cam.fx.min(cam.fy)) + 0.5e-3 * d_max;
     let margin = ((speed + camera_speed_m_s) * exposure_s + slack_m + edge) as f32;
     let (w, h) = (cam.width as f32, cam.height as f32);
@@ -252,20 +313,34 @@ pub fn voxel_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_
     let position = cam.position_m;
     move |centre: Vec3| {
         let c = centre - position;
-        planes.iter().all(|n| n.dot(c) + 0.5 * n.abs().element_sum() >= -margin)
+        planes
+            .iter()
+            .all(|n| n.dot(c) + 0.5 * n.abs().element_sum() >= -margin)
     }
 }
 
 /// The drops of [`drops_near`] that can draw into `cam`'s frame (see [`voxel_in_view`]): the
 /// voxels that cannot are skipped without drawing their drops. The drops kept are exactly
 /// those of [`drops_near`] in those voxels.
-pub fn drops_in_view(region: &RainRegion, cam: &Camera, exposure_s: f64, camera_speed_m_s: f64, ground: bool) -> Vec<Drop> {
+pub fn drops_in_view(
+    region: &RainRegion,
+    cam: &Camera,
+    exposure_s: f64,
+    camera_speed_m_s: f64,
+    ground: bool,
+) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
-    voxels_where(region, cam.position_m, ground, voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0), |voxel, out| {
-        for bin in 0..region.bins.len() {
-            voxel_drops(region, &speeds, voxel, bin, out);
-        }
-    })
+    voxels_where(
+        region,
+        cam.position_m,
+        ground,
+        voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0),
+        |voxel, out| {
+            for bin in 0..region.bins.len() {
+                voxel_drops(region, &speeds, voxel, bin, out);
+            }
+        },
+    )
 }
 
 /// Runs `fill` for every voxel within the region around `center_m` that `keep_voxel` accepts
@@ -306,13 +381,22 @@ pub(crate) fn map_voxel_columns<T: Send + AsMut<Vec<Drop>>>(
     (lo.x as i64..=hi.x as i64)
         .into_par_iter()
         .map(|ix| {
-            let mut voxels = (lo.y as i64..=hi.y as i64).filter(|&iy| !(ground && iy < 0)).flat_map(|iy| (lo.z as i64..=hi.z as i64).map(move |iz| [ix, iy, iz])).filter(|&[ix, iy, iz]| {
-                // nearest point of the voxel to the centre
-                let q = DVec3::new(c.x.clamp(ix as f64, ix as f64 + 1.0), c.y.clamp(iy as f64, iy as f64 + 1.0), c.z.clamp(iz as f64, iz as f64 + 1.0));
-                q.distance(c) <= r && keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5))
-            });
+            let mut voxels = (lo.y as i64..=hi.y as i64)
+                .filter(|&iy| !(ground && iy < 0))
+                .flat_map(|iy| (lo.z as i64..=hi.z as i64).map(move |iz| [ix, iy, iz]))
+                .filter(|&[ix, iy, iz]| {
+                    // nearest point of the voxel to the centre
+                    let q = DVec3::new(
+                        c.x.clamp(ix as f64, ix as f64 + 1.0),
+                        c.y.clamp(iy as f64, iy as f64 + 1.0),
+                        c.z.clamp(iz as f64, iz as f64 + 1.0),
+                    );
+                    q.distance(c) <= r
+                        && keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5))
+                });
             let mut out = per_column(&mut voxels);
-            out.as_mut().retain(|d| d.position_m.as_dvec3().distance(c) <= r);
+            out.as_mut()
+                .retain(|d| d.position_m.as_dvec3().distance(c) <= r);
             out
         })
         .collect()
@@ -329,7 +413,14 @@ mod tests {
     #[test]
     fn tabulated_speeds_follow_beards_law() {
         use rand::{Rng, SeedableRng};
-        let bins = [(0.01, 0.03), (0.1, 0.3), (1.0, 1.2), (1.8, 2.0), (2.0, 3.0), (5.0, 6.0)];
+        let bins = [
+            (0.01, 0.03),
+            (0.1, 0.3),
+            (1.0, 1.2),
+            (1.8, 2.0),
+            (2.0, 3.0),
+            (5.0, 6.0),
+        ];
         let t = BinSpeeds::new(&bins);
         let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
         let mut rng = Pcg64Mcg::seed_from_u64(3);
@@ -338,7 +429,10 @@ mod tests {
             for _ in 0..20_000 {
                 let d = rng.random_range(lo..=hi);
                 let e = (t.m_s(b, d) / law.m_s(d) - 1.0).abs();
-                assert!(e < if lo < 0.5 { 3e-5 } else { 3e-7 }, "bin {b} d = {d}: {e:e}");
+                assert!(
+                    e < if lo < 0.5 { 3e-5 } else { 3e-7 },
+                    "bin {b} d = {d}: {e:e}"
+                );
                 worst = worst.max(e);
             }
             assert_eq!(t.m_s(b, lo), law.m_s(lo));
@@ -349,15 +443,45 @@ mod tests {
 
     #[test]
     fn wrap_is_x_minus_its_floor_bit_for_bit() {
-        let xs = [0.0, -0.0, 0.25, 1.0, -1.0, -0.25, 3.999_999_999, -2.5e-17, 1e-300, 7.3e9, -7.3e9, 123.456, -123.456];
-        for x in xs.into_iter().chain((0..2000).map(|k| (k as f64 - 1000.0) * 0.013_7)) {
+        let xs = [
+            0.0,
+            -0.0,
+            0.25,
+            1.0,
+            -1.0,
+            -0.25,
+            3.999_999_999,
+            -2.5e-17,
+            1e-300,
+            7.3e9,
+            -7.3e9,
+            123.456,
+            -123.456,
+        ];
+        for x in xs
+            .into_iter()
+            .chain((0..2000).map(|k| (k as f64 - 1000.0) * 0.013_7))
+        {
             assert_eq!(wrap(x).to_bits(), (x - x.floor()).to_bits(), "{x}");
         }
     }
 
     #[test]
     fn floor_by_truncation_is_floor() {
-        for x in [-3.5, -3.0, -0.0, 0.0, -1e-300, 1e-300, 0.999_999, 2.0, -2.000_001, 9e15, -9e15, 123_456.789] {
+        for x in [
+            -3.5,
+            -3.0,
+            -0.0,
+            0.0,
+            -1e-300,
+            1e-300,
+            0.999_999,
+            2.0,
+            -2.000_001,
+            9e15,
+            -9e15,
+            123_456.789,
+        ] {
             assert_eq!(floor(x), x.floor(), "{x}");
         }
     }
@@ -366,7 +490,10 @@ mod tests {
     fn drops_are_world_anchored_and_coherent_in_time() {
         use std::collections::HashMap;
         let a = drops_near(&region(0.0), Vec3::new(0.0, 1.6, 0.0), true);
-        let b: HashMap<_, _> = drops_near(&region(0.0), Vec3::new(0.5, 1.6, 0.0), true).into_iter().map(|d| (d.id, d)).collect();
+        let b: HashMap<_, _> = drops_near(&region(0.0), Vec3::new(0.5, 1.6, 0.0), true)
+            .into_iter()
+            .map(|d| (d.id, d))
+            .collect();
         // drops seen from both centres are the same drops
         let shared: Vec<_> = a.iter().filter(|d| b.contains_key(&d.id)).collect();
         assert!(shared.len() > 100);
@@ -374,7 +501,10 @@ mod tests {
             assert_eq!(*d, &b[&d.id]);
         }
         // 10 ms later every drop moved by v dt (no wrap for most)
-        let later: HashMap<_, _> = drops_near(&region(0.01), Vec3::new(0.0, 1.6, 0.0), true).into_iter().map(|d| (d.id, d)).collect();
+        let later: HashMap<_, _> = drops_near(&region(0.01), Vec3::new(0.0, 1.6, 0.0), true)
+            .into_iter()
+            .map(|d| (d.id, d))
+            .collect();
         let mut moved = 0;
         for d in &a {
             if let Some(e) = later.get(&d.id) {
@@ -384,24 +514,51 @@ mod tests {
                 }
             }
         }
-        assert!(moved as f64 > 0.9 * a.len() as f64, "{moved} of {}", a.len());
+        assert!(
+            moved as f64 > 0.9 * a.len() as f64,
+            "{moved} of {}",
+            a.len()
+        );
     }
 
     #[test]
     fn frustum_culling_keeps_every_streak_that_reaches_the_frame() {
-        use crate::rain::splat::{composite, RainShading, RainTargets};
+        use crate::rain::splat::{RainShading, RainTargets, composite};
         use glam::Mat3;
         let r = RainRegion::new(30.0, &[1.0, 1.5, 2.0], 5.0, [4.0, 0.0, -2.0], 0.3, 4).unwrap();
         let rot = Mat3::from_rotation_y(0.4) * Mat3::from_rotation_x(-0.2);
-        let cam = Camera::new(80, 60, [60.0, 60.0, 40.0, 30.0], Vec3::new(0.2, 1.6, 0.3), rot).unwrap();
+        let cam = Camera::new(
+            80,
+            60,
+            [60.0, 60.0, 40.0, 30.0],
+            Vec3::new(0.2, 1.6, 0.3),
+            rot,
+        )
+        .unwrap();
         let all = drops_near(&r, cam.position_m, true);
         let seen = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true);
-        assert!(seen.len() * 2 < all.len(), "{} of {}", seen.len(), all.len());
+        assert!(
+            seen.len() * 2 < all.len(),
+            "{} of {}",
+            seen.len(),
+            all.len()
+        );
         let draw = |drops: &[Drop]| {
             let n = cam.pixels();
             let (mut rgb, mut a, mut z) = (vec![0.1f32; 3 * n], vec![0.0; n], vec![0.0; n]);
             let depth = vec![f32::INFINITY; n];
-            let shown = composite(&cam, drops, 1.0 / 30.0, &RainShading::open_sky(), RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut a, rain_depth_m: &mut z });
+            let shown = composite(
+                &cam,
+                drops,
+                1.0 / 30.0,
+                &RainShading::open_sky(),
+                RainTargets {
+                    rgb: &mut rgb,
+                    depth_m: &depth,
+                    alpha: &mut a,
+                    rain_depth_m: &mut z,
+                },
+            );
             (rgb, a, shown)
         };
         let (rgb_all, a_all, shown_all) = draw(&all);
@@ -415,10 +572,18 @@ mod tests {
     fn drop_count_follows_marshall_palmer() {
         let r = region(0.0);
         let d = drops_near(&r, Vec3::new(0.3, 10.0, 0.7), true);
-        let per_m3: f64 = r.bins.iter().map(|&(lo, hi)| drops_per_m3(20.0, lo, hi)).sum();
+        let per_m3: f64 = r
+            .bins
+            .iter()
+            .map(|&(lo, hi)| drops_per_m3(20.0, lo, hi))
+            .sum();
         let expected = per_m3 * 4.0 / 3.0 * std::f64::consts::PI * 27.0;
         let sd = expected.sqrt();
-        assert!((d.len() as f64 - expected).abs() < 4.0 * sd + 0.02 * expected, "{} vs {expected}", d.len());
+        assert!(
+            (d.len() as f64 - expected).abs() < 4.0 * sd + 0.02 * expected,
+            "{} vs {expected}",
+            d.len()
+        );
         assert!(drops_near(&r, Vec3::new(0.0, -10.0, 0.0), true).is_empty());
         // the budget's estimate holds them (it grows the sphere by a voxel's diagonal)
         assert!(r.expected_drops(1.0) >= d.len() as f64);
@@ -429,9 +594,17 @@ mod tests {
         // 50 m at 200 mm/h: ~1.4e3 drops/m³ in 5.6e5 m³, ~55 GiB of drops.
         let big = RainRegion::new(200.0, &[1.0, 1.5, 2.0], 50.0, [0.0; 3], 0.0, 1).unwrap();
         let refused = big.check_budget(1.0);
-        assert!(matches!(&refused, Err(Error::TooLarge { what, .. }) if what.contains("rain_near_m = 50")), "{refused:?}");
+        assert!(
+            matches!(&refused, Err(Error::TooLarge { what, .. }) if what.contains("rain_near_m = 50")),
+            "{refused:?}"
+        );
         // a frame sees a fraction of it; a 5 m region at any rate fits whole
         assert!(big.check_budget(1e-3).is_ok());
-        assert!(RainRegion::new(500.0, &[0.5, 1.0, 2.0, 3.0], 5.0, [0.0; 3], 0.0, 1).unwrap().check_budget(1.0).is_ok());
+        assert!(
+            RainRegion::new(500.0, &[0.5, 1.0, 2.0, 3.0], 5.0, [0.0; 3], 0.0, 1)
+                .unwrap()
+                .check_budget(1.0)
+                .is_ok()
+        );
     }
 }

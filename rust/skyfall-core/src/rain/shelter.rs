@@ -25,7 +25,10 @@ fn candidates(boxes: &[SceneBox], drops: &[Drop], center_m: Vec3, near_m: f32) -
                 return false;
             }
             let reach = near_m + (b.max_m.y - floor) * slope;
-            b.min_m.x <= center_m.x + reach && b.max_m.x >= center_m.x - reach && b.min_m.z <= center_m.z + reach && b.max_m.z >= center_m.z - reach
+            b.min_m.x <= center_m.x + reach
+                && b.max_m.x >= center_m.x - reach
+                && b.min_m.z <= center_m.z + reach
+                && b.max_m.z >= center_m.z - reach
         })
         .copied()
         .collect()
@@ -58,27 +61,43 @@ mod tests {
     use super::*;
 
     fn drop_at(p: Vec3, v: Vec3) -> Drop {
-        Drop { position_m: p, velocity_m_s: v, diameter_m: 1e-3, id: [0; 5] }
+        Drop {
+            position_m: p,
+            velocity_m_s: v,
+            diameter_m: 1e-3,
+            id: [0; 5],
+        }
     }
 
     #[test]
     fn an_awning_shelters_what_the_wind_does_not_blow_in() {
         // Awning over x in [0, 4] at 3 m.
-        let awning = SceneBox { min_m: Vec3::new(0.0, 3.0, -10.0), max_m: Vec3::new(4.0, 3.2, 10.0), albedo: Vec3::ONE };
+        let awning = SceneBox {
+            min_m: Vec3::new(0.0, 3.0, -10.0),
+            max_m: Vec3::new(4.0, 3.2, 10.0),
+            albedo: Vec3::ONE,
+        };
         let still = Vec3::new(0.0, -6.0, 0.0);
         let windy = Vec3::new(3.0, -6.0, 0.0); // blows towards +x: slant 0.5 m per m of fall
         let mut drops = vec![
-            drop_at(Vec3::new(2.0, 1.0, 0.0), still),  // under it: sheltered
+            drop_at(Vec3::new(2.0, 1.0, 0.0), still), // under it: sheltered
             drop_at(Vec3::new(-1.0, 1.0, 0.0), still), // beside it: open
-            drop_at(Vec3::new(0.5, 1.0, 0.0), windy),  // came from x = -0.5 at 3 m: blown in
-            drop_at(Vec3::new(2.0, 1.0, 0.0), windy),  // came from x = 1 at 3 m: sheltered
-            drop_at(Vec3::new(2.0, 4.0, 0.0), still),  // above it: open
+            drop_at(Vec3::new(0.5, 1.0, 0.0), windy), // came from x = -0.5 at 3 m: blown in
+            drop_at(Vec3::new(2.0, 1.0, 0.0), windy), // came from x = 1 at 3 m: sheltered
+            drop_at(Vec3::new(2.0, 4.0, 0.0), still), // above it: open
         ];
         remove_sheltered(&mut drops, &[awning], Vec3::new(0.0, 1.6, 0.0), 5.0);
-        let xs: Vec<(f32, f32)> = drops.iter().map(|d| (d.position_m.x, d.position_m.y)).collect();
+        let xs: Vec<(f32, f32)> = drops
+            .iter()
+            .map(|d| (d.position_m.x, d.position_m.y))
+            .collect();
         assert_eq!(xs, vec![(-1.0, 1.0), (0.5, 1.0), (2.0, 4.0)]);
         // Far boxes are not considered; none at all changes nothing.
-        let far = SceneBox { min_m: Vec3::new(100.0, 0.0, 100.0), max_m: Vec3::new(101.0, 1.0, 101.0), albedo: Vec3::ONE };
+        let far = SceneBox {
+            min_m: Vec3::new(100.0, 0.0, 100.0),
+            max_m: Vec3::new(101.0, 1.0, 101.0),
+            albedo: Vec3::ONE,
+        };
         assert!(candidates(&[far], &drops, Vec3::ZERO, 5.0).is_empty());
         let before = drops.clone();
         remove_sheltered(&mut drops, &[], Vec3::ZERO, 5.0);

@@ -26,9 +26,9 @@ use crate::error::Result;
 use crate::scene::camera::Camera;
 use crate::scene::lights::Light;
 use crate::sky::ambient::AmbientMap;
-use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Streak ends nearer than this (m along the axis) are clipped.
 pub const NEAR_CLIP_M: f32 = 0.05;
@@ -57,14 +57,25 @@ impl RainShading {
     /// Seed 002's constant r (0.5 here), an open-sky drop light I_R = E/π (relative 1.0), no
     /// lights, no culling. The ambient-light map will lower I_R where drops see less sky.
     pub fn open_sky() -> Self {
-        RainShading { reflectance: 0.5, drop_radiance: 1.0, lights: Vec::new(), sky_illuminance_lux: 10_000.0, cull_threshold: None, ambient: None }
+        RainShading {
+            reflectance: 0.5,
+            drop_radiance: 1.0,
+            lights: Vec::new(),
+            sky_illuminance_lux: 10_000.0,
+            cull_threshold: None,
+            ambient: None,
+        }
     }
 
     /// I_R of a drop at `p`, per channel.
     pub fn drop_light(&self, p: Vec3) -> Vec3 {
-        let lit = self.lights.iter().fold(Vec3::ZERO, |acc, l| acc + l.illuminance_lux(p));
+        let lit = self
+            .lights
+            .iter()
+            .fold(Vec3::ZERO, |acc, l| acc + l.illuminance_lux(p));
         let sky = self.ambient.as_ref().map_or(1.0, |m| m.sample(p)[0]);
-        Vec3::splat(self.drop_radiance * sky) + lit * (self.drop_radiance / self.sky_illuminance_lux)
+        Vec3::splat(self.drop_radiance * sky)
+            + lit * (self.drop_radiance / self.sky_illuminance_lux)
     }
 }
 
@@ -118,8 +129,16 @@ fn reach(wa: f32, wb: f32) -> f32 {
 
 /// Projects a drop's exposure-long path relative to a camera moving at `camera_velocity_m_s`
 /// (the camera's pose is the one at the end of the exposure); None when it is behind.
-pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_s: Vec3) -> Option<ScreenStreak> {
-    let mut pa = to_camera(cam, d.position_m - (d.velocity_m_s - camera_velocity_m_s) * exposure_s);
+pub fn screen_streak(
+    cam: &Camera,
+    d: &Drop,
+    exposure_s: f32,
+    camera_velocity_m_s: Vec3,
+) -> Option<ScreenStreak> {
+    let mut pa = to_camera(
+        cam,
+        d.position_m - (d.velocity_m_s - camera_velocity_m_s) * exposure_s,
+    );
     let mut pb = to_camera(cam, d.position_m);
     let (za, zb) = (-pa.z, -pb.z);
     if za < NEAR_CLIP_M && zb < NEAR_CLIP_M {
@@ -152,7 +171,8 @@ pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_
     let r = 0.5 * wa.max(wb) + 1.0;
     let min = a.min(b) - Vec2::splat(r);
     let max = a.max(b) + Vec2::splat(r);
-    let on_screen = min.x < cam.width as f32 && min.y < cam.height as f32 && max.x > 0.0 && max.y > 0.0;
+    let on_screen =
+        min.x < cam.width as f32 && min.y < cam.height as f32 && max.x > 0.0 && max.y > 0.0;
     if !on_screen || !alpha.is_finite() {
         return None;
     }
@@ -161,8 +181,28 @@ pub fn screen_streak(cam: &Camera, d: &Drop, exposure_s: f32, camera_velocity_m_
     // Pixels farther than `reach` from the axis get no coverage; on a steep streak a row's
     // window is the pixels whose centre lies within `half` of the axis' crossing.
     let reach = reach(wa, wb);
-    let (slope, half) = if dir.y.abs() > 0.5 { (dir.x / dir.y, reach / dir.y.abs()) } else { (0.0, 0.0) };
-    Some(ScreenStreak { a, b, inv_za: 1.0 / za, inv_zb: 1.0 / zb, wa, wb, alpha, min, max, light: Vec3::ONE, dir, len, inv_len, slope, half })
+    let (slope, half) = if dir.y.abs() > 0.5 {
+        (dir.x / dir.y, reach / dir.y.abs())
+    } else {
+        (0.0, 0.0)
+    };
+    Some(ScreenStreak {
+        a,
+        b,
+        inv_za: 1.0 / za,
+        inv_zb: 1.0 / zb,
+        wa,
+        wb,
+        alpha,
+        min,
+        max,
+        light: Vec3::ONE,
+        dir,
+        len,
+        inv_len,
+        slope,
+        half,
+    })
 }
 
 /// Per-pixel buffers the rain pass writes.
@@ -179,7 +219,13 @@ pub struct RainTargets<'a> {
 
 /// Projects, lights and culls the drops, sorted far to near (stable: ties keep the drops'
 /// deterministic order). The GPU backend draws the same list.
-pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_s: Vec3, shading: &RainShading) -> (Vec<ScreenStreak>, RainStats) {
+pub fn prepare(
+    cam: &Camera,
+    drops: &[Drop],
+    exposure_s: f32,
+    camera_velocity_m_s: Vec3,
+    shading: &RainShading,
+) -> (Vec<ScreenStreak>, RainStats) {
     // Projected and lit in parallel, in the drops' order (rayon's collect keeps it).
     let mut streaks: Vec<ScreenStreak> = drops
         .par_iter()
@@ -200,7 +246,11 @@ pub fn prepare(cam: &Camera, drops: &[Drop], exposure_s: f32, camera_velocity_m_
     // Far to near, ties in the drops' order: (key, index) pairs are a total order, so the
     // unstable sort of the small pairs gives the stable sort's order, the same in every
     // process, without moving the streaks around.
-    let mut order: Vec<(f32, u32)> = streaks.iter().enumerate().map(|(i, s)| (s.inv_za + s.inv_zb, i as u32)).collect();
+    let mut order: Vec<(f32, u32)> = streaks
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s.inv_za + s.inv_zb, i as u32))
+        .collect();
     order.par_sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
     permute_in_place(&mut streaks, order.into_iter().map(|(_, i)| i).collect());
     stats.streaks = streaks.len();
@@ -250,8 +300,22 @@ impl ScreenStreak {
     /// [`Self::fragment`] uses, so the shader does not compute its own.
     pub fn packed(&self) -> [f32; 16] {
         [
-            self.a.x, self.a.y, self.dir.x, self.dir.y, self.len, reach(self.wa, self.wb), self.wa, self.wb, self.inv_za, self.inv_zb, self.alpha, 0.0,
-            self.light.x, self.light.y, self.light.z, 0.0,
+            self.a.x,
+            self.a.y,
+            self.dir.x,
+            self.dir.y,
+            self.len,
+            reach(self.wa, self.wb),
+            self.wa,
+            self.wb,
+            self.inv_za,
+            self.inv_zb,
+            self.alpha,
+            0.0,
+            self.light.x,
+            self.light.y,
+            self.light.z,
+            0.0,
         ]
     }
 
@@ -263,12 +327,21 @@ impl ScreenStreak {
         let inside = |p: Vec2| p.x >= 0.0 && p.y >= 0.0 && p.x <= width && p.y <= height;
         if self.len <= 1e-6 {
             let w = 0.5 * (self.wa + self.wb);
-            return if inside(self.a) { self.alpha * w * w } else { 0.0 };
+            return if inside(self.a) {
+                self.alpha * w * w
+            } else {
+                0.0
+            };
         }
         // Liang–Barsky: the part t ∈ [t0, t1] of a + t·(b − a) inside the frame.
         let d = self.b - self.a;
         let (mut t0, mut t1) = (0.0f32, 1.0f32);
-        for (p, q) in [(-d.x, self.a.x), (d.x, width - self.a.x), (-d.y, self.a.y), (d.y, height - self.a.y)] {
+        for (p, q) in [
+            (-d.x, self.a.x),
+            (d.x, width - self.a.x),
+            (-d.y, self.a.y),
+            (d.y, height - self.a.y),
+        ] {
             if p == 0.0 {
                 if q < 0.0 {
                     return 0.0;
@@ -293,7 +366,12 @@ impl ScreenStreak {
         // Clamped first, so truncation is the floor (no libm floor/ceil on SSE2 targets).
         let lo = |v: f32, hi: u32| floor_nonneg(v.clamp(0.0, hi as f32)) as u32;
         let up = |v: f32, hi: u32| ceil_nonneg(v.clamp(0.0, hi as f32)) as u32;
-        (lo(self.min.x, width), up(self.max.x, width), lo(self.min.y, height), up(self.max.y, height))
+        (
+            lo(self.min.x, width),
+            up(self.max.x, width),
+            lo(self.min.y, height),
+            up(self.max.y, height),
+        )
     }
 
     /// Pixel columns (x0, x1), end-exclusive, that the streak may touch within pixel rows
@@ -302,9 +380,17 @@ impl ScreenStreak {
     /// within r = ½·max(w) + 1.5 of the axis segment; the segment's part within r of the rows'
     /// centres, widened by r and a pixel for rounding, holds every column it covers there. A
     /// slanted streak then meets far fewer tiles than its bounding box does.
-    fn columns_in_rows(&self, rows: std::ops::Range<u32>, (bx0, bx1): (u32, u32), width: u32) -> (u32, u32) {
+    fn columns_in_rows(
+        &self,
+        rows: std::ops::Range<u32>,
+        (bx0, bx1): (u32, u32),
+        width: u32,
+    ) -> (u32, u32) {
         let r = 0.5 * self.wa.max(self.wb) + 1.5;
-        let (ylo, yhi) = (idx_f32(rows.start as usize) + 0.5 - r, idx_f32(rows.end as usize) - 0.5 + r);
+        let (ylo, yhi) = (
+            idx_f32(rows.start as usize) + 0.5 - r,
+            idx_f32(rows.end as usize) - 0.5 + r,
+        );
         let dy = self.b.y - self.a.y;
         let (t0, t1) = if dy.abs() > 1e-6 {
             let (ta, tb) = ((ylo - self.a.y) / dy, (yhi - self.a.y) / dy);
@@ -313,10 +399,16 @@ impl ScreenStreak {
             (0.0, 1.0)
         };
         // (false for NaN too)
-        if t0.partial_cmp(&t1).is_none_or(|o| o == std::cmp::Ordering::Greater) {
+        if t0
+            .partial_cmp(&t1)
+            .is_none_or(|o| o == std::cmp::Ordering::Greater)
+        {
             return (bx0, bx0);
         }
-        let (xa, xb) = (self.a.x + (self.b.x - self.a.x) * t0, self.a.x + (self.b.x - self.a.x) * t1);
+        let (xa, xb) = (
+            self.a.x + (self.b.x - self.a.x) * t0,
+            self.a.x + (self.b.x - self.a.x) * t1,
+        );
         let pad = r + 1.0;
         let lo = |v: f32| floor_nonneg(v.clamp(0.0, width as f32)) as u32;
         let up = |v: f32| ceil_nonneg(v.clamp(0.0, width as f32)) as u32;
@@ -332,15 +424,28 @@ impl ScreenStreak {
         let q = p - self.a;
         let along = q.dot(dir);
         let across = q.perp_dot(dir).abs();
-        let k = if len > 1e-6 { (along / len).clamp(0.0, 1.0) } else { 0.0 };
+        let k = if len > 1e-6 {
+            (along / len).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         let width = self.wa + (self.wb - self.wa) * k;
-        let cov_across = if width >= 1.0 { (0.5 * width + 0.5 - across).clamp(0.0, 1.0) } else { width * (1.0 - across).clamp(0.0, 1.0) };
-        let cov_along = (along + 0.5).clamp(0.0, 1.0).min((len - along + 0.5).clamp(0.0, 1.0));
+        let cov_across = if width >= 1.0 {
+            (0.5 * width + 0.5 - across).clamp(0.0, 1.0)
+        } else {
+            width * (1.0 - across).clamp(0.0, 1.0)
+        };
+        let cov_along = (along + 0.5)
+            .clamp(0.0, 1.0)
+            .min((len - along + 0.5).clamp(0.0, 1.0));
         let cov = cov_across * cov_along;
         if cov <= 0.0 {
             return None;
         }
-        Some((self.alpha * cov, 1.0 / (self.inv_za + (self.inv_zb - self.inv_za) * k)))
+        Some((
+            self.alpha * cov,
+            1.0 / (self.inv_za + (self.inv_zb - self.inv_za) * k),
+        ))
     }
 
     /// [`Self::fragment`]'s coverage and inverse depth (0 off the streak) at the point
@@ -360,7 +465,10 @@ impl ScreenStreak {
             width * clamp01(1.0 - across)
         };
         let cov_along = clamp01(least(along, self.len - along) + 0.5);
-        (self.alpha * cov_across * cov_along, self.inv_za + (self.inv_zb - self.inv_za) * k)
+        (
+            self.alpha * cov_across * cov_along,
+            self.inv_za + (self.inv_zb - self.inv_za) * k,
+        )
     }
 }
 
@@ -380,7 +488,10 @@ impl ScreenStreak {
             Vec4::select(width.cmpge(one), wide, thin)
         };
         let cov_along = clamp01(along.min(Vec4::splat(self.len) - along) + half);
-        (Vec4::splat(self.alpha) * cov_across * cov_along, Vec4::splat(self.inv_za) + Vec4::splat(self.inv_zb - self.inv_za) * k)
+        (
+            Vec4::splat(self.alpha) * cov_across * cov_along,
+            Vec4::splat(self.inv_za) + Vec4::splat(self.inv_zb - self.inv_za) * k,
+        )
     }
 }
 
@@ -389,7 +500,14 @@ impl ScreenStreak {
 /// column of tiles, else per row the columns it can reach there (see
 /// [`ScreenStreak::columns_in_rows`]: a slanted streak meets far fewer tiles than its box).
 #[inline]
-fn tile_spans(s: &ScreenStreak, width: u32, height: u32, tile_w: u32, tile_h: u32, mut f: impl FnMut(u32, u32, u32)) {
+fn tile_spans(
+    s: &ScreenStreak,
+    width: u32,
+    height: u32,
+    tile_w: u32,
+    tile_h: u32,
+    mut f: impl FnMut(u32, u32, u32),
+) {
     let (x0, x1, y0, y1) = s.pixel_bounds(width, height);
     let (i0, i1) = (x0 / tile_w, x1.div_ceil(tile_w));
     if i1 <= i0 + 1 {
@@ -409,14 +527,25 @@ fn tile_spans(s: &ScreenStreak, width: u32, height: u32, tile_w: u32, tile_h: u3
 
 /// Streak indices per `tile` × `tile` pixel tile, in list order (see [`bin_by_tiles`]). For the
 /// GPU pass.
-pub fn bin_by_tile(streaks: &[ScreenStreak], width: u32, height: u32, tile: u32) -> (Vec<u32>, Vec<u32>) {
+pub fn bin_by_tile(
+    streaks: &[ScreenStreak],
+    width: u32,
+    height: u32,
+    tile: u32,
+) -> (Vec<u32>, Vec<u32>) {
     bin_by_tiles(streaks, width, height, tile, tile)
 }
 
 /// Streak indices per `tile_w` × `tile_h` pixel tile (row-major tiles), in list order:
 /// (offsets, indices) with the tile t's streaks at `indices[offsets[t]..offsets[t + 1]]`.
 /// The two halves of the list are binned in parallel and joined tile by tile.
-pub fn bin_by_tiles(streaks: &[ScreenStreak], width: u32, height: u32, tile_w: u32, tile_h: u32) -> (Vec<u32>, Vec<u32>) {
+pub fn bin_by_tiles(
+    streaks: &[ScreenStreak],
+    width: u32,
+    height: u32,
+    tile_w: u32,
+    tile_h: u32,
+) -> (Vec<u32>, Vec<u32>) {
     let tx = width.div_ceil(tile_w);
     let tiles = (tx * height.div_ceil(tile_h)) as usize;
     let half = streaks.len() / 2;
@@ -445,7 +574,8 @@ pub fn bin_by_tiles(streaks: &[ScreenStreak], width: u32, height: u32, tile_w: u
         }
         (counts, indices)
     };
-    let ((oa, ia), (ob, ib)) = rayon::join(|| bin(0, &streaks[..half]), || bin(half, &streaks[half..]));
+    let ((oa, ia), (ob, ib)) =
+        rayon::join(|| bin(0, &streaks[..half]), || bin(half, &streaks[half..]));
     // Tile t: the first half's streaks, then the second's (list order).
     let mut offsets = Vec::with_capacity(tiles + 1);
     let mut indices = Vec::with_capacity(ia.len() + ib.len());
@@ -479,20 +609,49 @@ impl RainFrame<'_> {
     /// The frame's streaks (see [`prepare`]), its stats, and how many drops there were (those
     /// of the voxels that can reach the view, less the sheltered ones).
     pub fn streaks(&self, cam: &Camera) -> Result<(Vec<ScreenStreak>, RainStats, usize)> {
-        self.region.check_budget(cam.view_solid_angle_sr() / (4.0 * std::f64::consts::PI))?;
-        let (t, v) = (f64::from(self.exposure_s), f64::from(self.camera_velocity_m_s.length()));
+        self.region
+            .check_budget(cam.view_solid_angle_sr() / (4.0 * std::f64::consts::PI))?;
+        let (t, v) = (
+            f64::from(self.exposure_s),
+            f64::from(self.camera_velocity_m_s.length()),
+        );
         let mut drops = match self.region.method {
-            super::drops::RainMethod::Drops => super::drops::drops_in_view(self.region, cam, t, v, self.ground),
-            super::drops::RainMethod::Billboards => super::billboards::billboards_in_view(self.region, cam, t, self.camera_velocity_m_s, self.ground),
+            super::drops::RainMethod::Drops => {
+                super::drops::drops_in_view(self.region, cam, t, v, self.ground)
+            }
+            super::drops::RainMethod::Billboards => super::billboards::billboards_in_view(
+                self.region,
+                cam,
+                t,
+                self.camera_velocity_m_s,
+                self.ground,
+            ),
         };
-        super::shelter::remove_sheltered(&mut drops, self.shelter, cam.position_m, self.region.near_m as f32);
-        let (streaks, stats) = prepare(cam, &drops, self.exposure_s, self.camera_velocity_m_s, self.shading);
+        super::shelter::remove_sheltered(
+            &mut drops,
+            self.shelter,
+            cam.position_m,
+            self.region.near_m as f32,
+        );
+        let (streaks, stats) = prepare(
+            cam,
+            &drops,
+            self.exposure_s,
+            self.camera_velocity_m_s,
+            self.shading,
+        );
         Ok((streaks, stats, drops.len()))
     }
 }
 
 /// Composites the drops' streaks over the frame, far to near, for a camera at rest.
-pub fn composite(cam: &Camera, drops: &[Drop], exposure_s: f32, shading: &RainShading, t: RainTargets<'_>) -> RainStats {
+pub fn composite(
+    cam: &Camera,
+    drops: &[Drop],
+    exposure_s: f32,
+    shading: &RainShading,
+    t: RainTargets<'_>,
+) -> RainStats {
     let (streaks, stats) = prepare(cam, drops, exposure_s, Vec3::ZERO, shading);
     composite_streaks(cam, &streaks, shading.reflectance, t);
     stats
@@ -529,17 +688,37 @@ fn ceil_nonneg(v: f32) -> usize {
 /// loops have fixed trip counts and the coverage no branch: the branches of a data-dependent
 /// span mispredict on nearly every row of a thin streak.
 #[inline]
-pub fn for_each_fragment(s: &ScreenStreak, y0: usize, rows: usize, w: usize, f: impl FnMut(usize, f32, f32)) {
+pub fn for_each_fragment(
+    s: &ScreenStreak,
+    y0: usize,
+    rows: usize,
+    w: usize,
+    f: impl FnMut(usize, f32, f32),
+) {
     for_each_fragment_in(s, y0, rows, w, 0..w, f);
 }
 
 /// [`for_each_fragment`], the shallow streaks' rows walked only within the columns `cols`
 /// (steep streaks' windows are a few pixels: the caller filters those by column).
-pub fn for_each_fragment_in(s: &ScreenStreak, y0: usize, rows: usize, w: usize, cols: std::ops::Range<usize>, mut f: impl FnMut(usize, f32, f32)) {
-    if s.max.y <= idx_f32(y0) || s.min.y >= idx_f32(y0 + rows) || s.max.x <= 0.0 || s.min.x >= idx_f32(w) {
+pub fn for_each_fragment_in(
+    s: &ScreenStreak,
+    y0: usize,
+    rows: usize,
+    w: usize,
+    cols: std::ops::Range<usize>,
+    mut f: impl FnMut(usize, f32, f32),
+) {
+    if s.max.y <= idx_f32(y0)
+        || s.min.y >= idx_f32(y0 + rows)
+        || s.max.x <= 0.0
+        || s.min.x >= idx_f32(w)
+    {
         return;
     }
-    let (ya, yb) = (floor_nonneg(s.min.y.max(idx_f32(y0))), ceil_nonneg(s.max.y.min(idx_f32(y0 + rows))));
+    let (ya, yb) = (
+        floor_nonneg(s.min.y.max(idx_f32(y0))),
+        ceil_nonneg(s.max.y.min(idx_f32(y0 + rows))),
+    );
     let steep = s.half > 0.0;
     if steep {
         let (slope, half) = (s.slope, s.half);
@@ -547,7 +726,13 @@ pub fn for_each_fragment_in(s: &ScreenStreak, y0: usize, rows: usize, w: usize, 
         // crossing: an open interval of 2·half holds at most ⌈2·half⌉ pixel centres, the first
         // at ⌊xc − half + ½⌋.
         let span = ceil_nonneg(2.0 * half).clamp(1, w);
-        let rows_of = SteepRows { s, y0, w, slope, half };
+        let rows_of = SteepRows {
+            s,
+            y0,
+            w,
+            slope,
+            half,
+        };
         // Thin (w < 1 px all along): the coverage across is w·(1 − d). The drawing paths walk
         // steep streaks with for_each_fragment_x4; this walk is their fallback and reference.
         if s.wa.max(s.wb) < 1.0 {
@@ -561,7 +746,10 @@ pub fn for_each_fragment_in(s: &ScreenStreak, y0: usize, rows: usize, w: usize, 
         // centre can be covered: −½ < along < len + ½ and across < reach (both linear in the
         // column; |dx| ≥ √¾ for a shallow streak), widened by a pixel for rounding. The other
         // pixels of the row have no coverage.
-        let (bx0, bx1) = (s.min.x.max(0.0).max(idx_f32(cols.start)), s.max.x.min(idx_f32(w)).min(idx_f32(cols.end.min(w))));
+        let (bx0, bx1) = (
+            s.min.x.max(0.0).max(idx_f32(cols.start)),
+            s.max.x.min(idx_f32(w)).min(idx_f32(cols.end.min(w))),
+        );
         if bx1 <= bx0 {
             return;
         }
@@ -576,7 +764,10 @@ pub fn for_each_fragment_in(s: &ScreenStreak, y0: usize, rows: usize, w: usize, 
                 lo = lo.max(c0.min(c1));
                 hi = hi.min(c0.max(c1));
             }
-            let (lo, hi) = ((lo + s.a.x - 0.5 - 1.0).max(bx0), (hi + s.a.x - 0.5 + 1.0).min(bx1));
+            let (lo, hi) = (
+                (lo + s.a.x - 0.5 - 1.0).max(bx0),
+                (hi + s.a.x - 0.5 + 1.0).min(bx1),
+            );
             if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
                 continue;
             }
@@ -598,7 +789,14 @@ pub fn for_each_fragment_in(s: &ScreenStreak, y0: usize, rows: usize, w: usize, 
 /// least a window wide, which are nearly all of them; returns false, having called nothing,
 /// for the others (walk those with [`for_each_fragment`]).
 #[inline]
-pub fn for_each_fragment_x4(s: &ScreenStreak, y0: usize, rows: usize, w: usize, cols: std::ops::Range<usize>, mut f: impl FnMut(usize, Vec4, Vec4)) -> bool {
+pub fn for_each_fragment_x4(
+    s: &ScreenStreak,
+    y0: usize,
+    rows: usize,
+    w: usize,
+    cols: std::ops::Range<usize>,
+    mut f: impl FnMut(usize, Vec4, Vec4),
+) -> bool {
     if s.half <= 0.0 {
         return false;
     }
@@ -608,10 +806,17 @@ pub fn for_each_fragment_x4(s: &ScreenStreak, y0: usize, rows: usize, w: usize, 
         return false;
     }
     let cols = cols.start..cols.end.min(w);
-    if s.max.y <= idx_f32(y0) || s.min.y >= idx_f32(y0 + rows) || s.max.x <= idx_f32(cols.start) || s.min.x >= idx_f32(cols.end) {
+    if s.max.y <= idx_f32(y0)
+        || s.min.y >= idx_f32(y0 + rows)
+        || s.max.x <= idx_f32(cols.start)
+        || s.min.x >= idx_f32(cols.end)
+    {
         return true;
     }
-    let (ya, yb) = (floor_nonneg(s.min.y.max(idx_f32(y0))), ceil_nonneg(s.max.y.min(idx_f32(y0 + rows))));
+    let (ya, yb) = (
+        floor_nonneg(s.min.y.max(idx_f32(y0))),
+        ceil_nonneg(s.max.y.min(idx_f32(y0 + rows))),
+    );
     let thin = s.wa.max(s.wb) < 1.0;
     let c = (idx_f32(cols.start), idx_f32(cols.end));
     match (thin, chunks) {
@@ -627,10 +832,21 @@ pub fn for_each_fragment_x4(s: &ScreenStreak, y0: usize, rows: usize, w: usize, 
 /// (`CHUNKS` chunks; 0: as many as the window needs), lanes outside the columns
 /// [`cols.0`, `cols.1`) zeroed. `THIN`: under a pixel wide all along.
 #[inline(always)]
-fn steep_x4<const THIN: bool, const CHUNKS: usize>(s: &ScreenStreak, ys: std::ops::Range<usize>, y0: usize, w: usize, cols: (f32, f32), f: &mut impl FnMut(usize, Vec4, Vec4)) {
+fn steep_x4<const THIN: bool, const CHUNKS: usize>(
+    s: &ScreenStreak,
+    ys: std::ops::Range<usize>,
+    y0: usize,
+    w: usize,
+    cols: (f32, f32),
+    f: &mut impl FnMut(usize, Vec4, Vec4),
+) {
     let (c0, c1) = (Vec4::splat(cols.0), Vec4::splat(cols.1));
     let inside = |x: Vec4, a: Vec4| Vec4::select(x.cmpge(c0) & x.cmplt(c1), a, Vec4::ZERO);
-    let chunks = if CHUNKS > 0 { CHUNKS } else { ceil_nonneg(2.0 * s.half).max(1).div_ceil(4) };
+    let chunks = if CHUNKS > 0 {
+        CHUNKS
+    } else {
+        ceil_nonneg(2.0 * s.half).max(1).div_ceil(4)
+    };
     let (dx, dy) = (s.dir.x, s.dir.y);
     let last = w - 4 * chunks;
     let lanes = Vec4::new(0.0, 1.0, 2.0, 3.0);
@@ -646,14 +862,20 @@ fn steep_x4<const THIN: bool, const CHUNKS: usize>(s: &ScreenStreak, ys: std::op
             let y = ys.start;
             let qy = Vec4::splat(idx_f32(y)) + lanes + Vec4::splat(0.5) - ay;
             let xc = ax + qy * s.slope;
-            let x0 = (xc - Vec4::splat(s.half) + Vec4::splat(0.5)).max(Vec4::ZERO).floor().min(Vec4::splat(lastf));
+            let x0 = (xc - Vec4::splat(s.half) + Vec4::splat(0.5))
+                .max(Vec4::ZERO)
+                .floor()
+                .min(Vec4::splat(lastf));
             let qx0 = x0 + Vec4::splat(0.5) - ax;
             let (along0, across0) = (qy * dy + qx0 * dx, qx0 * dy - qy * dx);
             let mut cov = [Vec4::ZERO; 4];
             let mut inv = [Vec4::ZERO; 4];
             for j in 0..4 {
                 let jf = idx_f32(j);
-                (cov[j], inv[j]) = s.coverage_x4::<THIN>(along0 + Vec4::splat(jf * dx), (across0 + Vec4::splat(jf * dy)).abs());
+                (cov[j], inv[j]) = s.coverage_x4::<THIN>(
+                    along0 + Vec4::splat(jf * dx),
+                    (across0 + Vec4::splat(jf * dy)).abs(),
+                );
             }
             // (pixel j, row l) → (row l, pixel j)
             let cov = glam::Mat4::from_cols(cov[0], cov[1], cov[2], cov[3]).transpose();
@@ -664,7 +886,11 @@ fn steep_x4<const THIN: bool, const CHUNKS: usize>(s: &ScreenStreak, ys: std::op
             let x0 = (x0 + Vec4::splat(8_388_608.0)).to_array();
             for l in 0..4 {
                 let x = Vec4::splat(x0f[l]) + lanes;
-                f((y + l - y0) * w + (x0[l].to_bits() - 0x4B00_0000) as usize, inside(x, cov.col(l)), inv.col(l));
+                f(
+                    (y + l - y0) * w + (x0[l].to_bits() - 0x4B00_0000) as usize,
+                    inside(x, cov.col(l)),
+                    inv.col(l),
+                );
             }
             ys.start += 4;
         }
@@ -682,7 +908,11 @@ fn steep_x4<const THIN: bool, const CHUNKS: usize>(s: &ScreenStreak, ys: std::op
             let along = Vec4::splat(along0) + j * dx;
             let across = (Vec4::splat(across0) + j * dy).abs();
             let (a, inv_z) = s.coverage_x4::<THIN>(along, across);
-            f(row + 4 * c, inside(Vec4::splat(idx_f32(x0 + 4 * c)) + lanes, a), inv_z);
+            f(
+                row + 4 * c,
+                inside(Vec4::splat(idx_f32(x0 + 4 * c)) + lanes, a),
+                inv_z,
+            );
         }
     }
 }
@@ -700,7 +930,12 @@ impl SteepRows<'_> {
     /// Visits the window of `span` pixels on each row of `ys`; `THIN`: the streak is under a
     /// pixel wide all along.
     #[inline(always)]
-    fn run<const THIN: bool>(&self, ys: std::ops::Range<usize>, span: usize, f: &mut impl FnMut(usize, f32, f32)) {
+    fn run<const THIN: bool>(
+        &self,
+        ys: std::ops::Range<usize>,
+        span: usize,
+        f: &mut impl FnMut(usize, f32, f32),
+    ) {
         let s = self.s;
         let (dx, dy) = (s.dir.x, s.dir.y);
         for y in ys {
@@ -742,11 +977,17 @@ fn least(a: f32, b: f32) -> f32 {
 /// Composites prepared streaks (see [`prepare`]) over the frame, rows in parallel bands; each
 /// band draws only the streaks binned to it (see [`bin_by_tiles`]), steep ones four pixels at
 /// a time.
-pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], reflectance: f32, t: RainTargets<'_>) {
+pub fn composite_streaks(
+    cam: &Camera,
+    streaks: &[ScreenStreak],
+    reflectance: f32,
+    t: RainTargets<'_>,
+) {
     let w = cam.width as usize;
     let band = BAND_ROWS * w;
     let r = reflectance;
-    let (offsets, indices) = bin_by_tiles(streaks, cam.width, cam.height, cam.width, BAND_ROWS as u32);
+    let (offsets, indices) =
+        bin_by_tiles(streaks, cam.width, cam.height, cam.width, BAND_ROWS as u32);
     t.rgb
         .par_chunks_mut(3 * band)
         .zip(t.depth_m.par_chunks(band))
@@ -767,11 +1008,21 @@ pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], reflectance: f3
                 let light = s.light.to_array();
                 // Four pixels' twelve colour values are three vectors: R G B R | G B R G | B R G B.
                 let [lr, lg, lb] = light;
-                let lv = [Vec4::new(lr, lg, lb, lr), Vec4::new(lg, lb, lr, lg), Vec4::new(lb, lr, lg, lb)];
+                let lv = [
+                    Vec4::new(lr, lg, lb, lr),
+                    Vec4::new(lg, lb, lr, lg),
+                    Vec4::new(lb, lr, lg, lb),
+                ];
                 let walked = for_each_fragment_x4(s, y0, rows, w, 0..w, |i, a, inv_z| {
-                    let Some(end) = i.checked_add(4).filter(|&e| e <= px) else { return };
+                    let Some(end) = i.checked_add(4).filter(|&e| e <= px) else {
+                        return;
+                    };
                     // As the one-pixel closure below, lane by lane (same bits).
-                    let a = Vec4::select((Vec4::from_slice(&depth[i..end]) * inv_z).cmple(Vec4::ONE), Vec4::ZERO, a);
+                    let a = Vec4::select(
+                        (Vec4::from_slice(&depth[i..end]) * inv_z).cmple(Vec4::ONE),
+                        Vec4::ZERO,
+                        a,
+                    );
                     let ar = a * r;
                     let ars = [ar.xxxy(), ar.yyzz(), ar.zwww()];
                     let c = &mut rgb[3 * i..3 * end];
@@ -779,9 +1030,12 @@ pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], reflectance: f3
                         let cv = Vec4::from_slice(&c[4 * m..4 * m + 4]);
                         (cv + *ar * (*l - cv)).write_to_slice(&mut c[4 * m..4 * m + 4]);
                     }
-                    (Vec4::from_slice(&alpha[i..end]) * (Vec4::ONE - a)).write_to_slice(&mut alpha[i..end]);
+                    (Vec4::from_slice(&alpha[i..end]) * (Vec4::ONE - a))
+                        .write_to_slice(&mut alpha[i..end]);
                     let z = Vec4::select(a.cmpgt(Vec4::ZERO), Vec4::ONE / inv_z, Vec4::INFINITY);
-                    Vec4::from_slice(&rdepth[i..end]).min(z).write_to_slice(&mut rdepth[i..end]);
+                    Vec4::from_slice(&rdepth[i..end])
+                        .min(z)
+                        .write_to_slice(&mut rdepth[i..end]);
                 });
                 if walked {
                     continue;
@@ -812,8 +1066,8 @@ mod tests {
 
     #[test]
     fn permuting_in_place_is_the_gathered_copy() {
-        use rand::seq::SliceRandom;
         use rand::SeedableRng;
+        use rand::seq::SliceRandom;
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
         for n in [0usize, 1, 2, 7, 1000] {
             let v: Vec<u64> = (0..n as u64).map(|k| k * 7919 % 1009).collect();
@@ -833,28 +1087,69 @@ mod tests {
         // that the billboards' opacity balance integrates.
         use rand::{Rng, SeedableRng};
         let (w, h) = (96usize, 64usize);
-        let cam = Camera::new(w as u32, h as u32, [60.0, 60.0, 48.0, 32.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            w as u32,
+            h as u32,
+            [60.0, 60.0, 48.0, 32.0],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(17);
         let (mut checked, mut clipped) = (0, 0);
         for _ in 0..600 {
             let z: f32 = rng.random_range(0.2..6.0);
-            let p = Vec3::new(rng.random_range(-1.2..1.2) * z, rng.random_range(-1.0..1.0) * z, -z);
-            let v = Vec3::new(rng.random_range(-4.0..4.0), rng.random_range(-9.0..-2.0), rng.random_range(-2.0..2.0));
-            let d = Drop { position_m: p, velocity_m_s: v, diameter_m: rng.random_range(0.5e-3..4e-3), id: [0; 5] };
-            let Some(s) = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO) else { continue };
-            let sum: f32 = (0..w * h).filter_map(|i| s.fragment(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5))).map(|f| f.0).sum();
+            let p = Vec3::new(
+                rng.random_range(-1.2..1.2) * z,
+                rng.random_range(-1.0..1.0) * z,
+                -z,
+            );
+            let v = Vec3::new(
+                rng.random_range(-4.0..4.0),
+                rng.random_range(-9.0..-2.0),
+                rng.random_range(-2.0..2.0),
+            );
+            let d = Drop {
+                position_m: p,
+                velocity_m_s: v,
+                diameter_m: rng.random_range(0.5e-3..4e-3),
+                id: [0; 5],
+            };
+            let Some(s) = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO) else {
+                continue;
+            };
+            let sum: f32 = (0..w * h)
+                .filter_map(|i| s.fragment(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5)))
+                .map(|f| f.0)
+                .sum();
             let area = s.opacity_area_in(w as f32, h as f32);
             // The pixel grid samples the streak: its anti-aliased ends and the frame's edges
             // are off by at most about a pixel of length.
             let slack = 2.0 * s.alpha * (s.wa.max(s.wb) + 1.0);
-            assert!((sum - area).abs() <= 0.03 * area + slack, "{sum} vs {area} ({s:?})");
+            assert!(
+                (sum - area).abs() <= 0.03 * area + slack,
+                "{sum} vs {area} ({s:?})"
+            );
             checked += 1;
-            clipped += usize::from(s.min.x < 0.0 || s.min.y < 0.0 || s.max.x > w as f32 || s.max.y > h as f32);
+            clipped += usize::from(
+                s.min.x < 0.0 || s.min.y < 0.0 || s.max.x > w as f32 || s.max.y > h as f32,
+            );
         }
-        assert!(checked > 200 && clipped > 50, "{checked} streaks, {clipped} clipped");
+        assert!(
+            checked > 200 && clipped > 50,
+            "{checked} streaks, {clipped} clipped"
+        );
         // off the frame entirely: nothing
-        let off = Drop { position_m: Vec3::new(5.0, 0.0, -1.0), velocity_m_s: Vec3::new(0.0, -6.0, 0.0), diameter_m: 2e-3, id: [0; 5] };
-        assert!(screen_streak(&cam, &off, 1.0 / 30.0, Vec3::ZERO).is_none_or(|s| s.opacity_area_in(w as f32, h as f32) == 0.0));
+        let off = Drop {
+            position_m: Vec3::new(5.0, 0.0, -1.0),
+            velocity_m_s: Vec3::new(0.0, -6.0, 0.0),
+            diameter_m: 2e-3,
+            id: [0; 5],
+        };
+        assert!(
+            screen_streak(&cam, &off, 1.0 / 30.0, Vec3::ZERO)
+                .is_none_or(|s| s.opacity_area_in(w as f32, h as f32) == 0.0)
+        );
     }
 
     #[test]
@@ -864,31 +1159,68 @@ mod tests {
         // streaks leaving the frame; walked in bands of 7 rows.
         use rand::{Rng, SeedableRng};
         let (w, h) = (64usize, 45usize);
-        let cam = Camera::new(w as u32, h as u32, [40.0, 40.0, 32.0, 22.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            w as u32,
+            h as u32,
+            [40.0, 40.0, 32.0, 22.5],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(9);
         let mut checked = 0;
         for _ in 0..400 {
             let z: f32 = rng.random_range(0.1..6.0);
-            let p = Vec3::new(rng.random_range(-1.0..1.0) * z, rng.random_range(-0.8..0.8) * z, -z);
-            let v = Vec3::new(rng.random_range(-6.0..6.0), rng.random_range(-9.0..1.0), rng.random_range(-3.0..3.0));
-            let d = Drop { position_m: p, velocity_m_s: v, diameter_m: rng.random_range(0.5e-3..6e-3), id: [0; 5] };
-            let exposure = if rng.random_bool(0.1) { 1e-5 } else { 1.0 / 30.0 };
-            let Some(s) = screen_streak(&cam, &d, exposure, Vec3::ZERO) else { continue };
+            let p = Vec3::new(
+                rng.random_range(-1.0..1.0) * z,
+                rng.random_range(-0.8..0.8) * z,
+                -z,
+            );
+            let v = Vec3::new(
+                rng.random_range(-6.0..6.0),
+                rng.random_range(-9.0..1.0),
+                rng.random_range(-3.0..3.0),
+            );
+            let d = Drop {
+                position_m: p,
+                velocity_m_s: v,
+                diameter_m: rng.random_range(0.5e-3..6e-3),
+                id: [0; 5],
+            };
+            let exposure = if rng.random_bool(0.1) {
+                1e-5
+            } else {
+                1.0 / 30.0
+            };
+            let Some(s) = screen_streak(&cam, &d, exposure, Vec3::ZERO) else {
+                continue;
+            };
             let mut walked = vec![0.0f32; w * h];
             for y0 in (0..h).step_by(7) {
                 let rows = 7.min(h - y0);
                 for_each_fragment(&s, y0, rows, w, |i, a, inv_z| {
                     walked[y0 * w + i] += a;
                     if a > 0.0 {
-                        let (_, z) = s.fragment(Vec2::new((i % w) as f32 + 0.5, (y0 + i / w) as f32 + 0.5)).unwrap_or((0.0, f32::NAN));
-                        assert!((1.0 / inv_z - z).abs() <= 1e-4 * z, "{} vs {z}", 1.0 / inv_z);
+                        let (_, z) = s
+                            .fragment(Vec2::new((i % w) as f32 + 0.5, (y0 + i / w) as f32 + 0.5))
+                            .unwrap_or((0.0, f32::NAN));
+                        assert!(
+                            (1.0 / inv_z - z).abs() <= 1e-4 * z,
+                            "{} vs {z}",
+                            1.0 / inv_z
+                        );
                     }
                 });
             }
             for (i, got) in walked.iter().enumerate() {
-                let want = s.fragment(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5)).map_or(0.0, |f| f.0);
+                let want = s
+                    .fragment(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5))
+                    .map_or(0.0, |f| f.0);
                 // rounding only (the walk steps from the streak's start): nothing missed, nothing extra
-                assert!((got - want).abs() <= 2e-4 * s.alpha, "pixel {i}: {got} vs {want} ({s:?})");
+                assert!(
+                    (got - want).abs() <= 2e-4 * s.alpha,
+                    "pixel {i}: {got} vs {want} ({s:?})"
+                );
             }
             checked += 1;
         }
@@ -902,15 +1234,37 @@ mod tests {
         // gets its coverage from exactly one tile, lanes outside a tile carry a = 0.
         use rand::{Rng, SeedableRng};
         let (w, h) = (64usize, 45usize);
-        let cam = Camera::new(w as u32, h as u32, [40.0, 40.0, 32.0, 22.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            w as u32,
+            h as u32,
+            [40.0, 40.0, 32.0, 22.5],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
         let (mut checked, mut thin) = (0, 0);
         for _ in 0..600 {
             let z: f32 = rng.random_range(0.1..6.0);
-            let p = Vec3::new(rng.random_range(-1.0..1.0) * z, rng.random_range(-0.8..0.8) * z, -z);
-            let v = Vec3::new(rng.random_range(-4.0..4.0), rng.random_range(-9.0..1.0), rng.random_range(-3.0..3.0));
-            let d = Drop { position_m: p, velocity_m_s: v, diameter_m: rng.random_range(0.5e-3..6e-3), id: [0; 5] };
-            let Some(s) = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO) else { continue };
+            let p = Vec3::new(
+                rng.random_range(-1.0..1.0) * z,
+                rng.random_range(-0.8..0.8) * z,
+                -z,
+            );
+            let v = Vec3::new(
+                rng.random_range(-4.0..4.0),
+                rng.random_range(-9.0..1.0),
+                rng.random_range(-3.0..3.0),
+            );
+            let d = Drop {
+                position_m: p,
+                velocity_m_s: v,
+                diameter_m: rng.random_range(0.5e-3..6e-3),
+                id: [0; 5],
+            };
+            let Some(s) = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO) else {
+                continue;
+            };
             let mut walked = vec![0.0f32; w * h];
             let mut all = true;
             for y0 in (0..h).step_by(7) {
@@ -922,9 +1276,22 @@ mod tests {
                         assert!(row < rows && x + 4 <= w, "{i}");
                         for l in 0..4 {
                             if a[l] > 0.0 {
-                                assert!(cols.contains(&(x + l)), "lane {l} at x = {} outside {cols:?}", x + l);
-                                let (_, z) = s.fragment(Vec2::new((x + l) as f32 + 0.5, (y0 + row) as f32 + 0.5)).unwrap_or((0.0, f32::NAN));
-                                assert!((1.0 / inv_z[l] - z).abs() <= 1e-4 * z, "{} vs {z}", 1.0 / inv_z[l]);
+                                assert!(
+                                    cols.contains(&(x + l)),
+                                    "lane {l} at x = {} outside {cols:?}",
+                                    x + l
+                                );
+                                let (_, z) = s
+                                    .fragment(Vec2::new(
+                                        (x + l) as f32 + 0.5,
+                                        (y0 + row) as f32 + 0.5,
+                                    ))
+                                    .unwrap_or((0.0, f32::NAN));
+                                assert!(
+                                    (1.0 / inv_z[l] - z).abs() <= 1e-4 * z,
+                                    "{} vs {z}",
+                                    1.0 / inv_z[l]
+                                );
                             }
                             walked[(y0 + row) * w + x + l] += a[l];
                         }
@@ -935,8 +1302,13 @@ mod tests {
                 continue; // not steep: the scalar walk's case
             }
             for (i, got) in walked.iter().enumerate() {
-                let want = s.fragment(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5)).map_or(0.0, |f| f.0);
-                assert!((got - want).abs() <= 2e-4 * s.alpha, "pixel {i}: {got} vs {want} ({s:?})");
+                let want = s
+                    .fragment(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5))
+                    .map_or(0.0, |f| f.0);
+                assert!(
+                    (got - want).abs() <= 2e-4 * s.alpha,
+                    "pixel {i}: {got} vs {want} ({s:?})"
+                );
             }
             checked += 1;
             thin += usize::from(s.wa.max(s.wb) < 1.0);
@@ -951,14 +1323,34 @@ mod tests {
         // ScreenStreak::fragment.
         use rand::{Rng, SeedableRng};
         let (w, h) = (300usize, 45usize); // three column tiles, the last narrow
-        let cam = Camera::new(w as u32, h as u32, [40.0, 40.0, 150.0, 22.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            w as u32,
+            h as u32,
+            [40.0, 40.0, 150.0, 22.5],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
         let drops: Vec<Drop> = (0..600)
             .map(|k| {
                 let z: f32 = rng.random_range(0.2..6.0);
-                let p = Vec3::new(rng.random_range(-4.0..4.0) * z, rng.random_range(-0.8..0.8) * z, -z);
-                let v = Vec3::new(rng.random_range(-4.0..4.0), rng.random_range(-9.0..1.0), rng.random_range(-3.0..3.0));
-                Drop { position_m: p, velocity_m_s: v, diameter_m: rng.random_range(0.5e-3..5e-3), id: [k, 0, 0, 0, 0] }
+                let p = Vec3::new(
+                    rng.random_range(-4.0..4.0) * z,
+                    rng.random_range(-0.8..0.8) * z,
+                    -z,
+                );
+                let v = Vec3::new(
+                    rng.random_range(-4.0..4.0),
+                    rng.random_range(-9.0..1.0),
+                    rng.random_range(-3.0..3.0),
+                );
+                Drop {
+                    position_m: p,
+                    velocity_m_s: v,
+                    diameter_m: rng.random_range(0.5e-3..5e-3),
+                    id: [k, 0, 0, 0, 0],
+                }
             })
             .collect();
         let mut shading = RainShading::open_sky();
@@ -967,14 +1359,42 @@ mod tests {
         assert!(streaks.len() > 300);
         let n = w * h;
         let background: Vec<f32> = (0..3 * n).map(|_| rng.random()).collect();
-        let depth: Vec<f32> = (0..n).map(|_| if rng.random_bool(0.3) { f32::INFINITY } else { rng.random_range(0.3..5.0) }).collect();
+        let depth: Vec<f32> = (0..n)
+            .map(|_| {
+                if rng.random_bool(0.3) {
+                    f32::INFINITY
+                } else {
+                    rng.random_range(0.3..5.0)
+                }
+            })
+            .collect();
         let (mut rgb, mut alpha, mut rd) = (background.clone(), vec![0.0; n], vec![0.0; n]);
-        composite_streaks(&cam, &streaks, 0.5, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rd });
+        composite_streaks(
+            &cam,
+            &streaks,
+            0.5,
+            RainTargets {
+                rgb: &mut rgb,
+                depth_m: &depth,
+                alpha: &mut alpha,
+                rain_depth_m: &mut rd,
+            },
+        );
         for i in 0..n {
             let p = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-            let (mut c, mut keep, mut near) = ([background[3 * i], background[3 * i + 1], background[3 * i + 2]], 1.0f32, f32::INFINITY);
+            let (mut c, mut keep, mut near) = (
+                [
+                    background[3 * i],
+                    background[3 * i + 1],
+                    background[3 * i + 2],
+                ],
+                1.0f32,
+                f32::INFINITY,
+            );
             for s in &streaks {
-                let Some((a, z)) = s.fragment(p) else { continue };
+                let Some((a, z)) = s.fragment(p) else {
+                    continue;
+                };
                 if z >= depth[i] {
                     continue;
                 }
@@ -985,10 +1405,24 @@ mod tests {
                 near = near.min(z);
             }
             for ch in 0..3 {
-                assert!((rgb[3 * i + ch] - c[ch]).abs() < 2e-4, "pixel {i}: {} vs {}", rgb[3 * i + ch], c[ch]);
+                assert!(
+                    (rgb[3 * i + ch] - c[ch]).abs() < 2e-4,
+                    "pixel {i}: {} vs {}",
+                    rgb[3 * i + ch],
+                    c[ch]
+                );
             }
-            assert!((alpha[i] - (1.0 - keep)).abs() < 2e-4, "pixel {i}: {} vs {}", alpha[i], 1.0 - keep);
-            assert!(rd[i] == near || (rd[i] - near).abs() < 1e-3 * near, "pixel {i}: {} vs {near}", rd[i]);
+            assert!(
+                (alpha[i] - (1.0 - keep)).abs() < 2e-4,
+                "pixel {i}: {} vs {}",
+                alpha[i],
+                1.0 - keep
+            );
+            assert!(
+                rd[i] == near || (rd[i] - near).abs() < 1e-3 * near,
+                "pixel {i}: {} vs {near}",
+                rd[i]
+            );
         }
         let rained = alpha.iter().filter(|&&a| a > 1e-3).count();
         assert!(rained > n / 20, "{rained}");
@@ -1006,10 +1440,28 @@ mod tests {
         let streaks: Vec<ScreenStreak> = (0..301)
             .filter_map(|_| {
                 let z: f32 = rng.random_range(0.2..6.0);
-                let p = Vec3::new(rng.random_range(-1.5..1.5) * z, rng.random_range(-0.8..0.8) * z, -z);
-                let v = Vec3::new(rng.random_range(-12.0..12.0), rng.random_range(-9.0..1.0), 0.0);
+                let p = Vec3::new(
+                    rng.random_range(-1.5..1.5) * z,
+                    rng.random_range(-0.8..0.8) * z,
+                    -z,
+                );
+                let v = Vec3::new(
+                    rng.random_range(-12.0..12.0),
+                    rng.random_range(-9.0..1.0),
+                    0.0,
+                );
                 let d: f32 = rng.random_range(0.5e-3..6e-3);
-                screen_streak(&cam, &Drop { position_m: p, velocity_m_s: v, diameter_m: d, id: [0; 5] }, 1.0 / 30.0, Vec3::ZERO)
+                screen_streak(
+                    &cam,
+                    &Drop {
+                        position_m: p,
+                        velocity_m_s: v,
+                        diameter_m: d,
+                        id: [0; 5],
+                    },
+                    1.0 / 30.0,
+                    Vec3::ZERO,
+                )
             })
             .collect();
         // the tiles each streak covers, pixel by pixel
@@ -1019,7 +1471,9 @@ mod tests {
                 let mut px = Vec::new();
                 for y in 0..h {
                     for x in 0..w {
-                        if s.fragment(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).is_some() {
+                        if s.fragment(Vec2::new(x as f32 + 0.5, y as f32 + 0.5))
+                            .is_some()
+                        {
                             px.push((x, y));
                         }
                     }
@@ -1034,7 +1488,10 @@ mod tests {
             for t in 0..(tx * h.div_ceil(th)) {
                 let (x, y) = ((t % tx) * tw, (t / tx) * th);
                 let list = &indices[offsets[t as usize] as usize..offsets[t as usize + 1] as usize];
-                assert!(list.windows(2).all(|p| p[0] < p[1]), "tile {t} out of order");
+                assert!(
+                    list.windows(2).all(|p| p[0] < p[1]),
+                    "tile {t} out of order"
+                );
                 let meets = |k: usize| {
                     let (x0, x1, y0, y1) = streaks[k].pixel_bounds(w, h);
                     x0 < x + tw && x1 > x && y0 < y + th && y1 > y
@@ -1042,31 +1499,73 @@ mod tests {
                 boxed += (0..streaks.len()).filter(|&k| meets(k)).count();
                 assert!(list.iter().all(|&k| meets(k as usize)), "tile {t}");
                 for (k, px) in covered.iter().enumerate() {
-                    if px.iter().any(|&(px, py)| px >= x && px < x + tw && py >= y && py < y + th) {
-                        assert!(list.contains(&(k as u32)), "tile {t} ({tw}x{th}) misses streak {k}");
+                    if px
+                        .iter()
+                        .any(|&(px, py)| px >= x && px < x + tw && py >= y && py < y + th)
+                    {
+                        assert!(
+                            list.contains(&(k as u32)),
+                            "tile {t} ({tw}x{th}) misses streak {k}"
+                        );
                     }
                 }
             }
             if (tw, th) == (2, 4) {
                 // (2096 against 4240 when written)
-                assert!((indices.len() as f64) < 0.6 * boxed as f64, "{} entries, bounds {boxed}", indices.len());
+                assert!(
+                    (indices.len() as f64) < 0.6 * boxed as f64,
+                    "{} entries, bounds {boxed}",
+                    indices.len()
+                );
             }
         }
     }
 
     #[test]
     fn one_streak_carries_its_opacity_area() {
-        let cam = Camera::new(400, 400, [300.0, 300.0, 200.0, 200.0], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let cam = Camera::new(
+            400,
+            400,
+            [300.0, 300.0, 200.0, 200.0],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap();
         // a 2 mm drop 1 m ahead falling 6.5 m/s for 1/30 s: w = 0.6 px, L = 65 px.
-        let d = Drop { position_m: Vec3::new(0.0, -0.1, -1.0), velocity_m_s: Vec3::new(0.0, -6.5, 0.0), diameter_m: 2e-3, id: [0; 5] };
+        let d = Drop {
+            position_m: Vec3::new(0.0, -0.1, -1.0),
+            velocity_m_s: Vec3::new(0.0, -6.5, 0.0),
+            diameter_m: 2e-3,
+            id: [0; 5],
+        };
         let n = 400 * 400;
         let mut rgb = vec![0.0; 3 * n];
         let mut alpha = vec![0.0; n];
         let mut rd = vec![0.0; n];
         let depth = vec![f32::INFINITY; n];
-        let white = RainShading { reflectance: 1.0, ..RainShading::open_sky() };
-        let shown = composite(&cam, &[d], 1.0 / 30.0, &white, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rd });
-        assert_eq!(shown, RainStats { streaks: 1, culled: 0 });
+        let white = RainShading {
+            reflectance: 1.0,
+            ..RainShading::open_sky()
+        };
+        let shown = composite(
+            &cam,
+            &[d],
+            1.0 / 30.0,
+            &white,
+            RainTargets {
+                rgb: &mut rgb,
+                depth_m: &depth,
+                alpha: &mut alpha,
+                rain_depth_m: &mut rd,
+            },
+        );
+        assert_eq!(
+            shown,
+            RainStats {
+                streaks: 1,
+                culled: 0
+            }
+        );
         let w = 2e-3 * 300.0;
         let sum: f32 = alpha.iter().sum();
         // α w L = w² (plus round caps of the capsule, ≤ w² π/4 α): within 5 %.
@@ -1078,26 +1577,88 @@ mod tests {
         // behind a wall at 0.5 m nothing shows
         let wall = vec![0.5f32; n];
         let mut alpha2 = vec![0.0; n];
-        composite(&cam, &[d], 1.0 / 30.0, &white, RainTargets { rgb: &mut rgb, depth_m: &wall, alpha: &mut alpha2, rain_depth_m: &mut rd });
+        composite(
+            &cam,
+            &[d],
+            1.0 / 30.0,
+            &white,
+            RainTargets {
+                rgb: &mut rgb,
+                depth_m: &wall,
+                alpha: &mut alpha2,
+                rain_depth_m: &mut rd,
+            },
+        );
         assert!(alpha2.iter().all(|&a| a == 0.0));
         // culled when its light is below the threshold
-        let culling = RainShading { cull_threshold: Some(1.5), ..white.clone() };
-        let stats = composite(&cam, &[d], 1.0 / 30.0, &culling, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha2, rain_depth_m: &mut rd });
-        assert_eq!(stats, RainStats { streaks: 0, culled: 1 });
+        let culling = RainShading {
+            cull_threshold: Some(1.5),
+            ..white.clone()
+        };
+        let stats = composite(
+            &cam,
+            &[d],
+            1.0 / 30.0,
+            &culling,
+            RainTargets {
+                rgb: &mut rgb,
+                depth_m: &depth,
+                alpha: &mut alpha2,
+                rain_depth_m: &mut rd,
+            },
+        );
+        assert_eq!(
+            stats,
+            RainStats {
+                streaks: 0,
+                culled: 1
+            }
+        );
         // a camera moving with the drop sees a dot (the drop's disc), not a streak: a pixel
         // long, at α = w, so that it still carries w²
         let s = screen_streak(&cam, &d, 1.0 / 30.0, d.velocity_m_s).unwrap();
-        assert!((s.len - 1.0).abs() < 1e-6 && (s.alpha - w).abs() < 1e-6, "{} {}", s.len, s.alpha);
+        assert!(
+            (s.len - 1.0).abs() < 1e-6 && (s.alpha - w).abs() < 1e-6,
+            "{} {}",
+            s.len,
+            s.alpha
+        );
         assert!((s.opacity_area_in(400.0, 400.0) / (w * w) - 1.0).abs() < 1e-4);
         // whatever the exposure, the pixels sum to w² (a still drop: a dot; a near drop in a
         // short exposure: lengthened; 1/30 s: a streak)
-        for (v, z, t) in [(0.0, 1.0, 1.0 / 30.0), (0.0, 0.1, 1.0 / 30.0), (6.5, 0.3, 1e-4), (6.5, 1.0, 1e-3), (6.5, 1.0, 3e-3), (6.5, 5.0, 1e-4)] {
-            let d = Drop { position_m: Vec3::new(0.05, 0.0, -z), velocity_m_s: Vec3::new(0.0, -v, 0.0), ..d };
+        for (v, z, t) in [
+            (0.0, 1.0, 1.0 / 30.0),
+            (0.0, 0.1, 1.0 / 30.0),
+            (6.5, 0.3, 1e-4),
+            (6.5, 1.0, 1e-3),
+            (6.5, 1.0, 3e-3),
+            (6.5, 5.0, 1e-4),
+        ] {
+            let d = Drop {
+                position_m: Vec3::new(0.05, 0.0, -z),
+                velocity_m_s: Vec3::new(0.0, -v, 0.0),
+                ..d
+            };
             let w = 2e-3 * 300.0 / z;
             let mut alpha = vec![0.0; n];
-            composite(&cam, &[d], t, &white, RainTargets { rgb: &mut rgb, depth_m: &depth, alpha: &mut alpha, rain_depth_m: &mut rd });
+            composite(
+                &cam,
+                &[d],
+                t,
+                &white,
+                RainTargets {
+                    rgb: &mut rgb,
+                    depth_m: &depth,
+                    alpha: &mut alpha,
+                    rain_depth_m: &mut rd,
+                },
+            );
             let sum: f32 = alpha.iter().sum();
-            assert!((sum / (w * w) - 1.0).abs() < 0.02, "v {v} z {z} T {t}: {sum} vs {}", w * w);
+            assert!(
+                (sum / (w * w) - 1.0).abs() < 0.02,
+                "v {v} z {z} T {t}: {sum} vs {}",
+                w * w
+            );
         }
         // a camera moving up at 6.5 m/s doubles the streak
         let still = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO).unwrap();

@@ -18,7 +18,7 @@
 use super::bins::diameter_bins;
 use crate::error::{Error, Range, Result};
 use crate::physics::air::Air;
-use crate::physics::dsd::{drops_per_m3, mp_slope_per_mm, RAIN_RATE_MM_H};
+use crate::physics::dsd::{RAIN_RATE_MM_H, drops_per_m3, mp_slope_per_mm};
 use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
 use crate::seed::derive;
 use rand::{Rng, SeedableRng};
@@ -54,7 +54,9 @@ impl TextureRequest<'_> {
         diameter_bins(self.diameters_mm)?;
         SIZE_PX.check("size_px", None, self.size_px as f64)?;
         EXPOSURE_S.check("exposure_s", None, self.exposure_s)?;
-        let n = self.rain_rates_mm_h.len() as u128 * self.diameters_mm.len() as u128 * (self.size_px as u128).pow(2);
+        let n = self.rain_rates_mm_h.len() as u128
+            * self.diameters_mm.len() as u128
+            * (self.size_px as u128).pow(2);
         let bytes = n * 4;
         if bytes > TEXTURE_BUDGET_BYTES as u128 {
             let what = format!(
@@ -86,12 +88,26 @@ pub struct Streak {
 }
 
 /// The drops of one (rate, bin) texture, deterministic in `seed`.
-pub fn draw_streaks(rain_rate_mm_h: f64, lo_mm: f64, hi_mm: f64, exposure_s: f64, seed: u64) -> Vec<Streak> {
+pub fn draw_streaks(
+    rain_rate_mm_h: f64,
+    lo_mm: f64,
+    hi_mm: f64,
+    exposure_s: f64,
+    seed: u64,
+) -> Vec<Streak> {
     let expected = drops_per_m3(rain_rate_mm_h, lo_mm, hi_mm);
     if expected <= 0.0 {
         return Vec::new();
     }
-    let key = derive(seed, &[rain_rate_mm_h.to_bits(), lo_mm.to_bits(), hi_mm.to_bits(), exposure_s.to_bits()]);
+    let key = derive(
+        seed,
+        &[
+            rain_rate_mm_h.to_bits(),
+            lo_mm.to_bits(),
+            hi_mm.to_bits(),
+            exposure_s.to_bits(),
+        ],
+    );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
     let whole = expected.floor();
     let n = whole as usize + usize::from(rng.random::<f64>() < expected - whole);
@@ -105,8 +121,18 @@ pub fn draw_streaks(rain_rate_mm_h: f64, lo_mm: f64, hi_mm: f64, exposure_s: f64
             let v = law.m_s(d_mm);
             let diameter_m = d_mm * 1e-3;
             let length_m = v * exposure_s;
-            let alpha = if length_m > 0.0 { (diameter_m / length_m).min(1.0) } else { 1.0 };
-            Streak { x_m: rng.random(), y_m: rng.random(), diameter_m, length_m, alpha }
+            let alpha = if length_m > 0.0 {
+                (diameter_m / length_m).min(1.0)
+            } else {
+                1.0
+            };
+            Streak {
+                x_m: rng.random(),
+                y_m: rng.random(),
+                diameter_m,
+                length_m,
+                alpha,
+            }
         })
         .collect()
 }
@@ -121,7 +147,10 @@ fn overlap(a: f64, b: f64, k: i64) -> f64 {
 /// a ← a + c (1 − a), i.e. 1 − a = ∏ (1 − cᵢ), with c = α × the pixel's coverage.
 pub fn splat_streak(s: &Streak, size: usize, opacity: &mut [f32]) {
     let px = size as f64;
-    let (x0, x1) = ((s.x_m - 0.5 * s.diameter_m) * px, (s.x_m + 0.5 * s.diameter_m) * px);
+    let (x0, x1) = (
+        (s.x_m - 0.5 * s.diameter_m) * px,
+        (s.x_m + 0.5 * s.diameter_m) * px,
+    );
     let (y0, y1) = (s.y_m * px, (s.y_m + s.length_m) * px);
     let size_i = size as i64;
     let cols: Vec<(usize, f64)> = (x0.floor() as i64..x1.ceil() as i64)
@@ -143,13 +172,29 @@ pub fn splat_streak(s: &Streak, size: usize, opacity: &mut [f32]) {
 }
 
 /// Renders one texture into `out` (size × size), overwriting it.
-pub fn render_texture(rain_rate_mm_h: f64, lo_mm: f64, hi_mm: f64, size: usize, exposure_s: f64, seed: u64, out: &mut [f32]) {
+pub fn render_texture(
+    rain_rate_mm_h: f64,
+    lo_mm: f64,
+    hi_mm: f64,
+    size: usize,
+    exposure_s: f64,
+    seed: u64,
+    out: &mut [f32],
+) {
     out.fill(0.0);
     splat_all(rain_rate_mm_h, lo_mm, hi_mm, size, exposure_s, seed, out);
 }
 
 /// Composites every streak of one texture over `out`, which must start at zero.
-fn splat_all(rain_rate_mm_h: f64, lo_mm: f64, hi_mm: f64, size: usize, exposure_s: f64, seed: u64, out: &mut [f32]) {
+fn splat_all(
+    rain_rate_mm_h: f64,
+    lo_mm: f64,
+    hi_mm: f64,
+    size: usize,
+    exposure_s: f64,
+    seed: u64,
+    out: &mut [f32],
+) {
     for s in draw_streaks(rain_rate_mm_h, lo_mm, hi_mm, exposure_s, seed) {
         splat_streak(&s, size, out);
     }
@@ -179,7 +224,13 @@ mod tests {
 
     #[test]
     fn single_streak_integral_is_alpha_times_area() {
-        let s = Streak { x_m: 0.9995, y_m: 0.95, diameter_m: 1.3e-3, length_m: 0.2, alpha: 0.3 };
+        let s = Streak {
+            x_m: 0.9995,
+            y_m: 0.95,
+            diameter_m: 1.3e-3,
+            length_m: 0.2,
+            alpha: 0.3,
+        };
         let size = 256;
         let mut t = vec![0.0f32; size * size];
         splat_streak(&s, size, &mut t);
@@ -190,10 +241,20 @@ mod tests {
 
     #[test]
     fn deterministic_and_seed_dependent() {
-        let req = TextureRequest { rain_rates_mm_h: &[10.0], diameters_mm: &[1.0, 2.0], size_px: 64, exposure_s: 1.0 / 30.0, seed: 7 };
+        let req = TextureRequest {
+            rain_rates_mm_h: &[10.0],
+            diameters_mm: &[1.0, 2.0],
+            size_px: 64,
+            exposure_s: 1.0 / 30.0,
+            seed: 7,
+        };
         let a = render_textures(&req).unwrap_or_default();
         let b = render_textures(&req).unwrap_or_default();
-        let c = render_textures(&TextureRequest { seed: 8, ..req.clone() }).unwrap_or_default();
+        let c = render_textures(&TextureRequest {
+            seed: 8,
+            ..req.clone()
+        })
+        .unwrap_or_default();
         assert!(!a.is_empty());
         assert_eq!(a, b);
         assert_ne!(a, c);
@@ -205,7 +266,13 @@ mod tests {
     #[test]
     fn budget_is_checked_before_allocating() {
         let rates = [1.0; 100];
-        let req = TextureRequest { rain_rates_mm_h: &rates, diameters_mm: &[1.0], size_px: 16384, exposure_s: 0.03, seed: 0 };
+        let req = TextureRequest {
+            rain_rates_mm_h: &rates,
+            diameters_mm: &[1.0],
+            size_px: 16384,
+            exposure_s: 0.03,
+            seed: 0,
+        };
         assert!(matches!(req.validate(), Err(Error::TooLarge { .. })));
     }
 }

@@ -15,9 +15,9 @@
 //!   reflecting [`WINDOW_ALBEDO_FACTOR`] of the wall albedo.
 
 use super::camera::Camera;
-use crate::sky::ambient::AmbientMap;
-use crate::sky::Sky;
 use crate::error::{Error, Param, Range, Result};
+use crate::sky::Sky;
+use crate::sky::ambient::AmbientMap;
 use glam::Vec3;
 
 /// Pane albedo relative to the wall's.
@@ -54,7 +54,10 @@ impl BoxScene {
     pub fn new(boxes: Vec<SceneBox>, ground: bool, ground_albedo: Vec3) -> Result<Self> {
         if boxes.len() > MAX_BOXES {
             return Err(Error::Invalid {
-                param: Param { name: "boxes", index: None },
+                param: Param {
+                    name: "boxes",
+                    index: None,
+                },
                 message: format!("{} boxes, at most {MAX_BOXES} are supported", boxes.len()),
             });
         }
@@ -67,8 +70,14 @@ impl BoxScene {
                 unit.check("boxes.albedo", Some(i), f64::from(b.albedo[k]))?;
                 if b.max_m[k] <= b.min_m[k] {
                     return Err(Error::Invalid {
-                        param: Param { name: "boxes", index: Some(i) },
-                        message: format!("max must exceed min on every axis, got min {} max {}", b.min_m, b.max_m),
+                        param: Param {
+                            name: "boxes",
+                            index: Some(i),
+                        },
+                        message: format!(
+                            "max must exceed min on every axis, got min {} max {}",
+                            b.min_m, b.max_m
+                        ),
                     });
                 }
             }
@@ -76,7 +85,11 @@ impl BoxScene {
         for k in 0..3 {
             unit.check("ground_albedo", Some(k), f64::from(ground_albedo[k]))?;
         }
-        Ok(BoxScene { boxes, ground, ground_albedo })
+        Ok(BoxScene {
+            boxes,
+            ground,
+            ground_albedo,
+        })
     }
 }
 
@@ -119,7 +132,13 @@ pub fn trace(scene: &BoxScene, origin: Vec3, dir: Vec3) -> Option<(f32, Vec3, Ve
         best_a = scene.ground_albedo;
     }
     // Division by a tiny component stays finite and keeps its sign.
-    let safe = |d: f32| if d.abs() < 1e-20 { if d < 0.0 { -1e-20 } else { 1e-20 } } else { d };
+    let safe = |d: f32| {
+        if d.abs() < 1e-20 {
+            if d < 0.0 { -1e-20 } else { 1e-20 }
+        } else {
+            d
+        }
+    };
     let inv = Vec3::new(1.0 / safe(dir.x), 1.0 / safe(dir.y), 1.0 / safe(dir.z));
     for b in &scene.boxes {
         let t1 = (b.min_m - origin) * inv;
@@ -140,12 +159,22 @@ pub fn trace(scene: &BoxScene, origin: Vec3, dir: Vec3) -> Option<(f32, Vec3, Ve
             best_a = b.albedo;
         }
     }
-    if best_t.is_finite() { Some((best_t, best_n, best_a)) } else { None }
+    if best_t.is_finite() {
+        Some((best_t, best_n, best_a))
+    } else {
+        None
+    }
 }
 
 /// Radiance (relative) and depth (m along the optical axis, inf for sky) of one pixel.
 #[inline]
-pub fn shade_pixel(scene: &BoxScene, cam: &Camera, light: &SceneLight<'_>, x: u32, y: u32) -> (Vec3, f32) {
+pub fn shade_pixel(
+    scene: &BoxScene,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    x: u32,
+    y: u32,
+) -> (Vec3, f32) {
     let dir = cam.ray_direction(x, y);
     match trace(scene, cam.position_m, dir) {
         Some((t, n, albedo)) => {
@@ -154,7 +183,10 @@ pub fn shade_pixel(scene: &BoxScene, cam: &Camera, light: &SceneLight<'_>, x: u3
             let e = AmbientMap::channel(n).map_or(0.0, |c| light.ambient.sample(p)[c]);
             (a * e, t)
         }
-        None => (Vec3::splat(light.sky.sky_pixel(dir.normalize())), f32::INFINITY),
+        None => (
+            Vec3::splat(light.sky.sky_pixel(dir.normalize())),
+            f32::INFINITY,
+        ),
     }
 }
 
@@ -162,7 +194,7 @@ pub fn shade_pixel(scene: &BoxScene, cam: &Camera, light: &SceneLight<'_>, x: u3
 mod tests {
     use super::*;
     use crate::sky::cie::SkyKind;
-    use crate::sky::illuminance::{irradiance, SkyTable};
+    use crate::sky::illuminance::{SkyTable, irradiance};
     use glam::Mat3;
 
     /// The overcast sky and its open-sky light (no occluders).
@@ -173,8 +205,23 @@ mod tests {
     }
 
     fn cam() -> Camera {
-        Camera::new(64, 48, [40.0, 40.0, 32.0, 24.0], Vec3::new(0.0, 1.5, 0.0), Mat3::IDENTITY)
-            .unwrap_or(Camera { width: 1, height: 1, fx: 1.0, fy: 1.0, cx: 0.0, cy: 0.0, position_m: Vec3::ZERO, rotation: Mat3::IDENTITY })
+        Camera::new(
+            64,
+            48,
+            [40.0, 40.0, 32.0, 24.0],
+            Vec3::new(0.0, 1.5, 0.0),
+            Mat3::IDENTITY,
+        )
+        .unwrap_or(Camera {
+            width: 1,
+            height: 1,
+            fx: 1.0,
+            fy: 1.0,
+            cx: 0.0,
+            cy: 0.0,
+            position_m: Vec3::ZERO,
+            rotation: Mat3::IDENTITY,
+        })
     }
 
     #[test]
@@ -186,17 +233,29 @@ mod tests {
         for i in 0..n {
             let el = (i as f64 + 0.5) / n as f64 * std::f64::consts::FRAC_PI_2;
             let l = sky.emitted(Vec3::new(0.0, el.sin() as f32, el.cos() as f32));
-            sum += l * el.sin() * el.cos() * (std::f64::consts::FRAC_PI_2 / n as f64) * 2.0 * std::f64::consts::PI;
+            sum += l
+                * el.sin()
+                * el.cos()
+                * (std::f64::consts::FRAC_PI_2 / n as f64)
+                * 2.0
+                * std::f64::consts::PI;
         }
         assert!((sum / std::f64::consts::PI - 1.0).abs() < 1e-4, "{sum}");
     }
 
     #[test]
     fn ground_depth_is_analytic() {
-        let scene = BoxScene::new(vec![], true, Vec3::splat(0.2)).unwrap_or(BoxScene { boxes: vec![], ground: true, ground_albedo: Vec3::ONE });
+        let scene = BoxScene::new(vec![], true, Vec3::splat(0.2)).unwrap_or(BoxScene {
+            boxes: vec![],
+            ground: true,
+            ground_albedo: Vec3::ONE,
+        });
         let c = cam();
         let (sky, amb) = open();
-        let light = SceneLight { sky: &sky, ambient: &amb };
+        let light = SceneLight {
+            sky: &sky,
+            ambient: &amb,
+        };
         // bottom row centre: ray dir y = -(47.5 - 24)/40, so t = 1.5 / ((47.5 - 24) / 40)
         let (rad, t) = shade_pixel(&scene, &c, &light, 32, 47);
         assert!((t - 1.5 * 40.0 / 23.5).abs() < 1e-4, "{t}");
@@ -207,20 +266,47 @@ mod tests {
 
     #[test]
     fn a_wall_ahead_is_hit_at_its_distance_with_windows() {
-        let wall = SceneBox { min_m: Vec3::new(-5.0, 0.0, -10.0), max_m: Vec3::new(5.0, 3.0, -9.0), albedo: Vec3::splat(0.5) };
-        let scene = BoxScene::new(vec![wall], false, Vec3::ZERO).unwrap_or(BoxScene { boxes: vec![], ground: false, ground_albedo: Vec3::ZERO });
+        let wall = SceneBox {
+            min_m: Vec3::new(-5.0, 0.0, -10.0),
+            max_m: Vec3::new(5.0, 3.0, -9.0),
+            albedo: Vec3::splat(0.5),
+        };
+        let scene = BoxScene::new(vec![wall], false, Vec3::ZERO).unwrap_or(BoxScene {
+            boxes: vec![],
+            ground: false,
+            ground_albedo: Vec3::ZERO,
+        });
         let c = cam();
         let (sky, amb) = open();
-        let light = SceneLight { sky: &sky, ambient: &amb };
+        let light = SceneLight {
+            sky: &sky,
+            ambient: &amb,
+        };
         let wall_e = amb.sample(Vec3::ZERO)[3];
-        assert!((f64::from(wall_e) - (3.0 / 14.0 + 4.0 / (7.0 * std::f64::consts::PI))).abs() < 2e-3);
+        assert!(
+            (f64::from(wall_e) - (3.0 / 14.0 + 4.0 / (7.0 * std::f64::consts::PI))).abs() < 2e-3
+        );
         // Row 23 looks 0.5/40 up: the front face z = -9 at depth 9, p.y = 1.61, p.x = 0.1125 (a wall facing +Z, lit by the open sky's vertical illuminance).
         let (rad, t) = shade_pixel(&scene, &c, &light, 32, 23);
         assert!((t - 9.0).abs() < 1e-4, "{t}");
         assert!((rad - Vec3::splat(0.5 * wall_e)).length() < 1e-6, "{rad}");
         // Column 38: p.x = 1.4625, inside a pane.
         let (pane, _) = shade_pixel(&scene, &c, &light, 38, 23);
-        assert!((pane - Vec3::splat(0.5 * WINDOW_ALBEDO_FACTOR * wall_e)).length() < 1e-6, "{pane}");
-        assert!(BoxScene::new(vec![SceneBox { min_m: Vec3::ONE, max_m: Vec3::ZERO, albedo: Vec3::ZERO }], true, Vec3::ZERO).is_err());
+        assert!(
+            (pane - Vec3::splat(0.5 * WINDOW_ALBEDO_FACTOR * wall_e)).length() < 1e-6,
+            "{pane}"
+        );
+        assert!(
+            BoxScene::new(
+                vec![SceneBox {
+                    min_m: Vec3::ONE,
+                    max_m: Vec3::ZERO,
+                    albedo: Vec3::ZERO
+                }],
+                true,
+                Vec3::ZERO
+            )
+            .is_err()
+        );
     }
 }

@@ -29,7 +29,13 @@ pub struct Camera {
 
 impl Camera {
     /// Validated camera. `rotation` must be orthonormal (checked to 1e-3).
-    pub fn new(width: u32, height: u32, intrinsics: [f32; 4], position_m: Vec3, rotation: Mat3) -> Result<Self> {
+    pub fn new(
+        width: u32,
+        height: u32,
+        intrinsics: [f32; 4],
+        position_m: Vec3,
+        rotation: Mat3,
+    ) -> Result<Self> {
         SIDE_PX.check("width", None, f64::from(width))?;
         SIDE_PX.check("height", None, f64::from(height))?;
         let [fx, fy, cx, cy] = intrinsics;
@@ -44,21 +50,40 @@ impl Camera {
             world.check("position_m", Some(i), f64::from(v))?;
         }
         let gram = rotation.transpose() * rotation;
-        let off = (gram - Mat3::IDENTITY).to_cols_array().iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        let off = (gram - Mat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f32, |m, v| m.max(v.abs()));
         if off.is_nan() || off > 1e-3 || rotation.determinant() < 0.0 {
             return Err(Error::Invalid {
-                param: Param { name: "rotation", index: None },
+                param: Param {
+                    name: "rotation",
+                    index: None,
+                },
                 message: "world_from_camera rotation must be orthonormal and right-handed".into(),
             });
         }
-        Ok(Camera { width, height, fx, fy, cx, cy, position_m, rotation })
+        Ok(Camera {
+            width,
+            height,
+            fx,
+            fy,
+            cx,
+            cy,
+            position_m,
+            rotation,
+        })
     }
 
     /// World-space ray direction through the centre of pixel (x, y), scaled so that its
     /// camera-space z is −1: the point at parameter t lies t metres along the optical axis.
     #[inline]
     pub fn ray_direction(&self, x: u32, y: u32) -> Vec3 {
-        let dc = Vec3::new((x as f32 + 0.5 - self.cx) / self.fx, -((y as f32 + 0.5 - self.cy) / self.fy), -1.0);
+        let dc = Vec3::new(
+            (x as f32 + 0.5 - self.cx) / self.fx,
+            -((y as f32 + 0.5 - self.cy) / self.fy),
+            -1.0,
+        );
         self.rotation * dc
     }
 
@@ -92,8 +117,13 @@ impl Camera {
     /// the half-angles to the frame's farther side and edge (≥ the frame's own, when the
     /// principal point is off centre).
     pub fn view_solid_angle_sr(&self) -> f64 {
-        let half = |c: f32, side: u32, f: f32| (f64::from(c.abs().max((side as f32 - c).abs())) / f64::from(f)).atan();
-        let (a, b) = (half(self.cx, self.width, self.fx), half(self.cy, self.height, self.fy));
+        let half = |c: f32, side: u32, f: f32| {
+            (f64::from(c.abs().max((side as f32 - c).abs())) / f64::from(f)).atan()
+        };
+        let (a, b) = (
+            half(self.cx, self.width, self.fx),
+            half(self.cy, self.height, self.fy),
+        );
         4.0 * (a.sin() * b.sin()).min(1.0).asin()
     }
 
@@ -121,19 +151,51 @@ mod tests {
     fn view_solid_angle_is_the_pyramids() {
         // 90° × 90°: 4·asin(sin 45°·sin 45°) = 2π/3; an off-centre principal point widens the
         // pyramid to its farther side
-        let c = Camera::new(100, 100, [50.0, 50.0, 50.0, 50.0], Vec3::ZERO, Mat3::IDENTITY).unwrap_or_else(|_| unreachable_cam());
+        let c = Camera::new(
+            100,
+            100,
+            [50.0, 50.0, 50.0, 50.0],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap_or_else(|_| unreachable_cam());
         assert!((c.view_solid_angle_sr() - 2.0 * std::f64::consts::PI / 3.0).abs() < 1e-9);
-        let off = Camera::new(100, 100, [50.0, 50.0, 0.0, 50.0], Vec3::ZERO, Mat3::IDENTITY).unwrap_or_else(|_| unreachable_cam());
+        let off = Camera::new(
+            100,
+            100,
+            [50.0, 50.0, 0.0, 50.0],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap_or_else(|_| unreachable_cam());
         assert!(off.view_solid_angle_sr() > c.view_solid_angle_sr());
     }
 
     fn unreachable_cam() -> Camera {
-        Camera { width: 1, height: 1, fx: 1.0, fy: 1.0, cx: 0.0, cy: 0.0, position_m: Vec3::ZERO, rotation: Mat3::IDENTITY }
+        Camera {
+            width: 1,
+            height: 1,
+            fx: 1.0,
+            fy: 1.0,
+            cx: 0.0,
+            cy: 0.0,
+            position_m: Vec3::ZERO,
+            rotation: Mat3::IDENTITY,
+        }
     }
 
     #[test]
     fn rejects_bad_rotation_and_sizes() {
-        assert!(Camera::new(4, 4, [1.0; 4], Vec3::ZERO, Mat3::from_diagonal(Vec3::new(1.0, 1.0, -1.0))).is_err());
+        assert!(
+            Camera::new(
+                4,
+                4,
+                [1.0; 4],
+                Vec3::ZERO,
+                Mat3::from_diagonal(Vec3::new(1.0, 1.0, -1.0))
+            )
+            .is_err()
+        );
         assert!(Camera::new(0, 4, [1.0; 4], Vec3::ZERO, Mat3::IDENTITY).is_err());
         assert!(Camera::new(4, 4, [f32::NAN, 1.0, 1.0, 1.0], Vec3::ZERO, Mat3::IDENTITY).is_err());
     }

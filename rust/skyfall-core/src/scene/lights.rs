@@ -25,11 +25,33 @@ impl Light {
         let i = Some(index);
         for (k, &v) in row.iter().enumerate() {
             if !v.is_finite() {
-                return Err(Error::Invalid { param: Param { name: "lights", index: i }, message: format!("value {k} = {v} is not finite") });
+                return Err(Error::Invalid {
+                    param: Param {
+                        name: "lights",
+                        index: i,
+                    },
+                    message: format!("value {k} = {v} is not finite"),
+                });
             }
         }
-        let [x, y, z, r, g, b, intensity, dx, dy, dz, cos_outer, cos_inner] = <[f32; 12]>::try_from(row).map_err(|_| Error::Invalid {
-            param: Param { name: "lights", index: i },
+        let [
+            x,
+            y,
+            z,
+            r,
+            g,
+            b,
+            intensity,
+            dx,
+            dy,
+            dz,
+            cos_outer,
+            cos_inner,
+        ] = <[f32; 12]>::try_from(row).map_err(|_| Error::Invalid {
+            param: Param {
+                name: "lights",
+                index: i,
+            },
             message: format!("needs 12 values, got {}", row.len()),
         })?;
         for c in [x, y, z] {
@@ -42,12 +64,21 @@ impl Light {
         let dir = Vec3::new(dx, dy, dz);
         let spot = if dir.length_squared() > 0.0 {
             Range::closed(-1.0, 1.0, "").check("cos_outer", i, f64::from(cos_outer))?;
-            Range::closed(f64::from(cos_outer), 1.0, "").check("cos_inner", i, f64::from(cos_inner))?;
+            Range::closed(f64::from(cos_outer), 1.0, "").check(
+                "cos_inner",
+                i,
+                f64::from(cos_inner),
+            )?;
             Some((dir.normalize(), cos_outer, cos_inner))
         } else {
             None
         };
-        Ok(Light { position_m: Vec3::new(x, y, z), intensity_cd: intensity, color: Vec3::new(r, g, b), spot })
+        Ok(Light {
+            position_m: Vec3::new(x, y, z),
+            intensity_cd: intensity,
+            color: Vec3::new(r, g, b),
+            spot,
+        })
     }
 
     /// Illuminance at `p` from this light, lux per colour channel, on a surface facing it.
@@ -79,16 +110,47 @@ mod tests {
 
     #[test]
     fn inverse_square_and_cone() {
-        let p = Light::from_row(&[0.0, 5.0, 0.0, 1.0, 1.0, 1.0, 1000.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0).unwrap();
+        let p = Light::from_row(
+            &[
+                0.0, 5.0, 0.0, 1.0, 1.0, 1.0, 1000.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            ],
+            0,
+        )
+        .unwrap();
         assert!((p.illuminance_lux(Vec3::new(0.0, 3.0, 0.0)).x - 250.0).abs() < 1e-3);
         assert!((p.illuminance_lux(Vec3::new(0.0, 1.0, 0.0)).x - 62.5).abs() < 1e-3);
         let cos30 = 30f32.to_radians().cos();
         let cos20 = 20f32.to_radians().cos();
-        let s = Light::from_row(&[0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 100.0, 0.0, 0.0, -1.0, cos30, cos20], 0).unwrap();
+        let s = Light::from_row(
+            &[
+                0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 100.0, 0.0, 0.0, -1.0, cos30, cos20,
+            ],
+            0,
+        )
+        .unwrap();
         assert!((s.illuminance_lux(Vec3::new(0.0, 0.0, -2.0)).x - 25.0).abs() < 1e-3);
         assert_eq!(s.illuminance_lux(Vec3::new(0.0, 0.0, 2.0)).x, 0.0);
         assert_eq!(s.illuminance_lux(Vec3::new(2.0, 0.0, -1.0)).x, 0.0);
         assert!(Light::from_row(&[0.0; 11], 0).is_err());
-        assert!(Light::from_row(&[0.0, 0.0, f32::NAN, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0).is_err());
+        assert!(
+            Light::from_row(
+                &[
+                    0.0,
+                    0.0,
+                    f32::NAN,
+                    1.0,
+                    1.0,
+                    1.0,
+                    1.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0
+                ],
+                0
+            )
+            .is_err()
+        );
     }
 }

@@ -12,7 +12,7 @@
 //! [`AmbientMap::sample`] is the CPU reference of the WGSL `ambient_sample` in
 //! `skyfall-gpu`'s `common.wgsl`.
 
-use super::illuminance::{boxes_above, irradiance, SkyTable, CHANNELS};
+use super::illuminance::{CHANNELS, SkyTable, boxes_above, irradiance};
 use crate::error::{Error, Param, Range, Result};
 use crate::scene::boxes::BoxScene;
 use glam::Vec3;
@@ -41,14 +41,25 @@ pub struct AmbientMap {
 /// Whether a node is inside a box (and so filled from outside).
 fn solid(scene: &BoxScene, p: Vec3) -> bool {
     scene.boxes.iter().any(|b| {
-        p.x > b.min_m.x && p.x < b.max_m.x && p.z > b.min_m.z && p.z < b.max_m.z && p.y >= b.min_m.y && p.y < b.max_m.y
+        p.x > b.min_m.x
+            && p.x < b.max_m.x
+            && p.z > b.min_m.z
+            && p.z < b.max_m.z
+            && p.y >= b.min_m.y
+            && p.y < b.max_m.y
     })
 }
 
 impl AmbientMap {
     /// A map of one node: the same light everywhere (a scene without occluders).
     pub fn uniform(values: [f32; CHANNELS]) -> Self {
-        AmbientMap { origin_m: Vec3::ZERO, spacing_m: 1.0, dims: [1, 1, 1], values: values.to_vec(), solid: vec![0] }
+        AmbientMap {
+            origin_m: Vec3::ZERO,
+            spacing_m: 1.0,
+            dims: [1, 1, 1],
+            values: values.to_vec(),
+            solid: vec![0],
+        }
     }
 
     /// Node count for a box `min_m`..`max_m` at `spacing_m`, validated.
@@ -59,15 +70,28 @@ impl AmbientMap {
             coord.check("bounds.min", Some(k), f64::from(min_m[k]))?;
             coord.check("bounds.max", Some(k), f64::from(max_m[k]))?;
             if max_m[k] < min_m[k] {
-                return Err(Error::Invalid { param: Param { name: "bounds", index: Some(k) }, message: format!("max {} is below min {}", max_m[k], min_m[k]) });
+                return Err(Error::Invalid {
+                    param: Param {
+                        name: "bounds",
+                        index: Some(k),
+                    },
+                    message: format!("max {} is below min {}", max_m[k], min_m[k]),
+                });
             }
         }
-        let dims = [0, 1, 2].map(|k| (f64::from(max_m[k] - min_m[k]) / spacing_m).ceil() as usize + 1);
+        let dims =
+            [0, 1, 2].map(|k| (f64::from(max_m[k] - min_m[k]) / spacing_m).ceil() as usize + 1);
         let nodes = dims.iter().map(|&d| d as u128).product::<u128>();
         if nodes > MAX_NODES as u128 {
             return Err(Error::Invalid {
-                param: Param { name: "spacing_m", index: None },
-                message: format!("{}x{}x{} = {nodes} nodes exceed the {MAX_NODES} a map may have; use a larger spacing or smaller bounds", dims[0], dims[1], dims[2]),
+                param: Param {
+                    name: "spacing_m",
+                    index: None,
+                },
+                message: format!(
+                    "{}x{}x{} = {nodes} nodes exceed the {MAX_NODES} a map may have; use a larger spacing or smaller bounds",
+                    dims[0], dims[1], dims[2]
+                ),
             });
         }
         Ok(dims)
@@ -75,7 +99,13 @@ impl AmbientMap {
 
     /// Builds the map over `min_m`..`max_m` (the last node may overshoot `max_m` by less than
     /// a spacing), nodes in parallel.
-    pub fn build(scene: &BoxScene, samples: &SkyTable, min_m: Vec3, max_m: Vec3, spacing_m: f64) -> Result<Self> {
+    pub fn build(
+        scene: &BoxScene,
+        samples: &SkyTable,
+        min_m: Vec3,
+        max_m: Vec3,
+        spacing_m: f64,
+    ) -> Result<Self> {
         let dims = Self::grid_dims(min_m, max_m, spacing_m)?;
         let [nx, ny, nz] = dims;
         let s = spacing_m as f32;
@@ -94,12 +124,19 @@ impl AmbientMap {
                     if solid(scene, p) {
                         solid_col[k] = true;
                     } else {
-                        column[k * CHANNELS..(k + 1) * CHANNELS].copy_from_slice(&irradiance(&above, samples, p));
+                        column[k * CHANNELS..(k + 1) * CHANNELS]
+                            .copy_from_slice(&irradiance(&above, samples, p));
                     }
                 }
             });
         let solid = is_solid.iter().map(|&b| u32::from(b)).collect();
-        let mut map = AmbientMap { origin_m: min_m, spacing_m: s, dims, values, solid };
+        let mut map = AmbientMap {
+            origin_m: min_m,
+            spacing_m: s,
+            dims,
+            values,
+            solid,
+        };
         map.fill_solid(is_solid);
         Ok(map)
     }
@@ -130,7 +167,10 @@ impl AmbientMap {
                         ];
                         for m in nbrs.into_iter().flatten() {
                             if !pending[m] {
-                                for (a, v) in acc.iter_mut().zip(&self.values[m * CHANNELS..(m + 1) * CHANNELS]) {
+                                for (a, v) in acc
+                                    .iter_mut()
+                                    .zip(&self.values[m * CHANNELS..(m + 1) * CHANNELS])
+                                {
                                     *a += v;
                                 }
                                 count += 1;
@@ -188,7 +228,10 @@ impl AmbientMap {
             }
             let n = (ijk[0] * ny + ijk[1]) * nz + ijk[2];
             let is_open = self.solid[n] == 0;
-            for (c, v) in self.values[n * CHANNELS..(n + 1) * CHANNELS].iter().enumerate() {
+            for (c, v) in self.values[n * CHANNELS..(n + 1) * CHANNELS]
+                .iter()
+                .enumerate()
+            {
                 out[c] += w * v;
                 if is_open {
                     open[c] += w * v;
@@ -251,7 +294,7 @@ pub fn scene_bounds(scene: &BoxScene, extra: &[Vec3], spacing_m: f32) -> (Vec3, 
 mod tests {
     use super::*;
     use crate::scene::boxes::SceneBox;
-    use crate::sky::{cie::SkyKind, Sky};
+    use crate::sky::{Sky, cie::SkyKind};
 
     #[test]
     fn trilinear_is_exact_for_linear_fields_and_clamps() {
@@ -267,7 +310,13 @@ mod tests {
                 }
             }
         }
-        let m = AmbientMap { origin_m: origin, spacing_m: 0.5, dims: [nx, ny, nz], values, solid: vec![0; nx * ny * nz] };
+        let m = AmbientMap {
+            origin_m: origin,
+            spacing_m: 0.5,
+            dims: [nx, ny, nz],
+            values,
+            solid: vec![0; nx * ny * nz],
+        };
         for p in [Vec3::new(-0.3, 0.7, 2.9), Vec3::new(0.5, 1.0, 4.0), origin] {
             for (c, v) in m.sample(p).iter().enumerate() {
                 assert!((v - f(p, c)).abs() < 1e-5, "{p} {c}");
@@ -275,16 +324,30 @@ mod tests {
         }
         // beyond the grid: the boundary value
         assert!((m.sample(Vec3::new(-9.0, 0.0, 2.0))[0] - f(origin, 0)).abs() < 1e-6);
-        assert_eq!(AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]).sample(Vec3::splat(7.0)), [1.0, 0.4, 0.4, 0.4, 0.4]);
+        assert_eq!(
+            AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]).sample(Vec3::splat(7.0)),
+            [1.0, 0.4, 0.4, 0.4, 0.4]
+        );
     }
 
     #[test]
     fn nodes_inside_boxes_take_the_light_outside() {
-        let wall = SceneBox { min_m: Vec3::new(2.0, 0.0, -50.0), max_m: Vec3::new(4.0, 10.0, 50.0), albedo: Vec3::ONE };
+        let wall = SceneBox {
+            min_m: Vec3::new(2.0, 0.0, -50.0),
+            max_m: Vec3::new(4.0, 10.0, 50.0),
+            albedo: Vec3::ONE,
+        };
         let scene = BoxScene::new(vec![wall], true, Vec3::ONE).unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let s = SkyTable::new(&sky, 256).unwrap();
-        let m = AmbientMap::build(&scene, &s, Vec3::new(0.0, 0.0, 0.0), Vec3::new(6.0, 4.0, 0.0), 1.0).unwrap();
+        let m = AmbientMap::build(
+            &scene,
+            &s,
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(6.0, 4.0, 0.0),
+            1.0,
+        )
+        .unwrap();
         assert_eq!(m.dims, [7, 5, 1]);
         let at = |i: usize, j: usize| &m.values[(i * 5 + j) * CHANNELS..(i * 5 + j + 1) * CHANNELS];
         // node x = 3 is inside: filled from x = 2 and x = 4 (both on the wall's faces)
@@ -299,19 +362,37 @@ mod tests {
         assert!(AmbientMap::build(&scene, &s, Vec3::ZERO, Vec3::splat(1e5), 0.1).is_err());
         // Halfway between the open node x = 2 and the solid x = 3, the open one alone counts.
         assert_eq!(m.solid[3 * 5 + 2], 1);
-        assert_eq!(m.sample(Vec3::new(2.5, 2.0, 0.0)), m.sample(Vec3::new(2.0, 2.0, 0.0)));
+        assert_eq!(
+            m.sample(Vec3::new(2.5, 2.0, 0.0)),
+            m.sample(Vec3::new(2.0, 2.0, 0.0))
+        );
     }
 
     #[test]
     fn a_thin_awning_does_not_leak_the_sky_above_it_below_it() {
         // A 0.25 m awning at 3 m over x in [0, 4]: the 1 m grid's nodes at y = 3 lie inside it.
-        let awning = SceneBox { min_m: Vec3::new(0.0, 3.0, -50.0), max_m: Vec3::new(4.0, 3.25, 50.0), albedo: Vec3::ONE };
+        let awning = SceneBox {
+            min_m: Vec3::new(0.0, 3.0, -50.0),
+            max_m: Vec3::new(4.0, 3.25, 50.0),
+            albedo: Vec3::ONE,
+        };
         let scene = BoxScene::new(vec![awning], true, Vec3::ONE).unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let t = SkyTable::new(&sky, 64).unwrap();
-        let m = AmbientMap::build(&scene, &t, Vec3::new(-2.0, 0.0, 0.0), Vec3::new(6.0, 6.0, 0.0), 1.0).unwrap();
+        let m = AmbientMap::build(
+            &scene,
+            &t,
+            Vec3::new(-2.0, 0.0, 0.0),
+            Vec3::new(6.0, 6.0, 0.0),
+            1.0,
+        )
+        .unwrap();
         let direct = |p: Vec3| irradiance(&boxes_above(&scene, p.y), &t, p)[0];
-        for p in [Vec3::new(2.0, 2.6, 0.0), Vec3::new(2.3, 2.9, 0.0), Vec3::new(2.0, 3.6, 0.0)] {
+        for p in [
+            Vec3::new(2.0, 2.6, 0.0),
+            Vec3::new(2.3, 2.9, 0.0),
+            Vec3::new(2.0, 3.6, 0.0),
+        ] {
             let (got, want) = (m.sample(p)[0], direct(p));
             // the residual is the field's own variation between the open nodes used
             assert!((got - want).abs() < 0.12, "{p}: map {got} direct {want}");

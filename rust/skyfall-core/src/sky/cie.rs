@@ -49,25 +49,55 @@ impl SkyKind {
     /// need a sun direction; the others ignore it.
     pub fn general(sky_type: i64, sun: Option<Vec3>) -> Result<Self> {
         if !(1..=15).contains(&sky_type) {
-            return Err(Error::OutOfRange { param: Param { name: "sky", index: None }, value: sky_type as f64, range: "1..15 (CIE general sky type) or \"overcast\"".into() });
+            return Err(Error::OutOfRange {
+                param: Param {
+                    name: "sky",
+                    index: None,
+                },
+                value: sky_type as f64,
+                range: "1..15 (CIE general sky type) or \"overcast\"".into(),
+            });
         }
         let p = CIE_TYPES[(sky_type - 1) as usize];
         let needs_sun = p[2] != 0.0 || p[4] != 0.0;
         let sun = match sun {
             Some(s) if s.is_finite() && s.length() > 0.0 => s.normalize(),
-            Some(_) => return Err(Error::Invalid { param: Param { name: "sun", index: None }, message: "the sun direction must be finite and non-zero".into() }),
+            Some(_) => {
+                return Err(Error::Invalid {
+                    param: Param {
+                        name: "sun",
+                        index: None,
+                    },
+                    message: "the sun direction must be finite and non-zero".into(),
+                });
+            }
             None if needs_sun => {
                 return Err(Error::Invalid {
-                    param: Param { name: "sun_elevation_deg", index: None },
-                    message: format!("CIE sky type {sky_type} depends on the sun: give sun_elevation_deg and sun_azimuth_deg"),
-                })
+                    param: Param {
+                        name: "sun_elevation_deg",
+                        index: None,
+                    },
+                    message: format!(
+                        "CIE sky type {sky_type} depends on the sun: give sun_elevation_deg and sun_azimuth_deg"
+                    ),
+                });
             }
             None => Vec3::Y,
         };
         if needs_sun && sun.y < 0.0 {
-            return Err(Error::OutOfRange { param: Param { name: "sun_elevation_deg", index: None }, value: f64::from(sun.y.asin().to_degrees()), range: "[0, 90] deg".into() });
+            return Err(Error::OutOfRange {
+                param: Param {
+                    name: "sun_elevation_deg",
+                    index: None,
+                },
+                value: f64::from(sun.y.asin().to_degrees()),
+                range: "[0, 90] deg".into(),
+            });
         }
-        Ok(SkyKind::General { sky_type: sky_type as u8, sun })
+        Ok(SkyKind::General {
+            sky_type: sky_type as u8,
+            sun,
+        })
     }
 
     /// The five parameters a–e, and the sun (for the GPU uniform); the overcast sky is
@@ -75,7 +105,9 @@ impl SkyKind {
     pub fn params(&self) -> ([f32; 5], Vec3) {
         match *self {
             SkyKind::Overcast => ([f32::NAN, 0.0, 0.0, 0.0, 0.0], Vec3::Y),
-            SkyKind::General { sky_type, sun } => (CIE_TYPES[usize::from(sky_type) - 1].map(|v| v as f32), sun),
+            SkyKind::General { sky_type, sun } => {
+                (CIE_TYPES[usize::from(sky_type) - 1].map(|v| v as f32), sun)
+            }
         }
     }
 
@@ -89,8 +121,16 @@ impl SkyKind {
             SkyKind::Overcast => (1.0 + 2.0 * cz) / 3.0,
             SkyKind::General { sky_type, sun } => {
                 let [a, b, c, d, e] = CIE_TYPES[usize::from(sky_type) - 1];
-                let phi = |cos_z: f64| if cos_z <= 0.0 { 1.0 } else { 1.0 + a * (b / cos_z).exp() };
-                let f = |chi: f64| 1.0 + c * ((d * chi).exp() - (d * FRAC_PI_2).exp()) + e * chi.cos().powi(2);
+                let phi = |cos_z: f64| {
+                    if cos_z <= 0.0 {
+                        1.0
+                    } else {
+                        1.0 + a * (b / cos_z).exp()
+                    }
+                };
+                let f = |chi: f64| {
+                    1.0 + c * ((d * chi).exp() - (d * FRAC_PI_2).exp()) + e * chi.cos().powi(2)
+                };
                 let chi = f64::from(dir.dot(sun)).clamp(-1.0, 1.0).acos();
                 let zs = f64::from(sun.y).clamp(-1.0, 1.0).acos();
                 phi(cz) * f(chi) / (phi(1.0) * f(zs))

@@ -107,7 +107,10 @@ fn hidden(b: &SceneBox, p: Vec3, dx: f64, dz: f64) -> Option<(f64, f64)> {
     }
     // Horizontal distances along the azimuth at which the half-plane is inside the footprint.
     let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
-    for (o, d, lo, hi) in [(p.x, dx, b.min_m.x, b.max_m.x), (p.z, dz, b.min_m.z, b.max_m.z)] {
+    for (o, d, lo, hi) in [
+        (p.x, dx, b.min_m.x, b.max_m.x),
+        (p.z, dz, b.min_m.z, b.max_m.z),
+    ] {
         let (o, lo, hi) = (f64::from(o), f64::from(lo), f64::from(hi));
         if d.abs() < 1e-12 {
             if o < lo || o > hi {
@@ -131,7 +134,12 @@ fn hidden(b: &SceneBox, p: Vec3, dx: f64, dz: f64) -> Option<(f64, f64)> {
 
 /// The boxes that can hide sky from height `y_m` (those reaching above it).
 pub fn boxes_above(scene: &BoxScene, y_m: f32) -> Vec<SceneBox> {
-    scene.boxes.iter().filter(|b| b.max_m.y > y_m).copied().collect()
+    scene
+        .boxes
+        .iter()
+        .filter(|b| b.max_m.y > y_m)
+        .copied()
+        .collect()
 }
 
 /// Illuminance on the five normals at `p`, relative to E (1 on the open ground).
@@ -169,7 +177,13 @@ pub fn irradiance(boxes_above_p: &[SceneBox], table: &SkyTable, p: Vec3) -> [f32
 /// on while the ray leaves it does not).
 #[inline]
 pub fn occluded(boxes: &[SceneBox], p: Vec3, dir: Vec3) -> bool {
-    let safe = |d: f32| if d.abs() < 1e-20 { if d < 0.0 { -1e-20 } else { 1e-20 } } else { d };
+    let safe = |d: f32| {
+        if d.abs() < 1e-20 {
+            if d < 0.0 { -1e-20 } else { 1e-20 }
+        } else {
+            d
+        }
+    };
     let inv = Vec3::new(1.0 / safe(dir.x), 1.0 / safe(dir.y), 1.0 / safe(dir.z));
     boxes.iter().any(|b| {
         let t1 = (b.min_m - p) * inv;
@@ -193,7 +207,11 @@ mod tests {
         // the floor sees (1 + cos γ0)/2 of it, γ0 = atan(H/D) (the 2D view factor).
         let sky = Sky::new(SkyKind::general(5, None).unwrap(), 0.0, 1000.0).unwrap();
         let t = SkyTable::new(&sky, 256).unwrap();
-        let wall = SceneBox { min_m: Vec3::new(5.0, 0.0, -1e5), max_m: Vec3::new(6.0, 10.0, 1e5), albedo: Vec3::ONE };
+        let wall = SceneBox {
+            min_m: Vec3::new(5.0, 0.0, -1e5),
+            max_m: Vec3::new(6.0, 10.0, 1e5),
+            albedo: Vec3::ONE,
+        };
         let e = irradiance(&[wall], &t, Vec3::ZERO);
         let want = (1.0 + 2f64.atan().cos()) / 2.0;
         assert!((f64::from(e[0]) - want).abs() < 2e-4, "{} vs {want}", e[0]);
@@ -220,7 +238,11 @@ mod tests {
     fn a_point_inside_or_under_a_box_sees_no_sky() {
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let s = SkyTable::new(&sky, 256).unwrap();
-        let b = SceneBox { min_m: Vec3::new(-1.0, 2.0, -1.0), max_m: Vec3::new(1.0, 3.0, 1.0), albedo: Vec3::ONE };
+        let b = SceneBox {
+            min_m: Vec3::new(-1.0, 2.0, -1.0),
+            max_m: Vec3::new(1.0, 3.0, 1.0),
+            albedo: Vec3::ONE,
+        };
         assert_eq!(irradiance(&[b], &s, Vec3::new(0.0, 2.5, 0.0)), [0.0; 5]);
         // on its roof: the open sky for up
         let top = irradiance(&[b], &s, Vec3::new(0.0, 3.0, 0.0));

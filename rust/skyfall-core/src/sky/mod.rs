@@ -19,4 +19,4 @@ pub mod cie;
 pub mod illuminance;
 mod model;
 
-pub use model::{cloud_base_m, sun_direction, Sky, SKY_PIXEL_MAX};
+pub use model::{SKY_PIXEL_MAX, Sky, cloud_base_m, sun_direction};

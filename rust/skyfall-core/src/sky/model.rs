@@ -22,7 +22,11 @@ pub fn cloud_base_m(rain_rate_mm_h: f64) -> f64 {
 /// (north) towards +X (east).
 pub fn sun_direction(elevation_deg: f64, azimuth_deg: f64) -> Vec3 {
     let (el, az) = (elevation_deg.to_radians(), azimuth_deg.to_radians());
-    Vec3::new((az.sin() * el.cos()) as f32, el.sin() as f32, (-az.cos() * el.cos()) as f32)
+    Vec3::new(
+        (az.sin() * el.cos()) as f32,
+        el.sin() as f32,
+        (-az.cos() * el.cos()) as f32,
+    )
 }
 
 /// Elevation breaks of the normalisation quadrature in μ = sin γ: it resolves the steep
@@ -66,7 +70,13 @@ impl Sky {
     pub fn new(kind: SkyKind, extinction_per_m: f64, cloud_base_m: f64) -> Result<Self> {
         Range::closed(0.0, 1e3, "1/m").check("extinction_per_m", None, extinction_per_m)?;
         Range::closed(1.0, 2e4, "m").check("cloud_base_m", None, cloud_base_m)?;
-        let mut sky = Sky { kind, extinction_per_m, cloud_base_m, scale: 1.0, received_scale: 1.0 };
+        let mut sky = Sky {
+            kind,
+            extinction_per_m,
+            cloud_base_m,
+            scale: 1.0,
+            received_scale: 1.0,
+        };
         let ring = |mu: f64| {
             let (s, c) = (mu, (1.0 - mu * mu).max(0.0).sqrt());
             let mut sum = 0.0;
@@ -124,7 +134,9 @@ impl Sky {
     /// Luminance reaching the ground along `dir`, relative to E/π: [`Sky::emitted`] · τ.
     #[inline]
     pub fn received(&self, dir: Vec3) -> f64 {
-        self.received_scale * self.kind.relative_to_zenith(dir) * self.relative_transmittance(f64::from(dir.y))
+        self.received_scale
+            * self.kind.relative_to_zenith(dir)
+            * self.relative_transmittance(f64::from(dir.y))
     }
 }
 
@@ -144,10 +156,13 @@ mod tests {
     fn rain_dims_the_low_sky_most_and_keeps_e() {
         let s = Sky::new(SkyKind::Overcast, 1.5e-3, cloud_base_m(10.0)).unwrap();
         let zen = s.received(Vec3::Y) / s.emitted(Vec3::Y);
-        let low = s.received(Vec3::new(0.0, 0.2, 0.98).normalize()) / s.emitted(Vec3::new(0.0, 0.2, 0.98).normalize());
+        let low = s.received(Vec3::new(0.0, 0.2, 0.98).normalize())
+            / s.emitted(Vec3::new(0.0, 0.2, 0.98).normalize());
         assert!(low < zen && zen < 1.0);
         assert!(s.scale > 9.0 / 7.0);
-        assert!((cloud_base_m(0.0) - 1500.0).abs() < 1e-9 && (cloud_base_m(1e6) - 300.0).abs() < 1e-9);
+        assert!(
+            (cloud_base_m(0.0) - 1500.0).abs() < 1e-9 && (cloud_base_m(1e6) - 300.0).abs() < 1e-9
+        );
         let sun = sun_direction(30.0, 90.0);
         assert!((sun - Vec3::new(0.866_025_4, 0.5, 0.0)).length() < 1e-6);
     }
