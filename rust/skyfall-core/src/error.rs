@@ -70,6 +70,22 @@ pub enum Error {
         /// The length of the broadcast result.
         expected: usize,
     },
+    /// An allocation the system refused (an address-space limit, an exhausted machine).
+    #[error("out of memory: {what} needs {bytes} bytes ({mib:.1} MiB) that could not be allocated")]
+    OutOfMemory {
+        /// What was being allocated.
+        what: String,
+        /// Bytes asked for.
+        bytes: u128,
+        /// The same in MiB.
+        mib: f64,
+    },
+    /// A long computation stopped because its caller asked it to (Ctrl-C in Python).
+    #[error("{what} was cancelled")]
+    Cancelled {
+        /// What was stopped.
+        what: &'static str,
+    },
 }
 
 impl Error {
@@ -84,17 +100,50 @@ impl Error {
             budget_gib: budget as f64 / GIB,
         }
     }
+
+    /// Builds an [`Error::OutOfMemory`] for `len` values of `T`.
+    pub fn out_of_memory<T>(what: impl Into<String>, len: usize) -> Self {
+        const MIB: f64 = (1u64 << 20) as f64;
+        let bytes = len as u128 * std::mem::size_of::<T>() as u128;
+        Error::OutOfMemory {
+            what: what.into(),
+            bytes,
+            mib: bytes as f64 / MIB,
+        }
+    }
 }
 
-/// A closed interval with units, used to validate inputs.
-#[derive(Debug, Clone, Copy)]
+/// A vector of `len` copies of `value`, or [`Error::OutOfMemory`] where `vec![value; len]`
+/// would abort the process.
+pub fn try_filled<T: Clone>(what: &str, len: usize, value: T) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| Error::out_of_memory::<T>(what, len))?;
+    v.resize(len, value);
+    Ok(v)
+}
+
+/// [`Error::Cancelled`] once `cancel` is set: the check long loops make between chunks.
+#[inline]
+pub fn check_cancel(cancel: &std::sync::atomic::AtomicBool, what: &'static str) -> Result<()> {
+    if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+        Err(Error::Cancelled { what })
+    } else {
+        Ok(())
+    }
+}
+
+/// An interval with units, used to validate inputs: closed unless an end is marked open.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Range {
     /// Lower bound (inclusive unless `lo_open`).
     pub lo: f64,
-    /// Upper bound (inclusive).
+    /// Upper bound (inclusive unless `hi_open`).
     pub hi: f64,
     /// Whether the lower bound is excluded.
     pub lo_open: bool,
+    /// Whether the upper bound is excluded.
+    pub hi_open: bool,
     /// Unit shown in messages.
     pub unit: &'static str,
 }
@@ -106,27 +155,52 @@ impl Range {
             lo,
             hi,
             lo_open: false,
+            hi_open: false,
             unit,
         }
     }
     /// `(lo, hi] unit`.
     pub const fn open_closed(lo: f64, hi: f64, unit: &'static str) -> Self {
         Range {
-            lo,
-            hi,
             lo_open: true,
-            unit,
+            ..Range::closed(lo, hi, unit)
+        }
+    }
+    /// `[lo, hi) unit`.
+    pub const fn closed_open(lo: f64, hi: f64, unit: &'static str) -> Self {
+        Range {
+            hi_open: true,
+            ..Range::closed(lo, hi, unit)
+        }
+    }
+    /// `(lo, hi) unit`; `(-inf, inf)` accepts every finite number.
+    pub const fn open(lo: f64, hi: f64, unit: &'static str) -> Self {
+        Range {
+            lo_open: true,
+            hi_open: true,
+            ..Range::closed(lo, hi, unit)
         }
     }
 
-    /// Checks one value (NaN fails every comparison and so is rejected).
-    pub fn check(&self, name: &'static str, index: Option<usize>, value: f64) -> Result<f64> {
+    /// Whether `value` lies in the range (NaN never does).
+    #[inline]
+    pub fn contains(&self, value: f64) -> bool {
         let lo_ok = if self.lo_open {
             value > self.lo
         } else {
             value >= self.lo
         };
-        if lo_ok && value <= self.hi {
+        let hi_ok = if self.hi_open {
+            value < self.hi
+        } else {
+            value <= self.hi
+        };
+        lo_ok && hi_ok
+    }
+
+    /// Checks one value (NaN fails every comparison and so is rejected).
+    pub fn check(&self, name: &'static str, index: Option<usize>, value: f64) -> Result<f64> {
+        if self.contains(value) {
             Ok(value)
         } else {
             Err(Error::OutOfRange {
@@ -150,7 +224,11 @@ impl Range {
 impl fmt::Display for Range {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let open = if self.lo_open { "(" } else { "[" };
-        write!(f, "{open}{}, {}] {}", self.lo, self.hi, self.unit)?;
+        let close = if self.hi_open { ")" } else { "]" };
+        write!(f, "{open}{}, {}{close}", self.lo, self.hi)?;
+        if !self.unit.is_empty() {
+            write!(f, " {}", self.unit)?;
+        }
         Ok(())
     }
 }

@@ -1,8 +1,7 @@
 //! Output encoding.
 
-use numpy::{
-    PyArrayDyn, PyArrayMethods, PyReadonlyArray1, PyReadonlyArrayDyn, PyUntypedArrayMethods,
-};
+use numpy::ndarray::IxDyn;
+use numpy::{PyArrayDyn, PyReadonlyArray1, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -13,11 +12,10 @@ pub fn encode_srgb8<'py>(
     linear: PyReadonlyArrayDyn<'py, f32>,
 ) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
     let src = linear.as_slice()?;
-    let shape = linear.shape().to_vec();
-    let mut out = vec![0u8; src.len()];
-    py.detach(|| skyfall_core::color::encode_srgb8(src, &mut out));
-    let arr = numpy::PyArray1::from_vec(py, out);
-    arr.reshape(shape)
+    crate::alloc::filled::<u8, IxDyn>(py, linear.shape(), |out| {
+        py.detach(|| skyfall_core::color::encode_srgb8(src, out));
+        Ok(())
+    })
 }
 
 /// Bytes (any shape) through a 256-entry float32 table, same shape, GIL released.
@@ -31,8 +29,8 @@ pub fn apply_lut8<'py>(
         PyValueError::new_err(format!("table must have 256 entries, got {}", table.len()))
     })?;
     let src = encoded.as_slice()?;
-    let shape = encoded.shape().to_vec();
-    let mut out = vec![0.0f32; src.len()];
-    py.detach(|| skyfall_core::color::apply_lut8(src, t, &mut out));
-    numpy::PyArray1::from_vec(py, out).reshape(shape)
+    crate::alloc::filled::<f32, IxDyn>(py, encoded.shape(), |out| {
+        py.detach(|| skyfall_core::color::apply_lut8(src, t, out));
+        Ok(())
+    })
 }

@@ -1,7 +1,7 @@
 //! The one place where core errors become Python exceptions.
 
 use pyo3::PyErr;
-use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyMemoryError, PyValueError};
 
 pyo3::create_exception!(
     skyfall,
@@ -44,11 +44,15 @@ impl From<CoreError> for PyErr {
     fn from(e: CoreError) -> PyErr {
         use skyfall_core::Error as E;
         match e.0 {
-            // Every core error today is about a value the caller passed.
+            // A value the caller passed.
             err @ (E::OutOfRange { .. }
             | E::Invalid { .. }
             | E::TooLarge { .. }
             | E::Length { .. }) => PyValueError::new_err(err.to_string()),
+            err @ E::OutOfMemory { .. } => PyMemoryError::new_err(err.to_string()),
+            // Cancelled work ends with the exception the signal handler raised (see
+            // `crate::interrupt`); this is the fallback should none be pending.
+            err @ E::Cancelled { .. } => PyKeyboardInterrupt::new_err(err.to_string()),
         }
     }
 }

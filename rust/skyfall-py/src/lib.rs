@@ -1,8 +1,10 @@
 //! `skyfall._core`: thin pyo3 wrappers over `skyfall-core`. The public API is the Python
 //! package `skyfall`; this module's contract is `python/skyfall/_core.pyi`.
 
+mod alloc;
 mod color;
 mod errors;
+mod interrupt;
 mod physics;
 mod rain;
 mod rain_frame;

@@ -1,7 +1,8 @@
 //! Wrappers of `skyfall_core::physics`: numpy in, numpy out, GIL released.
 
 use crate::errors::CoreError;
-use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
+use numpy::ndarray::Ix1;
+use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use skyfall_core::error::{at, broadcast_len};
 use skyfall_core::physics::air::{Air, TEMPERATURE_C, air_viscosity_pa_s};
@@ -12,7 +13,8 @@ type Arr<'py> = PyReadonlyArray1<'py, f64>;
 type Out<'py> = PyResult<Bound<'py, PyArray1<f64>>>;
 
 fn done<'py>(py: Python<'py>, r: Result<Vec<f64>, skyfall_core::Error>) -> Out<'py> {
-    Ok(r.map_err(CoreError)?.into_pyarray(py))
+    let v = r.map_err(CoreError)?;
+    crate::alloc::from_slice::<f64, Ix1>(py, &[v.len()], &v)
 }
 
 /// Moist-air density, kg/m³ (arrays of length 1 or n).

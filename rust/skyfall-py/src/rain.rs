@@ -1,9 +1,9 @@
 //! Wrappers of `skyfall_core::rain`.
 
+use crate::alloc::from_slice;
 use crate::errors::CoreError;
-use numpy::ndarray::Array4;
-use numpy::{IntoPyArray, PyArray1, PyArray4, PyReadonlyArray1};
-use pyo3::exceptions::PyValueError;
+use numpy::ndarray::{Ix1, Ix4};
+use numpy::{PyArray1, PyArray4, PyReadonlyArray1};
 use pyo3::prelude::*;
 use skyfall_core::rain::bins::diameter_bins;
 use skyfall_core::rain::texture::{TextureRequest, render_textures};
@@ -32,9 +32,7 @@ pub fn rain_textures<'py>(
         size_px,
     );
     let data = py.detach(|| render_textures(&req)).map_err(CoreError)?;
-    let arr =
-        Array4::from_shape_vec(shape, data).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    Ok(arr.into_pyarray(py))
+    from_slice::<f32, Ix4>(py, &[shape.0, shape.1, shape.2, shape.3], &data)
 }
 
 type BinEdges<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
@@ -47,5 +45,8 @@ pub fn rain_diameter_bins<'py>(
 ) -> PyResult<BinEdges<'py>> {
     let bins = diameter_bins(diameters_mm.as_slice()?).map_err(CoreError)?;
     let (lo, hi): (Vec<f64>, Vec<f64>) = bins.into_iter().unzip();
-    Ok((lo.into_pyarray(py), hi.into_pyarray(py)))
+    Ok((
+        from_slice::<f64, Ix1>(py, &[lo.len()], &lo)?,
+        from_slice::<f64, Ix1>(py, &[hi.len()], &hi)?,
+    ))
 }

@@ -1,11 +1,11 @@
 //! The drops near a camera, as arrays: ground truth for stereo and video.
 
+use crate::alloc::filled;
 use crate::errors::CoreError;
 use crate::render::{RegionArgs, box_scene, region};
 use glam::Vec3;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
+use numpy::ndarray::{Ix1, Ix2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use skyfall_core::rain::drops::{Drop, drops_near};
 use skyfall_core::rain::shelter::remove_sheltered;
@@ -41,27 +41,29 @@ pub fn rain_drops<'py>(
         d
     });
     let n = drops.len();
-    let err = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
-    let pos = Array2::from_shape_vec(
-        (n, 3),
-        drops.iter().flat_map(|d| d.position_m.to_array()).collect(),
-    )
-    .map_err(err)?;
-    let vel = Array2::from_shape_vec(
-        (n, 3),
-        drops
-            .iter()
-            .flat_map(|d| d.velocity_m_s.to_array())
-            .collect(),
-    )
-    .map_err(err)?;
-    let diam: Vec<f32> = drops.iter().map(|d| d.diameter_m).collect();
-    let ids =
-        Array2::from_shape_vec((n, 5), drops.iter().flat_map(|d| d.id).collect()).map_err(err)?;
-    Ok((
-        pos.into_pyarray(py),
-        vel.into_pyarray(py),
-        diam.into_pyarray(py),
-        ids.into_pyarray(py),
-    ))
+    let pos = filled::<f32, Ix2>(py, &[n, 3], |out| {
+        for (o, d) in out.chunks_exact_mut(3).zip(&drops) {
+            o.copy_from_slice(&d.position_m.to_array());
+        }
+        Ok(())
+    })?;
+    let vel = filled::<f32, Ix2>(py, &[n, 3], |out| {
+        for (o, d) in out.chunks_exact_mut(3).zip(&drops) {
+            o.copy_from_slice(&d.velocity_m_s.to_array());
+        }
+        Ok(())
+    })?;
+    let diam = filled::<f32, Ix1>(py, &[n], |out| {
+        for (o, d) in out.iter_mut().zip(&drops) {
+            *o = d.diameter_m;
+        }
+        Ok(())
+    })?;
+    let ids = filled::<i64, Ix2>(py, &[n, 5], |out| {
+        for (o, d) in out.chunks_exact_mut(5).zip(&drops) {
+            o.copy_from_slice(&d.id);
+        }
+        Ok(())
+    })?;
+    Ok((pos, vel, diam, ids))
 }

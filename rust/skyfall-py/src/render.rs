@@ -4,6 +4,7 @@
 use crate::errors::{CoreError, gpu_error};
 use crate::sky::{AmbientLightMap, SkyModel};
 use glam::{Mat3, Vec3};
+use numpy::ndarray::{Ix2, Ix3};
 use numpy::{
     PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
     PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
@@ -321,19 +322,24 @@ pub fn render_frame<'py>(
     // sized once the frame is known to fit.
     check_frame_size(cam).map_err(CoreError)?;
     let (h, w) = (cam.height as usize, cam.width as usize);
-    let plane = || PyArray2::<f32>::zeros(py, [h, w], false);
+    let plane = || crate::alloc::zeros::<f32, Ix2>(py, &[h, w]);
     let out = out.unwrap_or_default();
-    let rgb = out
-        .rgb
-        .unwrap_or_else(|| PyArray3::<f32>::zeros(py, [h, w, 3], false));
-    let depth = out.depth_m.unwrap_or_else(plane);
-    let trans = haze.map(|_| out.transmittance.unwrap_or_else(plane));
-    let layers = rain.as_ref().map(|_| {
-        (
-            out.rain_alpha.unwrap_or_else(plane),
-            out.rain_depth_m.unwrap_or_else(plane),
-        )
-    });
+    let rgb = match out.rgb {
+        Some(a) => a,
+        None => crate::alloc::zeros::<f32, Ix3>(py, &[h, w, 3])?,
+    };
+    let depth = out.depth_m.map_or_else(plane, Ok)?;
+    let trans = match haze {
+        Some(_) => Some(out.transmittance.map_or_else(plane, Ok)?),
+        None => None,
+    };
+    let layers = match rain {
+        Some(_) => Some((
+            out.rain_alpha.map_or_else(plane, Ok)?,
+            out.rain_depth_m.map_or_else(plane, Ok)?,
+        )),
+        None => None,
+    };
     let report = {
         // A given array may also be an input (a photo rendered over itself): name it.
         fn busy(name: &'static str) -> impl Fn(numpy::BorrowError) -> PyErr {

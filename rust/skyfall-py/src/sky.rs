@@ -1,19 +1,23 @@
 //! Skies, sky illuminance with occlusion and the ambient-light map.
 
+use crate::alloc::{filled, from_slice};
 use crate::errors::CoreError;
+use crate::interrupt::interruptible_core;
 use crate::render::box_scene;
 use glam::Vec3;
-use numpy::ndarray::{Array2, Array3, Array4};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArray4, PyReadonlyArray2};
+use numpy::ndarray::{Ix1, Ix2, Ix3, Ix4};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArray4, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
+use skyfall_core::error::{Error, check_cancel};
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::ambient::AmbientMap;
 use skyfall_core::sky::cie::SkyKind;
 use skyfall_core::sky::illuminance::{CHANNELS, SkyTable, boxes_above, irradiance};
 use skyfall_core::sky::{Sky, cloud_base_m as base_for_rate, sun_direction};
 use std::sync::Arc;
+use std::sync::atomic::Ordering;
 
 /// Rows of an (N, 3) float32 array as points.
 fn points(a: &PyReadonlyArray2<'_, f32>, name: &str) -> PyResult<Vec<Vec3>> {
@@ -24,25 +28,14 @@ fn points(a: &PyReadonlyArray2<'_, f32>, name: &str) -> PyResult<Vec<Vec3>> {
             v.shape()
         )));
     }
-    let pts: Vec<Vec3> = v
-        .rows()
-        .into_iter()
-        .map(|r| Vec3::new(r[0], r[1], r[2]))
-        .collect();
+    let mut pts: Vec<Vec3> = Vec::new();
+    pts.try_reserve_exact(v.nrows())
+        .map_err(|_| CoreError(Error::out_of_memory::<Vec3>(name.to_string(), v.nrows())))?;
+    pts.extend(v.rows().into_iter().map(|r| Vec3::new(r[0], r[1], r[2])));
     if let Some(i) = pts.iter().position(|p| !p.is_finite()) {
         return Err(PyValueError::new_err(format!("{name}[{i}] is not finite")));
     }
     Ok(pts)
-}
-
-fn channels<'py>(
-    py: Python<'py>,
-    rows: Vec<[f32; CHANNELS]>,
-) -> PyResult<Bound<'py, PyArray2<f32>>> {
-    let n = rows.len();
-    let a = Array2::from_shape_vec((n, CHANNELS), rows.into_iter().flatten().collect())
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    Ok(a.into_pyarray(py))
 }
 
 /// A normalised sky with rain attenuation.
@@ -110,18 +103,17 @@ impl SkyModel {
         received: bool,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let d = points(&dirs, "directions")?;
-        let out: Vec<f64> = d
-            .iter()
-            .map(|v| {
+        filled::<f64, Ix1>(py, &[d.len()], |out| {
+            for (o, v) in out.iter_mut().zip(&d) {
                 let u = v.normalize_or_zero();
-                if received {
+                *o = if received {
                     self.sky.received(u)
                 } else {
                     self.sky.emitted(u)
-                }
-            })
-            .collect();
-        Ok(out.into_pyarray(py))
+                };
+            }
+            Ok(())
+        })
     }
 
     /// Illuminance relative to E on the five normals (up, +X, −X, +Z, −Z) at points (N, 3)
@@ -136,13 +128,20 @@ impl SkyModel {
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let pts = points(&points_m, "points_m")?;
         let scene = box_scene(&boxes, true, [0.0; 3])?;
-        let s = SkyTable::new(&self.sky, samples).map_err(CoreError)?;
-        let rows: Vec<[f32; CHANNELS]> = py.detach(|| {
-            pts.par_iter()
-                .map(|&p| irradiance(&boxes_above(&scene, p.y), &s, p))
-                .collect()
-        });
-        channels(py, rows)
+        let sky = &self.sky;
+        filled::<f32, Ix2>(py, &[pts.len(), CHANNELS], |out| {
+            interruptible_core(py, |cancel| {
+                let s = SkyTable::new_cancellable(sky, samples, cancel)?;
+                out.par_chunks_mut(CHANNELS)
+                    .zip(pts.par_iter())
+                    .for_each(|(o, &p)| {
+                        if !cancel.load(Ordering::Relaxed) {
+                            o.copy_from_slice(&irradiance(&boxes_above(&scene, p.y), &s, p));
+                        }
+                    });
+                check_cancel(cancel, "the illuminance")
+            })
+        })
     }
 
     /// The ambient-light map of boxes (M, 9) over `bounds_min_m`..`bounds_max_m`.
@@ -157,15 +156,17 @@ impl SkyModel {
         samples: usize,
     ) -> PyResult<AmbientLightMap> {
         let scene: BoxScene = box_scene(&boxes, true, [0.0; 3])?;
-        let s = SkyTable::new(&self.sky, samples).map_err(CoreError)?;
         let (lo, hi) = (Vec3::from(bounds_min_m), Vec3::from(bounds_max_m));
-        let map = if scene.boxes.is_empty() {
-            AmbientMap::grid_dims(lo, hi, spacing_m).map_err(CoreError)?;
-            AmbientMap::uniform(irradiance(&[], &s, Vec3::ZERO))
-        } else {
-            py.detach(|| AmbientMap::build(&scene, &s, lo, hi, spacing_m))
-                .map_err(CoreError)?
-        };
+        let sky = &self.sky;
+        let map = interruptible_core(py, |cancel| {
+            let s = SkyTable::new_cancellable(sky, samples, cancel)?;
+            if scene.boxes.is_empty() {
+                AmbientMap::grid_dims(lo, hi, spacing_m)?;
+                Ok(AmbientMap::uniform(irradiance(&[], &s, Vec3::ZERO)))
+            } else {
+                AmbientMap::build_cancellable(&scene, &s, lo, hi, spacing_m, cancel)
+            }
+        })?;
         Ok(AmbientLightMap { map: Arc::new(map) })
     }
 }
@@ -200,21 +201,19 @@ impl AmbientLightMap {
     #[getter]
     fn values<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray4<f32>>> {
         let [nx, ny, nz] = self.map.dims;
-        let a = Array4::from_shape_vec((nx, ny, nz, CHANNELS), self.map.values.clone())
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(a.into_pyarray(py))
+        from_slice::<f32, Ix4>(py, &[nx, ny, nz, CHANNELS], &self.map.values)
     }
 
     /// Nodes inside a box, (nx, ny, nz).
     #[getter]
     fn solid<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<bool>>> {
         let [nx, ny, nz] = self.map.dims;
-        let a = Array3::from_shape_vec(
-            (nx, ny, nz),
-            self.map.solid.iter().map(|&s| s != 0).collect(),
-        )
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        Ok(a.into_pyarray(py))
+        filled::<bool, Ix3>(py, &[nx, ny, nz], |out| {
+            for (o, &s) in out.iter_mut().zip(&self.map.solid) {
+                *o = s != 0;
+            }
+            Ok(())
+        })
     }
 
     /// Trilinear samples at points (N, 3): (N, 5) relative to E.
@@ -224,8 +223,12 @@ impl AmbientLightMap {
         points_m: PyReadonlyArray2<'py, f32>,
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
         let pts = points(&points_m, "points_m")?;
-        let rows: Vec<[f32; CHANNELS]> = pts.iter().map(|&p| self.map.sample(p)).collect();
-        channels(py, rows)
+        filled::<f32, Ix2>(py, &[pts.len(), CHANNELS], |out| {
+            for (o, &p) in out.chunks_exact_mut(CHANNELS).zip(&pts) {
+                o.copy_from_slice(&self.map.sample(p));
+            }
+            Ok(())
+        })
     }
 }
 

@@ -13,10 +13,11 @@
 //! `skyfall-gpu`'s `common.wgsl`.
 
 use super::illuminance::{CHANNELS, SkyTable, boxes_above, irradiance};
-use crate::error::{Error, Param, Range, Result};
+use crate::error::{Error, Param, Range, Result, check_cancel, try_filled};
 use crate::scene::boxes::BoxScene;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Most nodes a map may have (16 M: 320 MB of float32).
 pub const MAX_NODES: usize = 16 << 20;
@@ -106,11 +107,34 @@ impl AmbientMap {
         max_m: Vec3,
         spacing_m: f64,
     ) -> Result<Self> {
+        Self::build_cancellable(
+            scene,
+            samples,
+            min_m,
+            max_m,
+            spacing_m,
+            &AtomicBool::new(false),
+        )
+    }
+
+    /// [`AmbientMap::build`], stopping with [`Error::Cancelled`] soon after `cancel` is set:
+    /// it is checked before every node (one node is `samples.azimuths()` azimuths over the
+    /// boxes above it: milliseconds at 65536 azimuths) and every pass of the solid fill. A
+    /// grid whose buffers cannot be allocated is [`Error::OutOfMemory`].
+    pub fn build_cancellable(
+        scene: &BoxScene,
+        samples: &SkyTable,
+        min_m: Vec3,
+        max_m: Vec3,
+        spacing_m: f64,
+        cancel: &AtomicBool,
+    ) -> Result<Self> {
         let dims = Self::grid_dims(min_m, max_m, spacing_m)?;
         let [nx, ny, nz] = dims;
         let s = spacing_m as f32;
-        let mut values = vec![0.0f32; nx * ny * nz * CHANNELS];
-        let mut is_solid = vec![false; nx * ny * nz];
+        let nodes = nx * ny * nz;
+        let mut values = try_filled("the ambient map's values", nodes * CHANNELS, 0.0f32)?;
+        let mut is_solid = try_filled("the ambient map's solid nodes", nodes, false)?;
         values
             .par_chunks_mut(nz * CHANNELS)
             .zip(is_solid.par_chunks_mut(nz))
@@ -120,6 +144,9 @@ impl AmbientMap {
                 let y = min_m.y + j as f32 * s;
                 let above = boxes_above(scene, y);
                 for k in 0..nz {
+                    if cancel.load(Ordering::Relaxed) {
+                        return;
+                    }
                     let p = min_m + Vec3::new(i as f32 * s, j as f32 * s, k as f32 * s);
                     if solid(scene, p) {
                         solid_col[k] = true;
@@ -129,7 +156,11 @@ impl AmbientMap {
                     }
                 }
             });
-        let solid = is_solid.iter().map(|&b| u32::from(b)).collect();
+        check_cancel(cancel, "the ambient-light map")?;
+        let mut solid = try_filled("the ambient map's solid nodes", nodes, 0u32)?;
+        for (o, &b) in solid.iter_mut().zip(&is_solid) {
+            *o = u32::from(b);
+        }
         let mut map = AmbientMap {
             origin_m: min_m,
             spacing_m: s,
@@ -137,16 +168,18 @@ impl AmbientMap {
             values,
             solid,
         };
-        map.fill_solid(is_solid);
+        map.fill_solid(is_solid, cancel)?;
         Ok(map)
     }
 
     /// Replaces solid nodes by the mean of their filled 6-neighbours, layer by layer inward.
-    fn fill_solid(&mut self, mut pending: Vec<bool>) {
+    fn fill_solid(&mut self, mut pending: Vec<bool>, cancel: &AtomicBool) -> Result<()> {
         let [nx, ny, nz] = self.dims;
         let idx = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
+        let mut next = try_filled("the ambient map's fill", pending.len(), false)?;
         while pending.iter().any(|&p| p) {
-            let mut next = pending.clone();
+            check_cancel(cancel, "the ambient-light map")?;
+            next.copy_from_slice(&pending);
             let mut progress = false;
             for i in 0..nx {
                 for j in 0..ny {
@@ -186,11 +219,12 @@ impl AmbientMap {
                     }
                 }
             }
-            pending = next;
+            std::mem::swap(&mut pending, &mut next);
             if !progress {
                 break; // every node solid: they stay 0
             }
         }
+        Ok(())
     }
 
     /// Trilinear interpolation of the five channels at `p` (clamped to the grid) over the

@@ -16,10 +16,11 @@
 //! faces one of them; a face looking down sees no sky.
 
 use super::model::Sky;
-use crate::error::{Range, Result};
+use crate::error::{Range, Result, check_cancel};
 use crate::scene::boxes::{BoxScene, SceneBox, T_MIN};
 use glam::Vec3;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::sync::atomic::AtomicBool;
 
 /// Number of normals per point: up, +X, −X, +Z, −Z.
 pub const CHANNELS: usize = 5;
@@ -52,6 +53,12 @@ pub struct SkyTable {
 impl SkyTable {
     /// Tabulates `sky` (luminance received at the ground, relative to E/π) on `azimuths` sectors.
     pub fn new(sky: &Sky, azimuths: usize) -> Result<Self> {
+        Self::new_cancellable(sky, azimuths, &AtomicBool::new(false))
+    }
+
+    /// [`SkyTable::new`], stopping with [`Error::Cancelled`](crate::Error::Cancelled) soon after `cancel` is set
+    /// (checked every azimuth: 2048 sky evaluations, well under a millisecond).
+    pub fn new_cancellable(sky: &Sky, azimuths: usize, cancel: &AtomicBool) -> Result<Self> {
         AZIMUTHS.check("samples", None, azimuths as f64)?;
         let dphi = TAU / azimuths as f64;
         let h = FRAC_PI_2 / STEPS as f64;
@@ -59,6 +66,7 @@ impl SkyTable {
         let mut up = Vec::with_capacity(azimuths * (STEPS + 1));
         let mut side = Vec::with_capacity(azimuths * (STEPS + 1));
         for k in 0..azimuths {
+            check_cancel(cancel, "the sky table")?;
             let phi = (k as f64 + 0.5) * dphi;
             let (sx, sz) = (phi.sin(), -phi.cos());
             dirs.push((sx, sz));

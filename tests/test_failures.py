@@ -1,0 +1,85 @@
+"""Failure behaviour: out of memory is a MemoryError (never a panic, an abort or a hang), and
+long calls end with KeyboardInterrupt soon after Ctrl-C. Both run in subprocesses."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="RLIMIT_AS and /proc are Linux's")
+
+# A 4096x4096 rainy frame needs 4 planes of 64 MiB and rgb of 192 MiB. The limit is set to the
+# process's address space after set-up plus a margin too small for that, so the render fails
+# at some allocation: which one depends on the margin (the ambient map, rgb, a plane).
+OOM_CHILD = textwrap.dedent(
+    """
+    import resource, sys
+    from skyfall import Renderer, Weather, scenes
+    margin_mib, warm = int(sys.argv[1]), sys.argv[2] == "warm"
+    weather = Weather(rain_rate_mm_h=20.0)
+    if warm:  # threads started, the scene's map cached: the frame's arrays are what fails
+        Renderer(64, 48, backend="cpu").render(scenes.street(), weather)
+    vm = int(open("/proc/self/status").read().split("VmSize:")[1].split()[0]) * 1024
+    limit = vm + margin_mib * 1024 * 1024
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    Renderer(4096, 4096, backend="cpu").render(scenes.street(), weather)
+    print("rendered")
+    """
+)
+
+
+@pytest.mark.parametrize(("margin_mib", "warm"), [(8, "cold"), (64, "cold"), (8, "warm"), (200, "warm")])
+def test_out_of_memory_is_a_memory_error(margin_mib: int, warm: str) -> None:
+    start = time.monotonic()
+    # A hang (the old NULL-pointer panic deadlocked at 0 % CPU) fails here as TimeoutExpired.
+    r = subprocess.run(
+        [sys.executable, "-c", OOM_CHILD, str(margin_mib), warm], capture_output=True, text=True, timeout=30
+    )
+    took = time.monotonic() - start
+    assert r.returncode == 1, f"exit {r.returncode} (negative: a signal) after {took:.1f} s\n{r.stderr[-3000:]}"
+    assert "rendered" not in r.stdout
+    last = r.stderr.strip().splitlines()[-1]
+    assert "MemoryError" in last, r.stderr[-3000:]
+    for bad in ("panicked", "PanicException", "memory allocation of"):
+        assert bad not in r.stderr, r.stderr[-3000:]
+
+
+SIGINT_CHILD = textwrap.dedent(
+    """
+    import sys
+    from skyfall import Renderer, Weather, scenes, sky
+    print("started", flush=True)
+    if sys.argv[1] == "render":  # the ambient map at the documented maximum: minutes of work
+        Renderer(64, 48, backend="cpu").render(scenes.street(), Weather(rain_rate_mm_h=5.0), ambient_samples=65536)
+    else:  # 4000 points at 65536 azimuths each
+        sky.horizontal_illuminance([[0.0, 1.5, -5.0 - 0.01 * i] for i in range(4000)], scenes.street(), samples=65536)
+    print("finished", flush=True)
+    """
+)
+
+
+@pytest.mark.parametrize("call", ["render", "illuminance"])
+def test_long_calls_end_with_keyboard_interrupt(call: str) -> None:
+    p = subprocess.Popen(
+        [sys.executable, "-c", SIGINT_CHILD, call], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        assert p.stdout is not None and p.stdout.readline().strip() == "started"
+        time.sleep(1.0)
+        assert p.poll() is None, "the call ended before the signal: it is not a long call"
+        p.send_signal(signal.SIGINT)
+        sent = time.monotonic()
+        out, err = p.communicate(timeout=10)
+        took = time.monotonic() - sent
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    assert "finished" not in out
+    assert "KeyboardInterrupt" in err.strip().splitlines()[-1], err[-3000:]
+    assert took < 2.0, f"KeyboardInterrupt came {took:.2f} s after SIGINT"
