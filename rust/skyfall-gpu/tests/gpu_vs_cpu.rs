@@ -6,7 +6,7 @@ use glam::{Mat3, Vec3};
 use skyfall_core::frame::{FrameOut, SceneRef, render};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
-use skyfall_core::rain::splat::{RainFrame, RainShading};
+use skyfall_core::rain::streaks::{RainFrame, RainShading};
 use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;

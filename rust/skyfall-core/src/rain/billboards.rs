@@ -25,13 +25,13 @@
 //! camera moving forward at 15 m/s. A billboard frame's mean opacity varies more from seed to
 //! seed than the drops' (the sampled balance varies with the seed too).
 
-use super::drops::{Drop, RainRegion, map_voxel_columns, voxel_in_view, wrap};
-use super::splat::{ScreenStreak, screen_streak};
+use super::drops::{Drop, RainRegion, voxel_in_view};
 use super::texture::{Streak, draw_streaks};
+use crate::particles::streak::{ScreenStreak, screen_streak};
+use crate::particles::voxels::{map_voxel_columns, voxel_seed, wrap};
 use crate::physics::air::Air;
 use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
 use crate::scene::camera::Camera;
-use crate::seed::derive;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -188,15 +188,7 @@ pub fn billboards_in_view(
         };
         let right = Vec3::new(n.z, 0.0, -n.x);
         let corner = Vec3::new(voxel[0] as f32, voxel[1] as f32, voxel[2] as f32);
-        let mut rng = Pcg64Mcg::seed_from_u64(derive(
-            region.seed,
-            &[
-                voxel[0] as u64,
-                voxel[1] as u64,
-                voxel[2] as u64,
-                0x0BA1_A4CE,
-            ],
-        ));
+        let mut rng = Pcg64Mcg::seed_from_u64(voxel_seed(region.seed, voxel, &[0x0BA1_A4CE]));
         let finer = if centre.distance(eye) < NEAR_VOXEL_M {
             NEAR_FINER
         } else {
@@ -212,16 +204,7 @@ pub fn billboards_in_view(
         column.wanted += want;
         column.shown += f64::from(gain * gain) * board;
         for (bin, streaks) in textures.iter().enumerate() {
-            let key = derive(
-                region.seed,
-                &[
-                    voxel[0] as u64,
-                    voxel[1] as u64,
-                    voxel[2] as u64,
-                    bin as u64,
-                    0xB111_B0A4D,
-                ],
-            );
+            let key = voxel_seed(region.seed, voxel, &[bin as u64, 0xB111_B0A4D]);
             let mut rng = Pcg64Mcg::seed_from_u64(key);
             let (ox, oy): (f64, f64) = (rng.random(), rng.random());
             for (k, s) in streaks.iter().enumerate() {
@@ -244,7 +227,7 @@ pub fn billboards_in_view(
         }
     };
     let keep = voxel_in_view(region, cam, exposure_s, camera_speed_m_s, longest);
-    let columns = map_voxel_columns(region, eye, ground, keep, |voxels| {
+    let columns = map_voxel_columns(eye, region.near_m, ground, keep, |voxels| {
         let mut column = Column {
             drops: Vec::new(),
             wanted: 0.0,

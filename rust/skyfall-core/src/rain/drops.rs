@@ -11,15 +11,14 @@
 
 use super::bins::diameter_bins;
 use crate::error::{Error, Range, Result};
+use crate::particles::voxels::{in_view, voxel_seed, voxels_where, wrap};
 use crate::physics::air::Air;
 use crate::physics::dsd::{RAIN_RATE_MM_H, drops_per_m3, mp_slope_per_mm};
 use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
 use crate::scene::camera::Camera;
-use crate::seed::derive;
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
-use rayon::prelude::*;
 
 /// Valid rain-region radii, m.
 pub const NEAR_M: Range = Range::open_closed(0.0, 50.0, "m");
@@ -118,20 +117,6 @@ pub struct Drop {
     pub id: [i64; 5],
 }
 
-/// x − ⌊x⌋ (in [0, 1] for |x| < 2⁶³: positions and scrolls are metres).
-#[inline]
-pub(crate) fn wrap(x: f64) -> f64 {
-    x - floor(x)
-}
-
-/// ⌊x⌋ for |x| < 2⁶³ by truncation, the same bits as `f64::floor` (−0 included), which is a
-/// libm call on targets without a rounding instruction.
-#[inline]
-pub(crate) fn floor(x: f64) -> f64 {
-    let t = (x as i64 as f64).copysign(x);
-    if t > x { t - 1.0 } else { t }
-}
-
 /// Fall speeds per diameter bin, tabulated: Beard's law (a logarithm, a polynomial and an
 /// exponential per call) at `SPEED_STEPS` + 1 evenly spaced diameters of each bin, read back by
 /// linear interpolation; the cells holding one of the law's regime boundaries (19 µm, 1.07 mm)
@@ -201,16 +186,10 @@ fn voxel_drops(
     if expected <= 0.0 {
         return;
     }
-    let key = derive(
+    let key = voxel_seed(
         region.seed,
-        &[
-            voxel[0] as u64,
-            voxel[1] as u64,
-            voxel[2] as u64,
-            bin as u64,
-            lo.to_bits(),
-            hi.to_bits(),
-        ],
+        voxel,
+        &[bin as u64, lo.to_bits(), hi.to_bits()],
     );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
     let whole = expected.floor();
@@ -231,6 +210,12 @@ fn voxel_drops(
             diameter_m: (d_mm * 1e-3) as f32,
             id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
         });
+    }
+}
+
+impl crate::particles::voxels::Anchored for Drop {
+    fn position_m(&self) -> Vec3 {
+        self.position_m
     }
 }
 
@@ -268,8 +253,8 @@ impl RainMethod {
 pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
     voxels_where(
-        region,
         center_m,
+        region.near_m,
         ground,
         |_| true,
         |voxel, out| {
@@ -284,8 +269,7 @@ pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop
 /// box, grown by the farthest a drop moves relative to the camera (moving at
 /// `camera_speed_m_s`) in the exposure plus `slack_m`, and by the reach of a streak's
 /// anti-aliasing beyond the frame's edge (a drop's radius plus two pixels at the region's far
-/// side), meets the view frustum. Box against plane: the box is outside a plane when its
-/// corner farthest inside is outside.
+/// side), meets the view frustum (see [`in_view`]).
 pub fn voxel_in_view(
     region: &RainRegion,
     cam: &Camera,
@@ -299,24 +283,7 @@ pub fn voxel_in_view(
         (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
     let edge = 2.0 * (region.near_m + 2.0) / f64::from(cam.fx.min(cam.fy)) + 0.5e-3 * d_max;
     let margin = ((speed + camera_speed_m_s) * exposure_s + slack_m + edge) as f32;
-    let (w, h) = (cam.width as f32, cam.height as f32);
-    // Inward side planes of the frustum in camera space (the camera looks along −z), turned
-    // into the world.
-    let planes = [
-        Vec3::new(1.0, 0.0, -cam.cx / cam.fx),
-        Vec3::new(-1.0, 0.0, -(w - cam.cx) / cam.fx),
-        Vec3::new(0.0, -1.0, -cam.cy / cam.fy),
-        Vec3::new(0.0, 1.0, -(h - cam.cy) / cam.fy),
-        Vec3::new(0.0, 0.0, -1.0),
-    ]
-    .map(|n| cam.rotation * n.normalize());
-    let position = cam.position_m;
-    move |centre: Vec3| {
-        let c = centre - position;
-        planes
-            .iter()
-            .all(|n| n.dot(c) + 0.5 * n.abs().element_sum() >= -margin)
-    }
+    in_view(cam, margin)
 }
 
 /// The drops of [`drops_near`] that can draw into `cam`'s frame (see [`voxel_in_view`]): the
@@ -331,8 +298,8 @@ pub fn drops_in_view(
 ) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
     voxels_where(
-        region,
         cam.position_m,
+        region.near_m,
         ground,
         voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0),
         |voxel, out| {
@@ -341,65 +308,6 @@ pub fn drops_in_view(
             }
         },
     )
-}
-
-/// Runs `fill` for every voxel within the region around `center_m` that `keep_voxel` accepts
-/// (by its centre), columns in parallel, and keeps the drops within the region, in a
-/// deterministic order.
-pub(crate) fn voxels_where(
-    region: &RainRegion,
-    center_m: Vec3,
-    ground: bool,
-    keep_voxel: impl Fn(Vec3) -> bool + Sync,
-    fill: impl Fn([i64; 3], &mut Vec<Drop>) + Sync,
-) -> Vec<Drop> {
-    let columns = map_voxel_columns(region, center_m, ground, keep_voxel, |voxels| {
-        let mut out = Vec::new();
-        for v in voxels {
-            fill(v, &mut out);
-        }
-        out
-    });
-    columns.concat()
-}
-
-/// `per_column` of the voxels within the region around `center_m` that `keep_voxel` accepts
-/// (by its centre), one call per column of constant x (voxels in y, then z order), columns in
-/// parallel; the drops each call returns are cut to those within the region. The columns come
-/// back in x order, so the result is the same in every run.
-pub(crate) fn map_voxel_columns<T: Send + AsMut<Vec<Drop>>>(
-    region: &RainRegion,
-    center_m: Vec3,
-    ground: bool,
-    keep_voxel: impl Fn(Vec3) -> bool + Sync,
-    per_column: impl Fn(&mut dyn Iterator<Item = [i64; 3]>) -> T + Sync,
-) -> Vec<T> {
-    let c = center_m.as_dvec3();
-    let r = region.near_m;
-    let lo = (c - DVec3::splat(r)).floor();
-    let hi = (c + DVec3::splat(r)).floor();
-    (lo.x as i64..=hi.x as i64)
-        .into_par_iter()
-        .map(|ix| {
-            let mut voxels = (lo.y as i64..=hi.y as i64)
-                .filter(|&iy| !(ground && iy < 0))
-                .flat_map(|iy| (lo.z as i64..=hi.z as i64).map(move |iz| [ix, iy, iz]))
-                .filter(|&[ix, iy, iz]| {
-                    // nearest point of the voxel to the centre
-                    let q = DVec3::new(
-                        c.x.clamp(ix as f64, ix as f64 + 1.0),
-                        c.y.clamp(iy as f64, iy as f64 + 1.0),
-                        c.z.clamp(iz as f64, iz as f64 + 1.0),
-                    );
-                    q.distance(c) <= r
-                        && keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5))
-                });
-            let mut out = per_column(&mut voxels);
-            out.as_mut()
-                .retain(|d| d.position_m.as_dvec3().distance(c) <= r);
-            out
-        })
-        .collect()
 }
 
 #[cfg(test)]
@@ -442,51 +350,6 @@ mod tests {
     }
 
     #[test]
-    fn wrap_is_x_minus_its_floor_bit_for_bit() {
-        let xs = [
-            0.0,
-            -0.0,
-            0.25,
-            1.0,
-            -1.0,
-            -0.25,
-            3.999_999_999,
-            -2.5e-17,
-            1e-300,
-            7.3e9,
-            -7.3e9,
-            123.456,
-            -123.456,
-        ];
-        for x in xs
-            .into_iter()
-            .chain((0..2000).map(|k| (k as f64 - 1000.0) * 0.013_7))
-        {
-            assert_eq!(wrap(x).to_bits(), (x - x.floor()).to_bits(), "{x}");
-        }
-    }
-
-    #[test]
-    fn floor_by_truncation_is_floor() {
-        for x in [
-            -3.5,
-            -3.0,
-            -0.0,
-            0.0,
-            -1e-300,
-            1e-300,
-            0.999_999,
-            2.0,
-            -2.000_001,
-            9e15,
-            -9e15,
-            123_456.789,
-        ] {
-            assert_eq!(floor(x), x.floor(), "{x}");
-        }
-    }
-
-    #[test]
     fn drops_are_world_anchored_and_coherent_in_time() {
         use std::collections::HashMap;
         let a = drops_near(&region(0.0), Vec3::new(0.0, 1.6, 0.0), true);
@@ -523,7 +386,8 @@ mod tests {
 
     #[test]
     fn frustum_culling_keeps_every_streak_that_reaches_the_frame() {
-        use crate::rain::splat::{RainShading, RainTargets, composite};
+        use crate::particles::composite::RainTargets;
+        use crate::rain::streaks::{RainShading, composite};
         use glam::Mat3;
         let r = RainRegion::new(30.0, &[1.0, 1.5, 2.0], 5.0, [4.0, 0.0, -2.0], 0.3, 4).unwrap();
         let rot = Mat3::from_rotation_y(0.4) * Mat3::from_rotation_x(-0.2);
