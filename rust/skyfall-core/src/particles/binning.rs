@@ -100,8 +100,8 @@ pub fn bin_by_tiles(
 mod tests {
     use super::*;
     use crate::particles::streak::screen_streak;
-    use crate::scene::camera::Camera;
     use crate::rain::drops::Drop;
+    use crate::scene::camera::Camera;
     use glam::Vec2;
     use glam::{Mat3, Vec3};
 

@@ -46,8 +46,9 @@ pub struct ScreenStreak {
     pub(crate) half: f32,
 }
 
+/// A point relative to the camera's position (as particles are kept) in camera space.
 fn to_camera(cam: &Camera, p: glam::Vec3) -> glam::Vec3 {
-    cam.rotation.transpose() * (p - cam.position_m)
+    cam.rotation.transpose() * p
 }
 
 fn project(cam: &Camera, pc: glam::Vec3) -> Vec2 {

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 /// A particle anchored in the world, kept when within the region's radius.
 pub trait Anchored {
-    /// Its position, m.
+    /// Its position relative to the region's centre, m.
     fn position_m(&self) -> Vec3;
 }
 
@@ -39,7 +39,7 @@ pub fn floor(x: f64) -> f64 {
     if t > x { t - 1.0 } else { t }
 }
 
-/// Whether a voxel (by its centre) meets `cam`'s view frustum once its box is grown by
+/// Whether a voxel (by its centre relative to the camera) meets `cam`'s view frustum once its box is grown by
 /// `margin_m`: box against plane, the box is outside a plane when its corner farthest inside
 /// is outside.
 pub fn in_view(cam: &Camera, margin: f32) -> impl Fn(Vec3) -> bool + Sync + use<> {
@@ -54,9 +54,7 @@ pub fn in_view(cam: &Camera, margin: f32) -> impl Fn(Vec3) -> bool + Sync + use<
         Vec3::new(0.0, 0.0, -1.0),
     ]
     .map(|n| cam.rotation * n.normalize());
-    let position = cam.position_m;
-    move |centre: Vec3| {
-        let c = centre - position;
+    move |c: Vec3| {
         planes
             .iter()
             .all(|n| n.dot(c) + 0.5 * n.abs().element_sum() >= -margin)
@@ -64,10 +62,10 @@ pub fn in_view(cam: &Camera, margin: f32) -> impl Fn(Vec3) -> bool + Sync + use<
 }
 
 /// Runs `fill` for every voxel within `radius_m` of `center_m` that `keep_voxel` accepts
-/// (by its centre), columns in parallel, and keeps the particles within `radius_m`, in a
+/// (by its centre relative to `center_m`), columns in parallel, and keeps the particles within `radius_m`, in a
 /// deterministic order.
 pub fn voxels_where<P: Anchored + Send + Clone>(
-    center_m: Vec3,
+    center_m: DVec3,
     radius_m: f64,
     ground: bool,
     keep_voxel: impl Fn(Vec3) -> bool + Sync,
@@ -84,17 +82,18 @@ pub fn voxels_where<P: Anchored + Send + Clone>(
 }
 
 /// `per_column` of the voxels within `radius_m` of `center_m` that `keep_voxel` accepts
-/// (by its centre), one call per column of constant x (voxels in y, then z order), columns in
-/// parallel; the drops each call returns are cut to those within `radius_m`. The columns come
+/// (by its centre relative to `center_m`), one call per column of constant x (voxels in y, then z order), columns in
+/// parallel; the particles each call returns (positioned relative to `center_m`) are cut to
+/// those within `radius_m`. The columns come
 /// back in x order, so the result is the same in every run.
 pub fn map_voxel_columns<P: Anchored, T: Send + AsMut<Vec<P>>>(
-    center_m: Vec3,
+    center_m: DVec3,
     radius_m: f64,
     ground: bool,
     keep_voxel: impl Fn(Vec3) -> bool + Sync,
     per_column: impl Fn(&mut dyn Iterator<Item = [i64; 3]>) -> T + Sync,
 ) -> Vec<T> {
-    let c = center_m.as_dvec3();
+    let c = center_m;
     let r = radius_m;
     let lo = (c - DVec3::splat(r)).floor();
     let hi = (c + DVec3::splat(r)).floor();
@@ -112,11 +111,13 @@ pub fn map_voxel_columns<P: Anchored, T: Send + AsMut<Vec<P>>>(
                         c.z.clamp(iz as f64, iz as f64 + 1.0),
                     );
                     q.distance(c) <= r
-                        && keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5))
+                        && keep_voxel(
+                            (DVec3::new(ix as f64, iy as f64, iz as f64) + 0.5 - c).as_vec3(),
+                        )
                 });
             let mut out = per_column(&mut voxels);
             out.as_mut()
-                .retain(|d| d.position_m().as_dvec3().distance(c) <= r);
+                .retain(|d| d.position_m().as_dvec3().length() <= r);
             out
         })
         .collect()

@@ -107,7 +107,8 @@ impl RainRegion {
 /// One drop at the frame's time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Drop {
-    /// Position at the end of the exposure, m.
+    /// Position at the end of the exposure relative to the region's centre (a frame's: the
+    /// camera's position), m: kept small, so f32 holds it to ~1e-7 m wherever the world is.
     pub position_m: Vec3,
     /// Velocity, m/s.
     pub velocity_m_s: Vec3,
@@ -179,6 +180,7 @@ fn voxel_drops(
     speeds: &BinSpeeds,
     voxel: [i64; 3],
     bin: usize,
+    origin_m: DVec3,
     out: &mut Vec<Drop>,
 ) {
     let (lo, hi) = region.bins[bin];
@@ -205,7 +207,7 @@ fn voxel_drops(
         let p = p0 + vel * region.time_s;
         let local = DVec3::new(wrap(p.x), wrap(p.y), wrap(p.z));
         out.push(Drop {
-            position_m: (base + local).as_vec3(),
+            position_m: (base + local - origin_m).as_vec3(),
             velocity_m_s: vel.as_vec3(),
             diameter_m: (d_mm * 1e-3) as f32,
             id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
@@ -249,8 +251,8 @@ impl RainMethod {
 }
 
 /// Every drop within `region.near_m` of `center_m` (voxels at or above the ground only when
-/// `ground` is set), in a deterministic order.
-pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop> {
+/// `ground` is set), in a deterministic order, positioned relative to `center_m`.
+pub fn drops_near(region: &RainRegion, center_m: DVec3, ground: bool) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
     voxels_where(
         center_m,
@@ -259,7 +261,7 @@ pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop
         |_| true,
         |voxel, out| {
             for bin in 0..region.bins.len() {
-                voxel_drops(region, &speeds, voxel, bin, out);
+                voxel_drops(region, &speeds, voxel, bin, center_m, out);
             }
         },
     )
@@ -304,7 +306,7 @@ pub fn drops_in_view(
         voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0),
         |voxel, out| {
             for bin in 0..region.bins.len() {
-                voxel_drops(region, &speeds, voxel, bin, out);
+                voxel_drops(region, &speeds, voxel, bin, cam.position_m, out);
             }
         },
     )
@@ -352,19 +354,27 @@ mod tests {
     #[test]
     fn drops_are_world_anchored_and_coherent_in_time() {
         use std::collections::HashMap;
-        let a = drops_near(&region(0.0), Vec3::new(0.0, 1.6, 0.0), true);
-        let b: HashMap<_, _> = drops_near(&region(0.0), Vec3::new(0.5, 1.6, 0.0), true)
+        let (ca, cb) = (DVec3::new(0.0, 1.6, 0.0), DVec3::new(0.5, 1.6, 0.0));
+        let a = drops_near(&region(0.0), ca, true);
+        let b: HashMap<_, _> = drops_near(&region(0.0), cb, true)
             .into_iter()
             .map(|d| (d.id, d))
             .collect();
         // drops seen from both centres are the same drops
         let shared: Vec<_> = a.iter().filter(|d| b.contains_key(&d.id)).collect();
         assert!(shared.len() > 100);
+        // (positioned relative to each centre: the same world positions, to f32's rounding)
         for d in &shared {
-            assert_eq!(*d, &b[&d.id]);
+            let e = &b[&d.id];
+            let (pa, pb) = (ca + d.position_m.as_dvec3(), cb + e.position_m.as_dvec3());
+            assert!(pa.distance(pb) < 1e-6, "{pa} vs {pb}");
+            assert_eq!(
+                (d.velocity_m_s, d.diameter_m),
+                (e.velocity_m_s, e.diameter_m)
+            );
         }
         // 10 ms later every drop moved by v dt (no wrap for most)
-        let later: HashMap<_, _> = drops_near(&region(0.01), Vec3::new(0.0, 1.6, 0.0), true)
+        let later: HashMap<_, _> = drops_near(&region(0.01), ca, true)
             .into_iter()
             .map(|d| (d.id, d))
             .collect();
@@ -435,7 +445,7 @@ mod tests {
     #[test]
     fn drop_count_follows_marshall_palmer() {
         let r = region(0.0);
-        let d = drops_near(&r, Vec3::new(0.3, 10.0, 0.7), true);
+        let d = drops_near(&r, DVec3::new(0.3, 10.0, 0.7), true);
         let per_m3: f64 = r
             .bins
             .iter()
@@ -448,7 +458,7 @@ mod tests {
             "{} vs {expected}",
             d.len()
         );
-        assert!(drops_near(&r, Vec3::new(0.0, -10.0, 0.0), true).is_empty());
+        assert!(drops_near(&r, DVec3::new(0.0, -10.0, 0.0), true).is_empty());
         // the budget's estimate holds them (it grows the sphere by a voxel's diagonal)
         assert!(r.expected_drops(1.0) >= d.len() as f64);
     }

@@ -77,7 +77,7 @@ pub struct RainStats {
     pub culled: usize,
 }
 
-/// Projects, lights and culls the drops, sorted far to near (stable: ties keep the drops'
+/// Projects, lights and culls the drops (positioned relative to `cam`), sorted far to near (stable: ties keep the drops'
 /// deterministic order). The GPU backend draws the same list.
 pub fn prepare(
     cam: &Camera,
@@ -86,13 +86,15 @@ pub fn prepare(
     camera_velocity_m_s: Vec3,
     shading: &RainShading,
 ) -> (Vec<ScreenStreak>, RainStats) {
+    // Lights and the ambient map are in the world; the drops relative to the camera.
+    let eye = cam.eye();
     // Projected and lit in parallel, in the drops' order (rayon's collect keeps it).
     let mut streaks: Vec<ScreenStreak> = drops
         .par_iter()
         .with_min_len(1024)
         .filter_map(|d| {
             screen_streak(cam, d, exposure_s, camera_velocity_m_s).map(|mut s| {
-                s.light = shading.drop_light(d.position_m);
+                s.light = shading.drop_light(eye + d.position_m);
                 s
             })
         })
@@ -159,7 +161,7 @@ impl RainFrame<'_> {
         super::shelter::remove_sheltered(
             &mut drops,
             self.shelter,
-            cam.position_m,
+            cam.eye(),
             self.region.near_m as f32,
         );
         let (streaks, stats) = prepare(

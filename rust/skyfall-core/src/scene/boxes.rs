@@ -176,9 +176,9 @@ pub fn shade_pixel(
     y: u32,
 ) -> (Vec3, f32) {
     let dir = cam.ray_direction(x, y);
-    match trace(scene, cam.position_m, dir) {
+    match trace(scene, cam.eye(), dir) {
         Some((t, n, albedo)) => {
-            let p = cam.position_m + dir * t;
+            let p = cam.eye() + dir * t;
             let a = surface_albedo(albedo, n, p);
             let e = AmbientMap::channel(n).map_or(0.0, |c| light.ambient.sample(p)[c]);
             (a * e, t)
@@ -219,7 +219,7 @@ mod tests {
             fy: 1.0,
             cx: 0.0,
             cy: 0.0,
-            position_m: Vec3::ZERO,
+            position_m: glam::DVec3::ZERO,
             rotation: Mat3::IDENTITY,
         })
     }
