@@ -106,10 +106,10 @@ pub fn render_photo8(
     if out.srgb.len() != 3 * n {
         return Err(length_error("out", out.srgb.len(), 3 * n));
     }
-    if let Some(a) = &out.rain_alpha {
-        if a.len() != n {
-            return Err(length_error("rain_alpha", a.len(), n));
-        }
+    if let Some(a) = &out.rain_alpha
+        && a.len() != n
+    {
+        return Err(length_error("rain_alpha", a.len(), n));
     }
     crate::haze::check_depth(photo.depth_m)?;
 

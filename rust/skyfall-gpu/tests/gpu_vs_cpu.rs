@@ -46,7 +46,7 @@ fn street() -> (BoxScene, Camera) {
 /// The scene's ambient-light map under `sky`, 2 m spacing.
 fn lit(scene: &BoxScene, cam: &Camera, sky: &Sky) -> AmbientMap {
     let s = SkyTable::new(sky, 64).unwrap();
-    let (lo, hi) = scene_bounds(scene, &[cam.position_m], 2.0);
+    let (lo, hi) = scene_bounds(scene, &[cam.eye()], 2.0);
     AmbientMap::build(scene, &s, lo, hi, 2.0).unwrap()
 }
 
