@@ -29,8 +29,7 @@ use super::drops::{Drop, RainRegion, voxel_in_view};
 use super::texture::{Streak, draw_streaks};
 use crate::particles::streak::{ScreenStreak, screen_streak};
 use crate::particles::voxels::{map_voxel_columns, voxel_seed, wrap};
-use crate::physics::air::Air;
-use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
+use crate::physics::fall_speed::FallSpeed;
 use crate::scene::camera::Camera;
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
@@ -98,7 +97,7 @@ fn probe_area(
     exposure_s: f64,
     camera_velocity_m_s: Vec3,
 ) -> (impl Fn(Vec3) -> f32 + Sync, f32) {
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let law = *FallSpeed::beard_standard();
     let d_mid = region
         .bins
         .first()
@@ -153,7 +152,7 @@ pub fn billboards_in_view(
     ground: bool,
 ) -> Vec<Drop> {
     let camera_speed_m_s = f64::from(camera_velocity_m_s.length());
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let law = *FallSpeed::beard_standard();
     let textures: Vec<Vec<Streak>> = region
         .bins
         .iter()

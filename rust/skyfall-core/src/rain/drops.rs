@@ -12,9 +12,8 @@
 use super::bins::diameter_bins;
 use crate::error::{Error, Range, Result};
 use crate::particles::voxels::{in_view, voxel_seed, voxels_where, wrap};
-use crate::physics::air::Air;
-use crate::physics::dsd::{RAIN_RATE_MM_H, drops_per_m3, mp_slope_per_mm};
-use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
+use crate::physics::dsd::{BinSampler, RAIN_RATE_MM_H, drops_per_m3};
+use crate::physics::fall_speed::FallSpeed;
 use crate::scene::camera::Camera;
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
@@ -134,7 +133,7 @@ const SPEED_STEPS: usize = 256;
 
 impl BinSpeeds {
     pub(crate) fn new(bins: &[(f64, f64)]) -> Self {
-        let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+        let law = *FallSpeed::beard_standard();
         let tables = bins
             .iter()
             .map(|&(lo, hi)| {
@@ -184,8 +183,8 @@ fn voxel_drops(
     out: &mut Vec<Drop>,
 ) {
     let (lo, hi) = region.bins[bin];
-    let expected = drops_per_m3(region.rain_rate_mm_h, lo, hi);
-    if expected <= 0.0 {
+    let sampler = BinSampler::new(region.rain_rate_mm_h, lo, hi);
+    if sampler.expected_per_m3() <= 0.0 {
         return;
     }
     let key = voxel_seed(
@@ -194,13 +193,10 @@ fn voxel_drops(
         &[bin as u64, lo.to_bits(), hi.to_bits()],
     );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
-    let whole = expected.floor();
-    let n = whole as usize + usize::from(rng.random::<f64>() < expected - whole);
-    let lam = mp_slope_per_mm(region.rain_rate_mm_h);
-    let tail = -(-lam * (hi - lo)).exp_m1();
+    let n = sampler.count(&mut rng);
     let base = DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64);
     for k in 0..n {
-        let d_mm = (lo - (-rng.random::<f64>() * tail).ln_1p() / lam).min(hi);
+        let d_mm = sampler.diameter_mm(rng.random());
         let v = speeds.m_s(bin, d_mm);
         let vel = DVec3::new(region.wind_m_s.x, -v, region.wind_m_s.z);
         let p0 = DVec3::new(rng.random(), rng.random(), rng.random());
@@ -279,7 +275,7 @@ pub fn voxel_in_view(
     camera_speed_m_s: f64,
     slack_m: f64,
 ) -> impl Fn(Vec3) -> bool + Sync + use<> {
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let law = *FallSpeed::beard_standard();
     let d_max = region.bins.last().map_or(0.0, |b| b.1);
     let speed =
         (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
@@ -332,7 +328,7 @@ mod tests {
             (5.0, 6.0),
         ];
         let t = BinSpeeds::new(&bins);
-        let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+        let law = *FallSpeed::beard_standard();
         let mut rng = Pcg64Mcg::seed_from_u64(3);
         let mut worst = 0.0f64;
         for (b, &(lo, hi)) in bins.iter().enumerate() {

@@ -5,7 +5,7 @@
 
 use super::drops::Drop;
 use crate::scene::boxes::SceneBox;
-use crate::sky::illuminance::occluded;
+use crate::scene::raycast::occluded;
 use glam::Vec3;
 use rayon::prelude::*;
 
