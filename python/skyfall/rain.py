@@ -195,8 +195,9 @@ def read_atlas(path: str | Path) -> tuple[NDArray[np.float32], NDArray[np.float6
 class Drops(NamedTuple):
     """Drops of a rain region (see :func:`drops`)."""
 
-    position_m: NDArray[np.float32]
-    """(N, 3) positions at the end of the exposure, m."""
+    position_m: NDArray[np.float64]
+    """(N, 3) world positions at the end of the exposure, m (float64: exact far from the
+    origin too)."""
     velocity_m_s: NDArray[np.float32]
     """(N, 3) velocities, m/s."""
     diameter_m: NDArray[np.float32]

@@ -3,7 +3,8 @@
 
 use crate::error::{Error, Param, Result};
 use crate::haze::{Haze, apply_row, check_depth};
-use crate::rain::splat::{RainFrame, RainStats, RainTargets, composite_streaks};
+use crate::particles::composite::{BAND_ROWS, bin_by_bands, composite_band_colour};
+use crate::rain::streaks::{RainFrame, RainStats};
 use crate::scene::boxes::{BoxScene, SceneLight, shade_pixel};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
@@ -216,59 +217,100 @@ pub fn render_into(
         transmittance: trans,
         rain: layers,
     } = out;
-    let mut t_rows: Vec<Option<&mut [f32]>> = match trans {
-        Some(t) => t.chunks_mut(w).map(Some).collect(),
-        None => (0..cam.height).map(|_| None).collect(),
+    // The particles first (they do not depend on the scene), binned to the bands.
+    let prepared = match rain.zip(layers) {
+        Some((rf, layers)) => {
+            let (streaks, stats, drops) = rf.streaks(cam)?;
+            let bins = bin_by_bands(cam, &streaks);
+            Some((
+                (rf.shading.reflectance, streaks, bins, stats, drops),
+                layers,
+            ))
+        }
+        None => None,
+    };
+    let (rain, layers) = prepared.unzip();
+    let band = BAND_ROWS * w;
+    let bands = cam.pixels().div_ceil(band);
+    let mut t_bands: Vec<Option<&mut [f32]>> = match trans {
+        Some(t) => t.chunks_mut(band).map(Some).collect(),
+        None => (0..bands).map(|_| None).collect(),
+    };
+    let mut rain_bands: Vec<Option<(&mut [f32], &mut [f32])>> = match layers {
+        Some((alpha, rain_depth)) => alpha
+            .chunks_mut(band)
+            .zip(rain_depth.chunks_mut(band))
+            .map(Some)
+            .collect(),
+        None => (0..bands).map(|_| None).collect(),
     };
     let u2 = cam.column_slopes_sq();
-    rgb.par_chunks_mut(3 * w)
-        .zip(depth.par_chunks_mut(w))
-        .zip(t_rows.par_iter_mut())
+    let particles = rain
+        .as_ref()
+        .map(|(r, streaks, bins, ..)| (*r, streaks.as_slice(), bins));
+    // The pipeline, band by band while the band is in cache: the scene stage, then the effect
+    // passes in physical order (haze, rain).
+    rgb.par_chunks_mut(3 * band)
+        .zip(depth.par_chunks_mut(band))
+        .zip(t_bands.par_iter_mut())
+        .zip(rain_bands.par_iter_mut())
         .enumerate()
-        .for_each(|(y, ((rgb_row, depth_row), t_row))| {
-            // The scene: ray cast, or the photo's row copied.
-            match scene {
-                SceneRef::Boxes(b) => {
-                    for x in 0..w {
-                        let (c, d) = shade_pixel(b, cam, light, x as u32, y as u32);
-                        rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
-                        depth_row[x] = d;
-                    }
-                }
-                SceneRef::Photo { rgb, depth_m } => {
-                    rgb_row.copy_from_slice(&rgb[3 * w * y..3 * w * (y + 1)]);
-                    depth_row.copy_from_slice(&depth_m[w * y..w * (y + 1)]);
+        .for_each(|(bi, (((rgb_band, depth_band), t_band), rain_band))| {
+            let y0 = bi * BAND_ROWS;
+            for (k, (rgb_row, depth_row)) in rgb_band
+                .chunks_mut(3 * w)
+                .zip(depth_band.chunks_mut(w))
+                .enumerate()
+            {
+                let y = y0 + k;
+                scene_row(scene, cam, light, y, rgb_row, depth_row);
+                if let (Some(h), Some(t_band)) = (haze, t_band.as_deref_mut()) {
+                    let t_row = &mut t_band[k * w..(k + 1) * w];
+                    apply_row(
+                        h,
+                        &u2,
+                        cam.row_slope_sq(y as u32),
+                        rgb_row,
+                        depth_row,
+                        t_row,
+                    );
                 }
             }
-            // Haze over the row while it is in cache: each pixel leaves memory once.
-            if let (Some(h), Some(t_row)) = (haze, t_row.as_deref_mut()) {
-                apply_row(
-                    h,
-                    &u2,
-                    cam.row_slope_sq(y as u32),
-                    rgb_row,
-                    depth_row,
-                    t_row,
+            if let (Some((r, streaks, (offsets, indices))), Some((alpha, rain_depth))) =
+                (particles, rain_band.as_mut())
+            {
+                let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
+                composite_band_colour(
+                    streaks, list, y0, w, depth_band, rgb_band, alpha, rain_depth, r,
                 );
             }
         });
-    rain.zip(layers)
-        .map(|(rf, (alpha, rain_depth))| {
-            let (streaks, stats, drops) = rf.streaks(cam)?;
-            composite_streaks(
-                cam,
-                &streaks,
-                rf.shading.reflectance,
-                RainTargets {
-                    rgb,
-                    depth_m: depth,
-                    alpha,
-                    rain_depth_m: rain_depth,
-                },
-            );
-            Ok((stats, drops))
-        })
-        .transpose()
+    Ok(rain.map(|(_, _, _, stats, drops)| (stats, drops)))
+}
+
+/// The scene stage of one row: the box scene ray cast, or the photo's row copied.
+fn scene_row(
+    scene: SceneRef<'_>,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    y: usize,
+    rgb_row: &mut [f32],
+    depth_row: &mut [f32],
+) {
+    let w = depth_row.len();
+    match scene {
+        SceneRef::Boxes(b) => {
+            for x in 0..w {
+                let (c, d) = shade_pixel(b, cam, light, x as u32, y as u32);
+                rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
+                depth_row[x] = d;
+            }
+        }
+        SceneRef::Photo { rgb, depth_m } => {
+            rgb_row.copy_from_slice(&rgb[3 * w * y..3 * w * (y + 1)]);
+            depth_row.copy_from_slice(&depth_m[w * y..w * (y + 1)]);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -344,7 +386,7 @@ mod tests {
         // Buffers full of NaN (numpy's np.empty could hold anything) come out as render's
         // frame, bit for bit, rain and haze included.
         use crate::rain::drops::RainRegion;
-        use crate::rain::splat::RainShading;
+        use crate::rain::streaks::RainShading;
         let cam = Camera::new(
             48,
             32,

@@ -2,7 +2,7 @@
 //! haze and the rain streaks of [`crate::frame::render`] fused into one pass: bands of rows in
 //! parallel, each cut into tiles of 128 columns drawn one after the other.
 //!
-//! The rain is composited far to near as in [`crate::rain::splat::composite_streaks`], but
+//! The rain is composited far to near as in [`crate::particles::composite::composite_streaks`], but
 //! into a per-pixel affine map instead of the colour: each streak does C ← (1 − a r) C + a r L,
 //! so the whole ordered stack is C ↦ P·C + Q with P = ∏(1 − a r) and Q accumulated as
 //! Q ← (1 − a r) Q + a r L. P and Q depend only on the streaks and the depth test, not on the
@@ -16,11 +16,12 @@ use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
 use crate::frame::check_frame_size;
 use crate::haze::Haze;
-use crate::rain::splat::{
-    RainFrame, RainStats, ScreenStreak, bin_by_tiles, for_each_fragment_in, for_each_fragment_x4,
-};
+use crate::particles::binning::bin_by_tiles;
+use crate::particles::composite::{Accumulator, composite_band};
+use crate::particles::streak::ScreenStreak;
+use crate::rain::streaks::{RainFrame, RainStats};
 use crate::scene::camera::Camera;
-use glam::{Vec4, Vec4Swizzles};
+use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use std::cell::RefCell;
 
@@ -105,10 +106,10 @@ pub fn render_photo8(
     if out.srgb.len() != 3 * n {
         return Err(length_error("out", out.srgb.len(), 3 * n));
     }
-    if let Some(a) = &out.rain_alpha {
-        if a.len() != n {
-            return Err(length_error("rain_alpha", a.len(), n));
-        }
+    if let Some(a) = &out.rain_alpha
+        && a.len() != n
+    {
+        return Err(length_error("rain_alpha", a.len(), n));
     }
     crate::haze::check_depth(photo.depth_m)?;
 
@@ -282,10 +283,58 @@ pub fn render_photo8(
     Ok(stats)
 }
 
-/// Rasterises a tile's streaks (`mine`, indices into `streaks`, far to near; the tile: the
-/// band's rows, columns `cols`) into the affine map per pixel: P in `p`, Q in `q` (one plane
-/// when every light is grey, `K` = 1; three, one per channel, for `K` = 3), and the coverage
-/// product into `cover` when it is not empty. Band-sized buffers, indexed as the band.
+/// The 8-bit output's accumulator over a band: each pixel's affine map C ↦ P·C + Q of the
+/// streaks composited over it (C ← (1 − a r) C + a r L gives P ← (1 − a r) P and
+/// Q ← (1 − a r) Q + a r L), P in `p`, Q in `K` planes of `q` (one when every light is grey),
+/// and the coverage product ∏(1 − a) in `cover` when it is not empty. Band-sized buffers,
+/// indexed as the band.
+struct AffineAccumulator<'a, const K: usize> {
+    p: &'a mut [f32],
+    q: [&'a mut [f32]; K],
+    cover: &'a mut [f32],
+    r: f32,
+}
+
+impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
+    type Streak = [f32; 3];
+
+    #[inline(always)]
+    fn streak(&self, light: Vec3) -> [f32; 3] {
+        light.to_array()
+    }
+
+    #[inline(always)]
+    fn add_x4(&mut self, l: &[f32; 3], i: usize, a: Vec4, _inv_z: Vec4) {
+        let end = i + 4;
+        let ar = a * self.r;
+        let keep = Vec4::ONE - ar;
+        (Vec4::from_slice(&self.p[i..end]) * keep).write_to_slice(&mut self.p[i..end]);
+        for (q, &lc) in self.q.iter_mut().zip(l) {
+            (Vec4::from_slice(&q[i..end]) * keep + ar * lc).write_to_slice(&mut q[i..end]);
+        }
+        if end <= self.cover.len() {
+            (Vec4::from_slice(&self.cover[i..end]) * (Vec4::ONE - a))
+                .write_to_slice(&mut self.cover[i..end]);
+        }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, l: &[f32; 3], i: usize, a: f32, _inv_z: f32) {
+        let ar = a * self.r;
+        let keep = 1.0 - ar;
+        self.p[i] *= keep;
+        for (q, &lc) in self.q.iter_mut().zip(l) {
+            q[i] = q[i] * keep + ar * lc;
+        }
+        if let Some(c) = self.cover.get_mut(i) {
+            *c *= 1.0 - a;
+        }
+    }
+}
+
+/// Composites a tile's streaks (`mine`, indices into `streaks`, far to near; the tile: the
+/// band's rows, columns `cols`) into the band's affine maps (see [`AffineAccumulator`]: P in
+/// `p`, Q in `q`'s `K` planes, the coverage product in `cover` when it is not empty).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn raster_tile<const K: usize>(
@@ -301,64 +350,16 @@ fn raster_tile<const K: usize>(
     q: &mut [f32],
     cover: &mut [f32],
 ) {
-    let want_alpha = !cover.is_empty();
     let px = p.len();
-    // Every buffer cut to the band's px (Q into its planes): one check per four pixels below
-    // (i + 4 ≤ px) then covers every slice.
-    let depth = &depth[..px];
     let mut planes = q.chunks_exact_mut(px);
-    let mut qs: [&mut [f32]; K] = std::array::from_fn(|_| planes.next().unwrap_or_default());
-    let cover_x4 = if want_alpha {
-        &mut cover[..px]
+    let q: [&mut [f32]; K] = std::array::from_fn(|_| planes.next().unwrap_or_default());
+    let cover = if cover.is_empty() {
+        cover
     } else {
-        &mut cover[..0]
+        &mut cover[..px]
     };
-    for (n, s) in mine.iter().map(|&k| &streaks[k as usize]).enumerate() {
-        // Touch a streak eight ahead: its cache line (the list is larger than L2) is then on
-        // its way while this one is drawn.
-        if let Some(&ahead) = mine.get(n + 8) {
-            std::hint::black_box(streaks[ahead as usize].touch());
-        }
-        let l = s.light().to_array();
-        // Four pixels of a row at a time for the steep streaks (nearly all).
-        let walked = for_each_fragment_x4(s, y0, rows, w, cols.clone(), |i, a, inv_z| {
-            // Hidden where z ≥ depth (1 ≥ depth/z, without the division); a = 0 leaves the
-            // pixels as they are, so there is no branch on it.
-            let Some(end) = i.checked_add(4).filter(|&e| e <= px) else {
-                return;
-            };
-            let d = Vec4::from_slice(&depth[i..end]);
-            let a = Vec4::select((d * inv_z).cmple(Vec4::ONE), Vec4::ZERO, a);
-            let ar = a * r;
-            let keep = Vec4::ONE - ar;
-            (Vec4::from_slice(&p[i..end]) * keep).write_to_slice(&mut p[i..end]);
-            for (q, &lc) in qs.iter_mut().zip(&l) {
-                (Vec4::from_slice(&q[i..end]) * keep + ar * lc).write_to_slice(&mut q[i..end]);
-            }
-            if want_alpha && end <= cover_x4.len() {
-                (Vec4::from_slice(&cover_x4[i..end]) * (Vec4::ONE - a))
-                    .write_to_slice(&mut cover_x4[i..end]);
-            }
-        });
-        if walked {
-            continue;
-        }
-        for_each_fragment_in(s, y0, rows, w, cols.clone(), |i, a, inv_z| {
-            if !cols.contains(&(i % w)) {
-                return;
-            }
-            let a = if 1.0 >= depth[i] * inv_z { 0.0 } else { a };
-            let ar = a * r;
-            let keep = 1.0 - ar;
-            p[i] *= keep;
-            for (q, &lc) in qs.iter_mut().zip(&l) {
-                q[i] = q[i] * keep + ar * lc;
-            }
-            if want_alpha {
-                cover_x4[i] *= 1.0 - a;
-            }
-        });
-    }
+    let mut acc = AffineAccumulator::<K> { p, q, cover, r };
+    composite_band(streaks, mine, y0, rows, w, cols, depth, &mut acc);
 }
 
 /// The first four values of `s` as a vector, in one unaligned load (glam's `from_slice`
@@ -522,7 +523,7 @@ mod tests {
     use crate::color::{encode_srgb8, encode_srgb8_formula};
     use crate::frame::{SceneRef, render};
     use crate::rain::drops::RainRegion;
-    use crate::rain::splat::RainShading;
+    use crate::rain::streaks::RainShading;
     use crate::scene::boxes::SceneLight;
     use crate::scene::lights::Light;
     use crate::sky::ambient::AmbientMap;

@@ -12,7 +12,7 @@ pub fn camera_words(cam: &Camera) -> [u32; CAMERA_WORDS] {
         cam.rotation.x_axis,
         cam.rotation.y_axis,
         cam.rotation.z_axis,
-        cam.position_m,
+        cam.eye(),
     ];
     for (i, c) in cols.iter().enumerate() {
         for k in 0..3 {

@@ -10,7 +10,7 @@ use skyfall_core::frame::{
     FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo,
 };
 use skyfall_core::haze::Haze;
-use skyfall_core::rain::splat::RainFrame;
+use skyfall_core::rain::streaks::RainFrame;
 use skyfall_core::scene::boxes::SceneLight;
 use skyfall_core::scene::camera::Camera;
 

@@ -1,6 +1,6 @@
 //! The rain pass: streaks composited over the frame (`shaders/rain.wgsl`). Streaks are
 //! projected, lit, culled, sorted and binned into 2 × 4-pixel tiles on the CPU
-//! (`skyfall_core::rain::splat`); each pixel walks its tile's list, and skips a streak whose
+//! (`skyfall_core::particles`); each pixel walks its tile's list, and skips a streak whose
 //! reach it is beyond before reading the rest of it.
 //!
 //! Tile size, measured on lavapipe (2 cores; 200 × 120 frame with 30 k streaks / 1920 × 1080
@@ -12,7 +12,8 @@
 use crate::camera::camera_words;
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, storage_init, uniform};
-use skyfall_core::rain::splat::{ScreenStreak, bin_by_tiles};
+use skyfall_core::particles::binning::bin_by_tiles;
+use skyfall_core::particles::streak::ScreenStreak;
 use skyfall_core::scene::camera::Camera;
 
 const SOURCE: &str = include_str!("shaders/rain.wgsl");

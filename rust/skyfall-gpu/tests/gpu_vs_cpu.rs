@@ -6,7 +6,7 @@ use glam::{Mat3, Vec3};
 use skyfall_core::frame::{FrameOut, SceneRef, render};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
-use skyfall_core::rain::splat::{RainFrame, RainShading};
+use skyfall_core::rain::streaks::{RainFrame, RainShading};
 use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;
@@ -46,7 +46,7 @@ fn street() -> (BoxScene, Camera) {
 /// The scene's ambient-light map under `sky`, 2 m spacing.
 fn lit(scene: &BoxScene, cam: &Camera, sky: &Sky) -> AmbientMap {
     let s = SkyTable::new(sky, 64).unwrap();
-    let (lo, hi) = scene_bounds(scene, &[cam.position_m], 2.0);
+    let (lo, hi) = scene_bounds(scene, &[cam.eye()], 2.0);
     AmbientMap::build(scene, &s, lo, hi, 2.0).unwrap()
 }
 

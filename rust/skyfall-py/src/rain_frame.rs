@@ -3,7 +3,7 @@
 use crate::alloc::filled;
 use crate::errors::CoreError;
 use crate::render::{RegionArgs, box_scene, region};
-use glam::Vec3;
+use glam::DVec3;
 use numpy::ndarray::{Ix1, Ix2};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -11,19 +11,20 @@ use skyfall_core::rain::drops::{Drop, drops_near};
 use skyfall_core::rain::shelter::remove_sheltered;
 
 type DropArrays<'py> = (
-    Bound<'py, PyArray2<f32>>,
+    Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<f32>>,
     Bound<'py, PyArray1<f32>>,
     Bound<'py, PyArray2<i64>>,
 );
 
 /// Every drop within the region around `center_m`, less those `shelter` boxes (N, 9) keep
-/// dry: positions (N, 3), velocities (N, 3), diameters (N,) in m, ids (N, 5).
+/// dry: world positions (N, 3, f64: exact far from the origin), velocities (N, 3), diameters
+/// (N,) in m, ids (N, 5).
 #[pyfunction]
 #[pyo3(signature = (center_m, region_args, *, ground, shelter=None))]
 pub fn rain_drops<'py>(
     py: Python<'py>,
-    center_m: [f32; 3],
+    center_m: [f64; 3],
     region_args: RegionArgs<'py>,
     ground: bool,
     shelter: Option<PyReadonlyArray2<'py, f32>>,
@@ -33,17 +34,18 @@ pub fn rain_drops<'py>(
         Some(b) => box_scene(b, false, [0.0; 3])?.boxes,
         None => Vec::new(),
     };
-    let c = Vec3::from(center_m);
+    let c = DVec3::from(center_m);
     reg.check_budget(1.0).map_err(CoreError)?;
     let drops: Vec<Drop> = py.detach(|| {
         let mut d = drops_near(&reg, c, ground);
-        remove_sheltered(&mut d, &boxes, c, reg.near_m as f32);
+        remove_sheltered(&mut d, &boxes, c.as_vec3(), reg.near_m as f32);
         d
     });
     let n = drops.len();
-    let pos = filled::<f32, Ix2>(py, &[n, 3], |out| {
+    let pos = filled::<f64, Ix2>(py, &[n, 3], |out| {
+        // The core keeps drops relative to the centre; these are world positions.
         for (o, d) in out.chunks_exact_mut(3).zip(&drops) {
-            o.copy_from_slice(&d.position_m.to_array());
+            o.copy_from_slice(&(c + d.position_m.as_dvec3()).to_array());
         }
         Ok(())
     })?;

@@ -3,7 +3,7 @@
 
 use crate::errors::{CoreError, gpu_error};
 use crate::sky::{AmbientLightMap, SkyModel};
-use glam::{Mat3, Vec3};
+use glam::{DVec3, Mat3, Vec3};
 use numpy::ndarray::{Ix2, Ix3};
 use numpy::{
     PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
@@ -15,7 +15,7 @@ use skyfall_core::frame::{FrameOut, SceneRef, check_frame_size, render_into};
 use skyfall_core::haze::Haze;
 use skyfall_core::photo8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
 use skyfall_core::rain::drops::{RainMethod, RainRegion};
-use skyfall_core::rain::splat::{RainFrame, RainShading};
+use skyfall_core::rain::streaks::{RainFrame, RainShading};
 use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;
@@ -49,14 +49,16 @@ pub(crate) type RegionArgs<'py> = (
 );
 
 /// Camera from (width, height, [fx, fy, cx, cy, px, py, pz, r00, r01, …, r22]) with the
-/// world_from_camera rotation row-major.
-pub(crate) fn camera(width: u32, height: u32, p: [f32; 16]) -> Result<Camera, CoreError> {
-    let rot = Mat3::from_cols_array(&[p[7], p[10], p[13], p[8], p[11], p[14], p[9], p[12], p[15]]);
+/// world_from_camera rotation row-major. The position stays f64 (the core draws particles
+/// relative to it); the rest is f32.
+pub(crate) fn camera(width: u32, height: u32, p: [f64; 16]) -> Result<Camera, CoreError> {
+    let f = |i: usize| p[i] as f32;
+    let rot = Mat3::from_cols_array(&[f(7), f(10), f(13), f(8), f(11), f(14), f(9), f(12), f(15)]);
     Ok(Camera::new(
         width,
         height,
-        [p[0], p[1], p[2], p[3]],
-        Vec3::new(p[4], p[5], p[6]),
+        [f(0), f(1), f(2), f(3)],
+        DVec3::new(p[4], p[5], p[6]),
         rot,
     )?)
 }
@@ -127,7 +129,7 @@ impl<'a> Request<'a> {
     fn parse<'py>(
         width: u32,
         height: u32,
-        camera_params: [f32; 16],
+        camera_params: [f64; 16],
         boxes: Option<&PyReadonlyArray2<'py, f32>>,
         ground: bool,
         ground_albedo: [f32; 3],
@@ -281,7 +283,7 @@ pub fn render_frame<'py>(
     py: Python<'py>,
     width: u32,
     height: u32,
-    camera_params: [f32; 16],
+    camera_params: [f64; 16],
     device: Option<Bound<'py, GpuDevice>>,
     boxes: Option<PyReadonlyArray2<'py, f32>>,
     ground: bool,
@@ -429,7 +431,7 @@ pub fn render_photo8<'py>(
     py: Python<'py>,
     width: u32,
     height: u32,
-    camera_params: [f32; 16],
+    camera_params: [f64; 16],
     photo_srgb8: PyReadonlyArray3<'py, u8>,
     photo_depth_m: PyReadonlyArray2<'py, f32>,
     decode_table: PyReadonlyArray1<'py, f32>,

@@ -200,7 +200,7 @@ mod tests {
             fy: 1.0,
             cx: 1.5,
             cy: 0.5,
-            position_m: Vec3::ZERO,
+            position_m: glam::DVec3::ZERO,
             rotation: Mat3::IDENTITY,
         });
         let h = Haze {

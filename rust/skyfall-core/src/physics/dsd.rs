@@ -43,6 +43,53 @@ pub fn drops_per_m3(rain_rate_mm_h: f64, d_min_mm: f64, d_max_mm: f64) -> f64 {
     MP_N0_PER_M3_MM / lam * (-lam * d_min_mm).exp() * -(-lam * (d_max_mm - d_min_mm)).exp_m1()
 }
 
+/// Marshall–Palmer drops of one diameter bin [lo, hi] mm in a unit volume, sampled: the count
+/// is ⌊λ⌋ plus one with probability λ − ⌊λ⌋ (λ = [`drops_per_m3`] of the bin), each diameter
+/// the inverse of the bin's truncated exponential at a uniform u. The rain textures and the
+/// world's drops draw with it, in that order (count, then per drop its diameter first).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BinSampler {
+    lo_mm: f64,
+    hi_mm: f64,
+    /// Λ, 1/mm.
+    lam: f64,
+    /// The bin's mass relative to e^(−Λ lo): 1 − e^(−Λ (hi − lo)).
+    tail: f64,
+    /// λ, drops per m³.
+    expected: f64,
+}
+
+impl BinSampler {
+    /// The bin [`lo_mm`, `hi_mm`] at `rain_rate_mm_h`.
+    pub fn new(rain_rate_mm_h: f64, lo_mm: f64, hi_mm: f64) -> Self {
+        let lam = mp_slope_per_mm(rain_rate_mm_h);
+        BinSampler {
+            lo_mm,
+            hi_mm,
+            lam,
+            tail: -(-lam * (hi_mm - lo_mm)).exp_m1(),
+            expected: drops_per_m3(rain_rate_mm_h, lo_mm, hi_mm),
+        }
+    }
+
+    /// λ, the expected drops per m³ (0: none to draw).
+    pub fn expected_per_m3(&self) -> f64 {
+        self.expected
+    }
+
+    /// The number of drops in 1 m³: one uniform draw from `rng`.
+    pub fn count(&self, rng: &mut impl rand::Rng) -> usize {
+        let whole = self.expected.floor();
+        whole as usize + usize::from(rng.random::<f64>() < self.expected - whole)
+    }
+
+    /// The diameter, mm, of a drop drawn at the uniform `u` in [0, 1).
+    #[inline]
+    pub fn diameter_mm(&self, u: f64) -> f64 {
+        (self.lo_mm - (-u * self.tail).ln_1p() / self.lam).min(self.hi_mm)
+    }
+}
+
 fn check_edges(d_min: &[f64], d_max: &[f64], n: usize, hi: Range) -> Result<()> {
     EDGE_MM.check_all("d_min_mm", d_min)?;
     hi.check_all("d_max_mm", d_max)?;

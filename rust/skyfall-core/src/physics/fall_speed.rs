@@ -95,6 +95,18 @@ pub struct FallSpeed {
 }
 
 impl FallSpeed {
+    /// Beard's law at standard air ([`crate::physics::air::Air::STANDARD`]), the law the
+    /// rain is drawn with: built once per process.
+    pub fn beard_standard() -> &'static FallSpeed {
+        static LAW: std::sync::OnceLock<FallSpeed> = std::sync::OnceLock::new();
+        LAW.get_or_init(|| {
+            FallSpeed::new(
+                FallSpeedModel::Beard,
+                &crate::physics::air::Air::STANDARD.props(),
+            )
+        })
+    }
+
     /// Binds `model` to the air described by `air`.
     pub fn new(model: FallSpeedModel, air: &AirProps) -> Self {
         let rho = air.density_kg_m3;

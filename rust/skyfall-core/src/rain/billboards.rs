@@ -25,14 +25,13 @@
 //! camera moving forward at 15 m/s. A billboard frame's mean opacity varies more from seed to
 //! seed than the drops' (the sampled balance varies with the seed too).
 
-use super::drops::{Drop, RainRegion, map_voxel_columns, voxel_in_view, wrap};
-use super::splat::{ScreenStreak, screen_streak};
+use super::drops::{Drop, RainRegion, voxel_in_view};
 use super::texture::{Streak, draw_streaks};
-use crate::physics::air::Air;
-use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
+use crate::particles::streak::{ScreenStreak, screen_streak};
+use crate::particles::voxels::{map_voxel_columns, voxel_seed, wrap};
+use crate::physics::fall_speed::FallSpeed;
 use crate::scene::camera::Camera;
-use crate::seed::derive;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -98,7 +97,7 @@ fn probe_area(
     exposure_s: f64,
     camera_velocity_m_s: Vec3,
 ) -> (impl Fn(Vec3) -> f32 + Sync, f32) {
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let law = *FallSpeed::beard_standard();
     let d_mid = region
         .bins
         .first()
@@ -109,14 +108,10 @@ fn probe_area(
         -law.m_s(d_mid) as f32,
         region.wind_m_s.z as f32,
     );
-    let (eye, near, frame) = (
-        cam.position_m,
-        region.near_m as f32,
-        (cam.width as f32, cam.height as f32),
-    );
+    let (near, frame) = (region.near_m as f32, (cam.width as f32, cam.height as f32));
     let cam = *cam;
     let area_at = move |end: Vec3| -> f32 {
-        if end.distance(eye) > near {
+        if end.length() > near {
             return 0.0;
         }
         let probe = Drop {
@@ -157,7 +152,7 @@ pub fn billboards_in_view(
     ground: bool,
 ) -> Vec<Drop> {
     let camera_speed_m_s = f64::from(camera_velocity_m_s.length());
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let law = *FallSpeed::beard_standard();
     let textures: Vec<Vec<Streak>> = region
         .bins
         .iter()
@@ -169,35 +164,27 @@ pub fn billboards_in_view(
         .map(|&(lo, hi)| law.m_s(0.5 * (lo + hi)) * region.time_s)
         .collect();
     let eye = cam.position_m;
+    let voxel_rel = |voxel: [i64; 3], offset: f64| {
+        (DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64) + offset - eye).as_vec3()
+    };
     let (area_at, probe_len) = probe_area(region, cam, exposure_s, camera_velocity_m_s);
     // A billboard's streak can end up to its own length below the voxel (the texture wraps).
     let longest = region.bins.last().map_or(0.0, |b| law.m_s(b.1)) * exposure_s;
     let per_voxel: usize = textures.iter().map(Vec::len).sum();
     let board_streaks = |voxel: [i64; 3], column: &mut Column| {
         column.drops.reserve(per_voxel);
-        let centre = Vec3::new(
-            voxel[0] as f32 + 0.5,
-            voxel[1] as f32 + 0.5,
-            voxel[2] as f32 + 0.5,
-        );
-        let to_eye = Vec3::new(eye.x - centre.x, 0.0, eye.z - centre.z);
+        // Relative to the camera, as the drops are.
+        let centre = voxel_rel(voxel, 0.5);
+        let to_eye = Vec3::new(-centre.x, 0.0, -centre.z);
         let n = if to_eye.length_squared() > 1e-12 {
             to_eye.normalize()
         } else {
             Vec3::Z
         };
         let right = Vec3::new(n.z, 0.0, -n.x);
-        let corner = Vec3::new(voxel[0] as f32, voxel[1] as f32, voxel[2] as f32);
-        let mut rng = Pcg64Mcg::seed_from_u64(derive(
-            region.seed,
-            &[
-                voxel[0] as u64,
-                voxel[1] as u64,
-                voxel[2] as u64,
-                0x0BA1_A4CE,
-            ],
-        ));
-        let finer = if centre.distance(eye) < NEAR_VOXEL_M {
+        let corner = voxel_rel(voxel, 0.0);
+        let mut rng = Pcg64Mcg::seed_from_u64(voxel_seed(region.seed, voxel, &[0x0BA1_A4CE]));
+        let finer = if centre.length() < NEAR_VOXEL_M {
             NEAR_FINER
         } else {
             1
@@ -212,16 +199,7 @@ pub fn billboards_in_view(
         column.wanted += want;
         column.shown += f64::from(gain * gain) * board;
         for (bin, streaks) in textures.iter().enumerate() {
-            let key = derive(
-                region.seed,
-                &[
-                    voxel[0] as u64,
-                    voxel[1] as u64,
-                    voxel[2] as u64,
-                    bin as u64,
-                    0xB111_B0A4D,
-                ],
-            );
+            let key = voxel_seed(region.seed, voxel, &[bin as u64, 0xB111_B0A4D]);
             let mut rng = Pcg64Mcg::seed_from_u64(key);
             let (ox, oy): (f64, f64) = (rng.random(), rng.random());
             for (k, s) in streaks.iter().enumerate() {
@@ -244,7 +222,7 @@ pub fn billboards_in_view(
         }
     };
     let keep = voxel_in_view(region, cam, exposure_s, camera_speed_m_s, longest);
-    let columns = map_voxel_columns(region, eye, ground, keep, |voxels| {
+    let columns = map_voxel_columns(eye, region.near_m, ground, keep, |voxels| {
         let mut column = Column {
             drops: Vec::new(),
             wanted: 0.0,
@@ -296,7 +274,9 @@ mod tests {
         )
         .unwrap();
         let (area_at, len) = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO);
-        let (corner, centre) = (Vec3::new(0.0, 1.0, -1.0), Vec3::new(0.5, 1.5, -0.5));
+        // (positions relative to the camera, as billboards_in_view makes them)
+        let (corner_m, centre_m) = (Vec3::new(0.0, 1.0, -1.0), Vec3::new(0.5, 1.5, -0.5));
+        let (corner, centre) = (corner_m - cam.eye(), centre_m - cam.eye());
         let mut rng = Pcg64Mcg::seed_from_u64(3);
         let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
         assert!((a / b - 1.125).abs() < 0.02, "{}", a / b);
@@ -311,6 +291,7 @@ mod tests {
         .unwrap();
         let r = RainRegion::new(10.0, &[1.0, 2.0], 30.0, [0.0; 3], 0.0, 1).unwrap();
         let (area_at, len) = probe_area(&r, &far, 1.0 / 30.0, Vec3::ZERO);
+        let (corner, centre) = (corner_m - far.eye(), centre_m - far.eye());
         let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
         assert!((a / b - 1.0).abs() < 0.003, "{}", a / b);
     }
@@ -342,12 +323,11 @@ mod tests {
         );
         // every billboard drop lies on its voxel's plane through the centre, facing the camera
         for drop in b.iter().take(500) {
-            let c = Vec3::new(
-                drop.id[0] as f32 + 0.5,
-                drop.id[1] as f32 + 0.5,
-                drop.id[2] as f32 + 0.5,
-            );
-            let n = Vec3::new(cam.position_m.x - c.x, 0.0, cam.position_m.z - c.z).normalize();
+            // (relative to the camera, as the drops are)
+            let c = (DVec3::new(drop.id[0] as f64, drop.id[1] as f64, drop.id[2] as f64) + 0.5
+                - cam.position_m)
+                .as_vec3();
+            let n = Vec3::new(-c.x, 0.0, -c.z).normalize();
             assert!((drop.position_m - c).dot(n).abs() < 1e-4);
         }
     }

@@ -11,15 +11,13 @@
 
 use super::bins::diameter_bins;
 use crate::error::{Error, Range, Result};
-use crate::physics::air::Air;
-use crate::physics::dsd::{RAIN_RATE_MM_H, drops_per_m3, mp_slope_per_mm};
-use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
+use crate::particles::voxels::{in_view, voxel_seed, voxels_where, wrap};
+use crate::physics::dsd::{BinSampler, RAIN_RATE_MM_H, drops_per_m3};
+use crate::physics::fall_speed::FallSpeed;
 use crate::scene::camera::Camera;
-use crate::seed::derive;
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
-use rayon::prelude::*;
 
 /// Valid rain-region radii, m.
 pub const NEAR_M: Range = Range::open_closed(0.0, 50.0, "m");
@@ -108,7 +106,8 @@ impl RainRegion {
 /// One drop at the frame's time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Drop {
-    /// Position at the end of the exposure, m.
+    /// Position at the end of the exposure relative to the region's centre (a frame's: the
+    /// camera's position), m: kept small, so f32 holds it to ~1e-7 m wherever the world is.
     pub position_m: Vec3,
     /// Velocity, m/s.
     pub velocity_m_s: Vec3,
@@ -116,20 +115,6 @@ pub struct Drop {
     pub diameter_m: f32,
     /// Which voxel and which drop in it: (ix, iy, iz, bin, index), stable across frames.
     pub id: [i64; 5],
-}
-
-/// x − ⌊x⌋ (in [0, 1] for |x| < 2⁶³: positions and scrolls are metres).
-#[inline]
-pub(crate) fn wrap(x: f64) -> f64 {
-    x - floor(x)
-}
-
-/// ⌊x⌋ for |x| < 2⁶³ by truncation, the same bits as `f64::floor` (−0 included), which is a
-/// libm call on targets without a rounding instruction.
-#[inline]
-pub(crate) fn floor(x: f64) -> f64 {
-    let t = (x as i64 as f64).copysign(x);
-    if t > x { t - 1.0 } else { t }
 }
 
 /// Fall speeds per diameter bin, tabulated: Beard's law (a logarithm, a polynomial and an
@@ -148,7 +133,7 @@ const SPEED_STEPS: usize = 256;
 
 impl BinSpeeds {
     pub(crate) fn new(bins: &[(f64, f64)]) -> Self {
-        let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+        let law = *FallSpeed::beard_standard();
         let tables = bins
             .iter()
             .map(|&(lo, hi)| {
@@ -194,43 +179,41 @@ fn voxel_drops(
     speeds: &BinSpeeds,
     voxel: [i64; 3],
     bin: usize,
+    origin_m: DVec3,
     out: &mut Vec<Drop>,
 ) {
     let (lo, hi) = region.bins[bin];
-    let expected = drops_per_m3(region.rain_rate_mm_h, lo, hi);
-    if expected <= 0.0 {
+    let sampler = BinSampler::new(region.rain_rate_mm_h, lo, hi);
+    if sampler.expected_per_m3() <= 0.0 {
         return;
     }
-    let key = derive(
+    let key = voxel_seed(
         region.seed,
-        &[
-            voxel[0] as u64,
-            voxel[1] as u64,
-            voxel[2] as u64,
-            bin as u64,
-            lo.to_bits(),
-            hi.to_bits(),
-        ],
+        voxel,
+        &[bin as u64, lo.to_bits(), hi.to_bits()],
     );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
-    let whole = expected.floor();
-    let n = whole as usize + usize::from(rng.random::<f64>() < expected - whole);
-    let lam = mp_slope_per_mm(region.rain_rate_mm_h);
-    let tail = -(-lam * (hi - lo)).exp_m1();
+    let n = sampler.count(&mut rng);
     let base = DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64);
     for k in 0..n {
-        let d_mm = (lo - (-rng.random::<f64>() * tail).ln_1p() / lam).min(hi);
+        let d_mm = sampler.diameter_mm(rng.random());
         let v = speeds.m_s(bin, d_mm);
         let vel = DVec3::new(region.wind_m_s.x, -v, region.wind_m_s.z);
         let p0 = DVec3::new(rng.random(), rng.random(), rng.random());
         let p = p0 + vel * region.time_s;
         let local = DVec3::new(wrap(p.x), wrap(p.y), wrap(p.z));
         out.push(Drop {
-            position_m: (base + local).as_vec3(),
+            position_m: (base + local - origin_m).as_vec3(),
             velocity_m_s: vel.as_vec3(),
             diameter_m: (d_mm * 1e-3) as f32,
             id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
         });
+    }
+}
+
+impl crate::particles::voxels::Anchored for Drop {
+    fn position_m(&self) -> Vec3 {
+        self.position_m
     }
 }
 
@@ -264,17 +247,17 @@ impl RainMethod {
 }
 
 /// Every drop within `region.near_m` of `center_m` (voxels at or above the ground only when
-/// `ground` is set), in a deterministic order.
-pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop> {
+/// `ground` is set), in a deterministic order, positioned relative to `center_m`.
+pub fn drops_near(region: &RainRegion, center_m: DVec3, ground: bool) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
     voxels_where(
-        region,
         center_m,
+        region.near_m,
         ground,
         |_| true,
         |voxel, out| {
             for bin in 0..region.bins.len() {
-                voxel_drops(region, &speeds, voxel, bin, out);
+                voxel_drops(region, &speeds, voxel, bin, center_m, out);
             }
         },
     )
@@ -284,8 +267,7 @@ pub fn drops_near(region: &RainRegion, center_m: Vec3, ground: bool) -> Vec<Drop
 /// box, grown by the farthest a drop moves relative to the camera (moving at
 /// `camera_speed_m_s`) in the exposure plus `slack_m`, and by the reach of a streak's
 /// anti-aliasing beyond the frame's edge (a drop's radius plus two pixels at the region's far
-/// side), meets the view frustum. Box against plane: the box is outside a plane when its
-/// corner farthest inside is outside.
+/// side), meets the view frustum (see [`in_view`]).
 pub fn voxel_in_view(
     region: &RainRegion,
     cam: &Camera,
@@ -293,30 +275,13 @@ pub fn voxel_in_view(
     camera_speed_m_s: f64,
     slack_m: f64,
 ) -> impl Fn(Vec3) -> bool + Sync + use<> {
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let law = *FallSpeed::beard_standard();
     let d_max = region.bins.last().map_or(0.0, |b| b.1);
     let speed =
         (law.m_s(d_max).powi(2) + region.wind_m_s.x.powi(2) + region.wind_m_s.z.powi(2)).sqrt();
     let edge = 2.0 * (region.near_m + 2.0) / f64::from(cam.fx.min(cam.fy)) + 0.5e-3 * d_max;
     let margin = ((speed + camera_speed_m_s) * exposure_s + slack_m + edge) as f32;
-    let (w, h) = (cam.width as f32, cam.height as f32);
-    // Inward side planes of the frustum in camera space (the camera looks along −z), turned
-    // into the world.
-    let planes = [
-        Vec3::new(1.0, 0.0, -cam.cx / cam.fx),
-        Vec3::new(-1.0, 0.0, -(w - cam.cx) / cam.fx),
-        Vec3::new(0.0, -1.0, -cam.cy / cam.fy),
-        Vec3::new(0.0, 1.0, -(h - cam.cy) / cam.fy),
-        Vec3::new(0.0, 0.0, -1.0),
-    ]
-    .map(|n| cam.rotation * n.normalize());
-    let position = cam.position_m;
-    move |centre: Vec3| {
-        let c = centre - position;
-        planes
-            .iter()
-            .all(|n| n.dot(c) + 0.5 * n.abs().element_sum() >= -margin)
-    }
+    in_view(cam, margin)
 }
 
 /// The drops of [`drops_near`] that can draw into `cam`'s frame (see [`voxel_in_view`]): the
@@ -331,75 +296,16 @@ pub fn drops_in_view(
 ) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
     voxels_where(
-        region,
         cam.position_m,
+        region.near_m,
         ground,
         voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0),
         |voxel, out| {
             for bin in 0..region.bins.len() {
-                voxel_drops(region, &speeds, voxel, bin, out);
+                voxel_drops(region, &speeds, voxel, bin, cam.position_m, out);
             }
         },
     )
-}
-
-/// Runs `fill` for every voxel within the region around `center_m` that `keep_voxel` accepts
-/// (by its centre), columns in parallel, and keeps the drops within the region, in a
-/// deterministic order.
-pub(crate) fn voxels_where(
-    region: &RainRegion,
-    center_m: Vec3,
-    ground: bool,
-    keep_voxel: impl Fn(Vec3) -> bool + Sync,
-    fill: impl Fn([i64; 3], &mut Vec<Drop>) + Sync,
-) -> Vec<Drop> {
-    let columns = map_voxel_columns(region, center_m, ground, keep_voxel, |voxels| {
-        let mut out = Vec::new();
-        for v in voxels {
-            fill(v, &mut out);
-        }
-        out
-    });
-    columns.concat()
-}
-
-/// `per_column` of the voxels within the region around `center_m` that `keep_voxel` accepts
-/// (by its centre), one call per column of constant x (voxels in y, then z order), columns in
-/// parallel; the drops each call returns are cut to those within the region. The columns come
-/// back in x order, so the result is the same in every run.
-pub(crate) fn map_voxel_columns<T: Send + AsMut<Vec<Drop>>>(
-    region: &RainRegion,
-    center_m: Vec3,
-    ground: bool,
-    keep_voxel: impl Fn(Vec3) -> bool + Sync,
-    per_column: impl Fn(&mut dyn Iterator<Item = [i64; 3]>) -> T + Sync,
-) -> Vec<T> {
-    let c = center_m.as_dvec3();
-    let r = region.near_m;
-    let lo = (c - DVec3::splat(r)).floor();
-    let hi = (c + DVec3::splat(r)).floor();
-    (lo.x as i64..=hi.x as i64)
-        .into_par_iter()
-        .map(|ix| {
-            let mut voxels = (lo.y as i64..=hi.y as i64)
-                .filter(|&iy| !(ground && iy < 0))
-                .flat_map(|iy| (lo.z as i64..=hi.z as i64).map(move |iz| [ix, iy, iz]))
-                .filter(|&[ix, iy, iz]| {
-                    // nearest point of the voxel to the centre
-                    let q = DVec3::new(
-                        c.x.clamp(ix as f64, ix as f64 + 1.0),
-                        c.y.clamp(iy as f64, iy as f64 + 1.0),
-                        c.z.clamp(iz as f64, iz as f64 + 1.0),
-                    );
-                    q.distance(c) <= r
-                        && keep_voxel(Vec3::new(ix as f32 + 0.5, iy as f32 + 0.5, iz as f32 + 0.5))
-                });
-            let mut out = per_column(&mut voxels);
-            out.as_mut()
-                .retain(|d| d.position_m.as_dvec3().distance(c) <= r);
-            out
-        })
-        .collect()
 }
 
 #[cfg(test)]
@@ -422,7 +328,7 @@ mod tests {
             (5.0, 6.0),
         ];
         let t = BinSpeeds::new(&bins);
-        let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+        let law = *FallSpeed::beard_standard();
         let mut rng = Pcg64Mcg::seed_from_u64(3);
         let mut worst = 0.0f64;
         for (b, &(lo, hi)) in bins.iter().enumerate() {
@@ -442,66 +348,29 @@ mod tests {
     }
 
     #[test]
-    fn wrap_is_x_minus_its_floor_bit_for_bit() {
-        let xs = [
-            0.0,
-            -0.0,
-            0.25,
-            1.0,
-            -1.0,
-            -0.25,
-            3.999_999_999,
-            -2.5e-17,
-            1e-300,
-            7.3e9,
-            -7.3e9,
-            123.456,
-            -123.456,
-        ];
-        for x in xs
-            .into_iter()
-            .chain((0..2000).map(|k| (k as f64 - 1000.0) * 0.013_7))
-        {
-            assert_eq!(wrap(x).to_bits(), (x - x.floor()).to_bits(), "{x}");
-        }
-    }
-
-    #[test]
-    fn floor_by_truncation_is_floor() {
-        for x in [
-            -3.5,
-            -3.0,
-            -0.0,
-            0.0,
-            -1e-300,
-            1e-300,
-            0.999_999,
-            2.0,
-            -2.000_001,
-            9e15,
-            -9e15,
-            123_456.789,
-        ] {
-            assert_eq!(floor(x), x.floor(), "{x}");
-        }
-    }
-
-    #[test]
     fn drops_are_world_anchored_and_coherent_in_time() {
         use std::collections::HashMap;
-        let a = drops_near(&region(0.0), Vec3::new(0.0, 1.6, 0.0), true);
-        let b: HashMap<_, _> = drops_near(&region(0.0), Vec3::new(0.5, 1.6, 0.0), true)
+        let (ca, cb) = (DVec3::new(0.0, 1.6, 0.0), DVec3::new(0.5, 1.6, 0.0));
+        let a = drops_near(&region(0.0), ca, true);
+        let b: HashMap<_, _> = drops_near(&region(0.0), cb, true)
             .into_iter()
             .map(|d| (d.id, d))
             .collect();
         // drops seen from both centres are the same drops
         let shared: Vec<_> = a.iter().filter(|d| b.contains_key(&d.id)).collect();
         assert!(shared.len() > 100);
+        // (positioned relative to each centre: the same world positions, to f32's rounding)
         for d in &shared {
-            assert_eq!(*d, &b[&d.id]);
+            let e = &b[&d.id];
+            let (pa, pb) = (ca + d.position_m.as_dvec3(), cb + e.position_m.as_dvec3());
+            assert!(pa.distance(pb) < 1e-6, "{pa} vs {pb}");
+            assert_eq!(
+                (d.velocity_m_s, d.diameter_m),
+                (e.velocity_m_s, e.diameter_m)
+            );
         }
         // 10 ms later every drop moved by v dt (no wrap for most)
-        let later: HashMap<_, _> = drops_near(&region(0.01), Vec3::new(0.0, 1.6, 0.0), true)
+        let later: HashMap<_, _> = drops_near(&region(0.01), ca, true)
             .into_iter()
             .map(|d| (d.id, d))
             .collect();
@@ -523,7 +392,8 @@ mod tests {
 
     #[test]
     fn frustum_culling_keeps_every_streak_that_reaches_the_frame() {
-        use crate::rain::splat::{RainShading, RainTargets, composite};
+        use crate::particles::composite::RainTargets;
+        use crate::rain::streaks::{RainShading, composite};
         use glam::Mat3;
         let r = RainRegion::new(30.0, &[1.0, 1.5, 2.0], 5.0, [4.0, 0.0, -2.0], 0.3, 4).unwrap();
         let rot = Mat3::from_rotation_y(0.4) * Mat3::from_rotation_x(-0.2);
@@ -571,7 +441,7 @@ mod tests {
     #[test]
     fn drop_count_follows_marshall_palmer() {
         let r = region(0.0);
-        let d = drops_near(&r, Vec3::new(0.3, 10.0, 0.7), true);
+        let d = drops_near(&r, DVec3::new(0.3, 10.0, 0.7), true);
         let per_m3: f64 = r
             .bins
             .iter()
@@ -584,7 +454,7 @@ mod tests {
             "{} vs {expected}",
             d.len()
         );
-        assert!(drops_near(&r, Vec3::new(0.0, -10.0, 0.0), true).is_empty());
+        assert!(drops_near(&r, DVec3::new(0.0, -10.0, 0.0), true).is_empty());
         // the budget's estimate holds them (it grows the sphere by a voxel's diagonal)
         assert!(r.expected_drops(1.0) >= d.len() as f64);
     }

@@ -5,7 +5,7 @@
 
 use super::drops::Drop;
 use crate::scene::boxes::SceneBox;
-use crate::sky::illuminance::occluded;
+use crate::scene::raycast::occluded;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -34,15 +34,16 @@ fn candidates(boxes: &[SceneBox], drops: &[Drop], center_m: Vec3, near_m: f32) -
         .collect()
 }
 
-/// Whether a box stands on the drop's path back along its velocity.
+/// Whether a box stands on the path back along its velocity of the drop `d`, positioned
+/// relative to `origin_m`.
 #[inline]
-pub fn sheltered(boxes: &[SceneBox], d: &Drop) -> bool {
+pub fn sheltered(boxes: &[SceneBox], origin_m: Vec3, d: &Drop) -> bool {
     let back = -d.velocity_m_s;
-    back.length() > 0.0 && occluded(boxes, d.position_m, back.normalize())
+    back.length() > 0.0 && occluded(boxes, origin_m + d.position_m, back.normalize())
 }
 
-/// Removes the drops `boxes` shelter (drops within `near_m` of `center_m`), keeping the
-/// others in order.
+/// Removes the drops `boxes` shelter (drops within `near_m` of `center_m`, positioned
+/// relative to it), keeping the others in order.
 pub fn remove_sheltered(drops: &mut Vec<Drop>, boxes: &[SceneBox], center_m: Vec3, near_m: f32) {
     if boxes.is_empty() || drops.is_empty() {
         return;
@@ -51,7 +52,10 @@ pub fn remove_sheltered(drops: &mut Vec<Drop>, boxes: &[SceneBox], center_m: Vec
     if near.is_empty() {
         return;
     }
-    let keep: Vec<bool> = drops.par_iter().map(|d| !sheltered(&near, d)).collect();
+    let keep: Vec<bool> = drops
+        .par_iter()
+        .map(|d| !sheltered(&near, center_m, d))
+        .collect();
     let mut k = keep.iter();
     drops.retain(|_| k.next().copied().unwrap_or(true));
 }
@@ -86,10 +90,15 @@ mod tests {
             drop_at(Vec3::new(2.0, 1.0, 0.0), windy), // came from x = 1 at 3 m: sheltered
             drop_at(Vec3::new(2.0, 4.0, 0.0), still), // above it: open
         ];
-        remove_sheltered(&mut drops, &[awning], Vec3::new(0.0, 1.6, 0.0), 5.0);
+        // Drops are positioned relative to the region's centre.
+        let c = Vec3::new(0.0, 1.6, 0.0);
+        for d in &mut drops {
+            d.position_m -= c;
+        }
+        remove_sheltered(&mut drops, &[awning], c, 5.0);
         let xs: Vec<(f32, f32)> = drops
             .iter()
-            .map(|d| (d.position_m.x, d.position_m.y))
+            .map(|d| (d.position_m.x + c.x, d.position_m.y + c.y))
             .collect();
         assert_eq!(xs, vec![(-1.0, 1.0), (0.5, 1.0), (2.0, 4.0)]);
         // Far boxes are not considered; none at all changes nothing.

@@ -17,9 +17,8 @@
 
 use super::bins::diameter_bins;
 use crate::error::{Error, Range, Result};
-use crate::physics::air::Air;
-use crate::physics::dsd::{RAIN_RATE_MM_H, drops_per_m3, mp_slope_per_mm};
-use crate::physics::fall_speed::{FallSpeed, FallSpeedModel};
+use crate::physics::dsd::{BinSampler, RAIN_RATE_MM_H};
+use crate::physics::fall_speed::FallSpeed;
 use crate::seed::derive;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -95,8 +94,8 @@ pub fn draw_streaks(
     exposure_s: f64,
     seed: u64,
 ) -> Vec<Streak> {
-    let expected = drops_per_m3(rain_rate_mm_h, lo_mm, hi_mm);
-    if expected <= 0.0 {
+    let bin = BinSampler::new(rain_rate_mm_h, lo_mm, hi_mm);
+    if bin.expected_per_m3() <= 0.0 {
         return Vec::new();
     }
     let key = derive(
@@ -109,15 +108,11 @@ pub fn draw_streaks(
         ],
     );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
-    let whole = expected.floor();
-    let n = whole as usize + usize::from(rng.random::<f64>() < expected - whole);
-    let lam = mp_slope_per_mm(rain_rate_mm_h);
-    let tail = -(-lam * (hi_mm - lo_mm)).exp_m1(); // mass of the bin relative to e^(−Λ lo)
-    let law = FallSpeed::new(FallSpeedModel::Beard, &Air::STANDARD.props());
+    let n = bin.count(&mut rng);
+    let law = FallSpeed::beard_standard();
     (0..n)
         .map(|_| {
-            let u: f64 = rng.random();
-            let d_mm = (lo_mm - (-u * tail).ln_1p() / lam).min(hi_mm);
+            let d_mm = bin.diameter_mm(rng.random());
             let v = law.m_s(d_mm);
             let diameter_m = d_mm * 1e-3;
             let length_m = v * exposure_s;

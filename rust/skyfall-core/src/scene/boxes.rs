@@ -15,6 +15,7 @@
 //!   reflecting [`WINDOW_ALBEDO_FACTOR`] of the wall albedo.
 
 use super::camera::Camera;
+use super::raycast::{inverse_direction, slabs};
 use crate::error::{Error, Param, Range, Result};
 use crate::sky::Sky;
 use crate::sky::ambient::AmbientMap;
@@ -22,8 +23,7 @@ use glam::Vec3;
 
 /// Pane albedo relative to the wall's.
 pub const WINDOW_ALBEDO_FACTOR: f32 = 0.2;
-/// Smallest hit distance along a ray (parameter units), to skip self-hits.
-pub const T_MIN: f32 = 1e-4;
+pub use super::raycast::T_MIN;
 /// Largest number of boxes in a scene.
 pub const MAX_BOXES: usize = 4096;
 
@@ -131,20 +131,9 @@ pub fn trace(scene: &BoxScene, origin: Vec3, dir: Vec3) -> Option<(f32, Vec3, Ve
         best_n = Vec3::Y;
         best_a = scene.ground_albedo;
     }
-    // Division by a tiny component stays finite and keeps its sign.
-    let safe = |d: f32| {
-        if d.abs() < 1e-20 {
-            if d < 0.0 { -1e-20 } else { 1e-20 }
-        } else {
-            d
-        }
-    };
-    let inv = Vec3::new(1.0 / safe(dir.x), 1.0 / safe(dir.y), 1.0 / safe(dir.z));
+    let inv = inverse_direction(dir);
     for b in &scene.boxes {
-        let t1 = (b.min_m - origin) * inv;
-        let t2 = (b.max_m - origin) * inv;
-        let lo = t1.min(t2);
-        let hi = t1.max(t2);
+        let (lo, hi) = slabs(b, origin, inv);
         let t_near = lo.x.max(lo.y).max(lo.z);
         let t_far = hi.x.min(hi.y).min(hi.z);
         if t_near > T_MIN && t_near <= t_far && t_near < best_t {
@@ -176,9 +165,9 @@ pub fn shade_pixel(
     y: u32,
 ) -> (Vec3, f32) {
     let dir = cam.ray_direction(x, y);
-    match trace(scene, cam.position_m, dir) {
+    match trace(scene, cam.eye(), dir) {
         Some((t, n, albedo)) => {
-            let p = cam.position_m + dir * t;
+            let p = cam.eye() + dir * t;
             let a = surface_albedo(albedo, n, p);
             let e = AmbientMap::channel(n).map_or(0.0, |c| light.ambient.sample(p)[c]);
             (a * e, t)
@@ -219,7 +208,7 @@ mod tests {
             fy: 1.0,
             cx: 0.0,
             cy: 0.0,
-            position_m: Vec3::ZERO,
+            position_m: glam::DVec3::ZERO,
             rotation: Mat3::IDENTITY,
         })
     }

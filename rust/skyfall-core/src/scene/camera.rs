@@ -1,7 +1,7 @@
 //! Pinhole camera with intrinsics (fx, fy, cx, cy) in pixels.
 
 use crate::error::{Error, Param, Range, Result};
-use glam::{Mat3, Vec3};
+use glam::{DVec3, Mat3, Vec3};
 
 /// Valid frame sides, pixels.
 pub const SIDE_PX: Range = Range::closed(1.0, 16384.0, "px");
@@ -21,8 +21,10 @@ pub struct Camera {
     pub cx: f32,
     /// Principal point y, px from the top edge.
     pub cy: f32,
-    /// Camera position in the world, m.
-    pub position_m: Vec3,
+    /// Camera position in the world, m, in f64: far from the world's origin (UTM-sized
+    /// scenes) an f32 position snaps to a coarse grid (0.5 m at 5e6 m), so particles are made
+    /// and drawn relative to it (see [`crate::particles::voxels`]).
+    pub position_m: DVec3,
     /// Rotation `world_from_camera`: columns are the camera's right, up and back axes.
     pub rotation: Mat3,
 }
@@ -33,9 +35,10 @@ impl Camera {
         width: u32,
         height: u32,
         intrinsics: [f32; 4],
-        position_m: Vec3,
+        position_m: impl Into<DVec3>,
         rotation: Mat3,
     ) -> Result<Self> {
+        let position_m: DVec3 = position_m.into();
         SIDE_PX.check("width", None, f64::from(width))?;
         SIDE_PX.check("height", None, f64::from(height))?;
         let [fx, fy, cx, cy] = intrinsics;
@@ -47,7 +50,7 @@ impl Camera {
         finite.check("cy", None, f64::from(cy))?;
         let world = Range::closed(-1e7, 1e7, "m");
         for (i, v) in position_m.to_array().into_iter().enumerate() {
-            world.check("position_m", Some(i), f64::from(v))?;
+            world.check("position_m", Some(i), v)?;
         }
         let gram = rotation.transpose() * rotation;
         let off = (gram - Mat3::IDENTITY)
@@ -73,6 +76,13 @@ impl Camera {
             position_m,
             rotation,
         })
+    }
+
+    /// The position in f32, for world-space work that needs no more (ray casting the box
+    /// scene, lights, the ambient-light map).
+    #[inline]
+    pub fn eye(&self) -> Vec3 {
+        self.position_m.as_vec3()
     }
 
     /// World-space ray direction through the centre of pixel (x, y), scaled so that its
@@ -179,7 +189,7 @@ mod tests {
             fy: 1.0,
             cx: 0.0,
             cy: 0.0,
-            position_m: Vec3::ZERO,
+            position_m: glam::DVec3::ZERO,
             rotation: Mat3::IDENTITY,
         }
     }

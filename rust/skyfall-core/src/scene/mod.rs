@@ -6,3 +6,4 @@
 pub mod boxes;
 pub mod camera;
 pub mod lights;
+pub mod raycast;

@@ -17,7 +17,8 @@
 
 use super::model::Sky;
 use crate::error::{Range, Result, check_cancel};
-use crate::scene::boxes::{BoxScene, SceneBox, T_MIN};
+use crate::scene::boxes::{BoxScene, SceneBox};
+use crate::scene::raycast::T_MIN;
 use glam::Vec3;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::sync::atomic::AtomicBool;
@@ -179,29 +180,6 @@ pub fn irradiance(boxes_above_p: &[SceneBox], table: &SkyTable, p: Vec3) -> [f32
         }
     }
     acc.map(|v| v as f32)
-}
-
-/// Whether the ray from `p` along `dir` meets a box (a box containing `p` counts; one `p` sits
-/// on while the ray leaves it does not).
-#[inline]
-pub fn occluded(boxes: &[SceneBox], p: Vec3, dir: Vec3) -> bool {
-    let safe = |d: f32| {
-        if d.abs() < 1e-20 {
-            if d < 0.0 { -1e-20 } else { 1e-20 }
-        } else {
-            d
-        }
-    };
-    let inv = Vec3::new(1.0 / safe(dir.x), 1.0 / safe(dir.y), 1.0 / safe(dir.z));
-    boxes.iter().any(|b| {
-        let t1 = (b.min_m - p) * inv;
-        let t2 = (b.max_m - p) * inv;
-        let lo = t1.min(t2);
-        let hi = t1.max(t2);
-        let t_near = lo.max_element();
-        let t_far = hi.min_element();
-        t_far > T_MIN && t_near <= t_far
-    })
 }
 
 #[cfg(test)]

@@ -1,0 +1,47 @@
+//! Far-to-near order of a frame's particles, deterministic in every process.
+
+/// Reorders `v` so that `v[j]` becomes the old `v[from[j]]` (`from` a permutation of the
+/// indices), cycle by cycle, without a second buffer: a frame's streak list is megabytes, and
+/// a fresh copy of it per frame costs as many page faults when the allocator hands the memory
+/// back to the system between frames.
+pub fn permute_in_place<T: Copy>(v: &mut [T], mut from: Vec<u32>) {
+    const DONE: u32 = u32::MAX;
+    for start in 0..from.len() {
+        if from[start] == DONE {
+            continue;
+        }
+        let first = v[start];
+        let mut j = start;
+        loop {
+            let k = from[j] as usize;
+            from[j] = DONE;
+            if k == start {
+                v[j] = first;
+                break;
+            }
+            v[j] = v[k];
+            j = k;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn permuting_in_place_is_the_gathered_copy() {
+        use rand::SeedableRng;
+        use rand::seq::SliceRandom;
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        for n in [0usize, 1, 2, 7, 1000] {
+            let v: Vec<u64> = (0..n as u64).map(|k| k * 7919 % 1009).collect();
+            let mut from: Vec<u32> = (0..n as u32).collect();
+            from.shuffle(&mut rng);
+            let want: Vec<u64> = from.iter().map(|&i| v[i as usize]).collect();
+            let mut got = v.clone();
+            permute_in_place(&mut got, from);
+            assert_eq!(got, want);
+        }
+    }
+}

@@ -1,0 +1,433 @@
+//! Particles in screen space: a particle (a raindrop now, a snowflake next) moving during the
+//! exposure is drawn as a perspective-correct, anti-aliased streak, with its inverse depth
+//! interpolated along it for the depth test.
+//!
+//! A particle of diameter D moving at velocity u during the exposure T sweeps the segment from
+//! p − u·T to p. Both ends are projected (clipped at [`NEAR_CLIP_M`]); the streak is a band
+//! whose width is the projected diameter w = D·f/z, interpolated along it. A pixel on the path
+//! is covered for the fraction α = w / max(L, w) of the exposure (L: the streak's length in
+//! pixels; the screen-space form of Yoshida, Dobashi & Yamamoto's D / (v T), fast rendering of
+//! rain streaks),
+//! times the pixel's coverage of the band, box-filtered: across, clamp(w/2 + ½ − dist, 0, 1)
+//! for w ≥ 1 px and w·clamp(1 − dist, 0, 1) below (a particle narrower than a pixel covers it
+//! partially); along, a one-pixel ramp at each end. Each streak so adds α·w·L = w² of
+//! opacity-area. [`ScreenStreak::fragment`] is the per-pixel definition; the walks of
+//! [`super::walk`] and the GPU's `rain.wgsl` compute the same values, and
+//! [`ScreenStreak::packed`] is the GPU's packing contract.
+
+use super::num::{ceil_nonneg, clamp01, floor_nonneg, idx_f32, least, pos};
+use crate::rain::drops::Drop;
+use crate::scene::camera::Camera;
+use glam::{Vec2, Vec3, Vec4};
+
+/// Streak ends nearer than this (m along the axis) are clipped.
+pub const NEAR_CLIP_M: f32 = 0.05;
+
+/// A streak in screen space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScreenStreak {
+    pub(crate) a: Vec2,
+    pub(crate) b: Vec2,
+    pub(crate) inv_za: f32,
+    pub(crate) inv_zb: f32,
+    pub(crate) wa: f32,
+    pub(crate) wb: f32,
+    pub(crate) alpha: f32,
+    pub(crate) min: Vec2,
+    pub(crate) max: Vec2,
+    pub(crate) light: Vec3,
+    /// Unit direction a → b (+y for a dot) and length, px: per streak, not per pixel.
+    pub(crate) dir: Vec2,
+    pub(crate) len: f32,
+    /// 1/len (0 for a dot), dx/dy and the half-width of a row's window, px, for steep streaks
+    /// (see [`for_each_fragment`]): per streak, not per band of rows.
+    pub(crate) inv_len: f32,
+    pub(crate) slope: f32,
+    pub(crate) half: f32,
+}
+
+/// A point relative to the camera's position (as particles are kept) in camera space.
+fn to_camera(cam: &Camera, p: glam::Vec3) -> glam::Vec3 {
+    cam.rotation.transpose() * p
+}
+
+fn project(cam: &Camera, pc: glam::Vec3) -> Vec2 {
+    let z = -pc.z;
+    Vec2::new(cam.cx + cam.fx * pc.x / z, cam.cy - cam.fy * pc.y / z)
+}
+
+/// The distance from a streak's axis beyond which a pixel gets no coverage, px: its widest
+/// half-width plus half a pixel, at least one pixel (see [`ScreenStreak::fragment`]).
+#[inline]
+pub(crate) fn reach(wa: f32, wb: f32) -> f32 {
+    (0.5 * wa.max(wb) + 0.5).max(1.0)
+}
+
+/// Projects a drop's exposure-long path relative to a camera moving at `camera_velocity_m_s`
+/// (the camera's pose is the one at the end of the exposure); None when it is behind.
+pub fn screen_streak(
+    cam: &Camera,
+    d: &Drop,
+    exposure_s: f32,
+    camera_velocity_m_s: Vec3,
+) -> Option<ScreenStreak> {
+    let mut pa = to_camera(
+        cam,
+        d.position_m - (d.velocity_m_s - camera_velocity_m_s) * exposure_s,
+    );
+    let mut pb = to_camera(cam, d.position_m);
+    let (za, zb) = (-pa.z, -pb.z);
+    if za < NEAR_CLIP_M && zb < NEAR_CLIP_M {
+        return None;
+    }
+    if za < NEAR_CLIP_M {
+        pa = pa + (pb - pa) * ((NEAR_CLIP_M - za) / (zb - za));
+    } else if zb < NEAR_CLIP_M {
+        pb = pb + (pa - pb) * ((NEAR_CLIP_M - zb) / (za - zb));
+    }
+    let (za, zb) = (-pa.z, -pb.z);
+    let f = 0.5 * (cam.fx + cam.fy);
+    let (mut a, mut b) = (project(cam, pa), project(cam, pb));
+    let (wa, wb) = (d.diameter_m * f / za, d.diameter_m * f / zb);
+    let mut len = a.distance(b);
+    let w_mid = 0.5 * (wa + wb);
+    // Every streak carries w² of opacity-area, whatever the exposure: its pixels' coverage
+    // sums to α·w·L for L ≥ 1 px, wherever it falls on the pixel grid (the anti-aliased ends
+    // are one pixel long), so α = w / L. A path shorter than a pixel or than the drop is wide
+    // (a near drop in a short exposure, a drop moving with the camera) is lengthened about its
+    // middle to max(w, 1 px): opaque when w ≥ 1 px, as the drop's disc is.
+    let l = len.max(w_mid).max(1.0);
+    if l > len {
+        let dir = if len > 1e-6 { (b - a) / len } else { Vec2::Y };
+        let grow = 0.5 * (l - len);
+        (a, b) = (a - dir * grow, b + dir * grow);
+        len = l;
+    }
+    let alpha = w_mid / l;
+    let r = 0.5 * wa.max(wb) + 1.0;
+    let min = a.min(b) - Vec2::splat(r);
+    let max = a.max(b) + Vec2::splat(r);
+    let on_screen =
+        min.x < cam.width as f32 && min.y < cam.height as f32 && max.x > 0.0 && max.y > 0.0;
+    if !on_screen || !alpha.is_finite() {
+        return None;
+    }
+    let dir = if len > 1e-6 { (b - a) / len } else { Vec2::Y };
+    let inv_len = if len > 1e-6 { 1.0 / len } else { 0.0 };
+    // Pixels farther than `reach` from the axis get no coverage; on a steep streak a row's
+    // window is the pixels whose centre lies within `half` of the axis' crossing.
+    let reach = reach(wa, wb);
+    let (slope, half) = if dir.y.abs() > 0.5 {
+        (dir.x / dir.y, reach / dir.y.abs())
+    } else {
+        (0.0, 0.0)
+    };
+    Some(ScreenStreak {
+        a,
+        b,
+        inv_za: 1.0 / za,
+        inv_zb: 1.0 / zb,
+        wa,
+        wb,
+        alpha,
+        min,
+        max,
+        light: Vec3::ONE,
+        dir,
+        len,
+        inv_len,
+        slope,
+        half,
+    })
+}
+
+impl ScreenStreak {
+    /// One value of the streak (to pull its cache line in ahead of use).
+    #[inline(always)]
+    pub fn touch(&self) -> f32 {
+        self.half
+    }
+
+    /// The drop's received light I_R, per channel (relative units).
+    pub fn light(&self) -> Vec3 {
+        self.light
+    }
+
+    /// The streak as 16 floats for the GPU pass: a.xy, the unit direction | length, reach
+    /// (the distance from the axis beyond which a pixel gets no coverage), w_a, w_b | 1/z_a,
+    /// 1/z_b, α, 0 | light rgb, 0. Direction, length and reach are the values
+    /// [`Self::fragment`] uses, so the shader does not compute its own.
+    pub fn packed(&self) -> [f32; 16] {
+        [
+            self.a.x,
+            self.a.y,
+            self.dir.x,
+            self.dir.y,
+            self.len,
+            reach(self.wa, self.wb),
+            self.wa,
+            self.wb,
+            self.inv_za,
+            self.inv_zb,
+            self.alpha,
+            0.0,
+            self.light.x,
+            self.light.y,
+            self.light.z,
+            0.0,
+        ]
+    }
+
+    /// The streak's opacity-area inside a `width` × `height` frame, px²: α times the length of
+    /// its axis inside the frame times its mean width there, the sum of its pixels' α·coverage
+    /// up to the anti-aliased ends. Over the whole axis it is w² (streaks are at least a pixel
+    /// long, see [`screen_streak`]), which goes as 1/z² with the drop's depth z.
+    pub fn opacity_area_in(&self, width: f32, height: f32) -> f32 {
+        let inside = |p: Vec2| p.x >= 0.0 && p.y >= 0.0 && p.x <= width && p.y <= height;
+        if self.len <= 1e-6 {
+            let w = 0.5 * (self.wa + self.wb);
+            return if inside(self.a) {
+                self.alpha * w * w
+            } else {
+                0.0
+            };
+        }
+        // Liang–Barsky: the part t ∈ [t0, t1] of a + t·(b − a) inside the frame.
+        let d = self.b - self.a;
+        let (mut t0, mut t1) = (0.0f32, 1.0f32);
+        for (p, q) in [
+            (-d.x, self.a.x),
+            (d.x, width - self.a.x),
+            (-d.y, self.a.y),
+            (d.y, height - self.a.y),
+        ] {
+            if p == 0.0 {
+                if q < 0.0 {
+                    return 0.0;
+                }
+            } else if p < 0.0 {
+                t0 = t0.max(q / p);
+            } else {
+                t1 = t1.min(q / p);
+            }
+        }
+        if t1 <= t0 {
+            return 0.0;
+        }
+        // The width is linear along the axis: its mean over [t0, t1] is its value midway.
+        let w = self.wa + (self.wb - self.wa) * (0.5 * (t0 + t1));
+        self.alpha * w * self.len * (t1 - t0)
+    }
+
+    /// Pixel rows and columns the streak may touch: (x0, x1, y0, y1), end-exclusive, clipped
+    /// to a `width` × `height` frame.
+    pub fn pixel_bounds(&self, width: u32, height: u32) -> (u32, u32, u32, u32) {
+        // Clamped first, so truncation is the floor (no libm floor/ceil on SSE2 targets).
+        let lo = |v: f32, hi: u32| floor_nonneg(v.clamp(0.0, hi as f32)) as u32;
+        let up = |v: f32, hi: u32| ceil_nonneg(v.clamp(0.0, hi as f32)) as u32;
+        (
+            lo(self.min.x, width),
+            up(self.max.x, width),
+            lo(self.min.y, height),
+            up(self.max.y, height),
+        )
+    }
+
+    /// Pixel columns (x0, x1), end-exclusive, that the streak may touch within pixel rows
+    /// `rows`, inside its box's columns `bx0..bx1` ([`Self::pixel_bounds`]): a covered pixel's centre lies less
+    /// than ½ px beyond either end and less than the reach (½·w + ½, at least 1) across, so
+    /// within r = ½·max(w) + 1.5 of the axis segment; the segment's part within r of the rows'
+    /// centres, widened by r and a pixel for rounding, holds every column it covers there. A
+    /// slanted streak then meets far fewer tiles than its bounding box does.
+    pub(crate) fn columns_in_rows(
+        &self,
+        rows: std::ops::Range<u32>,
+        (bx0, bx1): (u32, u32),
+        width: u32,
+    ) -> (u32, u32) {
+        let r = 0.5 * self.wa.max(self.wb) + 1.5;
+        let (ylo, yhi) = (
+            idx_f32(rows.start as usize) + 0.5 - r,
+            idx_f32(rows.end as usize) - 0.5 + r,
+        );
+        let dy = self.b.y - self.a.y;
+        let (t0, t1) = if dy.abs() > 1e-6 {
+            let (ta, tb) = ((ylo - self.a.y) / dy, (yhi - self.a.y) / dy);
+            (ta.min(tb).max(0.0), ta.max(tb).min(1.0))
+        } else {
+            (0.0, 1.0)
+        };
+        // (false for NaN too)
+        if t0
+            .partial_cmp(&t1)
+            .is_none_or(|o| o == std::cmp::Ordering::Greater)
+        {
+            return (bx0, bx0);
+        }
+        let (xa, xb) = (
+            self.a.x + (self.b.x - self.a.x) * t0,
+            self.a.x + (self.b.x - self.a.x) * t1,
+        );
+        let pad = r + 1.0;
+        let lo = |v: f32| floor_nonneg(v.clamp(0.0, width as f32)) as u32;
+        let up = |v: f32| ceil_nonneg(v.clamp(0.0, width as f32)) as u32;
+        let (x0, x1) = (lo(xa.min(xb) - pad).max(bx0), up(xa.max(xb) + pad).min(bx1));
+        (x0, x1.max(x0))
+    }
+
+    /// Coverage of the pixel centred at `p` and the depth there: (α·coverage, depth m), or
+    /// None when the pixel is off the streak. Mirrored line for line in `rain.wgsl`.
+    #[inline]
+    pub fn fragment(&self, p: Vec2) -> Option<(f32, f32)> {
+        let (dir, len) = (self.dir, self.len);
+        let q = p - self.a;
+        let along = q.dot(dir);
+        let across = q.perp_dot(dir).abs();
+        let k = if len > 1e-6 {
+            (along / len).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let width = self.wa + (self.wb - self.wa) * k;
+        let cov_across = if width >= 1.0 {
+            (0.5 * width + 0.5 - across).clamp(0.0, 1.0)
+        } else {
+            width * (1.0 - across).clamp(0.0, 1.0)
+        };
+        let cov_along = (along + 0.5)
+            .clamp(0.0, 1.0)
+            .min((len - along + 0.5).clamp(0.0, 1.0));
+        let cov = cov_across * cov_along;
+        if cov <= 0.0 {
+            return None;
+        }
+        Some((
+            self.alpha * cov,
+            1.0 / (self.inv_za + (self.inv_zb - self.inv_za) * k),
+        ))
+    }
+
+    /// [`Self::fragment`]'s coverage and inverse depth (0 off the streak) at the point
+    /// `along` px along the axis from `a` and `across` px off it, for the walk of
+    /// [`for_each_fragment`]: a product by 1/L for the division by L, compare-selects for the
+    /// clamps. `THIN`: the streak is under a pixel wide all along (the coverage across is
+    /// w·(1 − d)).
+    #[inline(always)]
+    pub(crate) fn coverage<const THIN: bool>(&self, along: f32, across: f32) -> (f32, f32) {
+        let k = clamp01(along * self.inv_len);
+        let width = self.wa + (self.wb - self.wa) * k;
+        let cov_across = if THIN {
+            width * pos(1.0 - across)
+        } else if width >= 1.0 {
+            clamp01(0.5 * width + 0.5 - across)
+        } else {
+            width * clamp01(1.0 - across)
+        };
+        let cov_along = clamp01(least(along, self.len - along) + 0.5);
+        (
+            self.alpha * cov_across * cov_along,
+            self.inv_za + (self.inv_zb - self.inv_za) * k,
+        )
+    }
+}
+
+impl ScreenStreak {
+    /// [`Self::coverage`] for four pixels, lane for lane the same bits.
+    #[inline(always)]
+    pub(crate) fn coverage_x4<const THIN: bool>(&self, along: Vec4, across: Vec4) -> (Vec4, Vec4) {
+        let (zero, one, half) = (Vec4::ZERO, Vec4::ONE, Vec4::splat(0.5));
+        let clamp01 = |x: Vec4| x.max(zero).min(one);
+        let k = clamp01(along * self.inv_len);
+        let width = Vec4::splat(self.wa) + Vec4::splat(self.wb - self.wa) * k;
+        let cov_across = if THIN {
+            width * (one - across).max(zero)
+        } else {
+            let wide = clamp01(half * width + half - across);
+            let thin = width * clamp01(one - across);
+            Vec4::select(width.cmpge(one), wide, thin)
+        };
+        let cov_along = clamp01(along.min(Vec4::splat(self.len) - along) + half);
+        (
+            Vec4::splat(self.alpha) * cov_across * cov_along,
+            Vec4::splat(self.inv_za) + Vec4::splat(self.inv_zb - self.inv_za) * k,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{Mat3, Vec3};
+
+    #[test]
+    fn opacity_area_is_the_sum_of_the_pixels_coverage() {
+        // Against ScreenStreak::fragment summed over every pixel of the frame, for random drops
+        // near and far, thin and wide, many leaving the frame: the analytic α·w·(length inside)
+        // that the billboards' opacity balance integrates.
+        use rand::{Rng, SeedableRng};
+        let (w, h) = (96usize, 64usize);
+        let cam = Camera::new(
+            w as u32,
+            h as u32,
+            [60.0, 60.0, 48.0, 32.0],
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )
+        .unwrap();
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(17);
+        let (mut checked, mut clipped) = (0, 0);
+        for _ in 0..600 {
+            let z: f32 = rng.random_range(0.2..6.0);
+            let p = Vec3::new(
+                rng.random_range(-1.2..1.2) * z,
+                rng.random_range(-1.0..1.0) * z,
+                -z,
+            );
+            let v = Vec3::new(
+                rng.random_range(-4.0..4.0),
+                rng.random_range(-9.0..-2.0),
+                rng.random_range(-2.0..2.0),
+            );
+            let d = Drop {
+                position_m: p,
+                velocity_m_s: v,
+                diameter_m: rng.random_range(0.5e-3..4e-3),
+                id: [0; 5],
+            };
+            let Some(s) = screen_streak(&cam, &d, 1.0 / 30.0, Vec3::ZERO) else {
+                continue;
+            };
+            let sum: f32 = (0..w * h)
+                .filter_map(|i| s.fragment(Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5)))
+                .map(|f| f.0)
+                .sum();
+            let area = s.opacity_area_in(w as f32, h as f32);
+            // The pixel grid samples the streak: its anti-aliased ends and the frame's edges
+            // are off by at most about a pixel of length.
+            let slack = 2.0 * s.alpha * (s.wa.max(s.wb) + 1.0);
+            assert!(
+                (sum - area).abs() <= 0.03 * area + slack,
+                "{sum} vs {area} ({s:?})"
+            );
+            checked += 1;
+            clipped += usize::from(
+                s.min.x < 0.0 || s.min.y < 0.0 || s.max.x > w as f32 || s.max.y > h as f32,
+            );
+        }
+        assert!(
+            checked > 200 && clipped > 50,
+            "{checked} streaks, {clipped} clipped"
+        );
+        // off the frame entirely: nothing
+        let off = Drop {
+            position_m: Vec3::new(5.0, 0.0, -1.0),
+            velocity_m_s: Vec3::new(0.0, -6.0, 0.0),
+            diameter_m: 2e-3,
+            id: [0; 5],
+        };
+        assert!(
+            screen_streak(&cam, &off, 1.0 / 30.0, Vec3::ZERO)
+                .is_none_or(|s| s.opacity_area_in(w as f32, h as f32) == 0.0)
+        );
+    }
+}
