@@ -18,6 +18,9 @@ __all__ = [
     "render_photo8",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
+    "RANGES",
+    "RANGE_MEANINGS",
+    "check_range",
     "SkyModel",
     "SkyfallError",
     "TEXTURE_BUDGET_BYTES",
@@ -38,6 +41,13 @@ __version__: str
 TEXTURE_BUDGET_BYTES: int
 MAX_DIAMETER_MM: float
 MAX_RAIN_RATE_MM_H: float
+
+RANGES: dict[str, tuple[float, float, bool, bool, str]]
+"""Every user-facing parameter's valid range: name -> (lo, hi, lo_inclusive, hi_inclusive, unit)."""
+RANGE_MEANINGS: dict[str, str]
+"""Name -> what the parameter is, one line."""
+
+def check_range(name: str, value: float, index: int | None = None) -> float: ...
 
 AIRLIGHT_RELATIVE: float
 FRAME_BUDGET_BYTES: int

@@ -1,13 +1,17 @@
-"""Argument checks shared by the public modules: clear TypeErrors, broadcasting."""
+"""Argument checks shared by the public modules: clear TypeErrors, broadcasting, and the
+valid ranges of :data:`skyfall._core.RANGES` (declared once, in the Rust core)."""
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from skyfall import _core
 
 FloatOrArray = float | NDArray[np.float64]
 
@@ -76,11 +80,65 @@ def finite_vec3(name: str, value: Any) -> NDArray[np.float64]:
     return v
 
 
+def inside(name: str, value: float) -> bool:
+    """Whether ``value`` lies in the declared range of ``name`` (exact for Python ints)."""
+    lo, hi, lo_inclusive, hi_inclusive, _unit = _core.RANGES[name]
+    above = value >= lo if lo_inclusive else value > lo
+    below = value <= hi if hi_inclusive else value < hi
+    return bool(above and below)
+
+
+def refuse(name: str, value: float, index: int | None = None) -> None:
+    """Raise the core's ValueError for ``value`` outside the range of ``name``."""
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond float
+        v = math.inf if value > 0 else -math.inf
+    _core.check_range(name, v, index)  # raises with the table's message
+    # Only an int that rounds into the range as a float gets here.
+    lo, hi, lo_inclusive, hi_inclusive, unit = _core.RANGES[name]
+    ends = f"{'[' if lo_inclusive else '('}{lo:g}, {hi:g}{']' if hi_inclusive else ')'}"
+    raise ValueError(f"{name} = {value} is outside the valid range {ends} {unit}".rstrip())
+
+
+def in_range(name: str, value: Any) -> float:
+    """Check a real scalar against the declared range of ``name`` (TypeError for non-numbers)."""
+    v = real(name, value)
+    if not inside(name, v):
+        refuse(name, v)
+    return v
+
+
+def all_in_range(name: str, values: Any) -> NDArray[np.float64]:
+    """Check every element of an array against the declared range of ``name``; the first
+    element outside is named by its index (for more than one element)."""
+    a = float_array(name, values)
+    flat = a.reshape(-1)
+    lo, hi, lo_inclusive, hi_inclusive, _unit = _core.RANGES[name]
+    with np.errstate(invalid="ignore"):
+        ok = (flat >= lo if lo_inclusive else flat > lo) & (flat <= hi if hi_inclusive else flat < hi)
+    if not np.all(ok):
+        i = int(np.argmin(ok))
+        refuse(name, float(flat[i]), i if flat.size > 1 else None)
+    return a
+
+
+def integer_in_range(name: str, value: Any) -> int:
+    """Check an integer against the declared range of ``name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} must be an int, got {type(value).__name__}")
+    v = int(value)
+    if not inside(name, v):
+        refuse(name, v)
+    return v
+
+
 def world_position(value: Any) -> NDArray[np.float64]:
-    """Check a world position, m: three finite numbers within the core's ±1e7 m."""
+    """Check a world position, m: three finite numbers within the declared ``position_m``."""
     p = finite_vec3("position_m", value)
-    if float(np.max(np.abs(p))) > 1e7:
-        raise ValueError(f"position_m = {p.tolist()} is outside the valid range [-1e7, 1e7] m per coordinate")
+    for c in p:  # the coordinate is named by its value: position_m = 2e7 is outside ...
+        if not inside("position_m", float(c)):
+            refuse("position_m", float(c))
     return p
 
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skyfall._validate import finite_vec3, float_array, integer, real, world_position
+from skyfall._validate import finite_vec3, float_array, in_range, inside, integer_in_range, refuse, world_position
 
 __all__ = ["Camera"]
 
@@ -33,10 +33,11 @@ class Camera:
     Parameters
     ----------
     position_m : sequence of 3 float
-        Camera centre in the world, m, each coordinate within ±1e7. Default (0, 1.6, 0): eye
+        Camera centre in the world, m, each coordinate in [-1e7, 1e7]. Default (0, 1.6, 0): eye
         height.
     yaw_deg : float
-        Heading about +Y, degrees; 0 looks along -Z, positive turns left (towards -X).
+        Heading about +Y, degrees, any finite angle; 0 looks along -Z, positive turns left
+        (towards -X).
     pitch_deg : float
         Elevation of the view direction, degrees in [-89, 89]; positive looks up.
     look_at_m : sequence of 3 float, optional
@@ -44,14 +45,15 @@ class Camera:
     vertical_fov_deg : float
         Vertical field of view, degrees in [0.001, 179), used when ``fy`` is not given.
     width, height : int, optional
-        Resolution, px. Left out, the renderer's resolution is used.
+        Resolution, px, in [1, 16384]. Left out, the renderer's resolution is used.
     fx, fy, cx, cy : float, optional
-        Intrinsics in px (need ``width`` and ``height``). Defaults: square pixels from the
-        field of view, principal point at the image centre.
+        Intrinsics in px (need ``width`` and ``height``): ``fx``, ``fy`` in (0, 1e9],
+        ``cx``, ``cy`` in [-1e9, 1e9]. Defaults: square pixels from the field of view,
+        principal point at the image centre.
     exposure_s : float
         Shutter time, s, in [1e-6, 0.1]: streak length of moving drops (rain frames).
     velocity_m_s : sequence of 3 float
-        The camera's own velocity, m/s (at most 1000 m/s): streaks follow the drops' motion
+        The camera's own velocity, m/s, its speed in [0, 1000]: streaks follow the drops' motion
         relative to the camera, e.g. a car driving into the rain.
     """
 
@@ -74,16 +76,11 @@ class Camera:
     ) -> None:
         self.position_m = world_position(position_m)
         self.velocity_m_s = finite_vec3("velocity_m_s", velocity_m_s)
-        if float(np.linalg.norm(self.velocity_m_s)) > 1000.0:
-            raise ValueError(f"velocity_m_s = {self.velocity_m_s.tolist()} is faster than 1000 m/s")
-        fov = real("vertical_fov_deg", vertical_fov_deg)
-        if not 0.001 <= fov < 179.0:
-            raise ValueError(f"vertical_fov_deg = {fov} is outside the valid range [0.001, 179) degrees")
-        self.vertical_fov_deg = fov
-        exp = real("exposure_s", exposure_s)
-        if not 1e-6 <= exp <= 0.1:
-            raise ValueError(f"exposure_s = {exp} is outside the valid range [1e-6, 0.1] s")
-        self.exposure_s = exp
+        speed = float(np.linalg.norm(self.velocity_m_s))
+        if not inside("velocity_m_s", speed):
+            refuse("velocity_m_s", speed)  # the speed |v| is what has a range
+        self.vertical_fov_deg = in_range("vertical_fov_deg", vertical_fov_deg)
+        self.exposure_s = in_range("exposure_s", exposure_s)
         if look_at_m is not None:
             target = finite_vec3("look_at_m", look_at_m)
             d = target - self.position_m
@@ -94,22 +91,16 @@ class Camera:
             pitch = math.degrees(math.asin(max(-1.0, min(1.0, float(d[1])))))
             yaw = math.degrees(math.atan2(-float(d[0]), -float(d[2])))
             yaw_deg, pitch_deg = yaw, pitch
-        yaw_v, pitch_v = real("yaw_deg", yaw_deg), real("pitch_deg", pitch_deg)
-        if not math.isfinite(yaw_v):
-            raise ValueError(f"yaw_deg = {yaw_v} must be finite")
-        if not -89.0 <= pitch_v <= 89.0:
-            raise ValueError(f"pitch_deg = {pitch_v} is outside the valid range [-89, 89] degrees")
+        yaw_v, pitch_v = in_range("yaw_deg", yaw_deg), in_range("pitch_deg", pitch_deg)
         self.yaw_deg, self.pitch_deg = yaw_v, pitch_v
         self.rotation = _rotation_from_yaw_pitch(yaw_v, pitch_v)
-        self.width = None if width is None else integer("width", width, 1, 16384)
-        self.height = None if height is None else integer("height", height, 1, 16384)
+        self.width = None if width is None else integer_in_range("width", width)
+        self.height = None if height is None else integer_in_range("height", height)
         given = {k: v for k, v in {"fx": fx, "fy": fy, "cx": cx, "cy": cy}.items() if v is not None}
         if given and (self.width is None or self.height is None):
             raise ValueError(f"intrinsics {sorted(given)} need width and height")
         for k, v in given.items():
-            val = real(k, v)
-            if not math.isfinite(val) or (k in ("fx", "fy") and val <= 0):
-                raise ValueError(f"{k} = {val} must be finite{' and positive' if k in ('fx', 'fy') else ''} (px)")
+            in_range(k, v)
         self._fx, self._fy, self._cx, self._cy = fx, fy, cx, cy
 
     def with_resolution(self, width: int, height: int) -> Camera:

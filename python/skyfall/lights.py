@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skyfall._validate import finite_vec3, real, world_position
+from skyfall._validate import all_in_range, finite_vec3, in_range, real, world_position
 
 __all__ = ["PointLight", "SpotLight", "pack"]
 
@@ -29,6 +29,11 @@ def _vec3(name: str, value: Any) -> tuple[float, float, float]:
 def _position(value: Any) -> tuple[float, float, float]:
     x, y, z = world_position(value)
     return float(x), float(y), float(z)
+
+
+def _color(value: Any) -> tuple[float, float, float]:
+    r, g, b = all_in_range("color", _vec3("color", value))
+    return float(r), float(g), float(b)
 
 
 def _unit(name: str, value: Any) -> tuple[float, float, float]:
@@ -49,7 +54,7 @@ class PointLight:
     Parameters
     ----------
     position_m : 3 floats
-        Position, m, each coordinate within ±1e7.
+        Position, m, each coordinate in [-1e7, 1e7].
     intensity_cd : float
         Luminous intensity, cd, in [0, 1e9] (a street lamp: about 1000-3000 cd).
     color : 3 floats
@@ -62,11 +67,8 @@ class PointLight:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "position_m", _position(self.position_m))
-        object.__setattr__(self, "color", _vec3("color", self.color))
-        if not 0.0 <= real("intensity_cd", self.intensity_cd) <= 1e9:
-            raise ValueError(f"intensity_cd = {self.intensity_cd} is outside the valid range [0, 1e9] cd")
-        if not all(0.0 <= c <= 1000.0 for c in self.color):
-            raise ValueError(f"color = {self.color} must be in [0, 1000] per channel")
+        object.__setattr__(self, "color", _color(self.color))
+        in_range("intensity_cd", self.intensity_cd)
 
     def row(self) -> list[float]:
         """The packed row `_core` takes."""
@@ -80,17 +82,18 @@ class SpotLight:
     Parameters
     ----------
     position_m : 3 floats
-        Position, m, each coordinate within ±1e7.
+        Position, m, each coordinate in [-1e7, 1e7].
     direction : 3 floats
         Axis of the cone (normalised here).
     intensity_cd : float
-        Luminous intensity on the axis, cd (a low-beam headlight: about 10000-20000 cd).
+        Luminous intensity on the axis, cd, in [0, 1e9] (a low-beam headlight: about
+        10000-20000 cd).
     cone_deg : float
         Outer half-angle, degrees in (0, 90]: no light beyond it.
     inner_cone_deg : float, optional
         Half-angle of full intensity (default 0.75 * cone_deg); smooth falloff between.
     color : 3 floats
-        Linear RGB multiplier.
+        Linear RGB multiplier of the intensity, each in [0, 1000].
     """
 
     position_m: tuple[float, float, float]
@@ -103,12 +106,10 @@ class SpotLight:
     def __post_init__(self) -> None:
         object.__setattr__(self, "position_m", _position(self.position_m))
         object.__setattr__(self, "direction", _unit("direction", self.direction))
-        object.__setattr__(self, "color", _vec3("color", self.color))
-        if not 0.0 <= real("intensity_cd", self.intensity_cd) <= 1e9:
-            raise ValueError(f"intensity_cd = {self.intensity_cd} is outside the valid range [0, 1e9] cd")
-        if not 0.0 < float(self.cone_deg) <= 90.0:
-            raise ValueError(f"cone_deg = {self.cone_deg} is outside the valid range (0, 90] degrees")
-        inner = 0.75 * float(self.cone_deg) if self.inner_cone_deg is None else float(self.inner_cone_deg)
+        object.__setattr__(self, "color", _color(self.color))
+        in_range("intensity_cd", self.intensity_cd)
+        in_range("cone_deg", self.cone_deg)
+        inner = 0.75 * float(self.cone_deg) if self.inner_cone_deg is None else real("inner_cone_deg", self.inner_cone_deg)
         if not 0.0 <= inner <= float(self.cone_deg):
             raise ValueError(f"inner_cone_deg = {inner} must be in [0, cone_deg = {self.cone_deg}]")
         object.__setattr__(self, "inner_cone_deg", inner)

@@ -89,7 +89,7 @@ def textures(
         Side of each square texture in pixels, [16, 16384]; the texture spans 1 m, so this
         is also pixels per metre.
     exposure_s : float
-        Exposure time T, s, in (0, 0.1] (a streak, v T, must fit in the 1 m texture).
+        Exposure time T, s, in [1e-6, 0.1] (a streak, v T, must fit in the 1 m texture).
     seed : int
         Seed in [0, 2^64); same inputs and seed give the same bits in any process.
 

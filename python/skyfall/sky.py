@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core
-from skyfall._validate import float_array, integer, real
+from skyfall._validate import all_in_range, float_array, in_range, integer_in_range
 from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.weather import Weather
 
@@ -74,13 +74,14 @@ MAP_SAMPLES = 64
 
 
 def cloud_base_m(rain_rate_mm_h: float) -> float:
-    """Cloud base height for a rain rate, m: 1500 - 250 ln(1 + R / (1 mm/h)), in [300, 1500] m.
+    """Cloud base height for a rain rate R in [0, 500] mm/h, m: 1500 - 250 ln(1 + R / (1 mm/h)),
+    clamped to [300, 1500] m.
 
     Seed 002 makes the cloud height a function of the rain rate (after Shibata 1999) without
     printing the relation; this is skyfall's own smooth stand-in: 1500 m dry, 900 m at
     10 mm/h, 520 m at 50 mm/h, 350 m at 100 mm/h. Override it with ``Weather.cloud_base_m``.
     """
-    return float(_core.cloud_base_m(real("rain_rate_mm_h", rain_rate_mm_h)))
+    return float(_core.cloud_base_m(in_range("rain_rate_mm_h", rain_rate_mm_h)))
 
 
 def _weather(
@@ -119,10 +120,8 @@ def _directions(elevation_deg: Any, azimuth_deg: Any) -> tuple[NDArray[np.float3
         el, az = np.broadcast_arrays(el, az)
     except ValueError:
         raise ValueError(f"shapes do not broadcast: elevation_deg{el.shape}, azimuth_deg{az.shape}") from None
-    if not (np.all(np.isfinite(el)) and np.all(np.isfinite(az))):
-        raise ValueError("elevation_deg and azimuth_deg must be finite")
-    if np.any(np.abs(el) > 90.0):
-        raise ValueError("elevation_deg must lie in [-90, 90] deg")
+    all_in_range("elevation_deg", el)
+    all_in_range("azimuth_deg", az)
     e, a = np.radians(el), np.radians(az)
     dirs = np.stack([np.sin(a) * np.cos(e), np.sin(e), -np.cos(a) * np.cos(e)], axis=-1)
     return np.ascontiguousarray(dirs.reshape(-1, 3), dtype=np.float32), el.shape
@@ -227,7 +226,7 @@ def horizontal_illuminance(
     w = _weather(weather, sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg)
     if normal not in CHANNELS:
         raise ValueError(f"normal = {normal!r} must be one of {CHANNELS}")
-    n = integer("samples", samples, 4, 65_536)
+    n = integer_in_range("samples", samples)
     rel = w.sky_model().illuminance(_points(points_m), _occluders(scene), samples=n)
     return rel[:, CHANNELS.index(normal)].astype(np.float64) * w.sky_illuminance_lux
 
@@ -353,10 +352,8 @@ def ambient_light_map(
     AmbientLightMap
     """
     w = _weather(weather, sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg)
-    s = real("spacing_m", spacing_m)
-    if not 0.05 <= s <= 100.0:
-        raise ValueError(f"spacing_m = {s} is outside the valid range [0.05, 100] m")
-    n = integer("samples", samples, 4, 65_536)
+    s = in_range("spacing_m", spacing_m)
+    n = integer_in_range("samples", samples)
     if bounds is None:
         lo, hi = default_bounds(scene, s)
     else:

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core, physics
-from skyfall._validate import choice, float_array, real
+from skyfall._validate import all_in_range, choice, float_array, in_range, inside
 
 __all__ = ["Weather"]
 
@@ -84,24 +84,17 @@ class Weather:
     cloud_base_m: float | None = None
 
     def __post_init__(self) -> None:
-        r = real("rain_rate_mm_h", self.rain_rate_mm_h)
-        if not 0.0 <= r <= _core.MAX_RAIN_RATE_MM_H:
-            raise ValueError(f"rain_rate_mm_h = {r} is outside the valid range [0, 500] mm/h")
-        v = real("visibility_m", self.visibility_m)
-        if not v >= 0.01:
-            raise ValueError(f"visibility_m = {v} is outside the valid range [0.01, inf] m")
-        e = real("sky_illuminance_lux", self.sky_illuminance_lux)
-        if not 1e-4 <= e <= 150000.0:
-            raise ValueError(f"sky_illuminance_lux = {e} is outside the valid range [1e-4, 150000] lx")
+        r = in_range("rain_rate_mm_h", self.rain_rate_mm_h)
+        v = in_range("visibility_m", self.visibility_m)
+        e = in_range("sky_illuminance_lux", self.sky_illuminance_lux)
         wind = float_array("wind_m_s", self.wind_m_s).reshape(-1)
-        if wind.size != 3 or not np.all(np.abs(wind) <= 60.0):
-            raise ValueError(f"wind_m_s = {self.wind_m_s!r} must be 3 components in [-60, 60] m/s")
-        near = real("rain_near_m", self.rain_near_m)
-        if not 0.0 < near <= 50.0:
-            raise ValueError(f"rain_near_m = {near} is outside the valid range (0, 50] m")
-        diams = tuple(float(d) for d in float_array("rain_diameters_mm", self.rain_diameters_mm).reshape(-1))
-        if not diams or any(not 0.0 < d <= 8.0 for d in diams) or any(b <= a for a, b in zip(diams, diams[1:])):
-            raise ValueError(f"rain_diameters_mm = {self.rain_diameters_mm!r} must be strictly increasing, in (0, 8] mm")
+        if wind.size != 3:
+            raise ValueError(f"wind_m_s = {self.wind_m_s!r} must have 3 components (x, y, z)")
+        all_in_range("wind_m_s", wind)
+        near = in_range("rain_near_m", self.rain_near_m)
+        diams = tuple(float(d) for d in all_in_range("rain_diameters_mm", self.rain_diameters_mm).reshape(-1))
+        if not diams or any(b <= a for a, b in zip(diams, diams[1:])):
+            raise ValueError(f"rain_diameters_mm = {self.rain_diameters_mm!r} must be strictly increasing (and not empty)")
         object.__setattr__(self, "wind_m_s", (float(wind[0]), float(wind[1]), float(wind[2])))
         object.__setattr__(self, "rain_near_m", near)
         object.__setattr__(self, "rain_diameters_mm", diams)
@@ -117,22 +110,16 @@ class Weather:
             if self.sky != "overcast":
                 raise ValueError(f"sky = {self.sky!r} must be \"overcast\" or a CIE general sky type 1-15")
         elif isinstance(self.sky, (int, np.integer)) and not isinstance(self.sky, bool):
-            if not 1 <= int(self.sky) <= 15:
-                raise ValueError(f"sky = {self.sky} is outside the valid range 1-15 (CIE general sky types)")
+            if not inside("sky", int(self.sky)):
+                raise ValueError(f"sky = {self.sky} is outside the valid range 1-15 (CIE general sky types) or \"overcast\"")
             object.__setattr__(self, "sky", int(self.sky))
         else:
             raise TypeError(f"sky must be \"overcast\" or an int 1-15, got {type(self.sky).__name__}")
         for name in ("sun_elevation_deg", "sun_azimuth_deg", "cloud_base_m"):
             if getattr(self, name) is not None:
-                object.__setattr__(self, name, real(name, getattr(self, name)))
+                object.__setattr__(self, name, in_range(name, getattr(self, name)))
         if (self.sun_elevation_deg is None) != (self.sun_azimuth_deg is None):
             raise ValueError("give both sun_elevation_deg and sun_azimuth_deg, or neither")
-        if self.sun_elevation_deg is not None and not 0.0 <= self.sun_elevation_deg <= 90.0:
-            raise ValueError(f"sun_elevation_deg = {self.sun_elevation_deg} is outside the valid range [0, 90] deg")
-        if self.sun_azimuth_deg is not None and not math.isfinite(self.sun_azimuth_deg):
-            raise ValueError(f"sun_azimuth_deg = {self.sun_azimuth_deg} must be finite")
-        if self.cloud_base_m is not None and not 1.0 <= self.cloud_base_m <= 20000.0:
-            raise ValueError(f"cloud_base_m = {self.cloud_base_m} is outside the valid range [1, 20000] m")
         self.sky_model()  # the sky's own checks (a sun for the types that need one)
 
     @property

@@ -225,11 +225,27 @@ impl fmt::Display for Range {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let open = if self.lo_open { "(" } else { "[" };
         let close = if self.hi_open { ")" } else { "]" };
-        write!(f, "{open}{}, {}{close}", self.lo, self.hi)?;
+        write!(f, "{open}{}, {}{close}", Bound(self.lo), Bound(self.hi))?;
         if !self.unit.is_empty() {
             write!(f, " {}", self.unit)?;
         }
         Ok(())
+    }
+}
+
+/// A range's end as people write it: `500`, `0.05`, but `1e7` and `1e-4` (not `10000000`
+/// and `0.0001`), `inf`.
+struct Bound(f64);
+
+impl fmt::Display for Bound {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        let a = x.abs();
+        if x.is_finite() && x != 0.0 && !(1e-3..1e6).contains(&a) {
+            write!(f, "{x:e}")
+        } else {
+            write!(f, "{x}")
+        }
     }
 }
 

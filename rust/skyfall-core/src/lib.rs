@@ -22,6 +22,7 @@ pub mod particles;
 pub mod photo8;
 pub mod physics;
 pub mod rain;
+pub mod ranges;
 pub mod scene;
 mod seed;
 pub mod sky;

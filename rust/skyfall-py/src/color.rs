@@ -1,8 +1,8 @@
 //! Output encoding.
 
+use crate::errors::invalid;
 use numpy::ndarray::IxDyn;
 use numpy::{PyArrayDyn, PyReadonlyArray1, PyReadonlyArrayDyn, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 /// Linear float32 (any shape) to 8-bit sRGB of the same shape, GIL released.
@@ -26,7 +26,11 @@ pub fn apply_lut8<'py>(
     table: PyReadonlyArray1<'py, f32>,
 ) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
     let t: &[f32; 256] = table.as_slice()?.try_into().map_err(|_| {
-        PyValueError::new_err(format!("table must have 256 entries, got {}", table.len()))
+        invalid(
+            "table",
+            None,
+            format!("must have 256 entries, got {}", table.len()),
+        )
     })?;
     let src = encoded.as_slice()?;
     crate::alloc::filled::<f32, IxDyn>(py, encoded.shape(), |out| {

@@ -31,6 +31,24 @@ pub fn gpu_error(e: skyfall_gpu::GpuError) -> PyErr {
     }
 }
 
+/// A value refused for a reason other than its range (a shape, a missing partner argument):
+/// the core's [`skyfall_core::Error::Invalid`], through the one mapping.
+pub fn invalid(name: &'static str, index: Option<usize>, message: impl Into<String>) -> PyErr {
+    CoreError(skyfall_core::Error::Invalid {
+        param: skyfall_core::error::Param { name, index },
+        message: message.into(),
+    })
+    .into()
+}
+
+/// An `out=` array numpy will not lend for writing (an input of the same render, or in use
+/// by another): the one refusal that is about Python objects rather than values.
+pub fn in_use(name: &str) -> PyErr {
+    PyValueError::new_err(format!(
+        "out {name} is in use elsewhere (an input of this render, or another render): pass a separate array"
+    ))
+}
+
 /// A core error on its way to Python.
 pub struct CoreError(pub skyfall_core::Error);
 

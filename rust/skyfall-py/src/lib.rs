@@ -8,6 +8,7 @@ mod interrupt;
 mod physics;
 mod rain;
 mod rain_frame;
+mod ranges;
 mod render;
 mod sky;
 
@@ -29,6 +30,8 @@ mod _core {
     #[pymodule_export]
     use super::rain_frame::rain_drops;
     #[pymodule_export]
+    use super::ranges::check_range;
+    #[pymodule_export]
     use super::render::{GpuDevice, render_frame, render_photo8};
     #[pymodule_export]
     use super::sky::{AmbientLightMap, SkyModel, cloud_base_m};
@@ -38,6 +41,8 @@ mod _core {
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        m.add("RANGES", super::ranges::table(m.py())?)?;
+        m.add("RANGE_MEANINGS", super::ranges::meanings(m.py())?)?;
         m.add(
             "TEXTURE_BUDGET_BYTES",
             skyfall_core::rain::texture::TEXTURE_BUDGET_BYTES,

@@ -1,7 +1,7 @@
 //! Frame rendering: the CPU backend as a function, the GPU backend as a device object. Both
 //! take the same arguments, parsed once into a [`Request`].
 
-use crate::errors::{CoreError, gpu_error};
+use crate::errors::{CoreError, gpu_error, in_use, invalid};
 use crate::sky::{AmbientLightMap, SkyModel};
 use glam::{DVec3, Mat3, Vec3};
 use numpy::ndarray::{Ix2, Ix3};
@@ -9,13 +9,13 @@ use numpy::{
     PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
     PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use skyfall_core::frame::{FrameOut, SceneRef, check_frame_size, render_into};
 use skyfall_core::haze::Haze;
 use skyfall_core::photo8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
 use skyfall_core::rain::drops::{RainMethod, RainRegion};
 use skyfall_core::rain::streaks::{RainFrame, RainShading};
+use skyfall_core::ranges;
 use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;
@@ -80,10 +80,11 @@ pub(crate) fn box_scene(
 ) -> PyResult<BoxScene> {
     let a = boxes.as_array();
     if a.ncols() != 9 {
-        return Err(PyValueError::new_err(format!(
-            "boxes must have shape (N, 9), got {:?}",
-            a.shape()
-        )));
+        return Err(invalid(
+            "boxes",
+            None,
+            format!("must have shape (N, 9), got {:?}", a.shape()),
+        ));
     }
     let rows = a
         .rows()
@@ -112,12 +113,12 @@ struct Request<'a> {
 #[pyo3(from_item_all)]
 pub struct RainArgs<'py> {
     region: RegionArgs<'py>,
-    exposure_s: f32,
-    camera_velocity_m_s: [f32; 3],
+    exposure_s: f64,
+    camera_velocity_m_s: [f64; 3],
     ground: bool,
     lights: Option<PyReadonlyArray2<'py, f32>>,
-    sky_illuminance_lux: f32,
-    cull_threshold: Option<f32>,
+    sky_illuminance_lux: f64,
+    cull_threshold: Option<f64>,
     /// Boxes that shelter the rain besides a box scene's own (a photo's occluders), and
     /// whether boxes shelter it at all.
     occluders: Option<PyReadonlyArray2<'py, f32>>,
@@ -147,7 +148,9 @@ impl<'a> Request<'a> {
             (None, Some((rgb, depth))) => (None, Some((rgb.as_slice()?, depth.as_slice()?))),
             (None, None) => (None, None),
             _ => {
-                return Err(PyValueError::new_err(
+                return Err(invalid(
+                    "boxes",
+                    None,
                     "give either boxes, or photo_rgb and photo_depth_m",
                 ));
             }
@@ -163,26 +166,18 @@ impl<'a> Request<'a> {
         let rain = match rain {
             None => None,
             Some(rain) => {
-                if !(rain.exposure_s > 0.0 && rain.exposure_s <= 0.1) {
-                    return Err(PyValueError::new_err(format!(
-                        "exposure_s = {} is outside the valid range (0, 0.1] s",
-                        rain.exposure_s
-                    )));
+                // Checked in f64, before the f32 the passes use rounds a value into range.
+                ranges::EXPOSURE_S
+                    .check(rain.exposure_s)
+                    .map_err(CoreError)?;
+                ranges::SKY_ILLUMINANCE_LUX
+                    .check(rain.sky_illuminance_lux)
+                    .map_err(CoreError)?;
+                if let Some(t) = rain.cull_threshold {
+                    ranges::CULL_THRESHOLD.check(t).map_err(CoreError)?;
                 }
-                if !(rain.sky_illuminance_lux > 0.0 && rain.sky_illuminance_lux.is_finite()) {
-                    return Err(PyValueError::new_err(format!(
-                        "sky_illuminance_lux = {} must be positive and finite",
-                        rain.sky_illuminance_lux
-                    )));
-                }
-                if rain
-                    .cull_threshold
-                    .is_some_and(|t| !(t >= 0.0 && t.is_finite()))
-                {
-                    return Err(PyValueError::new_err(
-                        "cull_threshold must be a finite number >= 0, or None",
-                    ));
-                }
+                let v = DVec3::from(rain.camera_velocity_m_s);
+                ranges::VELOCITY_M_S.check(v.length()).map_err(CoreError)?;
                 let lights = match &rain.lights {
                     None => Vec::new(),
                     Some(a) => a
@@ -196,21 +191,15 @@ impl<'a> Request<'a> {
                 };
                 let shading = RainShading {
                     lights,
-                    sky_illuminance_lux: rain.sky_illuminance_lux,
-                    cull_threshold: rain.cull_threshold,
+                    sky_illuminance_lux: rain.sky_illuminance_lux as f32,
+                    cull_threshold: rain.cull_threshold.map(|t| t as f32),
                     ambient: Some(Arc::clone(ambient)),
                     ..RainShading::open_sky()
                 };
-                let v = Vec3::from(rain.camera_velocity_m_s);
-                if !v.is_finite() || v.length() > 1000.0 {
-                    return Err(PyValueError::new_err(format!(
-                        "camera velocity_m_s = {v} must be finite and at most 1000 m/s"
-                    )));
-                }
                 Some((
                     region(&rain.region)?,
-                    rain.exposure_s,
-                    v,
+                    rain.exposure_s as f32,
+                    v.as_vec3(),
                     rain.ground,
                     shading,
                 ))
@@ -302,7 +291,9 @@ pub fn render_frame<'py>(
         ambient: &lit.ambient,
     };
     if boxes.is_none() && (photo_rgb.is_none() || photo_depth_m.is_none()) {
-        return Err(PyValueError::new_err(
+        return Err(invalid(
+            "boxes",
+            None,
             "give either boxes, or photo_rgb and photo_depth_m",
         ));
     }
@@ -345,11 +336,7 @@ pub fn render_frame<'py>(
     let report = {
         // A given array may also be an input (a photo rendered over itself): name it.
         fn busy(name: &'static str) -> impl Fn(numpy::BorrowError) -> PyErr {
-            move |_| {
-                PyValueError::new_err(format!(
-                    "out {name} is in use elsewhere (an input of this render, or another render): pass a separate array"
-                ))
-            }
+            move |_| in_use(name)
         }
         let (mut rgb_w, mut depth_w) = (
             rgb.try_readwrite().map_err(busy("rgb"))?,
@@ -456,10 +443,11 @@ pub fn render_photo8<'py>(
         &lit.ambient,
     )?;
     let decode: &[f32; 256] = decode_table.as_slice()?.try_into().map_err(|_| {
-        PyValueError::new_err(format!(
-            "decode_table must have 256 entries, got {}",
-            decode_table.len()
-        ))
+        invalid(
+            "decode_table",
+            None,
+            format!("must have 256 entries, got {}", decode_table.len()),
+        )
     })?;
     let photo = Photo8 {
         srgb: photo_srgb8.as_slice()?,

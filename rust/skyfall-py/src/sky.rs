@@ -1,16 +1,16 @@
 //! Skies, sky illuminance with occlusion and the ambient-light map.
 
 use crate::alloc::{filled, from_slice};
-use crate::errors::CoreError;
+use crate::errors::{CoreError, invalid};
 use crate::interrupt::interruptible_core;
 use crate::render::box_scene;
 use glam::Vec3;
 use numpy::ndarray::{Ix1, Ix2, Ix3, Ix4};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArray4, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
 use skyfall_core::error::{Error, check_cancel};
+use skyfall_core::ranges;
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::ambient::AmbientMap;
 use skyfall_core::sky::cie::SkyKind;
@@ -20,20 +20,21 @@ use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
 /// Rows of an (N, 3) float32 array as points.
-fn points(a: &PyReadonlyArray2<'_, f32>, name: &str) -> PyResult<Vec<Vec3>> {
+fn points(a: &PyReadonlyArray2<'_, f32>, name: &'static str) -> PyResult<Vec<Vec3>> {
     let v = a.as_array();
     if v.ncols() != 3 {
-        return Err(PyValueError::new_err(format!(
-            "{name} must have shape (N, 3), got {:?}",
-            v.shape()
-        )));
+        return Err(invalid(
+            name,
+            None,
+            format!("must have shape (N, 3), got {:?}", v.shape()),
+        ));
     }
     let mut pts: Vec<Vec3> = Vec::new();
     pts.try_reserve_exact(v.nrows())
         .map_err(|_| CoreError(Error::out_of_memory::<Vec3>(name.to_string(), v.nrows())))?;
     pts.extend(v.rows().into_iter().map(|r| Vec3::new(r[0], r[1], r[2])));
     if let Some(i) = pts.iter().position(|p| !p.is_finite()) {
-        return Err(PyValueError::new_err(format!("{name}[{i}] is not finite")));
+        return Err(invalid(name, Some(i), "must be finite"));
     }
     Ok(pts)
 }
@@ -58,21 +59,19 @@ impl SkyModel {
     ) -> PyResult<Self> {
         let sun = match (sun_elevation_deg, sun_azimuth_deg) {
             (Some(el), Some(az)) => {
-                if !(-90.0..=90.0).contains(&el) {
-                    return Err(PyValueError::new_err(format!(
-                        "sun_elevation_deg = {el} is outside the valid range [-90, 90] deg"
-                    )));
-                }
-                if !az.is_finite() {
-                    return Err(PyValueError::new_err(format!(
-                        "sun_azimuth_deg = {az} must be finite"
-                    )));
-                }
+                ranges::SUN_ELEVATION_DEG.check(el).map_err(CoreError)?;
+                ranges::SUN_AZIMUTH_DEG.check(az).map_err(CoreError)?;
                 Some(sun_direction(el, az))
             }
             (None, None) => None,
-            _ => {
-                return Err(PyValueError::new_err(
+            (el, _) => {
+                return Err(invalid(
+                    if el.is_some() {
+                        "sun_azimuth_deg"
+                    } else {
+                        "sun_elevation_deg"
+                    },
+                    None,
                     "give both sun_elevation_deg and sun_azimuth_deg, or neither",
                 ));
             }
@@ -235,10 +234,8 @@ impl AmbientLightMap {
 /// Cloud base height for a rain rate, m (see skyfall_core::sky::cloud_base_m).
 #[pyfunction]
 pub fn cloud_base_m(rain_rate_mm_h: f64) -> PyResult<f64> {
-    if !(0.0..=1e4).contains(&rain_rate_mm_h) {
-        return Err(PyValueError::new_err(format!(
-            "rain_rate_mm_h = {rain_rate_mm_h} is outside the valid range [0, 10000] mm/h"
-        )));
-    }
+    ranges::RAIN_RATE_MM_H
+        .check(rain_rate_mm_h)
+        .map_err(CoreError)?;
     Ok(base_for_rate(rain_rate_mm_h))
 }

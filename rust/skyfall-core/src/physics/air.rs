@@ -6,11 +6,11 @@
 use crate::error::{Error, Param, Range, Result};
 
 /// Valid air temperature, °C (Beard's viscosity law and the supercooled-water formulas).
-pub const TEMPERATURE_C: Range = Range::closed(-40.0, 50.0, "°C");
+pub const TEMPERATURE_C: Range = crate::ranges::TEMPERATURE_C.range;
 /// Valid air pressure, hPa (sea level down to about 20 km altitude).
-pub const PRESSURE_HPA: Range = Range::closed(50.0, 1100.0, "hPa");
+pub const PRESSURE_HPA: Range = crate::ranges::PRESSURE_HPA.range;
 /// Valid relative humidity, as a fraction.
-pub const RELATIVE_HUMIDITY: Range = Range::closed(0.0, 1.0, "(fraction)");
+pub const RELATIVE_HUMIDITY: Range = crate::ranges::RELATIVE_HUMIDITY.range;
 
 /// Specific gas constant of dry air, J/(kg·K).
 const R_DRY_J_KG_K: f64 = 287.04;

@@ -11,9 +11,9 @@ use crate::error::{Error, Param, Range, Result, at, broadcast_len};
 /// N0, drops per m³ per mm.
 pub const MP_N0_PER_M3_MM: f64 = 8000.0;
 /// Valid rain rates, mm/h (the heaviest recorded hourly rainfall is ~300 mm/h).
-pub const RAIN_RATE_MM_H: Range = Range::closed(0.0, 500.0, "mm/h");
+pub const RAIN_RATE_MM_H: Range = crate::ranges::RAIN_RATE_MM_H.range;
 /// Valid bin edges for drop counts, mm (the upper edge may be infinite).
-pub const EDGE_MM: Range = Range::closed(0.0, f64::INFINITY, "mm");
+pub const EDGE_MM: Range = crate::ranges::D_MIN_MM.range;
 
 /// Slope Λ, mm⁻¹ (infinite for R = 0).
 pub fn mp_slope_per_mm(rain_rate_mm_h: f64) -> f64 {

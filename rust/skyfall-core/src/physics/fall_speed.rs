@@ -21,7 +21,7 @@ use crate::error::{Error, Param, Range, Result, at, broadcast_len};
 use rayon::prelude::*;
 
 /// Valid drop diameters, mm.
-pub const DIAMETER_MM: Range = Range::closed(0.0, 8.0, "mm");
+pub const DIAMETER_MM: Range = crate::ranges::DIAMETER_MM.range;
 
 /// Which terminal-velocity law to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

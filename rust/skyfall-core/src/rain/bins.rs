@@ -9,7 +9,7 @@ use crate::error::{Error, Param, Range, Result};
 /// Bin width used when only one diameter is given, mm (the seed's 0.2 mm step).
 pub const SINGLE_BIN_WIDTH_MM: f64 = 0.2;
 /// Valid texture diameters, mm.
-pub const TEXTURE_DIAMETER_MM: Range = Range::open_closed(0.0, 8.0, "mm");
+pub const TEXTURE_DIAMETER_MM: Range = crate::ranges::DIAMETERS_MM.range;
 
 /// (lower, upper) bin edges in mm for strictly increasing `diameters_mm`.
 pub fn diameter_bins(diameters_mm: &[f64]) -> Result<Vec<(f64, f64)>> {

@@ -20,9 +20,9 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
 /// Valid rain-region radii, m.
-pub const NEAR_M: Range = Range::open_closed(0.0, 50.0, "m");
+pub const NEAR_M: Range = crate::ranges::RAIN_NEAR_M.range;
 /// Valid wind components, m/s.
-pub const WIND_M_S: Range = Range::closed(-60.0, 60.0, "m/s");
+pub const WIND_M_S: Range = crate::ranges::WIND_M_S.range;
 
 /// Which rain, where and when.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,7 +58,7 @@ impl RainRegion {
         for (i, w) in wind_m_s.iter().enumerate() {
             WIND_M_S.check("wind_m_s", Some(i), *w)?;
         }
-        Range::closed(-1e7, 1e7, "s").check("time_s", None, time_s)?;
+        crate::ranges::TIME_S.check(time_s)?;
         Ok(RainRegion {
             rain_rate_mm_h,
             bins: diameter_bins(diameters_mm)?,

@@ -27,9 +27,9 @@ use rayon::prelude::*;
 /// Largest result [`render_textures`] will allocate: 2 GiB.
 pub const TEXTURE_BUDGET_BYTES: u64 = 2 << 30;
 /// Valid texture sizes, pixels per side (pixels per metre of the cube).
-pub const SIZE_PX: Range = Range::closed(16.0, 16384.0, "px");
+pub const SIZE_PX: Range = crate::ranges::SIZE_PX.range;
 /// Valid exposures, s: a streak must fit in the 1 m texture (v ≤ 9.3 m/s).
-pub const EXPOSURE_S: Range = Range::open_closed(0.0, 0.1, "s");
+pub const EXPOSURE_S: Range = crate::ranges::EXPOSURE_S.range;
 
 /// What to render.
 #[derive(Debug, Clone, PartialEq)]

@@ -4,7 +4,7 @@ use crate::error::{Error, Param, Range, Result};
 use glam::{DVec3, Mat3, Vec3};
 
 /// Valid frame sides, pixels.
-pub const SIDE_PX: Range = Range::closed(1.0, 16384.0, "px");
+pub const SIDE_PX: Range = crate::ranges::SIDE_PX;
 
 /// A pinhole camera: pose and intrinsics.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,13 +42,13 @@ impl Camera {
         SIDE_PX.check("width", None, f64::from(width))?;
         SIDE_PX.check("height", None, f64::from(height))?;
         let [fx, fy, cx, cy] = intrinsics;
-        let positive = Range::open_closed(0.0, 1e9, "px");
+        let positive = crate::ranges::FOCAL_PX;
         positive.check("fx", None, f64::from(fx))?;
         positive.check("fy", None, f64::from(fy))?;
-        let finite = Range::closed(-1e9, 1e9, "px");
+        let finite = crate::ranges::PRINCIPAL_PX;
         finite.check("cx", None, f64::from(cx))?;
         finite.check("cy", None, f64::from(cy))?;
-        let world = Range::closed(-1e7, 1e7, "m");
+        let world = crate::ranges::POSITION_M.range;
         for (i, v) in position_m.to_array().into_iter().enumerate() {
             world.check("position_m", Some(i), v)?;
         }

@@ -55,11 +55,11 @@ impl Light {
             message: format!("needs 12 values, got {}", row.len()),
         })?;
         for c in [x, y, z] {
-            Range::closed(-1e7, 1e7, "m").check("position_m", i, f64::from(c))?;
+            crate::ranges::POSITION_M.check_at(i, f64::from(c))?;
         }
-        Range::closed(0.0, 1e9, "cd").check("intensity_cd", i, f64::from(intensity))?;
+        crate::ranges::INTENSITY_CD.check_at(i, f64::from(intensity))?;
         for c in [r, g, b] {
-            Range::closed(0.0, 1e3, "").check("color", i, f64::from(c))?;
+            crate::ranges::COLOR.check_at(i, f64::from(c))?;
         }
         let dir = Vec3::new(dx, dy, dz);
         let spot = if dir.length_squared() > 0.0 {

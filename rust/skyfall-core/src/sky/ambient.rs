@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// Most nodes a map may have (16 M: 320 MB of float32).
 pub const MAX_NODES: usize = 16 << 20;
 /// Valid grid spacings.
-pub const SPACING_M: Range = Range::closed(0.05, 100.0, "m");
+pub const SPACING_M: Range = crate::ranges::SPACING_M.range;
 
 /// Illuminance relative to E on five normals over a grid.
 #[derive(Debug, Clone, PartialEq)]

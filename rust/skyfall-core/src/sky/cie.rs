@@ -91,7 +91,7 @@ impl SkyKind {
                     index: None,
                 },
                 value: f64::from(sun.y.asin().to_degrees()),
-                range: "[0, 90] deg".into(),
+                range: crate::ranges::SUN_ELEVATION_DEG.range.to_string(),
             });
         }
         Ok(SkyKind::General {

@@ -28,7 +28,7 @@ pub const CHANNELS: usize = 5;
 /// The normals, in channel order.
 pub const NORMALS: [Vec3; CHANNELS] = [Vec3::Y, Vec3::X, Vec3::NEG_X, Vec3::Z, Vec3::NEG_Z];
 /// Valid numbers of azimuths.
-pub const AZIMUTHS: Range = Range::closed(4.0, 65_536.0, "azimuths");
+pub const AZIMUTHS: Range = crate::ranges::SAMPLES.range;
 /// Elevation steps of the cumulative tables.
 const STEPS: usize = 512;
 

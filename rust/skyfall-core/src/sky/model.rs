@@ -69,7 +69,7 @@ impl Sky {
     /// Normalised sky: ∫ L τ cos θ dω over the open hemisphere equals E (relative: π).
     pub fn new(kind: SkyKind, extinction_per_m: f64, cloud_base_m: f64) -> Result<Self> {
         Range::closed(0.0, 1e3, "1/m").check("extinction_per_m", None, extinction_per_m)?;
-        Range::closed(1.0, 2e4, "m").check("cloud_base_m", None, cloud_base_m)?;
+        crate::ranges::CLOUD_BASE_M.check(cloud_base_m)?;
         let mut sky = Sky {
             kind,
             extinction_per_m,

@@ -1,0 +1,408 @@
+//! Every valid range of a user-facing parameter, declared once.
+//!
+//! One [`Limit`] per parameter, named as the user writes it (`exposure_s`, not "the
+//! exposure"), with its interval, unit and meaning. The core's checks use these, the Python
+//! bindings check their arguments against them, and `skyfall._core.RANGES` exports [`ALL`] to
+//! Python, whose own checks (`skyfall._validate.in_range`) read it and leave the message to
+//! [`check_named`]: a value outside a range is refused with the same words on every path
+//! (`exposure_s = 0.2 is outside the valid range [1e-6, 0.1] s`).
+//!
+//! Choices where the checks had drifted apart:
+//! - `exposure_s` is [1e-6, 0.1] s (the camera's) for the rain textures and the bindings too
+//!   (they took (0, 0.1]): 1 µs is shorter than any shutter, and below it the f32 the passes
+//!   use rounds a tiny exposure to 0 (1e-300 s was accepted, then drawn as T = 0).
+//! - `sun_elevation_deg` is [0, 90] deg (the Weather's): the CIE general skies model a sun
+//!   above the horizon, and the bindings' former [-90, 90] let through suns the sky refused
+//!   later for the types that depend on it and ignored silently for the others.
+//! - `cloud_base_m(rain_rate_mm_h)` takes the rain rate's own [0, 500] mm/h (the bindings
+//!   allowed [0, 10000], beyond every other use of the rate).
+//! - `sky_illuminance_lux` is [1e-4, 150000] lx (the Weather's) for frames made through the
+//!   bindings too (they accepted any positive number).
+
+use crate::error::{Error, Param, Range, Result};
+
+/// A user-facing parameter's valid range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limit {
+    /// The parameter's name as the user writes it.
+    pub name: &'static str,
+    /// Its valid interval, with unit.
+    pub range: Range,
+    /// What it is, in one line.
+    pub meaning: &'static str,
+}
+
+impl Limit {
+    const fn new(name: &'static str, range: Range, meaning: &'static str) -> Self {
+        Limit {
+            name,
+            range,
+            meaning,
+        }
+    }
+
+    /// Checks a value of this parameter.
+    pub fn check(&self, value: f64) -> Result<f64> {
+        self.range.check(self.name, None, value)
+    }
+
+    /// Checks element `index` of an array parameter.
+    pub fn check_at(&self, index: Option<usize>, value: f64) -> Result<f64> {
+        self.range.check(self.name, index, value)
+    }
+
+    /// Checks every element (indices named only for arrays longer than one).
+    pub fn check_all(&self, values: &[f64]) -> Result<()> {
+        self.range.check_all(self.name, values)
+    }
+}
+
+const INF: f64 = f64::INFINITY;
+
+// Weather.
+/// Rain rate R.
+pub const RAIN_RATE_MM_H: Limit = Limit::new(
+    "rain_rate_mm_h",
+    Range::closed(0.0, 500.0, "mm/h"),
+    "rain rate R (0: no drops, zero extinction)",
+);
+/// Rain rates of a texture set (each as [`RAIN_RATE_MM_H`]).
+pub const RAIN_RATES_MM_H: Limit = Limit::new(
+    "rain_rates_mm_h",
+    RAIN_RATE_MM_H.range,
+    "rain rates of a set of rain textures",
+);
+/// Meteorological visibility of the air without rain.
+pub const VISIBILITY_M: Limit = Limit::new(
+    "visibility_m",
+    Range::closed(0.01, INF, "m"),
+    "meteorological visibility of the air without rain (inf: perfectly clear)",
+);
+/// Horizontal illuminance of the open sky at the ground.
+pub const SKY_ILLUMINANCE_LUX: Limit = Limit::new(
+    "sky_illuminance_lux",
+    Range::closed(1e-4, 150_000.0, "lx"),
+    "horizontal illuminance E of the open sky at the ground, rain included",
+);
+/// Wind velocity, per component.
+pub const WIND_M_S: Limit = Limit::new(
+    "wind_m_s",
+    Range::closed(-60.0, 60.0, "m/s"),
+    "wind velocity, each of x, y, z",
+);
+/// Radius of the rain region drawn as streaks.
+pub const RAIN_NEAR_M: Limit = Limit::new(
+    "rain_near_m",
+    Range::open_closed(0.0, 50.0, "m"),
+    "radius of the rain region around the camera drawn as streaks",
+);
+/// Drop diameters whose bins are drawn.
+pub const RAIN_DIAMETERS_MM: Limit = Limit::new(
+    "rain_diameters_mm",
+    Range::open_closed(0.0, 8.0, "mm"),
+    "drop diameters (strictly increasing) whose bins are drawn",
+);
+/// Texture diameters (each as [`RAIN_DIAMETERS_MM`]).
+pub const DIAMETERS_MM: Limit = Limit::new(
+    "diameters_mm",
+    RAIN_DIAMETERS_MM.range,
+    "drop diameters (strictly increasing) of rain textures and their bins",
+);
+/// CIE general sky type.
+pub const SKY: Limit = Limit::new(
+    "sky",
+    Range::closed(1.0, 15.0, ""),
+    "CIE S 011 general sky type (or \"overcast\")",
+);
+/// The sun's elevation.
+pub const SUN_ELEVATION_DEG: Limit = Limit::new(
+    "sun_elevation_deg",
+    Range::closed(0.0, 90.0, "deg"),
+    "the sun's elevation above the horizon",
+);
+/// The sun's azimuth.
+pub const SUN_AZIMUTH_DEG: Limit = Limit::new(
+    "sun_azimuth_deg",
+    Range::open(-INF, INF, "deg"),
+    "the sun's azimuth from -Z (north) towards +X (east), any finite angle",
+);
+/// Elevation of a direction the sky is looked up in.
+pub const ELEVATION_DEG: Limit = Limit::new(
+    "elevation_deg",
+    Range::closed(-90.0, 90.0, "deg"),
+    "elevation of a viewing direction above the horizon (below it the sky is 0)",
+);
+/// Azimuth of a direction the sky is looked up in.
+pub const AZIMUTH_DEG: Limit = Limit::new(
+    "azimuth_deg",
+    Range::open(-INF, INF, "deg"),
+    "azimuth of a viewing direction from -Z towards +X, any finite angle",
+);
+/// Cloud base height.
+pub const CLOUD_BASE_M: Limit = Limit::new(
+    "cloud_base_m",
+    Range::closed(1.0, 20_000.0, "m"),
+    "cloud base height H above the ground",
+);
+
+// Camera.
+/// Frame and camera width or height.
+pub const SIDE_PX: Range = Range::closed(1.0, 16_384.0, "px");
+/// Frame width.
+pub const WIDTH: Limit = Limit::new("width", SIDE_PX, "frame width");
+/// Frame height.
+pub const HEIGHT: Limit = Limit::new("height", SIDE_PX, "frame height");
+/// World coordinate of a camera or light.
+pub const POSITION_M: Limit = Limit::new(
+    "position_m",
+    Range::closed(-1e7, 1e7, "m"),
+    "world position of a camera or light, each coordinate",
+);
+/// Camera heading.
+pub const YAW_DEG: Limit = Limit::new(
+    "yaw_deg",
+    Range::open(-INF, INF, "deg"),
+    "camera heading about +Y, any finite angle",
+);
+/// Camera pitch.
+pub const PITCH_DEG: Limit = Limit::new(
+    "pitch_deg",
+    Range::closed(-89.0, 89.0, "deg"),
+    "elevation of the camera's view direction",
+);
+/// Vertical field of view.
+pub const VERTICAL_FOV_DEG: Limit = Limit::new(
+    "vertical_fov_deg",
+    Range::closed_open(0.001, 179.0, "deg"),
+    "vertical field of view",
+);
+/// Focal lengths in pixels.
+pub const FOCAL_PX: Range = Range::open_closed(0.0, 1e9, "px");
+/// Horizontal focal length.
+pub const FX: Limit = Limit::new("fx", FOCAL_PX, "horizontal focal length");
+/// Vertical focal length.
+pub const FY: Limit = Limit::new("fy", FOCAL_PX, "vertical focal length");
+/// Principal point coordinates in pixels.
+pub const PRINCIPAL_PX: Range = Range::closed(-1e9, 1e9, "px");
+/// Principal point, x.
+pub const CX: Limit = Limit::new("cx", PRINCIPAL_PX, "principal point, x");
+/// Principal point, y.
+pub const CY: Limit = Limit::new("cy", PRINCIPAL_PX, "principal point, y");
+/// Shutter time.
+pub const EXPOSURE_S: Limit = Limit::new(
+    "exposure_s",
+    Range::closed(1e-6, 0.1, "s"),
+    "shutter time T: a drop's streak is its path v T (a streak must fit in the 1 m texture)",
+);
+/// The camera's speed.
+pub const VELOCITY_M_S: Limit = Limit::new(
+    "velocity_m_s",
+    Range::closed(0.0, 1000.0, "m/s"),
+    "the camera's own speed |v|",
+);
+
+// Lights.
+/// Luminous intensity of a light.
+pub const INTENSITY_CD: Limit = Limit::new(
+    "intensity_cd",
+    Range::closed(0.0, 1e9, "cd"),
+    "luminous intensity of a light (on the axis of a spot)",
+);
+/// Colour multiplier of a light.
+pub const COLOR: Limit = Limit::new(
+    "color",
+    Range::closed(0.0, 1000.0, ""),
+    "linear RGB multiplier of a light's intensity, each channel",
+);
+/// Outer half-angle of a spot light.
+pub const CONE_DEG: Limit = Limit::new(
+    "cone_deg",
+    Range::open_closed(0.0, 90.0, "deg"),
+    "outer half-angle of a spot light's cone",
+);
+
+// Frames and sky light.
+/// Time of a frame.
+pub const TIME_S: Limit = Limit::new(
+    "time_s",
+    Range::closed(-1e7, 1e7, "s"),
+    "time of a frame: drops have fallen v time_s",
+);
+/// Rain seed.
+pub const SEED: Limit = Limit::new(
+    "seed",
+    Range::closed_open(0.0, 18_446_744_073_709_551_616.0, ""),
+    "seed of the rain, an integer below 2^64",
+);
+/// Received-light threshold below which drops are skipped.
+pub const CULL_THRESHOLD: Limit = Limit::new(
+    "cull_threshold",
+    Range::closed_open(0.0, INF, ""),
+    "skip drops whose received light I_R (1.0: the open sky's) is below this",
+);
+/// Node spacing of an ambient-light map.
+pub const SPACING_M: Limit = Limit::new(
+    "spacing_m",
+    Range::closed(0.05, 100.0, "m"),
+    "node spacing of an ambient-light map",
+);
+/// The renderer's ambient-map spacing (as [`SPACING_M`]).
+pub const AMBIENT_SPACING_M: Limit = Limit::new(
+    "ambient_spacing_m",
+    SPACING_M.range,
+    "node spacing of a frame's ambient-light map",
+);
+/// Azimuths sampled per point.
+pub const SAMPLES: Limit = Limit::new(
+    "samples",
+    Range::closed(4.0, 65_536.0, ""),
+    "azimuths sampled per point of a sky-illuminance integral",
+);
+/// The renderer's azimuths per map node (as [`SAMPLES`]).
+pub const AMBIENT_SAMPLES: Limit = Limit::new(
+    "ambient_samples",
+    SAMPLES.range,
+    "azimuths per node of a frame's ambient-light map",
+);
+
+// Physics.
+/// Drop diameter.
+pub const DIAMETER_MM: Limit = Limit::new(
+    "diameter_mm",
+    Range::closed(0.0, 8.0, "mm"),
+    "equivolume drop diameter (drops above ~8 mm break up)",
+);
+/// Air temperature.
+pub const TEMPERATURE_C: Limit = Limit::new(
+    "temperature_c",
+    Range::closed(-40.0, 50.0, "°C"),
+    "air temperature",
+);
+/// Air pressure.
+pub const PRESSURE_HPA: Limit = Limit::new(
+    "pressure_hpa",
+    Range::closed(50.0, 1100.0, "hPa"),
+    "air pressure",
+);
+/// Relative humidity.
+pub const RELATIVE_HUMIDITY: Limit = Limit::new(
+    "relative_humidity",
+    Range::closed(0.0, 1.0, "(fraction)"),
+    "relative humidity as a fraction",
+);
+/// Lower diameter of a drop-count interval.
+pub const D_MIN_MM: Limit = Limit::new(
+    "d_min_mm",
+    Range::closed(0.0, INF, "mm"),
+    "lower diameter of an interval of the drop-size distribution",
+);
+/// Texture size.
+pub const SIZE_PX: Limit = Limit::new(
+    "size_px",
+    Range::closed(16.0, 16_384.0, "px"),
+    "rain texture size, pixels per side (per metre of the cube)",
+);
+
+/// Every limit, for export and lookup by name.
+pub const ALL: &[Limit] = &[
+    RAIN_RATE_MM_H,
+    RAIN_RATES_MM_H,
+    VISIBILITY_M,
+    SKY_ILLUMINANCE_LUX,
+    WIND_M_S,
+    RAIN_NEAR_M,
+    RAIN_DIAMETERS_MM,
+    DIAMETERS_MM,
+    SKY,
+    SUN_ELEVATION_DEG,
+    SUN_AZIMUTH_DEG,
+    ELEVATION_DEG,
+    AZIMUTH_DEG,
+    CLOUD_BASE_M,
+    WIDTH,
+    HEIGHT,
+    POSITION_M,
+    YAW_DEG,
+    PITCH_DEG,
+    VERTICAL_FOV_DEG,
+    FX,
+    FY,
+    CX,
+    CY,
+    EXPOSURE_S,
+    VELOCITY_M_S,
+    INTENSITY_CD,
+    COLOR,
+    CONE_DEG,
+    TIME_S,
+    SEED,
+    CULL_THRESHOLD,
+    SPACING_M,
+    AMBIENT_SPACING_M,
+    SAMPLES,
+    AMBIENT_SAMPLES,
+    DIAMETER_MM,
+    TEMPERATURE_C,
+    PRESSURE_HPA,
+    RELATIVE_HUMIDITY,
+    D_MIN_MM,
+    SIZE_PX,
+];
+
+/// The limit of the parameter `name`.
+pub fn find(name: &str) -> Option<&'static Limit> {
+    ALL.iter().find(|l| l.name == name)
+}
+
+/// Checks `value` (element `index` of an array) of the parameter `name`; an unknown name is
+/// [`Error::Invalid`].
+pub fn check_named(name: &str, index: Option<usize>, value: f64) -> Result<f64> {
+    match find(name) {
+        Some(l) => l.check_at(index, value),
+        None => Err(Error::Invalid {
+            param: Param {
+                name: "name",
+                index: None,
+            },
+            message: format!("no parameter {name:?} has a declared range"),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_ends_are_refused_just_outside() {
+        for (i, l) in ALL.iter().enumerate() {
+            assert!(ALL[i + 1..].iter().all(|m| m.name != l.name), "{}", l.name);
+            let r = l.range;
+            assert!(r.lo < r.hi, "{}", l.name);
+            let step = |x: f64| 1e-9 * x.abs().max(1.0);
+            if r.lo.is_finite() {
+                let out = if r.lo_open { r.lo } else { r.lo - step(r.lo) };
+                let msg = l.check(out).unwrap_err().to_string();
+                assert!(msg.starts_with(&format!("{} = ", l.name)), "{msg}");
+                assert!(msg.contains(&r.to_string()), "{msg}");
+            }
+            if r.hi.is_finite() && r.hi < 1e18 {
+                let out = if r.hi_open { r.hi } else { r.hi + step(r.hi) };
+                assert!(l.check(out).is_err(), "{} {out}", l.name);
+            }
+            assert!(l.check(f64::NAN).is_err(), "{}", l.name);
+        }
+        assert_eq!(
+            EXPOSURE_S.check(0.2).unwrap_err().to_string(),
+            "exposure_s = 0.2 is outside the valid range [1e-6, 0.1] s"
+        );
+        assert_eq!(
+            check_named("wind_m_s", Some(2), 61.0)
+                .unwrap_err()
+                .to_string(),
+            "wind_m_s[2] = 61 is outside the valid range [-60, 60] m/s"
+        );
+        assert!(check_named("no_such", None, 0.0).is_err());
+        assert!(SUN_AZIMUTH_DEG.check(1e300).is_ok() && SUN_AZIMUTH_DEG.check(INF).is_err());
+    }
+}
