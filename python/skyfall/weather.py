@@ -55,7 +55,7 @@ class Weather:
         Radius of the rain region around the camera in which drops are drawn as streaks, m,
         in (0, 50] (5 m as in seed 000); beyond it rain shows only as haze.
     rain_diameters_mm : sequence of float
-        Strictly increasing drop diameters whose bins are drawn (see
+        Strictly increasing drop diameters, mm, each in (0, 8], whose bins are drawn (see
         :func:`skyfall.rain.diameter_bins`); the seed's 1.0-2.0 mm by default.
     rain_streaks : bool
         Draw the drops near the camera as streaks (default). False leaves rain as haze only.
