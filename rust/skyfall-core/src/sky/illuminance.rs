@@ -64,8 +64,13 @@ impl SkyTable {
         let dphi = TAU / azimuths as f64;
         let h = FRAC_PI_2 / STEPS as f64;
         let mut dirs = Vec::with_capacity(azimuths);
-        let mut up = Vec::with_capacity(azimuths * (STEPS + 1));
-        let mut side = Vec::with_capacity(azimuths * (STEPS + 1));
+        // 2 x 269 MB at 65536 azimuths: refused as OutOfMemory, not an abort.
+        let n = azimuths * (STEPS + 1);
+        let (mut up, mut side) = (Vec::new(), Vec::new());
+        for v in [&mut up, &mut side] {
+            v.try_reserve_exact(n)
+                .map_err(|_| crate::Error::out_of_memory::<f64>("the sky table", n))?;
+        }
         for k in 0..azimuths {
             check_cancel(cancel, "the sky table")?;
             let phi = (k as f64 + 0.5) * dphi;
