@@ -222,10 +222,7 @@ pub fn render_into(
         Some((rf, layers)) => {
             let (streaks, stats, drops) = rf.streaks(cam)?;
             let bins = bin_by_bands(cam, &streaks);
-            Some((
-                (rf.shading.reflectance, streaks, bins, stats, drops),
-                layers,
-            ))
+            Some(((streaks, bins, stats, drops), layers))
         }
         None => None,
     };
@@ -247,7 +244,7 @@ pub fn render_into(
     let u2 = cam.column_slopes_sq();
     let particles = rain
         .as_ref()
-        .map(|(r, streaks, bins, ..)| (*r, streaks.as_slice(), bins));
+        .map(|(streaks, bins, ..)| (streaks.as_slice(), bins));
     // The pipeline, band by band while the band is in cache: the scene stage, then the effect
     // passes in physical order (haze, rain).
     rgb.par_chunks_mut(3 * band)
@@ -276,16 +273,16 @@ pub fn render_into(
                     );
                 }
             }
-            if let (Some((r, streaks, (offsets, indices))), Some((alpha, rain_depth))) =
+            if let (Some((streaks, (offsets, indices))), Some((alpha, rain_depth))) =
                 (particles, rain_band.as_mut())
             {
                 let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
                 composite_band_colour(
-                    streaks, list, y0, w, depth_band, rgb_band, alpha, rain_depth, r,
+                    streaks, list, y0, w, depth_band, rgb_band, alpha, rain_depth,
                 );
             }
         });
-    Ok(rain.map(|(_, _, _, stats, drops)| (stats, drops)))
+    Ok(rain.map(|(_, _, stats, drops)| (stats, drops)))
 }
 
 /// The scene stage of one row: the box scene ray cast, or the photo's row copied.

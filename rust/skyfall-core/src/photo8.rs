@@ -128,7 +128,6 @@ pub fn render_photo8(
         }
         return Ok(stats);
     }
-    let r = rain.map_or(0.0, |rf| rf.shading.reflectance);
     // Each band of rows is cut into tiles of TILE_W columns, rasterised and shaded one after
     // the other: a tile's scratch and depth stay in the core's L1.
     let tiles_x = w.div_ceil(TILE_W);
@@ -199,7 +198,6 @@ pub fn render_photo8(
                                 w,
                                 cols.clone(),
                                 depth,
-                                r,
                                 p,
                                 q,
                                 cover,
@@ -213,7 +211,6 @@ pub fn render_photo8(
                                 w,
                                 cols.clone(),
                                 depth,
-                                r,
                                 p,
                                 q,
                                 cover,
@@ -292,21 +289,21 @@ struct AffineAccumulator<'a, const K: usize> {
     p: &'a mut [f32],
     q: [&'a mut [f32]; K],
     cover: &'a mut [f32],
-    r: f32,
 }
 
 impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
-    type Streak = [f32; 3];
+    /// The light per channel and r.
+    type Streak = ([f32; 3], f32);
 
     #[inline(always)]
-    fn streak(&self, light: Vec3) -> [f32; 3] {
-        light.to_array()
+    fn streak(&self, light: Vec3, r: f32) -> Self::Streak {
+        (light.to_array(), r)
     }
 
     #[inline(always)]
-    fn add_x4(&mut self, l: &[f32; 3], i: usize, a: Vec4, _inv_z: Vec4) {
+    fn add_x4(&mut self, (l, r): &Self::Streak, i: usize, a: Vec4, _inv_z: Vec4) {
         let end = i + 4;
-        let ar = a * self.r;
+        let ar = a * *r;
         let keep = Vec4::ONE - ar;
         (Vec4::from_slice(&self.p[i..end]) * keep).write_to_slice(&mut self.p[i..end]);
         for (q, &lc) in self.q.iter_mut().zip(l) {
@@ -319,8 +316,8 @@ impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
     }
 
     #[inline(always)]
-    fn add(&mut self, l: &[f32; 3], i: usize, a: f32, _inv_z: f32) {
-        let ar = a * self.r;
+    fn add(&mut self, (l, r): &Self::Streak, i: usize, a: f32, _inv_z: f32) {
+        let ar = a * r;
         let keep = 1.0 - ar;
         self.p[i] *= keep;
         for (q, &lc) in self.q.iter_mut().zip(l) {
@@ -345,7 +342,6 @@ fn raster_tile<const K: usize>(
     w: usize,
     cols: std::ops::Range<usize>,
     depth: &[f32],
-    r: f32,
     p: &mut [f32],
     q: &mut [f32],
     cover: &mut [f32],
@@ -358,7 +354,7 @@ fn raster_tile<const K: usize>(
     } else {
         &mut cover[..px]
     };
-    let mut acc = AffineAccumulator::<K> { p, q, cover, r };
+    let mut acc = AffineAccumulator::<K> { p, q, cover };
     composite_band(streaks, mine, y0, rows, w, cols, depth, &mut acc);
 }
 

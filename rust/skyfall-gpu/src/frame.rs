@@ -81,9 +81,7 @@ impl GpuRenderer {
         let ctx = &self.ctx;
         ctx.scoped(|| {
             // The particles first (on the CPU: they do not depend on the scene).
-            let rain = rain
-                .map(|rf| rf.streaks(cam).map(|p| (rf.shading.reflectance, p)))
-                .transpose()?;
+            let rain = rain.map(|rf| rf.streaks(cam)).transpose()?;
             let mut f = FrameEncoder::new(ctx, &self.pool, cam);
             let (rgb, depth) = match scene {
                 SceneRef::Boxes(_) => (f.target("rgb", 3 * n), f.target("depth", n)),
@@ -109,8 +107,8 @@ impl GpuRenderer {
             if let Some(h) = haze {
                 self.haze.encode(&mut f, &targets, h)?;
             }
-            if let Some((r, (streaks, ..))) = &rain {
-                self.rain.encode(&mut f, &targets, (streaks, *r))?;
+            if let Some((streaks, ..)) = &rain {
+                self.rain.encode(&mut f, &targets, streaks)?;
             }
             // One submission, one readback of every output.
             let FrameOut {
@@ -128,7 +126,7 @@ impl GpuRenderer {
                 outputs.push((d, d_out));
             }
             f.read_back(outputs)?;
-            Ok(rain.map(|(_, (_, stats, drops))| (stats, drops)))
+            Ok(rain.map(|(_, stats, drops)| (stats, drops)))
         })
     }
 

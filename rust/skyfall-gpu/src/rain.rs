@@ -26,8 +26,8 @@ pub const TILE_H: u32 = 4;
 pub struct RainPass(ComputePass);
 
 impl FramePass for RainPass {
-    /// The prepared streaks (far to near) and r, the share of the drops' own light.
-    type Input<'i> = (&'i [ScreenStreak], f32);
+    /// The prepared streaks, far to near (each with its light and r).
+    type Input<'i> = &'i [ScreenStreak];
 
     fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
@@ -49,7 +49,7 @@ impl FramePass for RainPass {
         &self,
         f: &mut FrameEncoder<'_>,
         t: &FrameTargets<'_>,
-        (streaks, reflectance): Self::Input<'_>,
+        streaks: Self::Input<'_>,
     ) -> Result<(), GpuError> {
         let Some((alpha, rain_depth)) = t.rain else {
             return Err(GpuError::Readback(
@@ -78,7 +78,7 @@ impl FramePass for RainPass {
             indices.push(0);
         }
         let params = RainUniform {
-            reflectance,
+            streak_count: streaks.len() as u32,
             tiles_x: cam.width.div_ceil(TILE_W),
             tile_w: TILE_W,
             tile_h: TILE_H,

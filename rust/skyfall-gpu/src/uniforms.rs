@@ -52,8 +52,8 @@ pub struct HazeUniform {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
 pub struct RainUniform {
-    /// r, the share of the drop's own light.
-    pub reflectance: f32,
+    /// Streaks in the list (each carries its own r).
+    pub streak_count: u32,
     /// Tiles per row.
     pub tiles_x: u32,
     /// Tile width, px.

@@ -36,6 +36,9 @@ pub struct ScreenStreak {
     pub(crate) min: Vec2,
     pub(crate) max: Vec2,
     pub(crate) light: Vec3,
+    /// r, the share of its own light the particle shows (I = r·L + (1 − r)·background):
+    /// set by its effect, so particles of several effects composite in one list.
+    pub(crate) reflectance: f32,
     /// Unit direction a → b (+y for a dot) and length, px: per streak, not per pixel.
     pub(crate) dir: Vec2,
     pub(crate) len: f32,
@@ -133,6 +136,7 @@ pub fn screen_streak(
         min,
         max,
         light: Vec3::ONE,
+        reflectance: 1.0,
         dir,
         len,
         inv_len,
@@ -153,9 +157,14 @@ impl ScreenStreak {
         self.light
     }
 
+    /// r, the share of its own light it shows.
+    pub fn reflectance(&self) -> f32 {
+        self.reflectance
+    }
+
     /// The streak as 16 floats for the GPU pass: a.xy, the unit direction | length, reach
     /// (the distance from the axis beyond which a pixel gets no coverage), w_a, w_b | 1/z_a,
-    /// 1/z_b, α, 0 | light rgb, 0. Direction, length and reach are the values
+    /// 1/z_b, α, r | light rgb, 0. Direction, length and reach are the values
     /// [`Self::fragment`] uses, so the shader does not compute its own.
     pub fn packed(&self) -> [f32; 16] {
         [
@@ -170,7 +179,7 @@ impl ScreenStreak {
             self.inv_za,
             self.inv_zb,
             self.alpha,
-            0.0,
+            self.reflectance,
             self.light.x,
             self.light.y,
             self.light.z,
