@@ -6,6 +6,7 @@ use crate::pass::{FrameEncoder, FramePass, FrameTargets};
 use crate::pool::BufferPool;
 use crate::rain::RainPass;
 use crate::scene_raycast::SceneRaycastPass;
+use skyfall_core::frame::passes::Passes;
 use skyfall_core::frame::{
     FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo,
 };
@@ -81,7 +82,7 @@ impl GpuRenderer {
         let ctx = &self.ctx;
         ctx.scoped(|| {
             // The particles first (on the CPU: they do not depend on the scene).
-            let rain = rain.map(|rf| rf.streaks(cam)).transpose()?;
+            let passes = Passes::prepare(cam, haze, rain)?;
             let mut f = FrameEncoder::new(ctx, &self.pool, cam);
             let (rgb, depth) = match scene {
                 SceneRef::Boxes(_) => (f.target("rgb", 3 * n), f.target("depth", n)),
@@ -90,8 +91,9 @@ impl GpuRenderer {
                     (f.upload("rgb", rgb), f.upload("depth", depth_m))
                 }
             };
-            let transmittance = haze.map(|_| f.target("transmittance", n));
-            let layers = rain
+            let transmittance = passes.haze.map(|_| f.target("transmittance", n));
+            let layers = passes
+                .particles
                 .as_ref()
                 .map(|_| (f.target("rain_alpha", n), f.target("rain_depth", n)));
             let targets = FrameTargets {
@@ -104,11 +106,11 @@ impl GpuRenderer {
             if let SceneRef::Boxes(b) = scene {
                 self.raycast.encode(&mut f, &targets, (b, light))?;
             }
-            if let Some(h) = haze {
+            if let Some(h) = passes.haze {
                 self.haze.encode(&mut f, &targets, h)?;
             }
-            if let Some((streaks, ..)) = &rain {
-                self.rain.encode(&mut f, &targets, streaks)?;
+            if let Some(p) = &passes.particles {
+                self.rain.encode(&mut f, &targets, &p.streaks)?;
             }
             // One submission, one readback of every output.
             let FrameOut {
@@ -126,7 +128,7 @@ impl GpuRenderer {
                 outputs.push((d, d_out));
             }
             f.read_back(outputs)?;
-            Ok(rain.map(|(_, stats, drops)| (stats, drops)))
+            Ok(passes.rain_report())
         })
     }
 

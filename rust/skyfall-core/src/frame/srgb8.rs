@@ -1,5 +1,5 @@
-//! The CPU backend's fast path for 8-bit photos: sRGB bytes in, sRGB bytes out, with the
-//! haze and the rain streaks of [`crate::frame::render`] fused into one pass: bands of rows in
+//! The 8-bit output stage, for 8-bit photos: sRGB bytes in, sRGB bytes out, the frame's
+//! passes (haze and particles, [`super::passes::Passes`]) drawn in one pass: bands of rows in
 //! parallel, each cut into tiles of 128 columns drawn one after the other.
 //!
 //! The rain is composited far to near as in [`crate::particles::composite::composite_streaks`], but
@@ -12,9 +12,10 @@
 //! encoded once, four at a time. The result equals the float frame encoded to 8 bits up to the
 //! rounding of the reassociated sums (tests: every byte within 1 code, nearly all identical).
 
+use super::check_frame_size;
+use super::passes::Passes;
 use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
-use crate::frame::check_frame_size;
 use crate::haze::Haze;
 use crate::particles::binning::bin_by_tiles;
 use crate::particles::composite::{Accumulator, composite_band};
@@ -113,13 +114,11 @@ pub fn render_photo8(
     }
     crate::haze::check_depth(photo.depth_m)?;
 
-    let (streaks, stats) = match rain {
-        Some(rf) => {
-            let (s, st, drops) = rf.streaks(cam)?;
-            (s, Some(Photo8Stats { rain: st, drops }))
-        }
-        None => (Vec::new(), None),
-    };
+    let passes = Passes::prepare(cam, haze, rain)?;
+    let stats = passes
+        .rain_report()
+        .map(|(rain, drops)| Photo8Stats { rain, drops });
+    let streaks: &[ScreenStreak] = passes.particles.as_ref().map_or(&[], |p| &p.streaks);
     if haze.is_none() && streaks.is_empty() {
         // Nothing to draw: encode(decode(b)) = b for every byte (tested), so the bytes as they are.
         out.srgb.copy_from_slice(photo.srgb);
@@ -132,7 +131,7 @@ pub fn render_photo8(
     // the other: a tile's scratch and depth stay in the core's L1.
     let tiles_x = w.div_ceil(TILE_W);
     let (offsets, indices) = bin_by_tiles(
-        &streaks,
+        streaks,
         cam.width,
         cam.height,
         TILE_W as u32,
@@ -191,7 +190,7 @@ pub fn render_photo8(
                         }
                         if grey {
                             raster_tile::<1>(
-                                &streaks,
+                                streaks,
                                 mine,
                                 y0,
                                 rows,
@@ -204,7 +203,7 @@ pub fn render_photo8(
                             );
                         } else {
                             raster_tile::<3>(
-                                &streaks,
+                                streaks,
                                 mine,
                                 y0,
                                 rows,
