@@ -132,6 +132,16 @@ class Renderer:
         The backend in use, ``"cpu"`` or ``"gpu"``.
     adapter_info : dict or None
         The GPU adapter when ``backend == "gpu"``.
+
+    Examples
+    --------
+    >>> from skyfall import Weather, scenes
+    >>> renderer = Renderer(64, 36, backend="cpu")
+    >>> frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=10.0))
+    >>> frame.rgb.shape, frame.depth_m.shape, sorted(frame.layers)
+    ((36, 64, 3), (36, 64), ['rain_alpha', 'rain_depth_m', 'transmittance'])
+    >>> renderer.render_srgb8(scenes.street(), Weather(rain_rate_mm_h=10.0)).dtype
+    dtype('uint8')
     """
 
     def __init__(self, width: int, height: int, *, backend: str = "auto") -> None:

@@ -168,6 +168,18 @@ def street(
     awning : bool
         A 0.25 m thick awning 3.5 m deep over the right-hand pavement, 3 m up, from 1 m to
         40 m ahead: drops beneath it see less sky (:mod:`skyfall.sky`).
+
+    Returns
+    -------
+    BoxScene
+
+    Examples
+    --------
+    >>> scene = street(lamps=True, headlights=True)
+    >>> scene.boxes.shape, len(scene.lamps_m), len(scene.lights)  # 16 lamps lit, 2 headlights
+    ((16, 9), 16, 18)
+    >>> scene.camera.position_m.tolist()
+    [1.5, 1.6, 0.0]
     """
     if not 20.0 <= float(length_m) <= 1000.0:
         raise ValueError(f"length_m = {length_m} is outside the valid range [20, 1000] m")
