@@ -57,10 +57,23 @@ def _check_apart(scene: BoxScene | PhotoScene, outputs: dict[str, NDArray[Any] |
                 raise ValueError(f"{name} overlaps {other}: pass a separate array")
 
 
-def _writable(a: Any, dtype: type, shape: tuple[int, ...]) -> bool:
-    """Whether ``a`` is an array Rust can write a frame into: ``dtype``, ``shape``,
-    C-contiguous, writable."""
-    return isinstance(a, np.ndarray) and a.dtype == dtype and a.shape == shape and a.flags.c_contiguous and a.flags.writeable
+def _check_writable(name: str, a: Any, dtype: type, shape: tuple[int, ...]) -> None:
+    """Refuse ``a`` unless Rust can write a frame into it (``dtype``, ``shape``, C-contiguous,
+    writable), saying what is wrong with it."""
+    want = f"a writable C-contiguous {np.dtype(dtype).name} array of shape {shape}"
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be {want} (numpy), got {type(a).__name__}")
+    if a.dtype != dtype:
+        problem = f"dtype {a.dtype}"
+    elif a.shape != shape:
+        problem = f"shape {a.shape}"
+    elif not a.flags.c_contiguous:
+        problem = "an array that is not C-contiguous"
+    elif not a.flags.writeable:
+        problem = "a read-only array"
+    else:
+        return
+    raise ValueError(f"{name} must be {want}, got {problem}")
 
 
 @dataclass
@@ -277,8 +290,11 @@ class Renderer:
         Raises
         ------
         ValueError
-            When ``out`` or ``rain_alpha_out`` has the wrong dtype, shape or layout, or overlaps
-            the scene's photo, its depth map or the other output.
+            When a photo is not the renderer's size (checked first), when ``out`` or
+            ``rain_alpha_out`` has the wrong dtype, shape or layout, or overlaps the scene's
+            photo, its depth map or the other output.
+        TypeError
+            When ``out`` or ``rain_alpha_out`` is not a numpy array.
 
         Returns
         -------
@@ -286,13 +302,14 @@ class Renderer:
             The image (``out`` when given).
         """
         weather = weather if weather is not None else Weather()
+        self._check_photo_size(scene)  # before the outputs: their shapes follow from it
         shape = (self.height, self.width)
         if out is None:
             out = np.empty((*shape, 3), np.uint8)
-        elif not _writable(out, np.uint8, (*shape, 3)):
-            raise ValueError(f"out must be a writable C-contiguous uint8 array of shape {(*shape, 3)}")
-        if rain_alpha_out is not None and not _writable(rain_alpha_out, np.float32, shape):
-            raise ValueError(f"rain_alpha_out must be a writable C-contiguous float32 array of shape {shape}")
+        else:
+            _check_writable("out", out, np.uint8, (*shape, 3))
+        if rain_alpha_out is not None:
+            _check_writable("rain_alpha_out", rain_alpha_out, np.float32, shape)
         _check_apart(scene, {"out": out, "rain_alpha_out": rain_alpha_out})
         if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
             cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
@@ -321,10 +338,18 @@ class Renderer:
         shape = (self.height, self.width)
         arrays = {"rgb": out.rgb, "depth_m": out.depth_m, **{k: out.layers.get(k) for k in ("transmittance", "rain_alpha", "rain_depth_m")}}
         for name, a in arrays.items():
-            want = (*shape, 3) if name == "rgb" else shape
-            if a is not None and not _writable(a, np.float32, want):
-                raise ValueError(f"out's {name} must be a writable C-contiguous float32 array of shape {want}")
+            if a is not None:
+                _check_writable(f"out's {name}", a, np.float32, (*shape, 3) if name == "rgb" else shape)
         return arrays
+
+    def _check_photo_size(self, scene: Any) -> None:
+        """A photo must be the renderer's size (a box scene is rendered at any size)."""
+        if isinstance(scene, PhotoScene) and scene.shape != (self.height, self.width):
+            h, w = scene.shape
+            raise ValueError(
+                f"the photo is {w}x{h} px, the renderer {self.width}x{self.height} px: "
+                f"render it with a renderer of its size, Renderer({w}, {h})"
+            )
 
     def _frame_args(
         self,
@@ -347,8 +372,7 @@ class Renderer:
         integer("seed", seed, 0, 2**64 - 1)
         kwargs: dict[str, Any] = {}
         if isinstance(scene, PhotoScene):
-            if scene.shape != (self.height, self.width):
-                raise ValueError(f"the photo is {scene.shape[1]}x{scene.shape[0]}, the renderer {self.width}x{self.height}")
+            self._check_photo_size(scene)
             cam = scene.camera
         elif isinstance(scene, BoxScene):
             if camera is not None and not isinstance(camera, Camera):
