@@ -11,9 +11,24 @@ import doctest
 import importlib
 import pkgutil
 
+import numpy as np
 import pytest
 
 import skyfall
+
+NUMPY_PRINT_DEFAULTS = {
+    "edgeitems": 3,
+    "threshold": 1000,
+    "floatmode": "maxprec",
+    "precision": 8,
+    "suppress": False,
+    "linewidth": 75,
+    "nanstr": "nan",
+    "infstr": "inf",
+    "sign": "-",
+    "formatter": None,
+    "legacy": False,
+}
 
 MODULES = sorted(
     m.name for m in pkgutil.walk_packages(skyfall.__path__, prefix="skyfall.") if not m.name.startswith("skyfall._core")
@@ -32,7 +47,10 @@ def test_docstring_examples_run(name, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # examples that write files write them here
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     report: list[str] = []
-    failed = sum(runner.run(test, out=report.append).failed for test in _examples(name))
+    # numpy's own print options, as a user has them: importing colour-science (other tests do)
+    # switches numpy to its 1.13 legacy printing for the whole process
+    with np.printoptions(**NUMPY_PRINT_DEFAULTS):
+        failed = sum(runner.run(test, out=report.append).failed for test in _examples(name))
     assert failed == 0, "".join(report)
 
 
