@@ -124,8 +124,8 @@ def test_rain_is_coherent_in_time_and_follows_the_wind():
 
 def test_sequences_are_deterministic_and_move(renderer):
     w = Weather(rain_rate_mm_h=20.0)
-    seq = renderer.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9)
-    again = renderer.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9)
+    seq = list(renderer.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9))
+    again = list(renderer.render_sequence(open_air(), w, n_frames=3, fps=30.0, seed=9))
     assert len(seq) == 3
     for a, b in zip(seq, again):
         assert a.rgb.tobytes() == b.rgb.tobytes()
