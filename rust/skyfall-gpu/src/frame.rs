@@ -7,12 +7,12 @@ use crate::pool::BufferPool;
 use crate::rain::RainPass;
 use crate::scene_raycast::SceneRaycastPass;
 use skyfall_core::frame::passes::Passes;
+use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::frame::{
     FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo,
 };
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::streaks::RainFrame;
-use skyfall_core::scene::boxes::SceneLight;
 use skyfall_core::scene::camera::Camera;
 
 /// A device with every pass compiled, reused across frames.

@@ -3,7 +3,8 @@
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
 use crate::uniforms::{AmbientUniform, BoxElement, CameraUniform, SceneUniform, SkyUniform};
-use skyfall_core::scene::boxes::{BoxScene, SceneLight};
+use skyfall_core::frame::scene::SceneLight;
+use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::cie::SkyKind;
 
 const SOURCE: &str = include_str!("shaders/scene_raycast.wgsl");

@@ -3,11 +3,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use glam::{Mat3, Vec3};
+use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::frame::{FrameOut, SceneRef, render};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
 use skyfall_core::rain::streaks::{RainFrame, RainShading};
-use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
+use skyfall_core::scene::boxes::{BoxScene, SceneBox};
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;
 use skyfall_core::sky::ambient::{AmbientMap, scene_bounds};

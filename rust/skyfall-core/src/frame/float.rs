@@ -2,12 +2,12 @@
 //! module docs of [`super`]).
 
 use super::passes::Passes;
+use super::scene::{SceneLight, shade_pixel};
 use super::{FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo};
 use crate::error::Result;
 use crate::haze::{Haze, apply_row};
 use crate::particles::composite::{BAND_ROWS, bin_by_bands, composite_band_colour};
 use crate::rain::streaks::RainFrame;
-use crate::scene::boxes::{SceneLight, shade_pixel};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
 
@@ -175,7 +175,7 @@ mod tests {
         for y in 0..30u32 {
             for x in 0..40u32 {
                 let i = (y * 40 + x) as usize;
-                let (c, d) = boxes::shade_pixel(&scene, &cam, &light, x, y);
+                let (c, d) = super::super::scene::shade_pixel(&scene, &cam, &light, x, y);
                 let t = if d.is_infinite() {
                     0.0
                 } else {

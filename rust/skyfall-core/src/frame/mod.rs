@@ -21,6 +21,7 @@ use crate::scene::camera::Camera;
 
 pub mod float;
 pub mod passes;
+pub mod scene;
 pub mod srgb8;
 
 pub use float::{render, render_into};

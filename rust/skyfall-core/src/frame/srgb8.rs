@@ -516,10 +516,10 @@ fn shade_row_x1<const K: usize>(
 mod tests {
     use super::*;
     use crate::color::{encode_srgb8, encode_srgb8_formula};
+    use crate::frame::scene::SceneLight;
     use crate::frame::{SceneRef, render};
     use crate::rain::drops::RainRegion;
     use crate::rain::streaks::RainShading;
-    use crate::scene::boxes::SceneLight;
     use crate::scene::lights::Light;
     use crate::sky::ambient::AmbientMap;
     use crate::sky::{Sky, cie::SkyKind};

@@ -15,8 +15,8 @@
 //! [`super::walk`] and the GPU's `rain.wgsl` compute the same values, and
 //! [`ScreenStreak::packed`] is the GPU's packing contract.
 
+use super::Particle;
 use super::num::{ceil_nonneg, clamp01, floor_nonneg, idx_f32, least, pos};
-use crate::rain::drops::Drop;
 use crate::scene::camera::Camera;
 use glam::{Vec2, Vec3, Vec4};
 
@@ -70,7 +70,7 @@ pub(crate) fn reach(wa: f32, wb: f32) -> f32 {
 /// (the camera's pose is the one at the end of the exposure); None when it is behind.
 pub fn screen_streak(
     cam: &Camera,
-    d: &Drop,
+    d: &Particle,
     exposure_s: f32,
     camera_velocity_m_s: Vec3,
 ) -> Option<ScreenStreak> {
@@ -397,7 +397,7 @@ mod tests {
                 rng.random_range(-9.0..-2.0),
                 rng.random_range(-2.0..2.0),
             );
-            let d = Drop {
+            let d = Particle {
                 position_m: p,
                 velocity_m_s: v,
                 diameter_m: rng.random_range(0.5e-3..4e-3),
@@ -428,7 +428,7 @@ mod tests {
             "{checked} streaks, {clipped} clipped"
         );
         // off the frame entirely: nothing
-        let off = Drop {
+        let off = Particle {
             position_m: Vec3::new(5.0, 0.0, -1.0),
             velocity_m_s: Vec3::new(0.0, -6.0, 0.0),
             diameter_m: 2e-3,
