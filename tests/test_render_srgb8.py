@@ -103,16 +103,40 @@ def test_gpu_backend_gives_the_same_bytes_within_a_code():
 
 def test_bad_outputs_are_refused(cpu):
     scene = photo8(6)
-    with pytest.raises(ValueError, match="out must be"):
+    with pytest.raises(ValueError, match="out must be .* got dtype float32"):
         cpu.render_srgb8(scene, out=np.zeros((H, W, 3), np.float32))  # type: ignore[arg-type]
-    with pytest.raises(ValueError, match="out must be"):
-        cpu.render_srgb8(scene, out=np.zeros((H, W + 1, 3), np.uint8))
-    with pytest.raises(ValueError, match="rain_alpha_out must be"):
-        cpu.render_srgb8(scene, rain_alpha_out=np.zeros((H, W), np.float64))  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="the photo is"):
         Renderer(W + 2, H, backend="cpu").render_srgb8(scene)
+    # what is wrong is named: the dtype, the shape, the layout, the type
+    with pytest.raises(ValueError, match=r"rain_alpha_out must be .* shape \(101, 160\), got dtype float64"):
+        cpu.render_srgb8(scene, rain_alpha_out=np.zeros((H, W), np.float64))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"out must be .*, got shape \(101, 161, 3\)"):
+        cpu.render_srgb8(scene, out=np.zeros((H, W + 1, 3), np.uint8))
+    with pytest.raises(ValueError, match="rain_alpha_out .* got an array that is not C-contiguous"):
+        cpu.render_srgb8(scene, rain_alpha_out=np.zeros((W, H), np.float32).T)
+    read_only = np.zeros((H, W, 3), np.uint8)
+    read_only.flags.writeable = False
+    with pytest.raises(ValueError, match="out .* got a read-only array"):
+        cpu.render_srgb8(scene, out=read_only)
+    with pytest.raises(TypeError, match="rain_alpha_out must be .* got list"):
+        cpu.render_srgb8(scene, rain_alpha_out=[[0.0] * W] * H)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="weather"):
         cpu.render_srgb8(scene, "rain")  # type: ignore[arg-type]
+
+
+def test_a_photo_of_another_size_is_named_before_the_outputs_made_for_it():
+    # The README's order: outputs sized from the photo, a renderer of another size. The
+    # renderer's size is what is wrong, and it is what the error says (it used to blame
+    # rain_alpha_out).
+    scene = photo8(7)
+    alpha = np.empty(scene.depth_m.shape, np.float32)
+    image = np.empty((H, W, 3), np.uint8)
+    for backend in ("cpu", "gpu"):
+        other = Renderer(2 * W, 2 * H, backend=backend)
+        with pytest.raises(ValueError, match=r"the photo is 160x101 px, the renderer 320x202 px: .*Renderer\(160, 101\)"):
+            other.render_srgb8(scene, Weather(rain_rate_mm_h=10.0), rain_alpha_out=alpha, out=image)
+        with pytest.raises(ValueError, match="the photo is 160x101 px"):
+            other.render(scene, Weather(rain_rate_mm_h=10.0))
 
 
 @pytest.mark.parametrize("backend", ["cpu", "gpu"])

@@ -28,17 +28,62 @@ from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
-from skyfall import Renderer, Weather, io, physics, rain, scenes, sky
+from skyfall import Frame, Renderer, Weather, io, physics, rain, scenes, sky
 from skyfall.reference import gunn_kinzer_1949
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+
+@dataclass(frozen=True)
+class DemoFrame:
+    """One of the demo's street frames: what it shows, in what weather, and how its PNG is saved."""
+
+    name: str
+    """File stem: ``{name}.exr`` and ``{name}.png``."""
+    scene: Callable[[], scenes.BoxScene]
+    weather: Weather
+    seed: int = 0
+    exposure: float = 1.0
+    """Multiplier of the linear frame before the PNG's sRGB encoding."""
+
+    def render(self, renderer: Renderer) -> Frame:
+        return renderer.render(self.scene(), self.weather, seed=self.seed)
+
+    def png8(self, frame: Frame) -> NDArray[np.uint8]:
+        """The frame's 8-bit sRGB PNG pixels, as :meth:`skyfall.Frame.save` writes them."""
+        return io.to_srgb8(frame.rgb * np.float32(self.exposure))
+
+
+STREET = DemoFrame("street", scenes.street, Weather(rain_rate_mm_h=10.0))
+"""The street in 10 mm/h rain haze (and its streaks)."""
+STREET_RAIN_DAY = DemoFrame("street_rain_day", scenes.street, Weather(rain_rate_mm_h=50.0, wind_m_s=(3.0, 0.0, 0.0)))
+"""The street by day in 50 mm/h rain with a 3 m/s cross wind."""
+STREET_RAIN_DUSK = DemoFrame(
+    "street_rain",
+    partial(scenes.street, lamps=True, headlights=True),
+    Weather(rain_rate_mm_h=20.0, sky_illuminance_lux=30.0),
+    exposure=0.25,
+)
+"""The street at dusk (30 lx of sky) in 20 mm/h rain, lamps lit and a car's headlights on."""
+DEMO_FRAMES = (STREET, STREET_RAIN_DAY, STREET_RAIN_DUSK)
+"""The demo's street frames (rendered at 1280 x 720; tests/test_golden.py at 320 x 180)."""
+
+
+def rain_alpha_png(frame: Frame) -> NDArray[np.float32]:
+    """The rain_alpha layer stretched to its maximum for viewing (linear, [0, 1])."""
+    alpha = frame.layers["rain_alpha"]
+    stretched: NDArray[np.float32] = np.clip(alpha / np.float32(max(float(alpha.max()), 1e-6)), 0, 1)
+    return stretched
 
 
 def contact_sheet(tex: np.ndarray, rates: Sequence[float], diams: Sequence[float]) -> Figure:
@@ -128,29 +173,19 @@ def main(argv: list[str] | None = None) -> int:
     contact_sheet(tex, rates, diams).savefig(out / "rain_textures.png", dpi=110)
     velocity_plot().savefig(out / "terminal_velocity.png", dpi=110)
     renderer = Renderer(1280, 720)
-    t0 = time.perf_counter()
-    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=10.0))
-    dt = time.perf_counter() - t0
-    print(f"street, 10 mm/h haze: 1280x720 on the {renderer.backend} backend in {dt * 1e3:.1f} ms")
-    frame.save(out / "street.exr")
-    frame.save(out / "street.png")
-    t0 = time.perf_counter()
-    wet_weather = Weather(rain_rate_mm_h=50.0, wind_m_s=(3.0, 0.0, 0.0))
-    wet = renderer.render(scenes.street(), wet_weather, seed=0)
-    dt = time.perf_counter() - t0
-    print(f"street, 50 mm/h rain: {wet.stats['rain_streaks']} streaks of {wet.stats['rain_drops']} drops in {dt * 1e3:.1f} ms")
+    frames: dict[str, Frame] = {}
+    for demo in DEMO_FRAMES:
+        t0 = time.perf_counter()
+        frames[demo.name] = frame = demo.render(renderer)
+        dt = time.perf_counter() - t0
+        print(f"{demo.name}, {demo.weather.rain_rate_mm_h:g} mm/h: 1280x720 on the {renderer.backend} backend in {dt * 1e3:.1f} ms, {frame.stats.get('rain_streaks', 0)} streaks")
+        frame.save(out / f"{demo.name}.exr")
+        frame.save(out / f"{demo.name}.png", exposure=demo.exposure)
+    wet_weather = STREET_RAIN_DAY.weather
     e = sky.ambient_light_map(scenes.street(), weather=wet_weather).sample([[5.5, 1.5, -3.0], [0.0, 1.5, -3.0]])
     print(f"sky light on a drop under the awning: {e[0] / e[1]:.0%} of one in the middle of the street")
     ambient_plot(wet_weather).savefig(out / "ambient_light.png", dpi=100)
-    wet.save(out / "street_rain_day.exr")
-    wet.save(out / "street_rain_day.png")
-    alpha = wet.layers["rain_alpha"]
-    io.write_image(out / "street_rain_day_alpha.png", np.clip(alpha / max(float(alpha.max()), 1e-6), 0, 1))
-    dusk = renderer.render(
-        scenes.street(lamps=True, headlights=True), Weather(rain_rate_mm_h=20.0, sky_illuminance_lux=30.0), seed=0
-    )
-    dusk.save(out / "street_rain.exr")
-    dusk.save(out / "street_rain.png", exposure=0.25)
+    io.write_image(out / "street_rain_day_alpha.png", rain_alpha_png(frames[STREET_RAIN_DAY.name]))
     names = ("rain_textures.exr", "rain_textures.png", "terminal_velocity.png", "street.exr", "street.png")
     for name in (*names, "street_rain_day.exr", "street_rain_day.png", "street_rain_day_alpha.png", "ambient_light.png", "street_rain.exr", "street_rain.png"):
         print(f"wrote {out / name}")

@@ -39,13 +39,24 @@ def encode_srgb(linear: Any) -> NDArray[np.float32]:
     """sRGB transfer function (IEC 61966-2-1): linear [0, 1] to encoded [0, 1].
 
     12.92 x for x <= 0.0031308, 1.055 x^(1/2.4) - 0.055 above; input is clipped to [0, 1].
+
+    Examples
+    --------
+    >>> np.round(encode_srgb([0.0, 0.214, 1.0, 2.0]), 3)  # linear 0.214 is mid-grey
+    array([0. , 0.5, 1. , 1. ], dtype=float32)
     """
     x = np.clip(np.asarray(linear, dtype=np.float32), 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055).astype(np.float32)
 
 
 def decode_srgb(encoded: Any) -> NDArray[np.float32]:
-    """Inverse sRGB transfer function: encoded [0, 1] to linear [0, 1]."""
+    """Inverse sRGB transfer function: encoded [0, 1] to linear [0, 1].
+
+    Examples
+    --------
+    >>> np.round(decode_srgb([0.0, 0.5, 1.0]), 3)
+    array([0.   , 0.214, 1.   ], dtype=float32)
+    """
     v = np.clip(np.asarray(encoded, dtype=np.float32), 0.0, 1.0)
     return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4)).astype(np.float32)
 
@@ -64,13 +75,27 @@ def srgb8_table() -> NDArray[np.float32]:
 
 def decode_srgb8(encoded: Any) -> NDArray[np.float32]:
     """Decode 8-bit sRGB to linear float32 through a 256-entry table (same values as
-    :func:`decode_srgb` of ``encoded / 255``), in Rust, in parallel."""
+    :func:`decode_srgb` of ``encoded / 255``), in Rust, in parallel.
+
+    Examples
+    --------
+    >>> np.round(decode_srgb8(np.array([0, 128, 255], np.uint8)), 4)
+    array([0.    , 0.2159, 1.    ], dtype=float32)
+    """
     return _core.apply_lut8(np.ascontiguousarray(encoded, dtype=np.uint8), srgb8_table())
 
 
 def to_srgb8(linear: Any, *, alpha_channel: int | None = None) -> NDArray[np.uint8]:
     """Encode linear values to 8-bit sRGB (rounded to nearest, in Rust, in parallel);
-    values are clipped to [0, 1]; an alpha channel stays linear."""
+    values are clipped to [0, 1]; an alpha channel stays linear.
+
+    Examples
+    --------
+    >>> to_srgb8([0.0, 0.214, 1.0, 2.0])
+    array([  0, 127, 255, 255], dtype=uint8)
+    >>> to_srgb8([[0.214, 0.214, 0.214, 0.5]], alpha_channel=3)  # alpha: 0.5 * 255, rounded
+    array([[127, 127, 127, 128]], dtype=uint8)
+    """
     arr = np.ascontiguousarray(linear, dtype=np.float32)
     out: NDArray[np.uint8] = _core.encode_srgb8(arr)
     if alpha_channel is not None:

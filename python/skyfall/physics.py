@@ -74,6 +74,13 @@ def air_density_kg_m3(
         Density, kg/m^3: rho = (p - 0.378 e) / (R_d T), e = RH * e_s(T) with the Wexler
         (Hardy ITS-90) saturation vapour pressure. 1.1989 kg/m^3 at 20 degC, 1013.25 hPa,
         50 % RH.
+
+    Examples
+    --------
+    >>> round(air_density_kg_m3(), 4)  # 20 degC, 1013.25 hPa, 50 % RH
+    1.1989
+    >>> round(air_density_kg_m3(0.0, 700.0, 0.0), 4)  # dry air at 0 degC, 3 km up
+    0.8928
     """
     flat, shape = broadcast_flat(
         [("temperature_c", temperature_c), ("pressure_hpa", pressure_hpa), ("relative_humidity", relative_humidity)]
@@ -96,6 +103,11 @@ def air_viscosity_pa_s(temperature_c: Any = STANDARD_TEMPERATURE_C) -> FloatOrAr
     float or ndarray
         Viscosity, Pa s: (1.721 + 0.00487 T) 1e-5 for T >= 0 degC,
         (1.718 + 0.0049 T - 1.2e-5 T^2) 1e-5 below. 1.8184e-5 Pa s at 20 degC.
+
+    Examples
+    --------
+    >>> float(f"{air_viscosity_pa_s(20.0):.5g}")
+    1.8184e-05
     """
     flat, shape = broadcast_flat([("temperature_c", temperature_c)])
     if _empty(shape):
@@ -119,7 +131,8 @@ def terminal_velocity(
         Equivolume drop diameter, mm, in [0, 8]. D = 0 gives 0.
     model : {"beard", "sphere", "atlas"}
         ``"beard"`` (default): Beard 1976, three regimes with slip correction and drop
-        deformation; matches Gunn & Kinzer 1949 to ~1 % RMS. ``"sphere"``: the seed's rigid
+        deformation; matches Gunn & Kinzer 1949 to 1.6 % RMS over 0.1-5.8 mm (34 drops;
+        at most 3.6 % off over 0.2-5.8 mm). ``"sphere"``: the seed's rigid
         sphere, Cd(Re) = 24/Re (Re < 1), Schiller-Naumann (Re < 1000), 0.44, solved exactly
         for Re; good below ~1.4 mm, ~30 % too fast at 5.8 mm because real drops flatten.
         ``"atlas"``: Atlas et al. 1973, 9.65 - 10.3 exp(-0.6 D) (0 below 0.109 mm), scaled by
@@ -136,8 +149,12 @@ def terminal_velocity(
 
     Examples
     --------
-    >>> round(terminal_velocity(2.0), 2)
-    6.49
+    >>> round(terminal_velocity(2.0), 2)  # Gunn & Kinzer measured 6.49 m/s
+    6.52
+    >>> np.round(terminal_velocity([0.5, 2.0, 5.0], model="sphere"), 2)
+    array([ 2.02,  6.93, 11.12])
+    >>> round(terminal_velocity(2.0, pressure_hpa=700.0, temperature_c=0.0), 2)  # thinner air
+    7.45
     """
     choice("model", model, FALL_SPEED_MODELS)
     flat, shape = broadcast_flat(
@@ -169,6 +186,13 @@ def marshall_palmer(diameter_mm: Any, rain_rate_mm_h: Any) -> FloatOrArray:
     float or ndarray
         N(D) = 8000 exp(-Lambda D) drops per m^3 per mm of diameter,
         Lambda = 4.1 R^-0.21 per mm; 0 for R = 0.
+
+    Examples
+    --------
+    >>> round(marshall_palmer(1.0, 10.0), 1)  # 1 mm drops at 10 mm/h, per m^3 per mm
+    638.5
+    >>> marshall_palmer(1.0, 0.0)
+    0.0
     """
     flat, shape = broadcast_flat([("diameter_mm", diameter_mm), ("rain_rate_mm_h", rain_rate_mm_h)])
     if _empty(shape):
@@ -191,6 +215,11 @@ def drops_per_m3(rain_rate_mm_h: Any, d_min_mm: Any = 0.0, d_max_mm: Any = np.in
     float or ndarray
         The analytic bin integral N0/Lambda (exp(-Lambda d_min) - exp(-Lambda d_max)),
         drops per m^3; 0 for R = 0.
+
+    Examples
+    --------
+    >>> round(drops_per_m3(10.0, 0.9, 1.1), 1)  # drops of 0.9-1.1 mm at 10 mm/h
+    129.1
     """
     flat, shape = broadcast_flat(
         [("rain_rate_mm_h", rain_rate_mm_h), ("d_min_mm", d_min_mm), ("d_max_mm", d_max_mm)]
@@ -230,6 +259,11 @@ def rain_rate_from_dsd(
         split at Beard's regime boundaries). With measured fall speeds Marshall-Palmer
         carries 18 % more than R at 1 mm/h and 5 % more at 100 mm/h: a known property of
         the distribution, not an error of the integral.
+
+    Examples
+    --------
+    >>> np.round(rain_rate_from_dsd([1.0, 10.0, 100.0]), 2)
+    array([  1.18,  11.64, 105.12])
     """
     choice("model", model, FALL_SPEED_MODELS)
     flat, shape = broadcast_flat(
@@ -262,6 +296,12 @@ def rain_extinction_per_m(rain_rate_mm_h: Any) -> FloatOrArray:
         sigma, 1/m: geometric optics with extinction efficiency 2 over the Marshall-Palmer
         distribution, pi N0 / Lambda^3 (about 0.365 R^0.63 per km). 0 for R = 0. Koschmieder
         visibility is 3.912 / sigma.
+
+    Examples
+    --------
+    >>> sigma = rain_extinction_per_m(10.0)
+    >>> round(sigma * 1e3, 2), round(3.912 / sigma / 1e3, 1)  # per km; visibility, km
+    (1.56, 2.5)
     """
     flat, shape = broadcast_flat([("rain_rate_mm_h", rain_rate_mm_h)])
     if _empty(shape):

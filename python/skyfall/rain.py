@@ -64,6 +64,12 @@ def diameter_bins(diameters_mm: Sequence[float] | NDArray[np.float64]) -> tuple[
         Bin edges, mm: midpoints between neighbouring diameters; the outer bins are
         symmetric about their diameter; a single diameter gets a 0.2 mm bin. Lower edges
         are clipped at 0.
+
+    Examples
+    --------
+    >>> lower, upper = diameter_bins([1.0, 1.2, 1.4])
+    >>> np.round(lower, 3), np.round(upper, 3)
+    (array([0.9, 1.1, 1.3]), array([1.1, 1.3, 1.5]))
     """
     return _core.rain_diameter_bins(_vector("diameters_mm", diameters_mm))
 
@@ -114,6 +120,14 @@ def textures(
     Textures are rendered in parallel across (rate, diameter) pairs with the GIL released.
     The mean opacity's expectation over drop positions is exactly 1 - prod(1 - a_i D_i L_i)
     for the drawn drops (areas in m^2).
+
+    Examples
+    --------
+    >>> tex = textures([10.0], [1.0, 2.0], size_px=64, seed=0)
+    >>> tex.shape, tex.dtype
+    ((1, 2, 64, 64), dtype('float32'))
+    >>> bool(tex.min() >= 0.0 and tex.max() <= 1.0)
+    True
     """
     rates = _vector("rain_rates_mm_h", rain_rates_mm_h)
     diams = _vector("diameters_mm", diameters_mm)
@@ -134,6 +148,11 @@ def atlas(tex: NDArray[np.float32]) -> NDArray[np.float32]:
     Returns
     -------
     ndarray of float32, shape (n_rates * size, n_diameters * size)
+
+    Examples
+    --------
+    >>> atlas(textures([1.0, 10.0], [1.0, 1.5, 2.0], size_px=32)).shape
+    (64, 96)
     """
     arr = np.asarray(tex)
     if arr.ndim != 4 or arr.shape[2] != arr.shape[3]:

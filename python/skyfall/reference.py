@@ -17,6 +17,12 @@ def gunn_kinzer_1949() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     -------
     diameter_mm, fall_speed_m_s : ndarray
         35 drops, 0.078-5.8 mm, at about 1013 hPa, 20 degC, 50 % RH.
+
+    Examples
+    --------
+    >>> d, v = gunn_kinzer_1949()
+    >>> len(d), float(d[0]), float(d[-1]), float(v[-1])  # mm, mm, m/s
+    (35, 0.078, 5.8, 9.17)
     """
     text = resources.files("skyfall").joinpath("data/gunn_kinzer_1949.csv").read_text()
     rows = [line.split(",") for line in text.splitlines() if line and not line.startswith("#")][1:]

@@ -13,6 +13,7 @@ import tempfile
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -23,6 +24,7 @@ from skyfall._validate import choice, integer, real
 from skyfall.camera import Camera
 from skyfall.lights import pack
 from skyfall.scenes import BoxScene, PhotoScene
+from skyfall.scenes import _flag  # (a bool or np.bool_, TypeError otherwise; move to _validate)
 from skyfall.weather import Weather
 
 __all__ = ["BACKENDS", "Frame", "Renderer"]
@@ -57,10 +59,23 @@ def _check_apart(scene: BoxScene | PhotoScene, outputs: dict[str, NDArray[Any] |
                 raise ValueError(f"{name} overlaps {other}: pass a separate array")
 
 
-def _writable(a: Any, dtype: type, shape: tuple[int, ...]) -> bool:
-    """Whether ``a`` is an array Rust can write a frame into: ``dtype``, ``shape``,
-    C-contiguous, writable."""
-    return isinstance(a, np.ndarray) and a.dtype == dtype and a.shape == shape and a.flags.c_contiguous and a.flags.writeable
+def _check_writable(name: str, a: Any, dtype: type, shape: tuple[int, ...]) -> None:
+    """Refuse ``a`` unless Rust can write a frame into it (``dtype``, ``shape``, C-contiguous,
+    writable), saying what is wrong with it."""
+    want = f"a writable C-contiguous {np.dtype(dtype).name} array of shape {shape}"
+    if not isinstance(a, np.ndarray):
+        raise TypeError(f"{name} must be {want} (numpy), got {type(a).__name__}")
+    if a.dtype != dtype:
+        problem = f"dtype {a.dtype}"
+    elif a.shape != shape:
+        problem = f"shape {a.shape}"
+    elif not a.flags.c_contiguous:
+        problem = "an array that is not C-contiguous"
+    elif not a.flags.writeable:
+        problem = "a read-only array"
+    else:
+        return
+    raise ValueError(f"{name} must be {want}, got {problem}")
 
 
 @dataclass
@@ -132,6 +147,16 @@ class Renderer:
         The backend in use, ``"cpu"`` or ``"gpu"``.
     adapter_info : dict or None
         The GPU adapter when ``backend == "gpu"``.
+
+    Examples
+    --------
+    >>> from skyfall import Weather, scenes
+    >>> renderer = Renderer(64, 36, backend="cpu")
+    >>> frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=10.0))
+    >>> frame.rgb.shape, frame.depth_m.shape, sorted(frame.layers)
+    ((36, 64, 3), (36, 64), ['rain_alpha', 'rain_depth_m', 'transmittance'])
+    >>> renderer.render_srgb8(scenes.street(), Weather(rain_rate_mm_h=10.0)).dtype
+    dtype('uint8')
     """
 
     def __init__(self, width: int, height: int, *, backend: str = "auto") -> None:
@@ -267,8 +292,11 @@ class Renderer:
         Raises
         ------
         ValueError
-            When ``out`` or ``rain_alpha_out`` has the wrong dtype, shape or layout, or overlaps
-            the scene's photo, its depth map or the other output.
+            When a photo is not the renderer's size (checked first), when ``out`` or
+            ``rain_alpha_out`` has the wrong dtype, shape or layout, or overlaps the scene's
+            photo, its depth map or the other output.
+        TypeError
+            When ``out`` or ``rain_alpha_out`` is not a numpy array.
 
         Returns
         -------
@@ -276,14 +304,9 @@ class Renderer:
             The image (``out`` when given).
         """
         weather = weather if weather is not None else Weather()
-        shape = (self.height, self.width)
+        self._check_srgb8_outputs(scene, out, rain_alpha_out)
         if out is None:
-            out = np.empty((*shape, 3), np.uint8)
-        elif not _writable(out, np.uint8, (*shape, 3)):
-            raise ValueError(f"out must be a writable C-contiguous uint8 array of shape {(*shape, 3)}")
-        if rain_alpha_out is not None and not _writable(rain_alpha_out, np.float32, shape):
-            raise ValueError(f"rain_alpha_out must be a writable C-contiguous float32 array of shape {shape}")
-        _check_apart(scene, {"out": out, "rain_alpha_out": rain_alpha_out})
+            out = np.empty((self.height, self.width, 3), np.uint8)
         if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
             cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
             args = (self.width, self.height, cam.core_params(), scene.srgb8, scene.depth_m, io.srgb8_table(), out)
@@ -311,10 +334,28 @@ class Renderer:
         shape = (self.height, self.width)
         arrays = {"rgb": out.rgb, "depth_m": out.depth_m, **{k: out.layers.get(k) for k in ("transmittance", "rain_alpha", "rain_depth_m")}}
         for name, a in arrays.items():
-            want = (*shape, 3) if name == "rgb" else shape
-            if a is not None and not _writable(a, np.float32, want):
-                raise ValueError(f"out's {name} must be a writable C-contiguous float32 array of shape {want}")
+            if a is not None:
+                _check_writable(f"out's {name}", a, np.float32, (*shape, 3) if name == "rgb" else shape)
         return arrays
+
+    def _check_srgb8_outputs(self, scene: Any, out: Any, rain_alpha_out: Any) -> None:
+        """render_srgb8's outputs, checked after the photo's size (their shapes follow from it)."""
+        self._check_photo_size(scene)
+        shape = (self.height, self.width)
+        if out is not None:
+            _check_writable("out", out, np.uint8, (*shape, 3))
+        if rain_alpha_out is not None:
+            _check_writable("rain_alpha_out", rain_alpha_out, np.float32, shape)
+        _check_apart(scene, {"out": out, "rain_alpha_out": rain_alpha_out})
+
+    def _check_photo_size(self, scene: Any) -> None:
+        """A photo must be the renderer's size (a box scene is rendered at any size)."""
+        if isinstance(scene, PhotoScene) and scene.shape != (self.height, self.width):
+            h, w = scene.shape
+            raise ValueError(
+                f"the photo is {w}x{h} px, the renderer {self.width}x{self.height} px: "
+                f"render it with a renderer of its size, Renderer({w}, {h})"
+            )
 
     def _frame_args(
         self,
@@ -337,8 +378,7 @@ class Renderer:
         integer("seed", seed, 0, 2**64 - 1)
         kwargs: dict[str, Any] = {}
         if isinstance(scene, PhotoScene):
-            if scene.shape != (self.height, self.width):
-                raise ValueError(f"the photo is {scene.shape[1]}x{scene.shape[0]}, the renderer {self.width}x{self.height}")
+            self._check_photo_size(scene)
             cam = scene.camera
         elif isinstance(scene, BoxScene):
             if camera is not None and not isinstance(camera, Camera):
@@ -398,22 +438,175 @@ class Renderer:
         seed: int = 0,
         camera: Camera | None = None,
         start_s: float = 0.0,
+        cull_threshold: float | None = None,
+        ambient_spacing_m: float = 1.0,
+        ambient_samples: int = sky.MAP_SAMPLES,
+        out: Frame | None = None,
         progress: bool = False,
-    ) -> list[Frame]:
-        """Render ``n_frames`` consecutive frames at ``fps``: temporally coherent rain.
+    ) -> Iterator[Frame]:
+        """Render ``n_frames`` consecutive frames at ``fps``, one at a time: temporally
+        coherent rain.
 
-        Frame k is rendered at ``time_s = start_s + k / fps`` with the same seed. Streak
+        Frame k is :meth:`render` at ``time_s = start_s + k / fps`` with the same seed, bit
+        for bit. Frames are rendered as the iterator is advanced and none is kept, so a clip
+        takes one frame's memory however long it is (``list(...)`` keeps them all). Streak
         length follows the camera's ``exposure_s`` (v * T), which should not exceed 1/fps.
-        ``progress=True`` shows a tqdm progress bar.
-        """
-        n = integer("n_frames", n_frames, 1, 1_000_000)
-        rate = real("fps", fps)
-        if not 0.0 < rate <= 10000.0:
-            raise ValueError(f"fps = {rate} is outside the valid range (0, 10000]")
-        from tqdm import tqdm  # type: ignore[import-untyped]
 
-        start = real("start_s", start_s)
-        times = [start + k / rate for k in range(n)]
-        if not (abs(start) <= 1e7 and abs(times[-1]) <= 1e7):
-            raise ValueError(f"start_s = {start_s} and fps = {fps} put frame times at [{start}, {times[-1]}] s, outside the valid range [-1e7, 1e7] s")
-        return [self.render(scene, weather, camera=camera, time_s=t, seed=seed) for t in tqdm(times, disable=not progress, unit="frame")]
+        Parameters
+        ----------
+        scene, weather, camera, seed, cull_threshold, ambient_spacing_m, ambient_samples
+            As for :meth:`render`.
+        n_frames : int
+            Number of frames, in [1, 1e6].
+        fps : float
+            Frames per second, in (0, 10000].
+        start_s : float
+            Time of the first frame, s; every frame's time must lie in [-1e7, 1e7] s.
+        out : Frame, optional
+            A frame of this size to render every frame into (see :meth:`render`): each
+            frame yielded then holds ``out``'s arrays, so it is overwritten by the next one;
+            copy what you keep (``frame.rgb.copy()``). None: fresh arrays for every frame.
+        progress : bool
+            Show a tqdm progress bar while the frames are rendered.
+
+        Returns
+        -------
+        iterator of Frame
+
+        Raises
+        ------
+        ValueError, TypeError
+            Every argument is checked when this is called, before the first frame.
+        """
+        if out is not None:
+            self._out_arrays(out)
+        weather, times, options = self._sequence_args(
+            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
+        )
+
+        def frames() -> Iterator[Frame]:
+            into = out
+            for t in times:
+                frame = self.render(scene, weather, time_s=t, out=into, **options)
+                if out is not None:
+                    into = frame  # out's arrays, and any layer the first frame added to them
+                yield frame
+
+        return frames()
+
+    def render_sequence_srgb8(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        n_frames: int,
+        fps: float = 30.0,
+        seed: int = 0,
+        camera: Camera | None = None,
+        start_s: float = 0.0,
+        cull_threshold: float | None = None,
+        ambient_spacing_m: float = 1.0,
+        ambient_samples: int = sky.MAP_SAMPLES,
+        out: NDArray[np.uint8] | None = None,
+        rain_alpha_out: NDArray[np.float32] | None = None,
+        progress: bool = False,
+    ) -> Iterator[NDArray[np.uint8]]:
+        """:meth:`render_sequence` in 8-bit sRGB: each frame is :meth:`render_srgb8` at
+        ``time_s = start_s + k / fps``, byte for byte.
+
+        Parameters
+        ----------
+        scene, weather, n_frames, fps, seed, camera, start_s, cull_threshold, ambient_spacing_m, ambient_samples, progress
+            As for :meth:`render_sequence`.
+        out : ndarray of uint8, shape (H, W, 3), optional
+            Where to write every frame: each array yielded is then ``out``, overwritten by
+            the next frame. None: a new array per frame.
+        rain_alpha_out : ndarray of float32, shape (H, W), optional
+            Filled with each frame's rain coverage as its image is yielded (overwritten by
+            the next frame).
+
+        Returns
+        -------
+        iterator of ndarray of uint8, shape (H, W, 3)
+
+        Raises
+        ------
+        ValueError, TypeError
+            Every argument is checked when this is called, before the first frame (see
+            :meth:`render_srgb8`).
+        """
+        self._check_srgb8_outputs(scene, out, rain_alpha_out)
+        weather, times, options = self._sequence_args(
+            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
+        )
+
+        def frames() -> Iterator[NDArray[np.uint8]]:
+            for t in times:
+                yield self.render_srgb8(scene, weather, time_s=t, out=out, rain_alpha_out=rain_alpha_out, **options)
+
+        return frames()
+
+    def _sequence_args(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None,
+        camera: Camera | None,
+        n_frames: int,
+        fps: float,
+        start_s: float,
+        seed: int,
+        cull_threshold: float | None,
+        ambient_spacing_m: float,
+        ambient_samples: int,
+        progress: bool,
+    ) -> tuple[Weather, Iterator[float], dict[str, Any]]:
+        """A sequence's arguments, all checked now (as :meth:`render` checks them): its
+        weather, its frame times (behind a progress bar, started at the first frame) and the
+        keyword arguments every frame is rendered with."""
+        weather = weather if weather is not None else Weather()
+        times = _frame_times(n_frames, fps, start_s)
+        show = _flag("progress", progress)
+        self._frame_args(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples)
+        options: dict[str, Any] = dict(
+            camera=camera, seed=seed, cull_threshold=cull_threshold, ambient_spacing_m=ambient_spacing_m, ambient_samples=ambient_samples
+        )
+        return weather, _progress(times, show), options
+
+
+class _FrameTimes:
+    """Frame k's time, ``start_s + k / fps``, for k < n (checked once, computed as needed)."""
+
+    def __init__(self, start: float, rate: float, n: int) -> None:
+        self.start, self.rate, self.n = start, rate, n
+
+    def __call__(self, k: int) -> float:
+        return self.start + k / self.rate
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __iter__(self) -> Iterator[float]:
+        return (self(k) for k in range(self.n))
+
+
+def _frame_times(n_frames: int, fps: float, start_s: float) -> _FrameTimes:
+    n = integer("n_frames", n_frames, 1, 1_000_000)
+    rate = real("fps", fps)
+    if not 0.0 < rate <= 10000.0:
+        raise ValueError(f"fps = {rate} is outside the valid range (0, 10000]")
+    times = _FrameTimes(real("start_s", start_s), rate, n)
+    start, end = times(0), times(n - 1)
+    if not (abs(start) <= 1e7 and abs(end) <= 1e7):
+        raise ValueError(f"start_s = {start_s} and fps = {fps} put frame times at [{start}, {end}] s, outside the valid range [-1e7, 1e7] s")
+    return times
+
+
+def _progress(times: _FrameTimes, show: bool) -> Iterator[float]:
+    """The frame times, behind a tqdm bar when ``show`` (closed when the frames stop)."""
+    if not show:
+        yield from times
+        return
+    from tqdm import tqdm  # type: ignore[import-untyped]
+
+    with tqdm(times, total=len(times), unit="frame") as bar:
+        yield from bar

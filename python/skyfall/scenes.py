@@ -9,11 +9,13 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from os import PathLike
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from skyfall._validate import float_array, integer, real
 from skyfall.camera import Camera
 from skyfall.io import decode_srgb8
 from skyfall.lights import PointLight, SpotLight
@@ -61,8 +63,53 @@ class BoxScene:
     lights: tuple[PointLight | SpotLight, ...] = ()
 
 
+BOX_KEYS = ("min", "max", "albedo")
+"""The keys of a box's dict (:func:`boxes`)."""
+
+
+def _flag(name: str, value: Any) -> bool:
+    """A switch: a bool or numpy bool only (``"no"`` or 0 would turn a switch on or off by accident)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
+    return bool(value)
+
+
+def _camera(value: Any) -> Camera | None:
+    if value is not None and not isinstance(value, Camera):
+        raise TypeError(f"camera must be a skyfall.Camera or None, got {type(value).__name__}")
+    return value
+
+
+def _lights(value: Any) -> tuple[PointLight | SpotLight, ...]:
+    """The lights as a tuple, each checked."""
+    if isinstance(value, (PointLight, SpotLight)):
+        raise TypeError(f"lights must be a sequence of lights, got one {type(value).__name__}: pass (light,)")
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence):
+        raise TypeError(f"lights must be a sequence of PointLight or SpotLight, got {type(value).__name__}")
+    for i, light in enumerate(value):
+        if not isinstance(light, (PointLight, SpotLight)):
+            raise TypeError(f"lights[{i}] must be a PointLight or SpotLight, got {type(light).__name__}")
+    return tuple(value)
+
+
+def _lamps(value: Any) -> NDArray[np.float64]:
+    """Lamp positions, (L, 3) finite numbers within the core's ±1e7 m."""
+    if value is None:
+        return np.zeros((0, 3))
+    a = float_array("lamps_m", value)
+    if a.size == 0:
+        return np.zeros((0, 3))
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"lamps_m must have shape (L, 3), got shape {a.shape}")
+    bad = np.argwhere(~(np.abs(a) <= 1e7))
+    if len(bad):
+        i, k = (int(v) for v in bad[0])
+        raise ValueError(f"lamps_m[{i}, {k}] = {a[i, k]} is outside the valid range [-1e7, 1e7] m")
+    return a
+
+
 def _albedo(name: str, value: Any) -> tuple[float, float, float]:
-    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    a = float_array(name, value).reshape(-1)
     if a.size == 1:
         a = np.repeat(a, 3)
     if a.size != 3 or not np.all((a >= 0) & (a <= 1)):
@@ -102,14 +149,14 @@ def boxes(
     BoxScene
     """
     arr = _box_rows(box_list, "boxes")
-    lamps = np.zeros((0, 3)) if lamps_m is None else np.asarray(lamps_m, dtype=np.float64).reshape(-1, 3)
+    cam = _camera(camera)
     return BoxScene(
         boxes=arr,
-        ground=bool(ground),
+        ground=_flag("ground", ground),
         ground_albedo=_albedo("ground_albedo", ground_albedo),
-        camera=camera if camera is not None else Camera(),
-        lamps_m=lamps,
-        lights=tuple(lights),
+        camera=cam if cam is not None else Camera(),
+        lamps_m=_lamps(lamps_m),
+        lights=_lights(lights),
     )
 
 
@@ -119,12 +166,17 @@ def _box_rows(box_list: Sequence[Mapping[str, Any]], name: str) -> NDArray[np.fl
         raise TypeError(f"{name} must be a sequence of dicts, got {type(box_list).__name__}")
     rows = []
     for i, b in enumerate(box_list):
-        if not isinstance(b, Mapping) or "min" not in b or "max" not in b:
+        if not isinstance(b, Mapping):
+            raise TypeError(f"{name}[{i}] must be a dict with 'min' and 'max' corners, got {type(b).__name__}")
+        if "min" not in b or "max" not in b:
             raise ValueError(f"{name}[{i}] must be a dict with 'min' and 'max' corners, got {b!r}")
-        lo = np.asarray(b["min"], dtype=np.float64).reshape(-1)
-        hi = np.asarray(b["max"], dtype=np.float64).reshape(-1)
+        unknown = sorted(str(k) for k in b if k not in BOX_KEYS)
+        if unknown:
+            raise ValueError(f"{name}[{i}] has unknown keys {unknown}: a box takes {list(BOX_KEYS)}")
+        lo = float_array(f"{name}[{i}].min", b["min"]).reshape(-1)
+        hi = float_array(f"{name}[{i}].max", b["max"]).reshape(-1)
         if lo.size != 3 or hi.size != 3 or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-            raise ValueError(f"{name}[{i}]: min and max must be 3 finite numbers (m)")
+            raise ValueError(f"{name}[{i}]: min and max must be 3 finite numbers (m), got min {b['min']!r}, max {b['max']!r}")
         if np.any(hi <= lo):
             raise ValueError(f"{name}[{i}]: max {hi.tolist()} must exceed min {lo.tolist()} on every axis")
         rows.append([*lo, *hi, *_albedo(f"{name}[{i}].albedo", b.get("albedo", DEFAULT_BOX_ALBEDO))])
@@ -159,7 +211,7 @@ def street(
     width_m : float
         Distance between the building fronts, m, in [4, 100].
     seed : int
-        Seeds the building heights and shades (deterministic).
+        Seeds the building heights and shades (deterministic), in [0, 2^64).
     lamps : bool
         Light the lamps: warm 2000 cd point lights at the lamp heads.
     headlights : bool
@@ -168,12 +220,27 @@ def street(
     awning : bool
         A 0.25 m thick awning 3.5 m deep over the right-hand pavement, 3 m up, from 1 m to
         40 m ahead: drops beneath it see less sky (:mod:`skyfall.sky`).
+
+    Returns
+    -------
+    BoxScene
+
+    Examples
+    --------
+    >>> scene = street(lamps=True, headlights=True)
+    >>> scene.boxes.shape, len(scene.lamps_m), len(scene.lights)  # 16 lamps lit, 2 headlights
+    ((16, 9), 16, 18)
+    >>> scene.camera.position_m.tolist()
+    [1.5, 1.6, 0.0]
     """
-    if not 20.0 <= float(length_m) <= 1000.0:
+    length_m = real("length_m", length_m)
+    if not 20.0 <= length_m <= 1000.0:
         raise ValueError(f"length_m = {length_m} is outside the valid range [20, 1000] m")
-    if not 4.0 <= float(width_m) <= 100.0:
+    width_m = real("width_m", width_m)
+    if not 4.0 <= width_m <= 100.0:
         raise ValueError(f"width_m = {width_m} is outside the valid range [4, 100] m")
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(integer("seed", seed, 0, 2**64 - 1))
+    lamps, headlights, awning = _flag("lamps", lamps), _flag("headlights", headlights), _flag("awning", awning)
     half = width_m / 2
     box_list: list[dict[str, Any]] = []
     for side in (-1, 1):
@@ -199,6 +266,22 @@ def street(
     return boxes(box_list, ground=True, camera=cam, lamps_m=lamp_positions, lights=tuple(lights))
 
 
+def _array(name: str, value: Any, path_hint: str) -> NDArray[Any]:
+    """``value`` as an array; a path or a string is a TypeError saying how to read it."""
+    if isinstance(value, (str, bytes, PathLike)):
+        raise TypeError(f"{name} must be an array, got the {type(value).__name__} {str(value)!r}; for {path_hint}")
+    return np.asarray(value)
+
+
+def _at_least_zero(name: str, a: NDArray[np.float32], unit: str, *, finite: bool) -> None:
+    """Refuse NaN, negative values and, with ``finite``, infinities, naming the first one."""
+    ok = np.isfinite(a) & (a >= 0) if finite else a >= 0  # NaN compares false
+    if not ok.all():
+        at = tuple(int(v) for v in np.argwhere(~ok)[0])
+        valid = "[0, inf)" if finite else "[0, inf]"
+        raise ValueError(f"{name}[{', '.join(map(str, at))}] = {a[at]} is outside the valid range {valid}{unit}")
+
+
 @dataclass(frozen=True)
 class PhotoScene:
     """A photo with its depth map: how datasets are made from real images.
@@ -217,7 +300,8 @@ class PhotoScene:
         The camera that took the photo; by default one at the origin looking along -Z with
         ``vertical_fov_deg``.
     vertical_fov_deg : float
-        Vertical field of view, degrees, when no camera is given.
+        Vertical field of view, degrees, in [0.001, 179), when no camera is given (a given
+        camera has its own).
     lights : tuple of PointLight or SpotLight
         Lights in the photo's world (camera coordinates when no camera is given) that light
         the rain.
@@ -245,33 +329,34 @@ class PhotoScene:
         lights: tuple[PointLight | SpotLight, ...] = (),
         occluders: Sequence[Mapping[str, Any]] = (),
     ) -> None:
-        img = np.asarray(image)
+        img = _array("image", image, "a file: read it with skyfall.io.read_image")
+        if img.dtype != np.uint8 and img.dtype.kind != "f":
+            raise TypeError(f"image must be uint8 (sRGB) or float (linear), got dtype {img.dtype}")
         if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
             raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
         srgb8: NDArray[np.uint8] | None = None
         if img.dtype == np.uint8:
             srgb8 = np.ascontiguousarray(img)  # decoded when `image` is first read
-        elif img.dtype.kind == "f":
-            lin = np.ascontiguousarray(img, dtype=np.float32)
-            if not np.all(np.isfinite(lin)) or lin.min() < 0:
-                raise ValueError("image must hold finite, non-negative linear values")
-            self.__dict__["image"] = lin  # the cached value of the `image` property
         else:
-            raise TypeError(f"image must be uint8 (sRGB) or float (linear), got dtype {img.dtype}")
-        d = np.asarray(depth_m)
+            lin = np.ascontiguousarray(img, dtype=np.float32)
+            _at_least_zero("image", lin, " (linear RGB)", finite=True)
+            self.__dict__["image"] = lin  # the cached value of the `image` property
+        d = _array("depth_m", depth_m, "a file: read it with skyfall.io.read_channels")
         if d.dtype.kind not in "fiu":
             raise TypeError(f"depth_m must be numeric, got dtype {d.dtype}")
         d = np.ascontiguousarray(d, dtype=np.float32)
         if d.shape != img.shape[:2]:
             raise ValueError(f"depth_m has shape {d.shape}, the image is {img.shape[:2]}")
-        if not d.min() >= 0:  # a NaN makes the minimum NaN, which compares false
-            raise ValueError("depth_m must be >= 0 m everywhere (inf for sky), without NaN")
+        _at_least_zero("depth_m", d, " m (inf for sky)", finite=False)
         h, w = img.shape[:2]
-        cam = camera if camera is not None else Camera((0.0, 0.0, 0.0), vertical_fov_deg=vertical_fov_deg)
+        fov = real("vertical_fov_deg", vertical_fov_deg)
+        cam = _camera(camera)
+        if cam is None:
+            cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=fov)
         object.__setattr__(self, "srgb8", srgb8)
         object.__setattr__(self, "depth_m", d)
         object.__setattr__(self, "camera", cam.with_resolution(w, h))
-        object.__setattr__(self, "lights", tuple(lights))
+        object.__setattr__(self, "lights", _lights(lights))
         object.__setattr__(self, "occluders", _box_rows(occluders, "occluders"))
 
     @cached_property

@@ -9,8 +9,9 @@
 //! - [`scene`]: cameras and the procedural box scene (ray cast).
 //! - [`haze`]: rain haze along view rays (seed 002).
 //! - [`sky`]: CIE skies, sky illuminance with occlusion, the ambient-light map (seed 002).
-//! - [`frame`]: the CPU backend's frame composition (fused passes).
-//! - [`photo8`]: the CPU fast path for 8-bit photos (haze and rain fused, bytes in and out).
+//! - [`frame`]: the frame pipeline (scene stage, effect passes, output stage) and the CPU
+//!   backend's two output stages: float32 frames and 8-bit sRGB photos.
+//! - [`particles`]: the particle toolkit shared by rain and (next) snow.
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
@@ -19,7 +20,6 @@ pub mod error;
 pub mod frame;
 pub mod haze;
 pub mod particles;
-pub mod photo8;
 pub mod physics;
 pub mod rain;
 pub mod ranges;

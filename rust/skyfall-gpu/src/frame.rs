@@ -2,16 +2,17 @@
 
 use crate::context::{AdapterChoice, GpuContext, GpuError};
 use crate::haze::HazePass;
-use crate::pass::{storage, storage_init};
-use crate::rain::{RainPass, RainTargets};
-use crate::readback::read_f32_into;
+use crate::pass::{FrameEncoder, FramePass, FrameTargets};
+use crate::pool::BufferPool;
+use crate::rain::RainPass;
 use crate::scene_raycast::SceneRaycastPass;
+use skyfall_core::frame::passes::Passes;
+use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::frame::{
     FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo,
 };
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::streaks::RainFrame;
-use skyfall_core::scene::boxes::SceneLight;
 use skyfall_core::scene::camera::Camera;
 
 /// A device with every pass compiled, reused across frames.
@@ -22,6 +23,7 @@ pub struct GpuRenderer {
     raycast: SceneRaycastPass,
     haze: HazePass,
     rain: RainPass,
+    pool: BufferPool,
 }
 
 impl GpuRenderer {
@@ -40,6 +42,7 @@ impl GpuRenderer {
             raycast,
             haze,
             rain,
+            pool: BufferPool::default(),
         })
     }
 
@@ -78,77 +81,59 @@ impl GpuRenderer {
         )?;
         let ctx = &self.ctx;
         ctx.scoped(|| {
-            let mut enc = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("frame"),
-                });
+            // The particles first (on the CPU: they do not depend on the scene).
+            let passes = Passes::prepare(cam, haze, rain)?;
+            let mut f = FrameEncoder::new(ctx, &self.pool, cam);
             let (rgb, depth) = match scene {
-                SceneRef::Boxes(b) => {
-                    ctx.check_buffer(
-                        "the ambient-light map",
-                        (light.ambient.values.len() * 4) as u64,
-                    )?;
-                    let rgb = storage(ctx, "rgb", 3 * n);
-                    let depth = storage(ctx, "depth", n);
-                    self.raycast
-                        .encode(ctx, &mut enc, b, cam, light, &rgb, &depth);
-                    (rgb, depth)
-                }
+                SceneRef::Boxes(_) => (f.target("rgb", 3 * n), f.target("depth", n)),
                 SceneRef::Photo { rgb, depth_m } => {
                     check_photo(cam, rgb, depth_m)?;
-                    (
-                        storage_init(ctx, "rgb", rgb),
-                        storage_init(ctx, "depth", depth_m),
-                    )
+                    (f.upload("rgb", rgb), f.upload("depth", depth_m))
                 }
             };
-            let trans = haze.map(|h| {
-                let t = storage(ctx, "transmittance", n);
-                self.haze.encode(ctx, &mut enc, h, cam, [&rgb, &depth, &t]);
-                t
-            });
-            let rain_out = rain.map(|rf| {
-                let (streaks, stats, drops) = rf.streaks(cam)?;
-                let alpha = storage(ctx, "rain_alpha", n);
-                let rain_depth = storage(ctx, "rain_depth", n);
-                let targets = RainTargets {
-                    rgb: &rgb,
-                    depth: &depth,
-                    alpha: &alpha,
-                    rain_depth: &rain_depth,
-                };
-                self.rain.encode(
-                    ctx,
-                    &mut enc,
-                    cam,
-                    &streaks,
-                    rf.shading.reflectance,
-                    targets,
-                )?;
-                Ok::<_, GpuError>((alpha, rain_depth, stats, drops))
-            });
-            let rain_out = rain_out.transpose()?;
-            ctx.queue.submit([enc.finish()]);
+            let transmittance = passes.haze.map(|_| f.target("transmittance", n));
+            let layers = passes
+                .particles
+                .as_ref()
+                .map(|_| (f.target("rain_alpha", n), f.target("rain_depth", n)));
+            let targets = FrameTargets {
+                rgb: &rgb,
+                depth: &depth,
+                transmittance: transmittance.as_ref(),
+                rain: layers.as_ref().map(|(a, d)| (a, d)),
+            };
+            // The passes in physical order: the scene, haze, rain.
+            if let SceneRef::Boxes(b) = scene {
+                self.raycast.encode(&mut f, &targets, (b, light))?;
+            }
+            if let Some(h) = passes.haze {
+                self.haze.encode(&mut f, &targets, h)?;
+            }
+            if let Some(p) = &passes.particles {
+                self.rain.encode(&mut f, &targets, &p.streaks)?;
+            }
+            // One submission, one readback of every output.
             let FrameOut {
                 rgb: rgb_out,
                 depth_m: depth_out,
                 transmittance: trans_out,
                 rain: layers_out,
             } = out;
-            read_f32_into(ctx, &rgb, rgb_out)?;
-            read_f32_into(ctx, &depth, depth_out)?;
-            if let (Some(t), Some(t_out)) = (&trans, trans_out) {
-                read_f32_into(ctx, t, t_out)?;
+            let mut outputs = vec![(rgb, rgb_out), (depth, depth_out)];
+            if let (Some(t), Some(t_out)) = (transmittance, trans_out) {
+                outputs.push((t, t_out));
             }
-            match (rain_out, layers_out) {
-                (Some((alpha, rd, stats, drops)), Some((a_out, d_out))) => {
-                    read_f32_into(ctx, &alpha, a_out)?;
-                    read_f32_into(ctx, &rd, d_out)?;
-                    Ok(Some((stats, drops)))
-                }
-                _ => Ok(None),
+            if let (Some((a, d)), Some((a_out, d_out))) = (layers, layers_out) {
+                outputs.push((a, a_out));
+                outputs.push((d, d_out));
             }
+            f.read_back(outputs)?;
+            Ok(passes.rain_report())
         })
+    }
+
+    /// Bytes of device memory the renderer keeps pooled between frames.
+    pub fn pooled_bytes(&self) -> u64 {
+        self.pool.pooled_bytes()
     }
 }

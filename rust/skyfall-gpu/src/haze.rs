@@ -1,10 +1,9 @@
 //! The haze pass: attenuation and airlight along view rays (`shaders/haze.wgsl`).
 
-use crate::camera::camera_words;
-use crate::context::GpuContext;
-use crate::pass::{Binding, ComputePass, uniform};
+use crate::context::{GpuContext, GpuError};
+use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
+use crate::uniforms::{CameraUniform, HazeUniform};
 use skyfall_core::haze::Haze;
-use skyfall_core::scene::camera::Camera;
 
 const SOURCE: &str = include_str!("shaders/haze.wgsl");
 
@@ -12,9 +11,11 @@ const SOURCE: &str = include_str!("shaders/haze.wgsl");
 #[derive(Debug)]
 pub struct HazePass(ComputePass);
 
-impl HazePass {
-    /// Compiles the pass.
-    pub fn new(ctx: &GpuContext) -> Self {
+impl FramePass for HazePass {
+    /// The haze: extinction and airlight.
+    type Input<'i> = &'i Haze;
+
+    fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
         HazePass(ComputePass::new(
             ctx,
@@ -24,36 +25,27 @@ impl HazePass {
         ))
     }
 
-    /// Records the pass over `[rgb, depth, transmittance]`: rgb in place, transmittance
-    /// written, from depth.
-    pub fn encode(
+    /// rgb in place and the transmittance written, from depth.
+    fn encode(
         &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
+        f: &mut FrameEncoder<'_>,
+        t: &FrameTargets<'_>,
         haze: &Haze,
-        cam: &Camera,
-        targets: [&wgpu::Buffer; 3],
-    ) {
-        let [rgb, depth, transmittance] = targets;
+    ) -> Result<(), GpuError> {
+        let Some(transmittance) = t.transmittance else {
+            return Err(GpuError::Readback(
+                "the haze pass needs the transmittance buffer".into(),
+            ));
+        };
         let a = haze.airlight;
-        let words = [
-            haze.extinction_per_m.to_bits(),
-            0,
-            0,
-            0,
-            a[0].to_bits(),
-            a[1].to_bits(),
-            a[2].to_bits(),
-            0,
-        ];
-        let cam_buf = uniform(ctx, "camera", &camera_words(cam));
-        let haze_buf = uniform(ctx, "haze", &words);
-        self.0.encode(
-            ctx,
-            enc,
-            &[&cam_buf, &haze_buf, rgb, depth, transmittance],
-            cam.width,
-            cam.height,
-        );
+        let block = HazeUniform {
+            params: [haze.extinction_per_m, 0.0, 0.0, 0.0],
+            airlight: [a[0], a[1], a[2], 0.0],
+        };
+        let cam = f.uniform("camera", &CameraUniform::new(f.cam));
+        let params = f.uniform("haze", &block);
+        f.dispatch(&self.0, &[&cam, &params, t.rgb, t.depth, transmittance]);
+        f.hold([cam, params]);
+        Ok(())
     }
 }

@@ -1,8 +1,11 @@
-//! What every compute pass shares: WGSL assembly, pipeline creation, uniform and storage
-//! buffers, bind groups and dispatch over 8 × 8 tiles.
+//! What every compute pass shares: WGSL assembly, pipeline creation, dispatch over 8 × 8
+//! tiles, the [`FramePass`] trait every pass implements, and the [`FrameEncoder`] a frame's
+//! passes record into (pooled buffers, one submission, one readback).
 
-use crate::context::GpuContext;
-use wgpu::util::DeviceExt;
+use crate::context::{GpuContext, GpuError};
+use crate::pool::{BufferPool, Pooled};
+use crate::readback::read_f32_into;
+use skyfall_core::scene::camera::Camera;
 
 /// The WGSL every pass is prepended with (camera block and rays).
 pub const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
@@ -89,12 +92,13 @@ impl ComputePass {
         }
     }
 
-    /// Records one dispatch covering `width × height` pixels with `buffers` bound in order.
-    pub fn encode(
+    /// Records one dispatch covering `width × height` pixels in 8 × 8 workgroups with
+    /// `buffers` bound in order.
+    pub fn dispatch(
         &self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
-        buffers: &[&wgpu::Buffer],
+        buffers: &[&Pooled],
         width: u32,
         height: u32,
     ) {
@@ -103,7 +107,7 @@ impl ComputePass {
             .enumerate()
             .map(|(i, b)| wgpu::BindGroupEntry {
                 binding: i as u32,
-                resource: b.as_entire_binding(),
+                resource: b.binding(),
             })
             .collect();
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -121,36 +125,150 @@ impl ComputePass {
     }
 }
 
-/// A uniform buffer holding `words`.
-pub fn uniform(ctx: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
-    ctx.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytemuck::cast_slice(words),
-            usage: wgpu::BufferUsages::UNIFORM,
-        })
+/// A frame's buffers on the device, as the passes read and write them: one f32 per channel.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameTargets<'a> {
+    /// Linear RGB, H·W·3.
+    pub rgb: &'a Pooled,
+    /// Depth along the optical axis, m, H·W.
+    pub depth: &'a Pooled,
+    /// Haze transmittance, H·W, when the haze pass runs.
+    pub transmittance: Option<&'a Pooled>,
+    /// Rain coverage and nearest streak depth, H·W each, when the rain pass runs.
+    pub rain: Option<(&'a Pooled, &'a Pooled)>,
 }
 
-/// A storage buffer initialised with `values`, readable back.
-pub fn storage_init<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, values: &[T]) -> wgpu::Buffer {
-    ctx.device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytemuck::cast_slice(values),
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-        })
+/// What a frame's passes record into: the device, the frame's one command encoder, the
+/// buffer pool and the camera. Buffers a pass takes are held until the frame is read back,
+/// then given back to the pool.
+pub struct FrameEncoder<'a> {
+    /// The device.
+    pub ctx: &'a GpuContext,
+    /// The frame's commands (submitted once, with the readback's copies).
+    pub enc: wgpu::CommandEncoder,
+    /// The frame's camera.
+    pub cam: &'a Camera,
+    pool: &'a BufferPool,
+    held: Vec<Pooled>,
 }
 
-/// An uninitialised storage buffer of `len` f32 values, readable back.
-pub fn storage(ctx: &GpuContext, label: &str, len: usize) -> wgpu::Buffer {
-    ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: (len.max(1) * 4) as u64,
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
+const TARGET: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+impl<'a> FrameEncoder<'a> {
+    /// Starts a frame.
+    pub fn new(ctx: &'a GpuContext, pool: &'a BufferPool, cam: &'a Camera) -> Self {
+        let enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
+        FrameEncoder {
+            ctx,
+            enc,
+            cam,
+            pool,
+            held: Vec::new(),
+        }
+    }
+
+    /// A uniform buffer holding `value`.
+    pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> Pooled {
+        let b = self.pool.take(
+            self.ctx,
+            label,
+            size_of::<T>() as u64,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        self.ctx
+            .queue
+            .write_buffer(&b.buffer, 0, bytemuck::bytes_of(value));
+        b
+    }
+
+    /// A storage buffer holding `values` (at least one value: a binding may not be empty).
+    pub fn upload<T: bytemuck::Pod>(&self, label: &str, values: &[T]) -> Pooled {
+        let bytes: &[u8] = bytemuck::cast_slice(values);
+        let b = self.pool.take(self.ctx, label, bytes.len() as u64, TARGET);
+        if !bytes.is_empty() {
+            self.ctx.queue.write_buffer(&b.buffer, 0, bytes);
+        }
+        b
+    }
+
+    /// A storage buffer of `len` f32 values that a pass writes in full.
+    pub fn target(&self, label: &str, len: usize) -> Pooled {
+        self.pool
+            .take(self.ctx, label, (len.max(1) * 4) as u64, TARGET)
+    }
+
+    /// Records `pass` over the frame's pixels with `buffers` bound in order.
+    pub fn dispatch(&mut self, pass: &ComputePass, buffers: &[&Pooled]) {
+        pass.dispatch(
+            self.ctx,
+            &mut self.enc,
+            buffers,
+            self.cam.width,
+            self.cam.height,
+        );
+    }
+
+    /// Holds `buffers` until the frame is read back (they are in its commands).
+    pub fn hold(&mut self, buffers: impl IntoIterator<Item = Pooled>) {
+        self.held.extend(buffers);
+    }
+
+    /// Submits the frame and reads `outputs` back into the caller's slices, in one staging
+    /// buffer mapped once; every buffer then goes back to the pool.
+    pub fn read_back(mut self, outputs: Vec<(Pooled, &mut [f32])>) -> Result<(), GpuError> {
+        let total: u64 = outputs.iter().map(|(_, o)| (o.len() * 4) as u64).sum();
+        let staging = self.pool.take(
+            self.ctx,
+            "readback",
+            total.max(4),
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        );
+        let mut offset = 0;
+        for (b, out) in &outputs {
+            let bytes = (out.len() * 4) as u64;
+            if bytes > b.size {
+                return Err(GpuError::Readback(format!(
+                    "{} values asked of a buffer of {} bytes",
+                    out.len(),
+                    b.size
+                )));
+            }
+            self.enc
+                .copy_buffer_to_buffer(&b.buffer, 0, &staging.buffer, offset, bytes);
+            offset += bytes;
+        }
+        self.ctx.queue.submit([self.enc.finish()]);
+        let mut outs: Vec<&mut [f32]> = Vec::with_capacity(outputs.len());
+        let mut done = Vec::with_capacity(outputs.len() + 1);
+        for (b, out) in outputs {
+            outs.push(out);
+            done.push(b);
+        }
+        read_f32_into(self.ctx, &staging.buffer, total, &mut outs)?;
+        done.push(staging);
+        self.pool.give_back(done.into_iter().chain(self.held));
+        Ok(())
+    }
+}
+
+/// A pass of the GPU frame: compiled once per device, then recorded into each frame's
+/// encoder over the frame's buffers with what it draws (`Input`).
+pub trait FramePass: Sized {
+    /// What the pass draws, besides the frame's buffers.
+    type Input<'i>;
+    /// Compiles the pass.
+    fn new(ctx: &GpuContext) -> Self;
+    /// Records the pass.
+    fn encode(
+        &self,
+        f: &mut FrameEncoder<'_>,
+        targets: &FrameTargets<'_>,
+        input: Self::Input<'_>,
+    ) -> Result<(), GpuError>;
 }

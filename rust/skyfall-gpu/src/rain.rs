@@ -9,12 +9,11 @@
 //! wide, so narrow tiles keep most of them out of most lists. The 8 × 8 workgroup then spans
 //! several tiles; on a real GPU that costs some divergence, which is unmeasured here.
 
-use crate::camera::camera_words;
 use crate::context::{GpuContext, GpuError};
-use crate::pass::{Binding, ComputePass, storage_init, uniform};
+use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
+use crate::uniforms::{CameraUniform, RainUniform};
 use skyfall_core::particles::binning::bin_by_tiles;
 use skyfall_core::particles::streak::ScreenStreak;
-use skyfall_core::scene::camera::Camera;
 
 const SOURCE: &str = include_str!("shaders/rain.wgsl");
 /// Tile width, px (see the module's note on tile size).
@@ -26,22 +25,11 @@ pub const TILE_H: u32 = 4;
 #[derive(Debug)]
 pub struct RainPass(ComputePass);
 
-/// The frame buffers the pass reads and writes: rgb (in place), depth (read), alpha and
-/// rain depth (written).
-pub struct RainTargets<'a> {
-    /// Linear RGB.
-    pub rgb: &'a wgpu::Buffer,
-    /// Scene depth.
-    pub depth: &'a wgpu::Buffer,
-    /// Streak coverage.
-    pub alpha: &'a wgpu::Buffer,
-    /// Nearest streak depth.
-    pub rain_depth: &'a wgpu::Buffer,
-}
+impl FramePass for RainPass {
+    /// The prepared streaks, far to near (each with its light and r).
+    type Input<'i> = &'i [ScreenStreak];
 
-impl RainPass {
-    /// Compiles the pass.
-    pub fn new(ctx: &GpuContext) -> Self {
+    fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
         RainPass(ComputePass::new(
             ctx,
@@ -54,27 +42,31 @@ impl RainPass {
         ))
     }
 
-    /// Records the pass over prepared `streaks` (far to near); [`GpuError::TooLarge`] when the
-    /// streaks or the tiles' lists of them do not fit one of the device's storage buffers.
-    pub fn encode(
+    /// rgb composited in place, the rain's coverage and nearest depth written;
+    /// [`GpuError::TooLarge`] when the streaks or the tiles' lists of them do not fit one of
+    /// the device's storage buffers.
+    fn encode(
         &self,
-        ctx: &GpuContext,
-        enc: &mut wgpu::CommandEncoder,
-        cam: &Camera,
-        streaks: &[ScreenStreak],
-        reflectance: f32,
-        t: RainTargets<'_>,
+        f: &mut FrameEncoder<'_>,
+        t: &FrameTargets<'_>,
+        streaks: Self::Input<'_>,
     ) -> Result<(), GpuError> {
+        let Some((alpha, rain_depth)) = t.rain else {
+            return Err(GpuError::Readback(
+                "the rain pass needs the rain layers' buffers".into(),
+            ));
+        };
+        let cam = f.cam;
         let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H);
         // rain_near_m and the rain rate set how many streaks there are (the region's volume
         // goes as rain_near_m³).
         let mut packed: Vec<f32> = streaks.iter().flat_map(|s| s.packed()).collect();
         let why = "(fewer with a smaller rain_near_m or rain rate)";
-        ctx.check_buffer(
+        f.ctx.check_buffer(
             &format!("the rain's {} streaks {why}", streaks.len()),
             (packed.len() * 4) as u64,
         )?;
-        ctx.check_buffer(
+        f.ctx.check_buffer(
             &format!("the rain's tile lists ({} entries) {why}", indices.len()),
             (indices.len() * 4) as u64,
         )?;
@@ -85,20 +77,19 @@ impl RainPass {
         if indices.is_empty() {
             indices.push(0);
         }
-        let params = [
-            reflectance.to_bits(),
-            cam.width.div_ceil(TILE_W),
-            TILE_W,
-            TILE_H,
-        ];
-        let cam_buf = uniform(ctx, "camera", &camera_words(cam));
-        let params_buf = uniform(ctx, "rain", &params);
-        let streak_buf = storage_init(ctx, "streaks", &packed);
-        let offsets_buf = storage_init(ctx, "tile offsets", &offsets);
-        let indices_buf = storage_init(ctx, "tile indices", &indices);
-        self.0.encode(
-            ctx,
-            enc,
+        let params = RainUniform {
+            streak_count: streaks.len() as u32,
+            tiles_x: cam.width.div_ceil(TILE_W),
+            tile_w: TILE_W,
+            tile_h: TILE_H,
+        };
+        let cam_buf = f.uniform("camera", &CameraUniform::new(cam));
+        let params_buf = f.uniform("rain", &params);
+        let streak_buf = f.upload("streaks", &packed);
+        let offsets_buf = f.upload("tile offsets", &offsets);
+        let indices_buf = f.upload("tile indices", &indices);
+        f.dispatch(
+            &self.0,
             &[
                 &cam_buf,
                 &params_buf,
@@ -107,12 +98,11 @@ impl RainPass {
                 &indices_buf,
                 t.rgb,
                 t.depth,
-                t.alpha,
-                t.rain_depth,
+                alpha,
+                rain_depth,
             ],
-            cam.width,
-            cam.height,
         );
+        f.hold([cam_buf, params_buf, streak_buf, offsets_buf, indices_buf]);
         Ok(())
     }
 }

@@ -3,11 +3,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use glam::{Mat3, Vec3};
+use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::frame::{FrameOut, SceneRef, render};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
 use skyfall_core::rain::streaks::{RainFrame, RainShading};
-use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
+use skyfall_core::scene::boxes::{BoxScene, SceneBox};
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;
 use skyfall_core::sky::ambient::{AmbientMap, scene_bounds};
@@ -243,4 +244,59 @@ fn gpu_matches_cpu_under_a_cie_sky_with_sky_visibility() {
     );
     // The map really shades: a wall's pixel differs from the open-sky vertical value somewhere.
     assert!(amb.values.chunks(5).any(|v| v[0] < 0.9));
+}
+
+#[test]
+fn pooled_buffers_give_the_same_frames_and_do_not_grow() {
+    // Frames of one size reuse the pool's buffers: the same bits as the first frame (every
+    // pass overwrites what it writes, so old contents never show), and no more pooled memory
+    // after the second frame than after the first. A frame of another size in between, or
+    // rain with fewer streaks, does not leak into the next.
+    let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let (scene, cam) = street();
+    let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let light = SceneLight {
+        sky: &sky,
+        ambient: &amb,
+    };
+    let h = Haze::new(0.01, [0.4; 3]).unwrap();
+    let region = RainRegion::new(30.0, &[1.0, 1.5, 2.0], 4.0, [1.0, 0.0, 0.0], 0.2, 3).unwrap();
+    let shading = RainShading::open_sky();
+    let rf = RainFrame {
+        region: &region,
+        exposure_s: 1.0 / 30.0,
+        camera_velocity_m_s: Vec3::ZERO,
+        ground: true,
+        shelter: &[],
+        shading: &shading,
+    };
+    let boxes = SceneRef::Boxes(&scene);
+    assert_eq!(gpu.pooled_bytes(), 0);
+    let first = gpu
+        .render(boxes, &cam, &light, Some(&h), Some(&rf))
+        .unwrap();
+    let after_one = gpu.pooled_bytes();
+    assert!(after_one >= (cam.pixels() * 4 * 7) as u64, "{after_one}");
+    let small = Camera::new(
+        40,
+        30,
+        [30.0, 30.0, 20.0, 15.0],
+        Vec3::new(0.0, 1.6, 0.0),
+        Mat3::IDENTITY,
+    )
+    .unwrap();
+    gpu.render(boxes, &small, &light, None, None).unwrap();
+    let dry = RainRegion::new(1.0, &[1.0], 2.0, [0.0; 3], 0.0, 9).unwrap();
+    let drizzle = RainFrame { region: &dry, ..rf };
+    gpu.render(boxes, &cam, &light, Some(&h), Some(&drizzle))
+        .unwrap();
+    let again = gpu
+        .render(boxes, &cam, &light, Some(&h), Some(&rf))
+        .unwrap();
+    assert_eq!(again, first);
+    let settled = gpu.pooled_bytes();
+    gpu.render(boxes, &cam, &light, Some(&h), Some(&rf))
+        .unwrap();
+    assert_eq!(gpu.pooled_bytes(), settled);
 }

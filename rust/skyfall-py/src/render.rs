@@ -10,13 +10,14 @@ use numpy::{
     PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
+use skyfall_core::frame::scene::SceneLight;
+use skyfall_core::frame::srgb8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
 use skyfall_core::frame::{FrameOut, SceneRef, check_frame_size, render_into};
 use skyfall_core::haze::Haze;
-use skyfall_core::photo8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
 use skyfall_core::rain::drops::{RainMethod, RainRegion};
 use skyfall_core::rain::streaks::{RainFrame, RainShading};
 use skyfall_core::ranges;
-use skyfall_core::scene::boxes::{BoxScene, SceneBox, SceneLight};
+use skyfall_core::scene::boxes::{BoxScene, SceneBox};
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::scene::lights::Light;
 use skyfall_core::sky::Sky;

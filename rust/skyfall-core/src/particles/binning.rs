@@ -99,8 +99,8 @@ pub fn bin_by_tiles(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::particles::Particle as Drop;
     use crate::particles::streak::screen_streak;
-    use crate::rain::drops::Drop;
     use crate::scene::camera::Camera;
     use glam::Vec2;
     use glam::{Mat3, Vec3};

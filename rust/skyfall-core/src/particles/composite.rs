@@ -24,8 +24,9 @@ pub trait Accumulator {
     /// Per-streak values the accumulator needs (its light, arranged as the accumulator reads
     /// it), made once per streak and band.
     type Streak;
-    /// The per-streak values of `light`, the streak's received light per channel.
-    fn streak(&self, light: Vec3) -> Self::Streak;
+    /// The per-streak values of `light`, the streak's received light per channel, and `r`,
+    /// the share of it the streak shows.
+    fn streak(&self, light: Vec3, r: f32) -> Self::Streak;
     /// Four consecutive pixels of a row from `i` (i + 4 ≤ the band's pixels).
     fn add_x4(&mut self, s: &Self::Streak, i: usize, a: Vec4, inv_z: Vec4);
     /// One pixel.
@@ -56,7 +57,7 @@ pub fn composite_band<A: Accumulator>(
         if let Some(&ahead) = list.get(n + 8) {
             std::hint::black_box(streaks[ahead as usize].touch());
         }
-        let st = acc.streak(s.light());
+        let st = acc.streak(s.light(), s.reflectance());
         let walked = for_each_fragment_x4(s, y0, rows, w, cols.clone(), |i, a, inv_z| {
             let Some(end) = i.checked_add(4).filter(|&e| e <= px) else {
                 return;
@@ -79,7 +80,7 @@ pub fn composite_band<A: Accumulator>(
 }
 
 /// The float frame's accumulator over a band: the colour composited in place,
-/// C ← C + a·r·(I_R − C); the coverage product ∏(1 − a) (in `alpha`, turned into 1 − it by
+/// C ← C + a·r·(I_R − C) (r per streak); the coverage product ∏(1 − a) (in `alpha`, turned into 1 − it by
 /// [`ColourAccumulator::finish`]) and the nearest visible fragment's depth.
 pub struct ColourAccumulator<'a> {
     /// Linear RGB of the band, 3 per pixel.
@@ -88,25 +89,17 @@ pub struct ColourAccumulator<'a> {
     pub alpha: &'a mut [f32],
     /// Nearest visible depth per pixel, m (inf: none).
     pub rain_depth_m: &'a mut [f32],
-    /// r, the share of the drop's own light.
-    pub reflectance: f32,
 }
 
 impl<'a> ColourAccumulator<'a> {
     /// Starts a band: the coverage product at 1, no depth.
-    pub fn new(
-        rgb: &'a mut [f32],
-        alpha: &'a mut [f32],
-        rain_depth_m: &'a mut [f32],
-        reflectance: f32,
-    ) -> Self {
+    pub fn new(rgb: &'a mut [f32], alpha: &'a mut [f32], rain_depth_m: &'a mut [f32]) -> Self {
         alpha.fill(1.0);
         rain_depth_m.fill(f32::INFINITY);
         ColourAccumulator {
             rgb,
             alpha,
             rain_depth_m,
-            reflectance,
         }
     }
 
@@ -121,10 +114,10 @@ impl<'a> ColourAccumulator<'a> {
 impl Accumulator for ColourAccumulator<'_> {
     /// The light per channel, and as the three vectors of four pixels' twelve interleaved
     /// colour values: R G B R | G B R G | B R G B.
-    type Streak = ([f32; 3], [Vec4; 3]);
+    type Streak = ([f32; 3], [Vec4; 3], f32);
 
     #[inline(always)]
-    fn streak(&self, light: Vec3) -> Self::Streak {
+    fn streak(&self, light: Vec3, r: f32) -> Self::Streak {
         let [lr, lg, lb] = light.to_array();
         (
             [lr, lg, lb],
@@ -133,14 +126,15 @@ impl Accumulator for ColourAccumulator<'_> {
                 Vec4::new(lg, lb, lr, lg),
                 Vec4::new(lb, lr, lg, lb),
             ],
+            r,
         )
     }
 
     #[inline(always)]
-    fn add_x4(&mut self, (_, lv): &Self::Streak, i: usize, a: Vec4, inv_z: Vec4) {
+    fn add_x4(&mut self, (_, lv, r): &Self::Streak, i: usize, a: Vec4, inv_z: Vec4) {
         let end = i + 4;
         // As `add`, lane by lane (same bits).
-        let ar = a * self.reflectance;
+        let ar = a * *r;
         let ars = [ar.xxxy(), ar.yyzz(), ar.zwww()];
         let c = &mut self.rgb[3 * i..3 * end];
         for (m, (ar, l)) in ars.iter().zip(lv).enumerate() {
@@ -155,8 +149,8 @@ impl Accumulator for ColourAccumulator<'_> {
     }
 
     #[inline(always)]
-    fn add(&mut self, (light, _): &Self::Streak, i: usize, a: f32, inv_z: f32) {
-        let ar = a * self.reflectance;
+    fn add(&mut self, (light, _, r): &Self::Streak, i: usize, a: f32, inv_z: f32) {
+        let ar = a * r;
         for (c, l) in self.rgb[3 * i..3 * i + 3].iter_mut().zip(light) {
             *c += ar * (l - *c);
         }
@@ -186,12 +180,7 @@ pub fn bin_by_bands(cam: &Camera, streaks: &[ScreenStreak]) -> (Vec<u32>, Vec<u3
 
 /// Composites prepared streaks (far to near, see [`crate::rain::streaks::prepare`]) over a
 /// whole frame, bands of rows in parallel; each band draws only the streaks binned to it.
-pub fn composite_streaks(
-    cam: &Camera,
-    streaks: &[ScreenStreak],
-    reflectance: f32,
-    t: RainTargets<'_>,
-) {
+pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], t: RainTargets<'_>) {
     let w = cam.width as usize;
     let band = BAND_ROWS * w;
     let (offsets, indices) = bin_by_bands(cam, streaks);
@@ -203,17 +192,7 @@ pub fn composite_streaks(
         .enumerate()
         .for_each(|(bi, (((rgb, depth), alpha), rdepth))| {
             let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
-            composite_band_colour(
-                streaks,
-                list,
-                bi * BAND_ROWS,
-                w,
-                depth,
-                rgb,
-                alpha,
-                rdepth,
-                reflectance,
-            );
+            composite_band_colour(streaks, list, bi * BAND_ROWS, w, depth, rgb, alpha, rdepth);
         });
 }
 
@@ -230,14 +209,12 @@ pub fn composite_band_colour(
     rgb: &mut [f32],
     alpha: &mut [f32],
     rain_depth_m: &mut [f32],
-    reflectance: f32,
 ) {
     let px = depth.len();
     let mut acc = ColourAccumulator::new(
         &mut rgb[..3 * px],
         &mut alpha[..px],
         &mut rain_depth_m[..px],
-        reflectance,
     );
     composite_band(streaks, list, y0, px / w, w, 0..w, depth, &mut acc);
     acc.finish();

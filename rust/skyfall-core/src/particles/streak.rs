@@ -15,8 +15,8 @@
 //! [`super::walk`] and the GPU's `rain.wgsl` compute the same values, and
 //! [`ScreenStreak::packed`] is the GPU's packing contract.
 
+use super::Particle;
 use super::num::{ceil_nonneg, clamp01, floor_nonneg, idx_f32, least, pos};
-use crate::rain::drops::Drop;
 use crate::scene::camera::Camera;
 use glam::{Vec2, Vec3, Vec4};
 
@@ -36,6 +36,9 @@ pub struct ScreenStreak {
     pub(crate) min: Vec2,
     pub(crate) max: Vec2,
     pub(crate) light: Vec3,
+    /// r, the share of its own light the particle shows (I = r·L + (1 − r)·background):
+    /// set by its effect, so particles of several effects composite in one list.
+    pub(crate) reflectance: f32,
     /// Unit direction a → b (+y for a dot) and length, px: per streak, not per pixel.
     pub(crate) dir: Vec2,
     pub(crate) len: f32,
@@ -67,7 +70,7 @@ pub(crate) fn reach(wa: f32, wb: f32) -> f32 {
 /// (the camera's pose is the one at the end of the exposure); None when it is behind.
 pub fn screen_streak(
     cam: &Camera,
-    d: &Drop,
+    d: &Particle,
     exposure_s: f32,
     camera_velocity_m_s: Vec3,
 ) -> Option<ScreenStreak> {
@@ -133,6 +136,7 @@ pub fn screen_streak(
         min,
         max,
         light: Vec3::ONE,
+        reflectance: 1.0,
         dir,
         len,
         inv_len,
@@ -153,9 +157,14 @@ impl ScreenStreak {
         self.light
     }
 
+    /// r, the share of its own light it shows.
+    pub fn reflectance(&self) -> f32 {
+        self.reflectance
+    }
+
     /// The streak as 16 floats for the GPU pass: a.xy, the unit direction | length, reach
     /// (the distance from the axis beyond which a pixel gets no coverage), w_a, w_b | 1/z_a,
-    /// 1/z_b, α, 0 | light rgb, 0. Direction, length and reach are the values
+    /// 1/z_b, α, r | light rgb, 0. Direction, length and reach are the values
     /// [`Self::fragment`] uses, so the shader does not compute its own.
     pub fn packed(&self) -> [f32; 16] {
         [
@@ -170,7 +179,7 @@ impl ScreenStreak {
             self.inv_za,
             self.inv_zb,
             self.alpha,
-            0.0,
+            self.reflectance,
             self.light.x,
             self.light.y,
             self.light.z,
@@ -388,7 +397,7 @@ mod tests {
                 rng.random_range(-9.0..-2.0),
                 rng.random_range(-2.0..2.0),
             );
-            let d = Drop {
+            let d = Particle {
                 position_m: p,
                 velocity_m_s: v,
                 diameter_m: rng.random_range(0.5e-3..4e-3),
@@ -419,7 +428,7 @@ mod tests {
             "{checked} streaks, {clipped} clipped"
         );
         // off the frame entirely: nothing
-        let off = Drop {
+        let off = Particle {
             position_m: Vec3::new(5.0, 0.0, -1.0),
             velocity_m_s: Vec3::new(0.0, -6.0, 0.0),
             diameter_m: 2e-3,

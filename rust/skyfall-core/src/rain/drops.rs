@@ -103,19 +103,9 @@ impl RainRegion {
     }
 }
 
-/// One drop at the frame's time.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Drop {
-    /// Position at the end of the exposure relative to the region's centre (a frame's: the
-    /// camera's position), m: kept small, so f32 holds it to ~1e-7 m wherever the world is.
-    pub position_m: Vec3,
-    /// Velocity, m/s.
-    pub velocity_m_s: Vec3,
-    /// Diameter, m.
-    pub diameter_m: f32,
-    /// Which voxel and which drop in it: (ix, iy, iz, bin, index), stable across frames.
-    pub id: [i64; 5],
-}
+/// A raindrop is a particle of the toolkit: its position (relative to the frame's camera),
+/// velocity, diameter and identity (voxel, diameter bin, index in the voxel).
+pub use crate::particles::Particle as Drop;
 
 /// Fall speeds per diameter bin, tabulated: Beard's law (a logarithm, a polynomial and an
 /// exponential per call) at `SPEED_STEPS` + 1 evenly spaced diameters of each bin, read back by
@@ -208,12 +198,6 @@ fn voxel_drops(
             diameter_m: (d_mm * 1e-3) as f32,
             id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
         });
-    }
-}
-
-impl crate::particles::voxels::Anchored for Drop {
-    fn position_m(&self) -> Vec3 {
-        self.position_m
     }
 }
 

@@ -95,6 +95,7 @@ pub fn prepare(
         .filter_map(|d| {
             screen_streak(cam, d, exposure_s, camera_velocity_m_s).map(|mut s| {
                 s.light = shading.drop_light(eye + d.position_m);
+                s.reflectance = shading.reflectance;
                 s
             })
         })
@@ -184,7 +185,7 @@ pub fn composite(
     t: RainTargets<'_>,
 ) -> RainStats {
     let (streaks, stats) = prepare(cam, drops, exposure_s, Vec3::ZERO, shading);
-    composite_streaks(cam, &streaks, shading.reflectance, t);
+    composite_streaks(cam, &streaks, t);
     stats
 }
 
@@ -233,7 +234,12 @@ mod tests {
             .collect();
         let mut shading = RainShading::open_sky();
         shading.drop_radiance = 1.3;
-        let (streaks, _) = prepare(&cam, &drops, 1.0 / 30.0, Vec3::ZERO, &shading);
+        let (mut streaks, _) = prepare(&cam, &drops, 1.0 / 30.0, Vec3::ZERO, &shading);
+        // Each particle carries its own r (particles of several effects share one list).
+        assert!(streaks.iter().all(|s| s.reflectance == shading.reflectance));
+        for s in &mut streaks {
+            s.reflectance = rng.random_range(0.1..1.0);
+        }
         assert!(streaks.len() > 300);
         let n = w * h;
         let background: Vec<f32> = (0..3 * n).map(|_| rng.random()).collect();
@@ -250,7 +256,6 @@ mod tests {
         composite_streaks(
             &cam,
             &streaks,
-            0.5,
             RainTargets {
                 rgb: &mut rgb,
                 depth_m: &depth,
@@ -277,7 +282,7 @@ mod tests {
                     continue;
                 }
                 for (c, l) in c.iter_mut().zip(s.light.to_array()) {
-                    *c += a * 0.5 * (l - *c);
+                    *c += a * s.reflectance * (l - *c);
                 }
                 keep *= 1.0 - a;
                 near = near.min(z);

@@ -3,7 +3,7 @@
 // kept line for line comparable. Prepended with common.wgsl.
 
 struct RainParams {
-    reflectance: f32,
+    streak_count: u32,
     tiles_x: u32,
     tile_w: u32,
     tile_h: u32,
@@ -70,7 +70,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let light = streaks[4u * k + 3u].xyz;
         let fa = s2.z * cov;
-        let ar = fa * params.reflectance;
+        let ar = fa * s2.w;  // r, per streak
         c += ar * (light - c);
         keep *= 1.0 - fa;
         z_min = min(z_min, z);

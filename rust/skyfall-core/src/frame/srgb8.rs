@@ -1,5 +1,5 @@
-//! The CPU backend's fast path for 8-bit photos: sRGB bytes in, sRGB bytes out, with the
-//! haze and the rain streaks of [`crate::frame::render`] fused into one pass: bands of rows in
+//! The 8-bit output stage, for 8-bit photos: sRGB bytes in, sRGB bytes out, the frame's
+//! passes (haze and particles, [`super::passes::Passes`]) drawn in one pass: bands of rows in
 //! parallel, each cut into tiles of 128 columns drawn one after the other.
 //!
 //! The rain is composited far to near as in [`crate::particles::composite::composite_streaks`], but
@@ -12,9 +12,10 @@
 //! encoded once, four at a time. The result equals the float frame encoded to 8 bits up to the
 //! rounding of the reassociated sums (tests: every byte within 1 code, nearly all identical).
 
+use super::check_frame_size;
+use super::passes::Passes;
 use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
-use crate::frame::check_frame_size;
 use crate::haze::Haze;
 use crate::particles::binning::bin_by_tiles;
 use crate::particles::composite::{Accumulator, composite_band};
@@ -113,13 +114,11 @@ pub fn render_photo8(
     }
     crate::haze::check_depth(photo.depth_m)?;
 
-    let (streaks, stats) = match rain {
-        Some(rf) => {
-            let (s, st, drops) = rf.streaks(cam)?;
-            (s, Some(Photo8Stats { rain: st, drops }))
-        }
-        None => (Vec::new(), None),
-    };
+    let passes = Passes::prepare(cam, haze, rain)?;
+    let stats = passes
+        .rain_report()
+        .map(|(rain, drops)| Photo8Stats { rain, drops });
+    let streaks: &[ScreenStreak] = passes.particles.as_ref().map_or(&[], |p| &p.streaks);
     if haze.is_none() && streaks.is_empty() {
         // Nothing to draw: encode(decode(b)) = b for every byte (tested), so the bytes as they are.
         out.srgb.copy_from_slice(photo.srgb);
@@ -128,12 +127,11 @@ pub fn render_photo8(
         }
         return Ok(stats);
     }
-    let r = rain.map_or(0.0, |rf| rf.shading.reflectance);
     // Each band of rows is cut into tiles of TILE_W columns, rasterised and shaded one after
     // the other: a tile's scratch and depth stay in the core's L1.
     let tiles_x = w.div_ceil(TILE_W);
     let (offsets, indices) = bin_by_tiles(
-        &streaks,
+        streaks,
         cam.width,
         cam.height,
         TILE_W as u32,
@@ -192,28 +190,26 @@ pub fn render_photo8(
                         }
                         if grey {
                             raster_tile::<1>(
-                                &streaks,
+                                streaks,
                                 mine,
                                 y0,
                                 rows,
                                 w,
                                 cols.clone(),
                                 depth,
-                                r,
                                 p,
                                 q,
                                 cover,
                             );
                         } else {
                             raster_tile::<3>(
-                                &streaks,
+                                streaks,
                                 mine,
                                 y0,
                                 rows,
                                 w,
                                 cols.clone(),
                                 depth,
-                                r,
                                 p,
                                 q,
                                 cover,
@@ -292,21 +288,21 @@ struct AffineAccumulator<'a, const K: usize> {
     p: &'a mut [f32],
     q: [&'a mut [f32]; K],
     cover: &'a mut [f32],
-    r: f32,
 }
 
 impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
-    type Streak = [f32; 3];
+    /// The light per channel and r.
+    type Streak = ([f32; 3], f32);
 
     #[inline(always)]
-    fn streak(&self, light: Vec3) -> [f32; 3] {
-        light.to_array()
+    fn streak(&self, light: Vec3, r: f32) -> Self::Streak {
+        (light.to_array(), r)
     }
 
     #[inline(always)]
-    fn add_x4(&mut self, l: &[f32; 3], i: usize, a: Vec4, _inv_z: Vec4) {
+    fn add_x4(&mut self, (l, r): &Self::Streak, i: usize, a: Vec4, _inv_z: Vec4) {
         let end = i + 4;
-        let ar = a * self.r;
+        let ar = a * *r;
         let keep = Vec4::ONE - ar;
         (Vec4::from_slice(&self.p[i..end]) * keep).write_to_slice(&mut self.p[i..end]);
         for (q, &lc) in self.q.iter_mut().zip(l) {
@@ -319,8 +315,8 @@ impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
     }
 
     #[inline(always)]
-    fn add(&mut self, l: &[f32; 3], i: usize, a: f32, _inv_z: f32) {
-        let ar = a * self.r;
+    fn add(&mut self, (l, r): &Self::Streak, i: usize, a: f32, _inv_z: f32) {
+        let ar = a * r;
         let keep = 1.0 - ar;
         self.p[i] *= keep;
         for (q, &lc) in self.q.iter_mut().zip(l) {
@@ -345,7 +341,6 @@ fn raster_tile<const K: usize>(
     w: usize,
     cols: std::ops::Range<usize>,
     depth: &[f32],
-    r: f32,
     p: &mut [f32],
     q: &mut [f32],
     cover: &mut [f32],
@@ -358,7 +353,7 @@ fn raster_tile<const K: usize>(
     } else {
         &mut cover[..px]
     };
-    let mut acc = AffineAccumulator::<K> { p, q, cover, r };
+    let mut acc = AffineAccumulator::<K> { p, q, cover };
     composite_band(streaks, mine, y0, rows, w, cols, depth, &mut acc);
 }
 
@@ -521,10 +516,10 @@ fn shade_row_x1<const K: usize>(
 mod tests {
     use super::*;
     use crate::color::{encode_srgb8, encode_srgb8_formula};
+    use crate::frame::scene::SceneLight;
     use crate::frame::{SceneRef, render};
     use crate::rain::drops::RainRegion;
     use crate::rain::streaks::RainShading;
-    use crate::scene::boxes::SceneLight;
     use crate::scene::lights::Light;
     use crate::sky::ambient::AmbientMap;
     use crate::sky::{Sky, cie::SkyKind};

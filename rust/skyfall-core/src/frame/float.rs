@@ -1,186 +1,15 @@
-//! The CPU backend's frame: passes fused row by row, so a row is produced, hazed and left
-//! while it is in cache.
+//! The float output stage: the linear float32 frame and its layers, band by band (see the
+//! module docs of [`super`]).
 
-use crate::error::{Error, Param, Result};
-use crate::haze::{Haze, apply_row, check_depth};
+use super::passes::Passes;
+use super::scene::{SceneLight, shade_pixel};
+use super::{FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo};
+use crate::error::Result;
+use crate::haze::{Haze, apply_row};
 use crate::particles::composite::{BAND_ROWS, bin_by_bands, composite_band_colour};
-use crate::rain::streaks::{RainFrame, RainStats};
-use crate::scene::boxes::{BoxScene, SceneLight, shade_pixel};
+use crate::rain::streaks::RainFrame;
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
-
-/// Largest frame (rgb + depth + layers, float32) the renderers allocate: 4 GiB.
-pub const FRAME_BUDGET_BYTES: u64 = 4 << 30;
-/// float32 values per pixel a frame may hold: rgb, depth and up to four layers.
-const VALUES_PER_PIXEL: u64 = 8;
-
-/// What the frame shows.
-#[derive(Debug, Clone, Copy)]
-pub enum SceneRef<'a> {
-    /// The procedural box scene, ray cast.
-    Boxes(&'a BoxScene),
-    /// A photo (linear RGB, H·W·3) with its depth map (H·W, metres along the axis, inf = sky).
-    Photo {
-        /// Linear RGB.
-        rgb: &'a [f32],
-        /// Depth, m.
-        depth_m: &'a [f32],
-    },
-}
-
-/// What the rain pass wrote.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RainBuffers {
-    /// Streak coverage 1 − ∏(1 − aᵢ), H·W.
-    pub alpha: Vec<f32>,
-    /// Nearest visible streak depth, m (inf: none), H·W.
-    pub depth_m: Vec<f32>,
-    /// Streaks drawn and culled.
-    pub stats: RainStats,
-    /// Drops generated (in the voxels that can reach the view).
-    pub drops: usize,
-}
-
-/// A rendered frame's buffers.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FrameBuffers {
-    /// Linear RGB, H·W·3.
-    pub rgb: Vec<f32>,
-    /// Depth along the optical axis, m (inf for sky), H·W.
-    pub depth_m: Vec<f32>,
-    /// Haze transmittance e^(−σ d), H·W, when the haze pass ran.
-    pub transmittance: Option<Vec<f32>>,
-    /// Rain layers, when the rain pass ran.
-    pub rain: Option<RainBuffers>,
-}
-
-/// Refuses frames over [`FRAME_BUDGET_BYTES`] before allocating.
-pub fn check_frame_size(cam: &Camera) -> Result<()> {
-    let bytes = cam.pixels() as u128 * u128::from(VALUES_PER_PIXEL) * 4;
-    if bytes > u128::from(FRAME_BUDGET_BYTES) {
-        let what = format!("a {}x{} frame", cam.width, cam.height);
-        return Err(Error::too_large(what, bytes, FRAME_BUDGET_BYTES));
-    }
-    Ok(())
-}
-
-/// Checks a photo scene's arrays against the camera.
-pub fn check_photo(cam: &Camera, rgb: &[f32], depth_m: &[f32]) -> Result<()> {
-    let n = cam.pixels();
-    if rgb.len() != 3 * n {
-        return Err(Error::Length {
-            param: Param {
-                name: "image",
-                index: None,
-            },
-            len: rgb.len(),
-            expected: 3 * n,
-        });
-    }
-    if depth_m.len() != n {
-        return Err(Error::Length {
-            param: Param {
-                name: "depth_m",
-                index: None,
-            },
-            len: depth_m.len(),
-            expected: n,
-        });
-    }
-    check_depth(depth_m)
-}
-
-/// Where [`render_into`] writes a frame: buffers the caller owns, every value overwritten
-/// (the Python binding passes numpy's arrays, so a frame's megabytes come from numpy's
-/// allocator, which asks for huge pages: a fresh frame then costs a few dozen page faults
-/// instead of one per 4 KiB).
-pub struct FrameOut<'a> {
-    /// Linear RGB, H·W·3.
-    pub rgb: &'a mut [f32],
-    /// Depth along the optical axis, m, H·W.
-    pub depth_m: &'a mut [f32],
-    /// Haze transmittance, H·W: given exactly when there is haze.
-    pub transmittance: Option<&'a mut [f32]>,
-    /// Rain coverage and nearest streak depth, H·W each: given exactly when it rains.
-    pub rain: Option<(&'a mut [f32], &'a mut [f32])>,
-}
-
-/// What [`render_into`] reports of the rain: streaks drawn and culled, drops generated.
-pub type RainReport = (RainStats, usize);
-
-impl FrameOut<'_> {
-    /// Checks the buffers against a `cam` frame with or without haze and rain: every length,
-    /// and the layers given exactly when they are drawn.
-    pub fn check(&self, cam: &Camera, haze: bool, rain: bool) -> Result<()> {
-        let n = cam.pixels();
-        let length = |name: &'static str, len: usize, expected: usize| Error::Length {
-            param: Param { name, index: None },
-            len,
-            expected,
-        };
-        if self.rgb.len() != 3 * n {
-            return Err(length("rgb", self.rgb.len(), 3 * n));
-        }
-        if self.depth_m.len() != n {
-            return Err(length("depth_m", self.depth_m.len(), n));
-        }
-        let t = self.transmittance.as_ref().map_or(0, |t| t.len());
-        if t != if haze { n } else { 0 } || haze != self.transmittance.is_some() {
-            return Err(length("transmittance", t, if haze { n } else { 0 }));
-        }
-        let (a, d) = self
-            .rain
-            .as_ref()
-            .map_or((0, 0), |(a, d)| (a.len(), d.len()));
-        if a != if rain { n } else { 0 } || rain != self.rain.is_some() {
-            return Err(length("rain_alpha", a, if rain { n } else { 0 }));
-        }
-        if d != a {
-            return Err(length("rain_depth_m", d, a));
-        }
-        Ok(())
-    }
-}
-
-impl FrameBuffers {
-    /// A `cam` frame's buffers (with the transmittance layer when `haze`, the rain layers when
-    /// `rain`), sized after the frame is checked to fit, filled by a backend's `render_into`.
-    pub fn filled<E: From<Error>>(
-        cam: &Camera,
-        haze: bool,
-        rain: bool,
-        render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
-    ) -> std::result::Result<Self, E> {
-        check_frame_size(cam)?;
-        let n = cam.pixels();
-        let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
-        let mut trans = haze.then(|| vec![0.0f32; n]);
-        let mut layers = rain.then(|| (vec![0.0f32; n], vec![0.0f32; n]));
-        let out = FrameOut {
-            rgb: &mut rgb,
-            depth_m: &mut depth,
-            transmittance: trans.as_deref_mut(),
-            rain: layers
-                .as_mut()
-                .map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
-        };
-        let report = render_into(out)?;
-        let rain = layers
-            .zip(report)
-            .map(|((alpha, depth_m), (stats, drops))| RainBuffers {
-                alpha,
-                depth_m,
-                stats,
-                drops,
-            });
-        Ok(FrameBuffers {
-            rgb,
-            depth_m: depth,
-            transmittance: trans,
-            rain,
-        })
-    }
-}
 
 /// Renders a frame on the CPU: scene (ray cast under `light`, or photo copy) and haze fused
 /// row by row, then the rain streaks over the result.
@@ -217,19 +46,13 @@ pub fn render_into(
         transmittance: trans,
         rain: layers,
     } = out;
-    // The particles first (they do not depend on the scene), binned to the bands.
-    let prepared = match rain.zip(layers) {
-        Some((rf, layers)) => {
-            let (streaks, stats, drops) = rf.streaks(cam)?;
-            let bins = bin_by_bands(cam, &streaks);
-            Some((
-                (rf.shading.reflectance, streaks, bins, stats, drops),
-                layers,
-            ))
-        }
-        None => None,
-    };
-    let (rain, layers) = prepared.unzip();
+    // The passes first (the particles do not depend on the scene), the particles binned to
+    // the bands.
+    let passes = Passes::prepare(cam, haze, rain)?;
+    let binned = passes
+        .particles
+        .as_ref()
+        .map(|p| (p.streaks.as_slice(), bin_by_bands(cam, &p.streaks)));
     let band = BAND_ROWS * w;
     let bands = cam.pixels().div_ceil(band);
     let mut t_bands: Vec<Option<&mut [f32]>> = match trans {
@@ -245,9 +68,7 @@ pub fn render_into(
         None => (0..bands).map(|_| None).collect(),
     };
     let u2 = cam.column_slopes_sq();
-    let particles = rain
-        .as_ref()
-        .map(|(r, streaks, bins, ..)| (*r, streaks.as_slice(), bins));
+    let particles = binned.as_ref().map(|(streaks, bins)| (*streaks, bins));
     // The pipeline, band by band while the band is in cache: the scene stage, then the effect
     // passes in physical order (haze, rain).
     rgb.par_chunks_mut(3 * band)
@@ -276,16 +97,16 @@ pub fn render_into(
                     );
                 }
             }
-            if let (Some((r, streaks, (offsets, indices))), Some((alpha, rain_depth))) =
+            if let (Some((streaks, (offsets, indices))), Some((alpha, rain_depth))) =
                 (particles, rain_band.as_mut())
             {
                 let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
                 composite_band_colour(
-                    streaks, list, y0, w, depth_band, rgb_band, alpha, rain_depth, r,
+                    streaks, list, y0, w, depth_band, rgb_band, alpha, rain_depth,
                 );
             }
         });
-    Ok(rain.map(|(_, _, _, stats, drops)| (stats, drops)))
+    Ok(passes.rain_report())
 }
 
 /// The scene stage of one row: the box scene ray cast, or the photo's row copied.
@@ -316,7 +137,9 @@ fn scene_row(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::{Error, Param};
     use crate::scene::boxes;
+    use crate::scene::boxes::BoxScene;
     use crate::sky::ambient::AmbientMap;
     use crate::sky::{Sky, cie::SkyKind};
     use glam::{Mat3, Vec3};
@@ -352,7 +175,7 @@ mod tests {
         for y in 0..30u32 {
             for x in 0..40u32 {
                 let i = (y * 40 + x) as usize;
-                let (c, d) = boxes::shade_pixel(&scene, &cam, &light, x, y);
+                let (c, d) = super::super::scene::shade_pixel(&scene, &cam, &light, x, y);
                 let t = if d.is_infinite() {
                     0.0
                 } else {

@@ -1,0 +1,200 @@
+//! A frame is one pipeline: the scene stage (a photo and its depth, or the box scene ray
+//! cast), then the effect passes in physical order (haze, then the particles: rain now,
+//! snow next; the windshield will come last, as a full-frame stage since it refracts what lies
+//! behind the glass), then an output stage. The passes are prepared once per frame
+//! ([`passes::Passes`]: the particles made, lit, projected and sorted far to near), and an
+//! output stage draws them:
+//!
+//! - [`float`]: the linear float32 frame with its layers, band by band (16 rows) while the
+//!   band is in cache: scene, haze, particles;
+//! - [`srgb8`]: 8-bit sRGB for 8-bit photos, in tiles: the particles into each pixel's affine
+//!   map first, then each pixel decoded, hazed, mapped and encoded once;
+//! - the GPU backend (`skyfall-gpu`), one pass per effect on the device.
+//!
+//! The layers a frame can carry are declared once, in [`layers`].
+
+use crate::error::{Error, Param, Result};
+use crate::haze::check_depth;
+use crate::rain::streaks::RainStats;
+use crate::scene::boxes::BoxScene;
+use crate::scene::camera::Camera;
+
+pub mod float;
+pub mod passes;
+pub mod scene;
+pub mod srgb8;
+
+pub use float::{render, render_into};
+
+/// Largest frame (rgb + depth + layers, float32) the renderers allocate: 4 GiB.
+pub const FRAME_BUDGET_BYTES: u64 = 4 << 30;
+/// float32 values per pixel a frame may hold: rgb, depth and up to four layers.
+const VALUES_PER_PIXEL: u64 = 8;
+
+/// What the frame shows.
+#[derive(Debug, Clone, Copy)]
+pub enum SceneRef<'a> {
+    /// The procedural box scene, ray cast.
+    Boxes(&'a BoxScene),
+    /// A photo (linear RGB, H·W·3) with its depth map (H·W, metres along the axis, inf = sky).
+    Photo {
+        /// Linear RGB.
+        rgb: &'a [f32],
+        /// Depth, m.
+        depth_m: &'a [f32],
+    },
+}
+
+/// What the rain pass wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RainBuffers {
+    /// Streak coverage 1 − ∏(1 − aᵢ), H·W.
+    pub alpha: Vec<f32>,
+    /// Nearest visible streak depth, m (inf: none), H·W.
+    pub depth_m: Vec<f32>,
+    /// Streaks drawn and culled.
+    pub stats: RainStats,
+    /// Drops generated (in the voxels that can reach the view).
+    pub drops: usize,
+}
+
+/// A rendered frame's buffers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameBuffers {
+    /// Linear RGB, H·W·3.
+    pub rgb: Vec<f32>,
+    /// Depth along the optical axis, m (inf for sky), H·W.
+    pub depth_m: Vec<f32>,
+    /// Haze transmittance e^(−σ d), H·W, when the haze pass ran.
+    pub transmittance: Option<Vec<f32>>,
+    /// Rain layers, when the rain pass ran.
+    pub rain: Option<RainBuffers>,
+}
+
+/// Refuses frames over [`FRAME_BUDGET_BYTES`] before allocating.
+pub fn check_frame_size(cam: &Camera) -> Result<()> {
+    let bytes = cam.pixels() as u128 * u128::from(VALUES_PER_PIXEL) * 4;
+    if bytes > u128::from(FRAME_BUDGET_BYTES) {
+        let what = format!("a {}x{} frame", cam.width, cam.height);
+        return Err(Error::too_large(what, bytes, FRAME_BUDGET_BYTES));
+    }
+    Ok(())
+}
+
+/// Checks a photo scene's arrays against the camera.
+pub fn check_photo(cam: &Camera, rgb: &[f32], depth_m: &[f32]) -> Result<()> {
+    let n = cam.pixels();
+    if rgb.len() != 3 * n {
+        return Err(Error::Length {
+            param: Param {
+                name: "image",
+                index: None,
+            },
+            len: rgb.len(),
+            expected: 3 * n,
+        });
+    }
+    if depth_m.len() != n {
+        return Err(Error::Length {
+            param: Param {
+                name: "depth_m",
+                index: None,
+            },
+            len: depth_m.len(),
+            expected: n,
+        });
+    }
+    check_depth(depth_m)
+}
+
+/// Where [`render_into`] writes a frame: buffers the caller owns, every value overwritten
+/// (the Python binding passes numpy's arrays, so a frame's megabytes come from numpy's
+/// allocator, which asks for huge pages: a fresh frame then costs a few dozen page faults
+/// instead of one per 4 KiB).
+pub struct FrameOut<'a> {
+    /// Linear RGB, H·W·3.
+    pub rgb: &'a mut [f32],
+    /// Depth along the optical axis, m, H·W.
+    pub depth_m: &'a mut [f32],
+    /// Haze transmittance, H·W: given exactly when there is haze.
+    pub transmittance: Option<&'a mut [f32]>,
+    /// Rain coverage and nearest streak depth, H·W each: given exactly when it rains.
+    pub rain: Option<(&'a mut [f32], &'a mut [f32])>,
+}
+
+/// What [`render_into`] reports of the rain: streaks drawn and culled, drops generated.
+pub type RainReport = (RainStats, usize);
+
+impl FrameOut<'_> {
+    /// Checks the buffers against a `cam` frame with or without haze and rain: every length,
+    /// and the layers given exactly when they are drawn.
+    pub fn check(&self, cam: &Camera, haze: bool, rain: bool) -> Result<()> {
+        let n = cam.pixels();
+        let length = |name: &'static str, len: usize, expected: usize| Error::Length {
+            param: Param { name, index: None },
+            len,
+            expected,
+        };
+        if self.rgb.len() != 3 * n {
+            return Err(length("rgb", self.rgb.len(), 3 * n));
+        }
+        if self.depth_m.len() != n {
+            return Err(length("depth_m", self.depth_m.len(), n));
+        }
+        let t = self.transmittance.as_ref().map_or(0, |t| t.len());
+        if t != if haze { n } else { 0 } || haze != self.transmittance.is_some() {
+            return Err(length("transmittance", t, if haze { n } else { 0 }));
+        }
+        let (a, d) = self
+            .rain
+            .as_ref()
+            .map_or((0, 0), |(a, d)| (a.len(), d.len()));
+        if a != if rain { n } else { 0 } || rain != self.rain.is_some() {
+            return Err(length("rain_alpha", a, if rain { n } else { 0 }));
+        }
+        if d != a {
+            return Err(length("rain_depth_m", d, a));
+        }
+        Ok(())
+    }
+}
+
+impl FrameBuffers {
+    /// A `cam` frame's buffers (with the transmittance layer when `haze`, the rain layers when
+    /// `rain`), sized after the frame is checked to fit, filled by a backend's `render_into`.
+    pub fn filled<E: From<Error>>(
+        cam: &Camera,
+        haze: bool,
+        rain: bool,
+        render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
+    ) -> std::result::Result<Self, E> {
+        check_frame_size(cam)?;
+        let n = cam.pixels();
+        let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
+        let mut trans = haze.then(|| vec![0.0f32; n]);
+        let mut layers = rain.then(|| (vec![0.0f32; n], vec![0.0f32; n]));
+        let out = FrameOut {
+            rgb: &mut rgb,
+            depth_m: &mut depth,
+            transmittance: trans.as_deref_mut(),
+            rain: layers
+                .as_mut()
+                .map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
+        };
+        let report = render_into(out)?;
+        let rain = layers
+            .zip(report)
+            .map(|((alpha, depth_m), (stats, drops))| RainBuffers {
+                alpha,
+                depth_m,
+                stats,
+                drops,
+            });
+        Ok(FrameBuffers {
+            rgb,
+            depth_m: depth,
+            transmittance: trans,
+            rain,
+        })
+    }
+}

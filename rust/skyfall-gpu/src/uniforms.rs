@@ -1,0 +1,129 @@
+//! The passes' uniform blocks as `#[repr(C)]` Pod structs, each mirroring its WGSL struct
+//! field for field (vec4-sized fields: no implicit padding on either side).
+
+use bytemuck::{Pod, Zeroable};
+use skyfall_core::scene::camera::Camera;
+
+/// `Camera` in `shaders/common.wgsl`: the world_from_camera axes, the position (f32: the box
+/// scene's ray origin; particles arrive already projected), intrinsics and frame size.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct CameraUniform {
+    /// Right axis (xyz).
+    pub right: [f32; 4],
+    /// Up axis (xyz).
+    pub up: [f32; 4],
+    /// Back axis (xyz): the camera looks along −back.
+    pub back: [f32; 4],
+    /// Position, m (xyz).
+    pub pos: [f32; 4],
+    /// fx, fy, cx, cy, px.
+    pub intr: [f32; 4],
+    /// Width, height, px.
+    pub size: [u32; 4],
+}
+
+impl CameraUniform {
+    /// The block of `cam`.
+    pub fn new(cam: &Camera) -> Self {
+        let v = |a: glam::Vec3| [a.x, a.y, a.z, 0.0];
+        CameraUniform {
+            right: v(cam.rotation.x_axis),
+            up: v(cam.rotation.y_axis),
+            back: v(cam.rotation.z_axis),
+            pos: v(cam.eye()),
+            intr: [cam.fx, cam.fy, cam.cx, cam.cy],
+            size: [cam.width, cam.height, 0, 0],
+        }
+    }
+}
+
+/// `Haze` in `shaders/haze.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct HazeUniform {
+    /// Extinction σ, 1/m (x).
+    pub params: [f32; 4],
+    /// Airlight, linear RGB.
+    pub airlight: [f32; 4],
+}
+
+/// `RainParams` in `shaders/rain.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct RainUniform {
+    /// Streaks in the list (each carries its own r).
+    pub streak_count: u32,
+    /// Tiles per row.
+    pub tiles_x: u32,
+    /// Tile width, px.
+    pub tile_w: u32,
+    /// Tile height, px.
+    pub tile_h: u32,
+}
+
+/// `SceneInfo` in `shaders/scene_raycast.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct SceneUniform {
+    /// Ground albedo (rgb).
+    pub ground_albedo: [f32; 4],
+    /// Number of boxes, ground (0/1).
+    pub counts: [u32; 4],
+}
+
+/// `SceneBox` in `shaders/scene_raycast.wgsl` (a storage array's element).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct BoxElement {
+    /// Lower corner, m.
+    pub min_m: [f32; 4],
+    /// Upper corner, m.
+    pub max_m: [f32; 4],
+    /// Albedo.
+    pub albedo: [f32; 4],
+}
+
+/// `SkyInfo` in `shaders/scene_raycast.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct SkyUniform {
+    /// CIE a, b, c, d.
+    pub abcd: [f32; 4],
+    /// CIE e, scale (π / normalisation), kind (0 overcast, 1 general).
+    pub e_scale: [f32; 4],
+    /// Unit vector towards the sun.
+    pub sun: [f32; 4],
+}
+
+/// `AmbientInfo` in `shaders/scene_raycast.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct AmbientUniform {
+    /// Node (0, 0, 0), m, and the spacing, m.
+    pub origin_spacing: [f32; 4],
+    /// Nodes along x, y, z.
+    pub dims: [u32; 4],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_block_is_whole_vec4s() {
+        // WGSL uniform structs of vec4 fields have 16-byte strides: the Rust side must match.
+        for size in [
+            size_of::<CameraUniform>(),
+            size_of::<HazeUniform>(),
+            size_of::<RainUniform>(),
+            size_of::<SceneUniform>(),
+            size_of::<BoxElement>(),
+            size_of::<SkyUniform>(),
+            size_of::<AmbientUniform>(),
+        ] {
+            assert_eq!(size % 16, 0, "{size}");
+        }
+        assert_eq!(size_of::<CameraUniform>(), 96);
+    }
+}
