@@ -281,7 +281,7 @@ def test_python_messages_are_the_cores() -> None:
         with pytest.raises(ValueError) as core_err:
             _core.check_range(name, v, index)
         assert str(py_err.value) == str(core_err.value)
-    assert str(core_err.value) == "vertical_fov_deg = 179 is outside the valid range [0.001, 179) deg"
+    assert str(core_err.value) == "vertical_fov_deg = 179.0 is outside the valid range [0.001, 179) deg"
 
 
 def _rain_kwargs(**changes: Any) -> dict[str, Any]:
@@ -321,5 +321,5 @@ def test_core_entry_points_refuse_just_outside(name: str, call: Callable[[float]
 
 
 def test_camera_speed_is_checked_in_the_core() -> None:
-    with pytest.raises(ValueError, match=r"^velocity_m_s = 1001 is outside the valid range \[0, 1000\] m/s"):
+    with pytest.raises(ValueError, match=r"^velocity_m_s = 1001.0 is outside the valid range \[0, 1000\] m/s"):
         _render_core(camera_velocity_m_s=[1001.0, 0.0, 0.0])

@@ -27,7 +27,8 @@ impl fmt::Display for Param {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
     /// A number outside its valid range (NaN and infinities included).
-    #[error("{param} = {value} is outside the valid range {range}")]
+    /// (The value prints as Python writes a float: `180.0`, `1e-300`, but `NaN`.)
+    #[error("{param} = {value:?} is outside the valid range {range}")]
     OutOfRange {
         /// The offending parameter.
         param: Param,

@@ -400,7 +400,7 @@ mod tests {
             check_named("wind_m_s", Some(2), 61.0)
                 .unwrap_err()
                 .to_string(),
-            "wind_m_s[2] = 61 is outside the valid range [-60, 60] m/s"
+            "wind_m_s[2] = 61.0 is outside the valid range [-60, 60] m/s"
         );
         assert!(check_named("no_such", None, 0.0).is_err());
         assert!(SUN_AZIMUTH_DEG.check(1e300).is_ok() && SUN_AZIMUTH_DEG.check(INF).is_err());
