@@ -29,6 +29,9 @@ OOM_CHILD = textwrap.dedent(
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     if sys.argv[3] == "frame":
         Renderer(4096, 4096, backend="cpu").render(scenes.street(), weather)
+    elif sys.argv[3] == "textures":  # 24 textures of 4096^2: 1.5 GiB, within the texture budget
+        from skyfall import rain
+        rain.textures([1, 5, 10, 20], [1.0, 1.2, 1.4, 1.6, 1.8, 2.0], size_px=4096)
     else:  # the sky table at the documented maximum of azimuths: 2 x 257 MiB
         from skyfall import sky
         sky.horizontal_illuminance([[0.0, 1.0, 0.0]], scenes.street(), samples=65536)
@@ -39,7 +42,7 @@ OOM_CHILD = textwrap.dedent(
 
 @pytest.mark.parametrize(
     ("margin_mib", "warm", "what"),
-    [(8, "cold", "frame"), (64, "cold", "frame"), (8, "warm", "frame"), (200, "warm", "frame"), (300, "warm", "sky")],
+    [(8, "cold", "frame"), (64, "cold", "frame"), (8, "warm", "frame"), (200, "warm", "frame"), (300, "warm", "sky"), (100, "warm", "textures")],
 )
 def test_out_of_memory_is_a_memory_error(margin_mib: int, warm: str, what: str) -> None:
     start = time.monotonic()

@@ -124,6 +124,17 @@ pub fn try_filled<T: Clone>(what: &str, len: usize, value: T) -> Result<Vec<T>> 
     Ok(v)
 }
 
+/// [`try_filled`] for large buffers: reserved fallibly, then filled by the thread pool, so the
+/// pages are first touched in parallel (as the kernels that write them next would).
+pub fn try_filled_par<T: Clone + Send + Sync>(what: &str, len: usize, value: T) -> Result<Vec<T>> {
+    use rayon::prelude::*;
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| Error::out_of_memory::<T>(what, len))?;
+    v.par_extend(rayon::iter::repeat_n(value, len));
+    Ok(v)
+}
+
 /// [`Error::Cancelled`] once `cancel` is set: the check long loops make between chunks.
 #[inline]
 pub fn check_cancel(cancel: &std::sync::atomic::AtomicBool, what: &'static str) -> Result<()> {

@@ -57,7 +57,7 @@ impl FramePass for RainPass {
             ));
         };
         let cam = f.cam;
-        let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H);
+        let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H)?;
         // rain_near_m and the rain rate set how many streaks there are (the region's volume
         // goes as rain_near_m³).
         let mut packed: Vec<f32> = streaks.iter().flat_map(|s| s.packed()).collect();

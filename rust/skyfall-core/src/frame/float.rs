@@ -52,7 +52,8 @@ pub fn render_into(
     let binned = passes
         .particles
         .as_ref()
-        .map(|p| (p.streaks.as_slice(), bin_by_bands(cam, &p.streaks)));
+        .map(|p| bin_by_bands(cam, &p.streaks).map(|bins| (p.streaks.as_slice(), bins)))
+        .transpose()?;
     let band = BAND_ROWS * w;
     let bands = cam.pixels().div_ceil(band);
     let mut t_bands: Vec<Option<&mut [f32]>> = match trans {

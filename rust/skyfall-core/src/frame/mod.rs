@@ -13,7 +13,7 @@
 //!
 //! The layers a frame can carry are declared once, in [`layers`].
 
-use crate::error::{Error, Param, Result};
+use crate::error::{Error, Param, Result, try_filled_par};
 use crate::haze::check_depth;
 use crate::rain::streaks::RainStats;
 use crate::scene::boxes::BoxScene;
@@ -170,9 +170,14 @@ impl FrameBuffers {
     ) -> std::result::Result<Self, E> {
         check_frame_size(cam)?;
         let n = cam.pixels();
-        let (mut rgb, mut depth) = (vec![0.0f32; 3 * n], vec![0.0f32; n]);
-        let mut trans = haze.then(|| vec![0.0f32; n]);
-        let mut layers = rain.then(|| (vec![0.0f32; n], vec![0.0f32; n]));
+        // Reserved fallibly: out of memory is an error, never an abort.
+        let plane = |what: &str| try_filled_par(what, n, 0.0f32);
+        let (mut rgb, mut depth) = (try_filled_par("rgb", 3 * n, 0.0f32)?, plane("depth_m")?);
+        let mut trans = haze.then(|| plane("transmittance")).transpose()?;
+        let mut layers = match rain {
+            true => Some((plane("rain_alpha")?, plane("rain_depth_m")?)),
+            false => None,
+        };
         let out = FrameOut {
             rgb: &mut rgb,
             depth_m: &mut depth,

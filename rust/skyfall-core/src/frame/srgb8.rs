@@ -136,7 +136,7 @@ pub fn render_photo8(
         cam.height,
         TILE_W as u32,
         BAND_ROWS as u32,
-    );
+    )?;
     let u2 = cam.column_slopes_sq();
     let enc = Srgb8Encoder::new();
     let band = BAND_ROWS * w;

@@ -2,6 +2,7 @@
 //! that a tile walks only its own. Shared by both CPU outputs and the GPU pass.
 
 use super::streak::ScreenStreak;
+use crate::error::{Error, Result, try_filled};
 
 /// Per row of `tile_w` × `tile_h` tiles that a streak may touch, `f(row, first column, end
 /// column)` (end-exclusive), rows in order: its bounding box's columns when the box is a single
@@ -33,32 +34,23 @@ fn tile_spans(
     }
 }
 
-/// Streak indices per `tile` × `tile` pixel tile, in list order (see [`bin_by_tiles`]). For the
-/// GPU pass.
-pub fn bin_by_tile(
-    streaks: &[ScreenStreak],
-    width: u32,
-    height: u32,
-    tile: u32,
-) -> (Vec<u32>, Vec<u32>) {
-    bin_by_tiles(streaks, width, height, tile, tile)
-}
-
 /// Streak indices per `tile_w` × `tile_h` pixel tile (row-major tiles), in list order:
 /// (offsets, indices) with the tile t's streaks at `indices[offsets[t]..offsets[t + 1]]`.
-/// The two halves of the list are binned in parallel and joined tile by tile.
+/// The two halves of the list are binned in parallel and joined tile by tile. The lists are
+/// reserved fallibly ([`Error::OutOfMemory`]: heavy rain in a large frame lists tens of
+/// millions of entries).
 pub fn bin_by_tiles(
     streaks: &[ScreenStreak],
     width: u32,
     height: u32,
     tile_w: u32,
     tile_h: u32,
-) -> (Vec<u32>, Vec<u32>) {
+) -> Result<(Vec<u32>, Vec<u32>)> {
     let tx = width.div_ceil(tile_w);
     let tiles = (tx * height.div_ceil(tile_h)) as usize;
     let half = streaks.len() / 2;
     let bin = |first: usize, part: &[ScreenStreak]| {
-        let mut counts = vec![0u32; tiles + 1];
+        let mut counts = try_filled("the tile lists' offsets", tiles + 1, 0u32)?;
         for s in part {
             tile_spans(s, width, height, tile_w, tile_h, |j, i0, i1| {
                 for i in i0..i1 {
@@ -70,7 +62,7 @@ pub fn bin_by_tiles(
             counts[t] += counts[t - 1];
         }
         let mut fill = counts.clone();
-        let mut indices = vec![0u32; counts[tiles] as usize];
+        let mut indices = try_filled("the tile lists", counts[tiles] as usize, 0u32)?;
         for (k, s) in part.iter().enumerate() {
             tile_spans(s, width, height, tile_w, tile_h, |j, i0, i1| {
                 for i in i0..i1 {
@@ -80,20 +72,26 @@ pub fn bin_by_tiles(
                 }
             });
         }
-        (counts, indices)
+        Ok::<_, Error>((counts, indices))
     };
-    let ((oa, ia), (ob, ib)) =
-        rayon::join(|| bin(0, &streaks[..half]), || bin(half, &streaks[half..]));
+    let (a, b) = rayon::join(|| bin(0, &streaks[..half]), || bin(half, &streaks[half..]));
+    let ((oa, ia), (ob, ib)) = (a?, b?);
     // Tile t: the first half's streaks, then the second's (list order).
-    let mut offsets = Vec::with_capacity(tiles + 1);
-    let mut indices = Vec::with_capacity(ia.len() + ib.len());
+    let mut offsets = Vec::new();
+    offsets
+        .try_reserve_exact(tiles + 1)
+        .map_err(|_| Error::out_of_memory::<u32>("the tile lists' offsets", tiles + 1))?;
+    let mut indices = Vec::new();
+    indices
+        .try_reserve_exact(ia.len() + ib.len())
+        .map_err(|_| Error::out_of_memory::<u32>("the tile lists", ia.len() + ib.len()))?;
     offsets.push(0u32);
     for t in 0..tiles {
         indices.extend_from_slice(&ia[oa[t] as usize..oa[t + 1] as usize]);
         indices.extend_from_slice(&ib[ob[t] as usize..ob[t + 1] as usize]);
         offsets.push(indices.len() as u32);
     }
-    (offsets, indices)
+    Ok((offsets, indices))
 }
 
 #[cfg(test)]
@@ -159,7 +157,7 @@ mod tests {
             })
             .collect();
         for (tw, th) in [(16, 16), (128, 16), (200, 7), (2, 4)] {
-            let (offsets, indices) = bin_by_tiles(&streaks, w, h, tw, th);
+            let (offsets, indices) = bin_by_tiles(&streaks, w, h, tw, th).unwrap();
             let tx = w.div_ceil(tw);
             let mut boxed = 0usize;
             for t in 0..(tx * h.div_ceil(th)) {

@@ -10,6 +10,7 @@
 use super::binning::bin_by_tiles;
 use super::streak::ScreenStreak;
 use super::walk::{for_each_fragment_in, for_each_fragment_x4};
+use crate::error::Result;
 use crate::scene::camera::Camera;
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
@@ -174,16 +175,16 @@ pub struct RainTargets<'a> {
 
 /// Streak lists per band of [`BAND_ROWS`] full-width rows: (offsets, indices) as
 /// [`bin_by_tiles`] gives them.
-pub fn bin_by_bands(cam: &Camera, streaks: &[ScreenStreak]) -> (Vec<u32>, Vec<u32>) {
+pub fn bin_by_bands(cam: &Camera, streaks: &[ScreenStreak]) -> Result<(Vec<u32>, Vec<u32>)> {
     bin_by_tiles(streaks, cam.width, cam.height, cam.width, BAND_ROWS as u32)
 }
 
 /// Composites prepared streaks (far to near, see [`crate::rain::streaks::prepare`]) over a
 /// whole frame, bands of rows in parallel; each band draws only the streaks binned to it.
-pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], t: RainTargets<'_>) {
+pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], t: RainTargets<'_>) -> Result<()> {
     let w = cam.width as usize;
     let band = BAND_ROWS * w;
-    let (offsets, indices) = bin_by_bands(cam, streaks);
+    let (offsets, indices) = bin_by_bands(cam, streaks)?;
     t.rgb
         .par_chunks_mut(3 * band)
         .zip(t.depth_m.par_chunks(band))
@@ -194,6 +195,7 @@ pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], t: RainTargets<
             let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
             composite_band_colour(streaks, list, bi * BAND_ROWS, w, depth, rgb, alpha, rdepth);
         });
+    Ok(())
 }
 
 /// One band of the float frame: rows from `y0` (as many as `depth` holds), every column, the

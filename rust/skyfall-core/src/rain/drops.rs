@@ -412,7 +412,8 @@ mod tests {
                     alpha: &mut a,
                     rain_depth_m: &mut z,
                 },
-            );
+            )
+            .unwrap();
             (rgb, a, shown)
         };
         let (rgb_all, a_all, shown_all) = draw(&all);

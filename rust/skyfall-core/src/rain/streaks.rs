@@ -183,10 +183,10 @@ pub fn composite(
     exposure_s: f32,
     shading: &RainShading,
     t: RainTargets<'_>,
-) -> RainStats {
+) -> Result<RainStats> {
     let (streaks, stats) = prepare(cam, drops, exposure_s, Vec3::ZERO, shading);
-    composite_streaks(cam, &streaks, t);
-    stats
+    composite_streaks(cam, &streaks, t)?;
+    Ok(stats)
 }
 
 #[cfg(test)]
@@ -262,7 +262,8 @@ mod tests {
                 alpha: &mut alpha,
                 rain_depth_m: &mut rd,
             },
-        );
+        )
+        .unwrap();
         for i in 0..n {
             let p = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
             let (mut c, mut keep, mut near) = (
@@ -348,7 +349,8 @@ mod tests {
                 alpha: &mut alpha,
                 rain_depth_m: &mut rd,
             },
-        );
+        )
+        .unwrap();
         assert_eq!(
             shown,
             RainStats {
@@ -378,7 +380,8 @@ mod tests {
                 alpha: &mut alpha2,
                 rain_depth_m: &mut rd,
             },
-        );
+        )
+        .unwrap();
         assert!(alpha2.iter().all(|&a| a == 0.0));
         // culled when its light is below the threshold
         let culling = RainShading {
@@ -396,7 +399,8 @@ mod tests {
                 alpha: &mut alpha2,
                 rain_depth_m: &mut rd,
             },
-        );
+        )
+        .unwrap();
         assert_eq!(
             stats,
             RainStats {
@@ -442,7 +446,8 @@ mod tests {
                     alpha: &mut alpha,
                     rain_depth_m: &mut rd,
                 },
-            );
+            )
+            .unwrap();
             let sum: f32 = alpha.iter().sum();
             assert!(
                 (sum / (w * w) - 1.0).abs() < 0.02,

@@ -196,18 +196,18 @@ fn splat_all(
 }
 
 /// Renders every (rate, diameter) texture, shape (n_rates, n_diameters, size, size) flattened,
-/// textures in parallel. The result is allocated zeroed (fresh pages from the OS, which cost
-/// nothing until touched) and each pixel is written only where a streak covers it.
+/// textures in parallel. The result is zeroed in parallel and each pixel is then written only
+/// where a streak covers it.
 pub fn render_textures(req: &TextureRequest<'_>) -> Result<Vec<f32>> {
     let n = req.validate()?;
     let bins = diameter_bins(req.diameters_mm)?;
     let plane = req.size_px * req.size_px;
     let nd = bins.len();
-    let mut out = vec![0.0f32; n];
+    // Zeroed in parallel, fallibly: out of memory is an error, not an abort.
+    let mut out = crate::error::try_filled_par("the rain textures", n, 0.0f32)?;
     out.par_chunks_mut(plane).enumerate().for_each(|(k, tex)| {
         let rate = req.rain_rates_mm_h[k / nd];
         let (lo, hi) = bins[k % nd];
-        tex.fill(0.0);
         splat_all(rate, lo, hi, req.size_px, req.exposure_s, req.seed, tex);
     });
     Ok(out)
