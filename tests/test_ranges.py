@@ -5,8 +5,10 @@ public API (Python's checks) and through ``_core`` (the core's)."""
 from __future__ import annotations
 
 import inspect
+import dataclasses
 import math
 import re
+from types import SimpleNamespace
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -285,16 +287,26 @@ def test_python_messages_are_the_cores() -> None:
     assert str(core_err.value) == "vertical_fov_deg = 179.0 is outside the valid range [0.001, 179) deg"
 
 
-def _rain_kwargs(**changes: Any) -> dict[str, Any]:
-    """``_core.render_frame``'s keyword arguments for a rainy street frame, one rain value changed."""
-    _cam, kwargs = _tiny._frame_args(_street, Weather(rain_rate_mm_h=5.0), None, 0.0, 0, None, 1.0, 64)
-    kwargs["rain"].update(changes)
-    return kwargs
-
-
 def _render_core(**changes: Any) -> object:
-    cam = _street.camera.with_resolution(8, 6)
-    return _core.render_frame(8, 6, cam.core_params(), **_rain_kwargs(**changes))
+    """A rainy street frame through ``_core.render_frame`` with one value changed past the
+    Python checks: the request's camera and weather are stand-ins with the same attributes
+    (the core reads them attribute by attribute), so only the core's own checks run."""
+    req = _tiny._request(_street, Weather(rain_rate_mm_h=5.0), None, 0.0, 0, None, 1.0, 64)
+    cam, w = req["camera"], req["weather"]
+    camera = SimpleNamespace(
+        width=cam.width,
+        height=cam.height,
+        position_m=cam.position_m,
+        rotation=cam.rotation,
+        exposure_s=changes.get("exposure_s", cam.exposure_s),
+        velocity_m_s=changes.get("camera_velocity_m_s", cam.velocity_m_s),
+        intrinsics=cam.intrinsics,
+    )
+    weather = SimpleNamespace(**{f.name: getattr(w, f.name) for f in dataclasses.fields(w)})
+    if "sky_illuminance_lux" in changes:
+        weather.sky_illuminance_lux = changes["sky_illuminance_lux"]
+    req.update(camera=camera, weather=weather, cull_threshold=changes.get("cull_threshold"))
+    return _core.render_frame(req)  # type: ignore[arg-type]
 
 
 # The ranges that had drifted, through _core's own entry points (no Python check on the way).

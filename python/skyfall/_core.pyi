@@ -5,17 +5,24 @@ from typing import TypedDict, final
 import numpy as np
 from numpy.typing import NDArray
 
+from skyfall.camera import Camera
+from skyfall.scenes import BoxScene, PhotoScene
+from skyfall.weather import Weather
+
 __all__ = [
     "apply_lut8",
     "encode_srgb8",
     "rain_drops",
     "AIRLIGHT_RELATIVE",
+    "KOSCHMIEDER",
     "FRAME_BUDGET_BYTES",
     "AmbientLightMap",
     "GpuDevice",
     "GpuUnavailableError",
     "render_frame",
     "render_photo8",
+    "weather_optics",
+    "LAYERS",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
     "RANGES",
@@ -50,65 +57,38 @@ RANGE_MEANINGS: dict[str, str]
 def check_range(name: str, value: float, index: int | None = None) -> float: ...
 
 AIRLIGHT_RELATIVE: float
+KOSCHMIEDER: float
 FRAME_BUDGET_BYTES: int
 
 class SkyfallError(Exception): ...
 class GpuUnavailableError(SkyfallError): ...
 
-_RegionArgs = tuple[float, NDArray[np.float64], float, list[float], float, int, str]
-class _RainArgs(TypedDict):
-    region: _RegionArgs
-    exposure_s: float
-    camera_velocity_m_s: list[float]
-    ground: bool
-    lights: NDArray[np.float32] | None
-    sky_illuminance_lux: float
+class _Request(TypedDict):
+    """One frame's request: the frame's own objects, read by the core attribute by attribute."""
+
+    camera: Camera
+    weather: Weather
+    scene: BoxScene | PhotoScene
+    time_s: float
+    seed: int
     cull_threshold: float | None
-    occluders: NDArray[np.float32] | None
-    shelter: bool
+    ambient: AmbientLightMap
 
-_RainTuple = tuple[NDArray[np.float32], NDArray[np.float32], int, int, int]
-class _OutArrays(TypedDict):
-    rgb: NDArray[np.float32] | None
-    depth_m: NDArray[np.float32] | None
-    transmittance: NDArray[np.float32] | None
-    rain_alpha: NDArray[np.float32] | None
-    rain_depth_m: NDArray[np.float32] | None
-
-_FrameTuple = tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32] | None, _RainTuple | None]
+LAYERS: dict[str, str]
+"""The layers a frame can carry, name -> meaning, in the order frames list them."""
 
 def render_frame(
-    width: int,
-    height: int,
-    camera_params: list[float],
-    *,
-    device: GpuDevice | None = None,
-    boxes: NDArray[np.float32] | None = None,
-    ground: bool = True,
-    ground_albedo: list[float] = ...,
-    photo_rgb: NDArray[np.float32] | None = None,
-    photo_depth_m: NDArray[np.float32] | None = None,
-    haze_params: tuple[float, list[float]] | None = None,
-    rain: _RainArgs | None = None,
-    sky: SkyModel | None = None,
-    ambient: AmbientLightMap | None = None,
-    out: _OutArrays | None = None,
-) -> _FrameTuple: ...
+    request: _Request, *, device: GpuDevice | None = None, out: dict[str, NDArray[np.float32] | None] | None = None
+) -> tuple[NDArray[np.float32], NDArray[np.float32], dict[str, NDArray[np.float32]], dict[str, int]]: ...
 def render_photo8(
-    width: int,
-    height: int,
-    camera_params: list[float],
+    request: _Request,
     photo_srgb8: NDArray[np.uint8],
-    photo_depth_m: NDArray[np.float32],
     decode_table: NDArray[np.float32],
     out_srgb8: NDArray[np.uint8],
     *,
     rain_alpha_out: NDArray[np.float32] | None = None,
-    haze_params: tuple[float, list[float]] | None = None,
-    rain: _RainArgs | None = None,
-    sky: SkyModel | None = None,
-    ambient: AmbientLightMap | None = None,
-) -> tuple[int, int, int] | None: ...
+) -> dict[str, int]: ...
+def weather_optics(weather: Weather) -> tuple[float, float, float, float]: ...
 
 def cloud_base_m(rain_rate_mm_h: float) -> float: ...
 @final
@@ -192,7 +172,7 @@ def rain_diameter_bins(diameters_mm: NDArray[np.float64]) -> tuple[NDArray[np.fl
 
 
 def rain_drops(
-    center_m: list[float], region_args: _RegionArgs, *, ground: bool, shelter: NDArray[np.float32] | None = None
+    center_m: list[float], weather: Weather, *, time_s: float, seed: int, ground: bool, shelter: NDArray[np.float32] | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
 
 def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...

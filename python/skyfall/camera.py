@@ -164,10 +164,6 @@ class Camera:
             y = cy - fy * pc[:, 1] / depth
         return np.stack([x, y], axis=1), depth
 
-    def core_params(self) -> list[float]:
-        """The flat parameter list `_core` takes: fx, fy, cx, cy, position, rotation (row-major)."""
-        return [*self.intrinsics(), *self.position_m.tolist(), *self.rotation.reshape(-1).tolist()]
-
     def __repr__(self) -> str:
         pos = ", ".join(f"{v:g}" for v in self.position_m)
         res = f", {self.width}x{self.height}" if self.width else ""

@@ -3,18 +3,15 @@
 A light at distance d gives a drop the illuminance I * cone / d^2 (lux, per colour channel);
 the drop's light I_R grows by that over the sky's illuminance (see :class:`skyfall.Weather`),
 so at dusk (low ``sky_illuminance_lux``) drops near lamps shine. Lights light streaks only;
-lit surfaces come later.
+lit surfaces come later. The core reads a light's fields directly (one frame request).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from skyfall._validate import all_in_range, finite_vec3, in_range, real, world_position
 
@@ -70,10 +67,6 @@ class PointLight:
         object.__setattr__(self, "color", _color(self.color))
         in_range("intensity_cd", self.intensity_cd)
 
-    def row(self) -> list[float]:
-        """The packed row `_core` takes."""
-        return [*self.position_m, *self.color, float(self.intensity_cd), 0.0, 0.0, 0.0, -1.0, -1.0]
-
 
 @dataclass(frozen=True)
 class SpotLight:
@@ -114,27 +107,5 @@ class SpotLight:
             raise ValueError(f"inner_cone_deg = {inner} must be in [0, cone_deg = {self.cone_deg}]")
         object.__setattr__(self, "inner_cone_deg", inner)
 
-    def row(self) -> list[float]:
-        """The packed row `_core` takes."""
-        inner = float(self.inner_cone_deg if self.inner_cone_deg is not None else 0.75 * self.cone_deg)
-        return [
-            *self.position_m,
-            *self.color,
-            float(self.intensity_cd),
-            *self.direction,
-            math.cos(math.radians(self.cone_deg)),
-            math.cos(math.radians(inner)),
-        ]
-
 
 Light = PointLight | SpotLight
-
-
-def pack(lights: Sequence[Light]) -> NDArray[np.float32] | None:
-    """Lights as the (N, 12) float32 array ``_core`` takes, or None for no lights."""
-    if not lights:
-        return None
-    for i, light in enumerate(lights):
-        if not isinstance(light, (PointLight, SpotLight)):
-            raise TypeError(f"lights[{i}] must be a PointLight or SpotLight, got {type(light).__name__}")
-    return np.array([light.row() for light in lights], dtype=np.float32)

@@ -269,7 +269,7 @@ def drops(
 
     if not isinstance(weather, Weather):
         raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
-    args = weather.rain_region_args(real("time_s", time_s), s)[:6] + ("drops",)
+    t = real("time_s", time_s)
     shelter = None
     if scene is not None and weather.rain_sheltered:
         if isinstance(scene, BoxScene):
@@ -278,5 +278,6 @@ def drops(
             shelter = scene.occluders
         else:
             raise TypeError(f"scene must be a BoxScene, a PhotoScene or None, got {type(scene).__name__}")
-    pos, vel, diam, ids = _core.rain_drops([float(v) for v in c], args, ground=bool(ground), shelter=shelter)
+    # The core makes the drops from the weather itself, always drop by drop.
+    pos, vel, diam, ids = _core.rain_drops([float(v) for v in c], weather, time_s=t, seed=s, ground=bool(ground), shelter=shelter)
     return Drops(pos, vel, diam, ids)

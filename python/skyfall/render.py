@@ -14,18 +14,20 @@ import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 from collections.abc import Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core, io, sky
-from skyfall._validate import choice, integer, real
+from skyfall._validate import choice, in_range, integer, real
 from skyfall.camera import Camera
-from skyfall.lights import pack
 from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.scenes import _flag  # (a bool or np.bool_, TypeError otherwise; move to _validate)
 from skyfall.weather import Weather
+
+if TYPE_CHECKING:
+    from skyfall._core import _Request
 
 __all__ = ["BACKENDS", "Frame", "Renderer"]
 
@@ -232,19 +234,11 @@ class Renderer:
         Frame
         """
         weather = weather if weather is not None else Weather()
-        cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
-        if isinstance(scene, PhotoScene):
-            kwargs.update(photo_rgb=scene.image, photo_depth_m=scene.depth_m)
-        if out is not None:
-            kwargs["out"] = self._out_arrays(out)
-        args = (self.width, self.height, cam.core_params())
-        rgb, depth, trans, rain = _core.render_frame(*args, device=self._device, **kwargs)
-        layers = {} if trans is None else {"transmittance": trans}
-        stats: dict[str, int] = {}
-        if rain is not None:
-            alpha, rain_depth, n_drops, n_streaks, n_culled = rain
-            layers.update(rain_alpha=alpha, rain_depth_m=rain_depth)
-            stats.update(rain_drops=n_drops, rain_streaks=n_streaks, rain_culled=n_culled)
+        request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
+        arrays = self._out_arrays(out) if out is not None else None
+        # One core call: the core derives the sky, the haze and its airlight, the rain and its
+        # light from the request, and names the layers it drew (skyfall._core.LAYERS).
+        rgb, depth, layers, stats = _core.render_frame(request, device=self._device, out=arrays)
         return Frame(
             rgb=rgb,
             depth_m=depth,
@@ -308,9 +302,8 @@ class Renderer:
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
         if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
-            cam, kwargs = self._frame_args(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
-            args = (self.width, self.height, cam.core_params(), scene.srgb8, scene.depth_m, io.srgb8_table(), out)
-            _core.render_photo8(*args, rain_alpha_out=rain_alpha_out, **kwargs)
+            request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
+            _core.render_photo8(request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out)
             return out
         frame = self.render(
             scene,
@@ -332,7 +325,7 @@ class Renderer:
         if not isinstance(out, Frame):
             raise TypeError(f"out must be a skyfall.Frame, got {type(out).__name__}")
         shape = (self.height, self.width)
-        arrays = {"rgb": out.rgb, "depth_m": out.depth_m, **{k: out.layers.get(k) for k in ("transmittance", "rain_alpha", "rain_depth_m")}}
+        arrays = {"rgb": out.rgb, "depth_m": out.depth_m, **{k: out.layers.get(k) for k in _core.LAYERS}}
         for name, a in arrays.items():
             if a is not None:
                 _check_writable(f"out's {name}", a, np.float32, (*shape, 3) if name == "rgb" else shape)
@@ -357,7 +350,7 @@ class Renderer:
                 f"render it with a renderer of its size, Renderer({w}, {h})"
             )
 
-    def _frame_args(
+    def _request(
         self,
         scene: BoxScene | PhotoScene,
         weather: Weather,
@@ -367,16 +360,14 @@ class Renderer:
         cull_threshold: float | None,
         ambient_spacing_m: float,
         ambient_samples: int,
-    ) -> tuple[Camera, dict[str, Any]]:
-        """The frame's camera and the keyword arguments of ``_core.render_frame`` and
-        ``_core.render_photo8`` (all but the scene's pixels), validated."""
+    ) -> _Request:
+        """The frame's request for ``_core.render_frame`` and ``_core.render_photo8``: the
+        frame's own objects (the core reads them attribute by attribute), with the scene's
+        ambient-light map (built once per scene, sky and spacing, and cached)."""
         if not isinstance(weather, Weather):
             raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
-        t = real("time_s", time_s)
-        if not abs(t) <= 1e7:
-            raise ValueError(f"time_s = {t} is outside the valid range [-1e7, 1e7] s")
+        t = in_range("time_s", time_s)
         integer("seed", seed, 0, 2**64 - 1)
-        kwargs: dict[str, Any] = {}
         if isinstance(scene, PhotoScene):
             self._check_photo_size(scene)
             cam = scene.camera
@@ -384,33 +375,18 @@ class Renderer:
             if camera is not None and not isinstance(camera, Camera):
                 raise TypeError(f"camera must be a skyfall.Camera, got {type(camera).__name__}")
             cam = (camera if camera is not None else scene.camera).with_resolution(self.width, self.height)
-            kwargs.update(boxes=scene.boxes, ground=scene.ground, ground_albedo=list(scene.ground_albedo))
         else:
             raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
-        ambient = self._ambient(scene, weather, cam, ambient_spacing_m, ambient_samples)
-        kwargs.update(sky=weather.sky_model(), ambient=ambient)
-        sigma = weather.extinction_per_m
-        if sigma > 0:
-            # Seed 002: Is = ks E_hv, the sky illuminance at the viewpoint (1 in the open).
-            e_view = float(ambient.sample(cam.position_m.reshape(1, 3).astype(np.float32))[0, 0])
-            kwargs["haze_params"] = (sigma, [_core.AIRLIGHT_RELATIVE * e_view] * 3)
-        if cull_threshold is not None:
-            th = real("cull_threshold", cull_threshold)
-            if not (th >= 0 and np.isfinite(th)):
-                raise ValueError(f"cull_threshold = {th} must be a finite number >= 0")
-        if weather.rain_rate_mm_h > 0 and weather.rain_streaks:
-            kwargs["rain"] = {
-                "region": weather.rain_region_args(t, seed),
-                "exposure_s": cam.exposure_s,
-                "camera_velocity_m_s": cam.velocity_m_s.tolist(),
-                "ground": isinstance(scene, BoxScene) and scene.ground,
-                "lights": pack(scene.lights),
-                "sky_illuminance_lux": weather.sky_illuminance_lux,
-                "cull_threshold": cull_threshold,
-                "occluders": scene.occluders if isinstance(scene, PhotoScene) and len(scene.occluders) else None,
-                "shelter": weather.rain_sheltered,
-            }
-        return cam, kwargs
+        cull = None if cull_threshold is None else in_range("cull_threshold", cull_threshold)
+        return {
+            "camera": cam,
+            "weather": weather,
+            "scene": scene,
+            "time_s": t,
+            "seed": int(seed),
+            "cull_threshold": cull,
+            "ambient": self._ambient(scene, weather, cam, ambient_spacing_m, ambient_samples),
+        }
 
     @staticmethod
     def _ambient(
@@ -566,7 +542,7 @@ class Renderer:
         weather = weather if weather is not None else Weather()
         times = _frame_times(n_frames, fps, start_s)
         show = _flag("progress", progress)
-        self._frame_args(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples)
+        self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples)
         options: dict[str, Any] = dict(
             camera=camera, seed=seed, cull_threshold=cull_threshold, ambient_spacing_m=ambient_spacing_m, ambient_samples=ambient_samples
         )

@@ -4,18 +4,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
 
-from skyfall import _core, physics
+from skyfall import _core
 from skyfall._validate import all_in_range, choice, float_array, in_range, inside
 
 __all__ = ["Weather"]
 
-KOSCHMIEDER = 3.912
-"""-ln(0.02): visibility is where contrast falls to 2 %."""
+KOSCHMIEDER: float = _core.KOSCHMIEDER
+"""-ln(0.02): visibility is where contrast falls to 2 % (the core's constant)."""
 
 
 @dataclass(frozen=True)
@@ -122,39 +122,30 @@ class Weather:
             raise ValueError("give both sun_elevation_deg and sun_azimuth_deg, or neither")
         self.sky_model()  # the sky's own checks (a sun for the types that need one)
 
+    @cached_property
+    def _optics(self) -> tuple[float, float, float, float]:
+        """(sigma_air, sigma_rain, sigma, cloud base) from the core, which the frames use."""
+        return _core.weather_optics(self)
+
     @property
     def air_extinction_per_m(self) -> float:
         """Koschmieder extinction of the air, 3.912 / visibility_m, 1/m."""
-        return 0.0 if math.isinf(self.visibility_m) else KOSCHMIEDER / self.visibility_m
+        return self._optics[0]
 
     @property
     def rain_extinction_per_m(self) -> float:
         """Extinction by rain, 1/m (:func:`skyfall.physics.rain_extinction_per_m`)."""
-        return float(physics.rain_extinction_per_m(self.rain_rate_mm_h))
+        return self._optics[1]
 
     @property
     def extinction_per_m(self) -> float:
         """Total extinction sigma = sigma_air + sigma_rain, 1/m."""
-        return self.air_extinction_per_m + self.rain_extinction_per_m
-
-    def rain_region_args(self, time_s: float, seed: int) -> tuple[float, NDArray[np.float64], float, list[float], float, int, str]:
-        """The argument tuple ``_core``'s rain functions take."""
-        return (
-            self.rain_rate_mm_h,
-            np.asarray(self.rain_diameters_mm, dtype=np.float64),
-            self.rain_near_m,
-            list(self.wind_m_s),
-            float(time_s),
-            int(seed),
-            self.rain_method,
-        )
+        return self._optics[2]
 
     @property
     def cloud_base_height_m(self) -> float:
         """The cloud base H in use, m: ``cloud_base_m`` or :func:`skyfall.sky.cloud_base_m` of the rain rate."""
-        if self.cloud_base_m is not None:
-            return self.cloud_base_m
-        return float(_core.cloud_base_m(self.rain_rate_mm_h))
+        return self._optics[3]
 
     def sky_model(self) -> _core.SkyModel:
         """The normalised sky with the rain's attenuation, as ``_core`` uses it (cached)."""

@@ -26,5 +26,6 @@ pub mod ranges;
 pub mod scene;
 mod seed;
 pub mod sky;
+pub mod weather;
 
 pub use error::{Error, Result};

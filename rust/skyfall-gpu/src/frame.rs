@@ -4,8 +4,10 @@ use crate::context::{AdapterChoice, GpuContext, GpuError};
 use crate::haze::HazePass;
 use crate::pass::{FrameEncoder, FramePass, FrameTargets};
 use crate::pool::BufferPool;
+use crate::pool::Pooled;
 use crate::rain::RainPass;
 use crate::scene_raycast::SceneRaycastPass;
+use skyfall_core::frame::layers::{Layer, Layers};
 use skyfall_core::frame::passes::Passes;
 use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::frame::{
@@ -91,16 +93,18 @@ impl GpuRenderer {
                     (f.upload("rgb", rgb), f.upload("depth", depth_m))
                 }
             };
-            let transmittance = passes.haze.map(|_| f.target("transmittance", n));
-            let layers = passes
-                .particles
-                .as_ref()
-                .map(|_| (f.target("rain_alpha", n), f.target("rain_depth", n)));
+            // The layers the passes draw, one buffer each.
+            let (haze_on, rain_on) = (passes.haze.is_some(), passes.particles.is_some());
+            let mut layers: Layers<Pooled> = Layers::default();
+            for l in Layer::ALL {
+                if l.drawn(haze_on, rain_on) {
+                    layers.set(l, f.target(l.name(), n));
+                }
+            }
             let targets = FrameTargets {
                 rgb: &rgb,
                 depth: &depth,
-                transmittance: transmittance.as_ref(),
-                rain: layers.as_ref().map(|(a, d)| (a, d)),
+                layers: &layers,
             };
             // The passes in physical order: the scene, haze, rain.
             if let SceneRef::Boxes(b) = scene {
@@ -116,16 +120,13 @@ impl GpuRenderer {
             let FrameOut {
                 rgb: rgb_out,
                 depth_m: depth_out,
-                transmittance: trans_out,
-                rain: layers_out,
+                layers: mut layers_out,
             } = out;
             let mut outputs = vec![(rgb, rgb_out), (depth, depth_out)];
-            if let (Some(t), Some(t_out)) = (transmittance, trans_out) {
-                outputs.push((t, t_out));
-            }
-            if let (Some((a, d)), Some((a_out, d_out))) = (layers, layers_out) {
-                outputs.push((a, a_out));
-                outputs.push((d, d_out));
+            for l in Layer::ALL {
+                if let (Some(b), Some(o)) = (layers.take(l), layers_out.take(l)) {
+                    outputs.push((b, o));
+                }
             }
             f.read_back(outputs)?;
             Ok(passes.rain_report())

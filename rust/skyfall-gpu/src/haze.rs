@@ -3,6 +3,7 @@
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
 use crate::uniforms::{CameraUniform, HazeUniform};
+use skyfall_core::frame::layers::Layer;
 use skyfall_core::haze::Haze;
 
 const SOURCE: &str = include_str!("shaders/haze.wgsl");
@@ -32,11 +33,7 @@ impl FramePass for HazePass {
         t: &FrameTargets<'_>,
         haze: &Haze,
     ) -> Result<(), GpuError> {
-        let Some(transmittance) = t.transmittance else {
-            return Err(GpuError::Readback(
-                "the haze pass needs the transmittance buffer".into(),
-            ));
-        };
+        let transmittance = t.layer(Layer::Transmittance)?;
         let a = haze.airlight;
         let block = HazeUniform {
             params: [haze.extinction_per_m, 0.0, 0.0, 0.0],

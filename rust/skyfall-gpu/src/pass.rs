@@ -5,6 +5,7 @@
 use crate::context::{GpuContext, GpuError};
 use crate::pool::{BufferPool, Pooled};
 use crate::readback::read_f32_into;
+use skyfall_core::frame::layers::{Layer, Layers};
 use skyfall_core::scene::camera::Camera;
 
 /// The WGSL every pass is prepended with (camera block and rays).
@@ -132,10 +133,18 @@ pub struct FrameTargets<'a> {
     pub rgb: &'a Pooled,
     /// Depth along the optical axis, m, H·W.
     pub depth: &'a Pooled,
-    /// Haze transmittance, H·W, when the haze pass runs.
-    pub transmittance: Option<&'a Pooled>,
-    /// Rain coverage and nearest streak depth, H·W each, when the rain pass runs.
-    pub rain: Option<(&'a Pooled, &'a Pooled)>,
+    /// The layers the frame's passes draw, H·W each.
+    pub layers: &'a Layers<Pooled>,
+}
+
+impl FrameTargets<'_> {
+    /// A layer's buffer: an error when the frame does not draw it (a pass asked for a layer
+    /// its frame has not made).
+    pub fn layer(&self, layer: Layer) -> Result<&Pooled, GpuError> {
+        self.layers
+            .get(layer)
+            .ok_or_else(|| GpuError::Readback(format!("the frame has no {} buffer", layer.name())))
+    }
 }
 
 /// What a frame's passes record into: the device, the frame's one command encoder, the

@@ -12,6 +12,7 @@
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
 use crate::uniforms::{CameraUniform, RainUniform};
+use skyfall_core::frame::layers::Layer;
 use skyfall_core::particles::binning::bin_by_tiles;
 use skyfall_core::particles::streak::ScreenStreak;
 
@@ -51,11 +52,7 @@ impl FramePass for RainPass {
         t: &FrameTargets<'_>,
         streaks: Self::Input<'_>,
     ) -> Result<(), GpuError> {
-        let Some((alpha, rain_depth)) = t.rain else {
-            return Err(GpuError::Readback(
-                "the rain pass needs the rain layers' buffers".into(),
-            ));
-        };
+        let (alpha, rain_depth) = (t.layer(Layer::RainAlpha)?, t.layer(Layer::RainDepth)?);
         let cam = f.cam;
         let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H)?;
         // rain_near_m and the rain rate set how many streaks there are (the region's volume

@@ -3,6 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use glam::{Mat3, Vec3};
+use skyfall_core::frame::layers::Layer;
 use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::frame::{FrameOut, SceneRef, render};
 use skyfall_core::haze::Haze;
@@ -102,8 +103,8 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     let (worst, _) = max_abs(&c2.rgb, &g2.rgb);
     assert!(worst < 1e-5, "haze max abs diff {worst}");
     let (worst_t, _) = max_abs(
-        c2.transmittance.as_deref().unwrap(),
-        g2.transmittance.as_deref().unwrap(),
+        c2.layer(Layer::Transmittance).unwrap(),
+        g2.layer(Layer::Transmittance).unwrap(),
     );
     assert!(worst_t < 1e-5, "transmittance max abs diff {worst_t}");
     assert_eq!(c2.depth_m, g2.depth_m);
@@ -148,14 +149,18 @@ fn gpu_rain_matches_cpu_rain() {
     };
     let c = render(photo, &cam, &light, None, Some(&rf)).unwrap();
     let g = gpu.render(photo, &cam, &light, None, Some(&rf)).unwrap();
-    let (cr, gr) = (c.rain.unwrap(), g.rain.unwrap());
-    assert_eq!(cr.stats, gr.stats);
-    assert!(cr.stats.streaks > 100);
-    let (worst_a, _) = max_abs(&cr.alpha, &gr.alpha);
+    let ((cs, _), (gs, gd)) = (c.rain.unwrap(), g.rain.unwrap());
+    assert_eq!(c.rain, g.rain);
+    assert!(cs.streaks > 100);
+    let (ga, gz) = (
+        g.layer(Layer::RainAlpha).unwrap(),
+        g.layer(Layer::RainDepth).unwrap(),
+    );
+    let (worst_a, _) = max_abs(c.layer(Layer::RainAlpha).unwrap(), ga);
     let (worst_rgb, _) = max_abs(&c.rgb, &g.rgb);
     assert!(worst_a < 1e-4, "rain alpha max abs diff {worst_a}");
     assert!(worst_rgb < 1e-4, "rgb max abs diff {worst_rgb}");
-    let (worst_z, _) = max_abs(&cr.depth_m, &gr.depth_m);
+    let (worst_z, _) = max_abs(c.layer(Layer::RainDepth).unwrap(), gz);
     assert!(worst_z < 1e-3, "rain depth max abs diff {worst_z}");
     // Read back into the caller's buffers (numpy's, from Python): every value overwritten.
     let n = cam.pixels();
@@ -165,28 +170,32 @@ fn gpu_rain_matches_cpu_rain() {
         vec![f32::NAN; n],
         vec![f32::NAN; n],
     );
-    let out = FrameOut {
-        rgb: &mut rgb,
-        depth_m: &mut d,
-        transmittance: None,
-        rain: Some((&mut a, &mut rd)),
-    };
+    let out = FrameOut::from_layers(
+        &mut rgb,
+        &mut d,
+        [
+            (Layer::RainAlpha, &mut a[..]),
+            (Layer::RainDepth, &mut rd[..]),
+        ],
+    );
     let (stats, drops) = gpu
         .render_into(photo, &cam, &light, None, Some(&rf), out)
         .unwrap()
         .unwrap();
-    assert_eq!((stats, drops), (gr.stats, gr.drops));
+    assert_eq!((stats, drops), (gs, gd));
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&rgb), bits(&g.rgb));
     assert_eq!(bits(&d), bits(&g.depth_m));
-    assert_eq!(bits(&a), bits(&gr.alpha));
-    assert_eq!(bits(&rd), bits(&gr.depth_m));
-    let short = FrameOut {
-        rgb: &mut rgb[3..],
-        depth_m: &mut d,
-        transmittance: None,
-        rain: Some((&mut a, &mut rd)),
-    };
+    assert_eq!(bits(&a), bits(ga));
+    assert_eq!(bits(&rd), bits(gz));
+    let short = FrameOut::from_layers(
+        &mut rgb[3..],
+        &mut d,
+        [
+            (Layer::RainAlpha, &mut a[..]),
+            (Layer::RainDepth, &mut rd[..]),
+        ],
+    );
     assert!(
         gpu.render_into(photo, &cam, &light, None, Some(&rf), short)
             .is_err()
@@ -197,7 +206,7 @@ fn gpu_rain_matches_cpu_rain() {
     let frame_bytes = (3 * n * 4) as u64;
     small.ctx.limits.max_storage_buffer_binding_size = frame_bytes;
     assert!(small.render(photo, &cam, &light, None, None).is_ok());
-    assert!((gr.stats.streaks * 64) as u64 > frame_bytes);
+    assert!((gs.streaks * 64) as u64 > frame_bytes);
     let err = small
         .render(photo, &cam, &light, None, Some(&rf))
         .unwrap_err();

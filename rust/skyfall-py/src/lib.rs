@@ -10,7 +10,9 @@ mod rain;
 mod rain_frame;
 mod ranges;
 mod render;
+mod request;
 mod sky;
+mod weather;
 
 use pyo3::prelude::*;
 
@@ -35,6 +37,8 @@ mod _core {
     use super::render::{GpuDevice, render_frame, render_photo8};
     #[pymodule_export]
     use super::sky::{AmbientLightMap, SkyModel, cloud_base_m};
+    #[pymodule_export]
+    use super::weather::weather_optics;
 
     use pyo3::prelude::*;
 
@@ -42,6 +46,12 @@ mod _core {
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         m.add("RANGES", super::ranges::table(m.py())?)?;
+        // The frame layers, name -> meaning, in the order frames list them.
+        let layers = pyo3::types::PyDict::new(m.py());
+        for l in skyfall_core::frame::layers::Layer::ALL {
+            layers.set_item(l.name(), l.meaning())?;
+        }
+        m.add("LAYERS", layers)?;
         m.add("RANGE_MEANINGS", super::ranges::meanings(m.py())?)?;
         m.add(
             "TEXTURE_BUDGET_BYTES",
@@ -56,6 +66,7 @@ mod _core {
             skyfall_core::physics::dsd::RAIN_RATE_MM_H.hi,
         )?;
         m.add("AIRLIGHT_RELATIVE", skyfall_core::haze::AIRLIGHT_RELATIVE)?;
+        m.add("KOSCHMIEDER", skyfall_core::weather::KOSCHMIEDER)?;
         m.add(
             "FRAME_BUDGET_BYTES",
             skyfall_core::frame::FRAME_BUDGET_BYTES,

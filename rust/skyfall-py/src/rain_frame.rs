@@ -2,7 +2,7 @@
 
 use crate::alloc::filled;
 use crate::errors::CoreError;
-use crate::render::{RegionArgs, box_scene, region};
+use crate::request::{WeatherSpec, box_rows};
 use glam::DVec3;
 use numpy::ndarray::{Ix1, Ix2};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
@@ -17,21 +17,27 @@ type DropArrays<'py> = (
     Bound<'py, PyArray2<i64>>,
 );
 
-/// Every drop within the region around `center_m`, less those `shelter` boxes (N, 9) keep
+/// Every drop of `weather` (a `skyfall.Weather`) at `time_s` with `seed` within its region
+/// around `center_m`, less those `shelter` boxes (N, 9) keep
 /// dry: world positions (N, 3, f64: exact far from the origin), velocities (N, 3), diameters
 /// (N,) in m, ids (N, 5).
 #[pyfunction]
-#[pyo3(signature = (center_m, region_args, *, ground, shelter=None))]
+#[pyo3(signature = (center_m, weather, *, time_s, seed, ground, shelter=None))]
 pub fn rain_drops<'py>(
     py: Python<'py>,
     center_m: [f64; 3],
-    region_args: RegionArgs<'py>,
+    weather: WeatherSpec,
+    time_s: f64,
+    seed: u64,
     ground: bool,
     shelter: Option<PyReadonlyArray2<'py, f32>>,
 ) -> PyResult<DropArrays<'py>> {
-    let reg = region(&region_args)?;
+    skyfall_core::ranges::TIME_S
+        .check(time_s)
+        .map_err(CoreError)?;
+    let reg = weather.core()?.region(time_s, seed).map_err(CoreError)?;
     let boxes = match &shelter {
-        Some(b) => box_scene(b, false, [0.0; 3])?.boxes,
+        Some(b) => box_rows(b)?,
         None => Vec::new(),
     };
     let c = DVec3::from(center_m);

@@ -3,7 +3,7 @@
 use crate::alloc::{filled, from_slice};
 use crate::errors::{CoreError, invalid};
 use crate::interrupt::interruptible_core;
-use crate::render::box_scene;
+use crate::request::box_scene;
 use glam::Vec3;
 use numpy::ndarray::{Ix1, Ix2, Ix3, Ix4};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArray4, PyReadonlyArray2};

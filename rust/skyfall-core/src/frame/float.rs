@@ -1,6 +1,7 @@
 //! The float output stage: the linear float32 frame and its layers, band by band (see the
 //! module docs of [`super`]).
 
+use super::layers::Layer;
 use super::passes::Passes;
 use super::scene::{SceneLight, shade_pixel};
 use super::{FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo};
@@ -43,9 +44,12 @@ pub fn render_into(
     let FrameOut {
         rgb,
         depth_m: depth,
-        transmittance: trans,
-        rain: layers,
+        mut layers,
     } = out;
+    let trans = layers.take(Layer::Transmittance);
+    let rain_layers = layers
+        .take(Layer::RainAlpha)
+        .zip(layers.take(Layer::RainDepth));
     // The passes first (the particles do not depend on the scene), the particles binned to
     // the bands.
     let passes = Passes::prepare(cam, haze, rain)?;
@@ -60,7 +64,7 @@ pub fn render_into(
         Some(t) => t.chunks_mut(band).map(Some).collect(),
         None => (0..bands).map(|_| None).collect(),
     };
-    let mut rain_bands: Vec<Option<(&mut [f32], &mut [f32])>> = match layers {
+    let mut rain_bands: Vec<Option<(&mut [f32], &mut [f32])>> = match rain_layers {
         Some((alpha, rain_depth)) => alpha
             .chunks_mut(band)
             .zip(rain_depth.chunks_mut(band))
@@ -172,7 +176,7 @@ mod tests {
             ambient: &amb,
         };
         let fused = render(SceneRef::Boxes(&scene), &cam, &light, Some(&h), None).unwrap();
-        let t_layer = fused.transmittance.clone().unwrap();
+        let t_layer = fused.layer(Layer::Transmittance).unwrap().to_vec();
         for y in 0..30u32 {
             for x in 0..40u32 {
                 let i = (y * 40 + x) as usize;
@@ -202,7 +206,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(plain.rgb, fused.rgb);
-        assert!(plain.transmittance.is_none());
+        assert!(plain.layer(Layer::Transmittance).is_none());
     }
 
     #[test]
@@ -253,30 +257,27 @@ mod tests {
             vec![f32::NAN; n],
             vec![f32::NAN; n],
         );
-        let out = FrameOut {
-            rgb: &mut rgb,
-            depth_m: &mut d,
-            transmittance: Some(&mut t),
-            rain: Some((&mut a, &mut rd)),
-        };
+        let out = FrameOut::from_layers(
+            &mut rgb,
+            &mut d,
+            [
+                (Layer::Transmittance, &mut t[..]),
+                (Layer::RainAlpha, &mut a[..]),
+                (Layer::RainDepth, &mut rd[..]),
+            ],
+        );
         let (stats, drops) = render_into(scene, &cam, &light, Some(&h), Some(&rf), out)
             .unwrap()
             .unwrap();
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        let rain = want.rain.unwrap();
-        assert!(stats.streaks > 0 && drops == rain.drops && stats == rain.stats);
+        assert!(stats.streaks > 0 && want.rain == Some((stats, drops)));
         assert_eq!(bits(&rgb), bits(&want.rgb));
         assert_eq!(bits(&d), bits(&want.depth_m));
-        assert_eq!(bits(&t), bits(&want.transmittance.unwrap()));
-        assert_eq!(bits(&a), bits(&rain.alpha));
-        assert_eq!(bits(&rd), bits(&rain.depth_m));
+        assert_eq!(bits(&t), bits(want.layer(Layer::Transmittance).unwrap()));
+        assert_eq!(bits(&a), bits(want.layer(Layer::RainAlpha).unwrap()));
+        assert_eq!(bits(&rd), bits(want.layer(Layer::RainDepth).unwrap()));
         // Buffers that do not match the request are named.
-        let short = FrameOut {
-            rgb: &mut rgb[1..],
-            depth_m: &mut d,
-            transmittance: None,
-            rain: None,
-        };
+        let short = FrameOut::from_layers(&mut rgb[1..], &mut d, []);
         assert!(matches!(
             render_into(scene, &cam, &light, None, None, short),
             Err(Error::Length {
@@ -284,12 +285,7 @@ mod tests {
                 ..
             })
         ));
-        let missing = FrameOut {
-            rgb: &mut rgb,
-            depth_m: &mut d,
-            transmittance: None,
-            rain: None,
-        };
+        let missing = FrameOut::from_layers(&mut rgb, &mut d, []);
         assert!(matches!(
             render_into(scene, &cam, &light, Some(&h), None, missing),
             Err(Error::Length {
@@ -300,12 +296,14 @@ mod tests {
                 ..
             })
         ));
-        let extra = FrameOut {
-            rgb: &mut rgb,
-            depth_m: &mut d,
-            transmittance: None,
-            rain: Some((&mut a, &mut rd)),
-        };
+        let extra = FrameOut::from_layers(
+            &mut rgb,
+            &mut d,
+            [
+                (Layer::RainAlpha, &mut a[..]),
+                (Layer::RainDepth, &mut rd[..]),
+            ],
+        );
         assert!(matches!(
             render_into(scene, &cam, &light, None, None, extra),
             Err(Error::Length {

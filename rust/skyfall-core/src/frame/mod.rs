@@ -18,9 +18,12 @@ use crate::haze::check_depth;
 use crate::rain::streaks::RainStats;
 use crate::scene::boxes::BoxScene;
 use crate::scene::camera::Camera;
+use layers::{Layer, Layers};
 
 pub mod float;
+pub mod layers;
 pub mod passes;
+pub mod request;
 pub mod scene;
 pub mod srgb8;
 
@@ -45,19 +48,6 @@ pub enum SceneRef<'a> {
     },
 }
 
-/// What the rain pass wrote.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RainBuffers {
-    /// Streak coverage 1 − ∏(1 − aᵢ), H·W.
-    pub alpha: Vec<f32>,
-    /// Nearest visible streak depth, m (inf: none), H·W.
-    pub depth_m: Vec<f32>,
-    /// Streaks drawn and culled.
-    pub stats: RainStats,
-    /// Drops generated (in the voxels that can reach the view).
-    pub drops: usize,
-}
-
 /// A rendered frame's buffers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameBuffers {
@@ -65,10 +55,17 @@ pub struct FrameBuffers {
     pub rgb: Vec<f32>,
     /// Depth along the optical axis, m (inf for sky), H·W.
     pub depth_m: Vec<f32>,
-    /// Haze transmittance e^(−σ d), H·W, when the haze pass ran.
-    pub transmittance: Option<Vec<f32>>,
-    /// Rain layers, when the rain pass ran.
-    pub rain: Option<RainBuffers>,
+    /// The layers the frame's passes drew, H·W each ([`Layer`]).
+    pub layers: Layers<Vec<f32>>,
+    /// The rain's streaks drawn and culled and drops generated, when it rained.
+    pub rain: Option<RainReport>,
+}
+
+impl FrameBuffers {
+    /// A layer, when the frame drew it.
+    pub fn layer(&self, layer: Layer) -> Option<&[f32]> {
+        self.layers.get(layer).map(Vec::as_slice)
+    }
 }
 
 /// Refuses frames over [`FRAME_BUDGET_BYTES`] before allocating.
@@ -116,16 +113,32 @@ pub struct FrameOut<'a> {
     pub rgb: &'a mut [f32],
     /// Depth along the optical axis, m, H·W.
     pub depth_m: &'a mut [f32],
-    /// Haze transmittance, H·W: given exactly when there is haze.
-    pub transmittance: Option<&'a mut [f32]>,
-    /// Rain coverage and nearest streak depth, H·W each: given exactly when it rains.
-    pub rain: Option<(&'a mut [f32], &'a mut [f32])>,
+    /// The layers, H·W each: given exactly when the frame's passes draw them
+    /// ([`Layer::drawn`]).
+    pub layers: Layers<&'a mut [f32]>,
 }
 
 /// What [`render_into`] reports of the rain: streaks drawn and culled, drops generated.
 pub type RainReport = (RainStats, usize);
 
-impl FrameOut<'_> {
+impl<'a> FrameOut<'a> {
+    /// The buffers `rgb`, `depth_m` and the layers given.
+    pub fn from_layers(
+        rgb: &'a mut [f32],
+        depth_m: &'a mut [f32],
+        layers: impl IntoIterator<Item = (Layer, &'a mut [f32])>,
+    ) -> Self {
+        let mut out = FrameOut {
+            rgb,
+            depth_m,
+            layers: Layers::default(),
+        };
+        for (l, buf) in layers {
+            out.layers.set(l, buf);
+        }
+        out
+    }
+
     /// Checks the buffers against a `cam` frame with or without haze and rain: every length,
     /// and the layers given exactly when they are drawn.
     pub fn check(&self, cam: &Camera, haze: bool, rain: bool) -> Result<()> {
@@ -141,27 +154,20 @@ impl FrameOut<'_> {
         if self.depth_m.len() != n {
             return Err(length("depth_m", self.depth_m.len(), n));
         }
-        let t = self.transmittance.as_ref().map_or(0, |t| t.len());
-        if t != if haze { n } else { 0 } || haze != self.transmittance.is_some() {
-            return Err(length("transmittance", t, if haze { n } else { 0 }));
-        }
-        let (a, d) = self
-            .rain
-            .as_ref()
-            .map_or((0, 0), |(a, d)| (a.len(), d.len()));
-        if a != if rain { n } else { 0 } || rain != self.rain.is_some() {
-            return Err(length("rain_alpha", a, if rain { n } else { 0 }));
-        }
-        if d != a {
-            return Err(length("rain_depth_m", d, a));
+        for l in Layer::ALL {
+            let want = if l.drawn(haze, rain) { n } else { 0 };
+            let got = self.layers.get(l).map_or(0, |b| b.len());
+            if got != want || self.layers.get(l).is_some() != l.drawn(haze, rain) {
+                return Err(length(l.name(), got, want));
+            }
         }
         Ok(())
     }
 }
 
 impl FrameBuffers {
-    /// A `cam` frame's buffers (with the transmittance layer when `haze`, the rain layers when
-    /// `rain`), sized after the frame is checked to fit, filled by a backend's `render_into`.
+    /// A `cam` frame's buffers (with each layer the passes draw, given `haze` and `rain`),
+    /// sized after the frame is checked to fit, filled by a backend's `render_into`.
     pub fn filled<E: From<Error>>(
         cam: &Camera,
         haze: bool,
@@ -171,34 +177,27 @@ impl FrameBuffers {
         check_frame_size(cam)?;
         let n = cam.pixels();
         // Reserved fallibly: out of memory is an error, never an abort.
-        let plane = |what: &str| try_filled_par(what, n, 0.0f32);
-        let (mut rgb, mut depth) = (try_filled_par("rgb", 3 * n, 0.0f32)?, plane("depth_m")?);
-        let mut trans = haze.then(|| plane("transmittance")).transpose()?;
-        let mut layers = match rain {
-            true => Some((plane("rain_alpha")?, plane("rain_depth_m")?)),
-            false => None,
-        };
-        let out = FrameOut {
-            rgb: &mut rgb,
-            depth_m: &mut depth,
-            transmittance: trans.as_deref_mut(),
-            rain: layers
-                .as_mut()
-                .map(|(a, d)| (a.as_mut_slice(), d.as_mut_slice())),
-        };
-        let report = render_into(out)?;
-        let rain = layers
-            .zip(report)
-            .map(|((alpha, depth_m), (stats, drops))| RainBuffers {
-                alpha,
-                depth_m,
-                stats,
-                drops,
-            });
+        let (mut rgb, mut depth) = (
+            try_filled_par("rgb", 3 * n, 0.0f32)?,
+            try_filled_par("depth_m", n, 0.0f32)?,
+        );
+        let mut layers: Layers<Vec<f32>> = Layers::default();
+        for l in Layer::ALL {
+            if l.drawn(haze, rain) {
+                layers.set(l, try_filled_par(l.name(), n, 0.0f32)?);
+            }
+        }
+        let slices = layers
+            .0
+            .iter_mut()
+            .zip(Layer::ALL)
+            .filter_map(|(b, l)| b.as_mut().map(|b| (l, b.as_mut_slice())));
+        let out = FrameOut::from_layers(&mut rgb, &mut depth, slices);
+        let rain = render_into(out)?;
         Ok(FrameBuffers {
             rgb,
             depth_m: depth,
-            transmittance: trans,
+            layers,
             rain,
         })
     }

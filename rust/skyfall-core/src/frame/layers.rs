@@ -1,0 +1,97 @@
+//! The ground-truth layers a frame can carry besides `rgb` and `depth_m`, declared once: every
+//! other list (the CPU and GPU outputs, the Python binding's names, `skyfall._core.LAYERS`, the
+//! Python `Frame.layers` keys) is derived from [`Layer::ALL`].
+
+/// A layer of a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Layer {
+    /// e^(−σ d) along the pixel's ray (the haze pass).
+    Transmittance,
+    /// The streaks' coverage 1 − ∏(1 − aᵢ) (the particle pass, rain).
+    RainAlpha,
+    /// The depth of the nearest visible streak, m; inf where none (the particle pass, rain).
+    RainDepth,
+}
+
+/// How many layers there are.
+pub const LAYER_COUNT: usize = 3;
+
+impl Layer {
+    /// Every layer, in the order frames list them.
+    pub const ALL: [Layer; LAYER_COUNT] =
+        [Layer::Transmittance, Layer::RainAlpha, Layer::RainDepth];
+
+    /// The layer's name, as users see it (`frame.layers[name]`, EXR channel names).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Layer::Transmittance => "transmittance",
+            Layer::RainAlpha => "rain_alpha",
+            Layer::RainDepth => "rain_depth_m",
+        }
+    }
+
+    /// What the layer holds, in one line.
+    pub const fn meaning(self) -> &'static str {
+        match self {
+            Layer::Transmittance => "haze transmittance e^(-sigma d) along the pixel's view ray",
+            Layer::RainAlpha => "rain streak coverage 1 - prod(1 - a_i)",
+            Layer::RainDepth => "depth of the nearest visible rain streak, m (inf: none)",
+        }
+    }
+
+    /// Whether a frame with these passes draws the layer.
+    pub const fn drawn(self, haze: bool, rain: bool) -> bool {
+        match self {
+            Layer::Transmittance => haze,
+            Layer::RainAlpha | Layer::RainDepth => rain,
+        }
+    }
+
+    /// Its index in [`Layer::ALL`].
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// One value per layer, by layer (a buffer where the layer is drawn, None elsewhere).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layers<T>(pub [Option<T>; LAYER_COUNT]);
+
+impl<T> Default for Layers<T> {
+    fn default() -> Self {
+        Layers(std::array::from_fn(|_| None))
+    }
+}
+
+impl<T> Layers<T> {
+    /// The layer's value.
+    pub fn get(&self, layer: Layer) -> Option<&T> {
+        self.0[layer.index()].as_ref()
+    }
+
+    /// Takes the layer's value out.
+    pub fn take(&mut self, layer: Layer) -> Option<T> {
+        self.0[layer.index()].take()
+    }
+
+    /// Sets the layer's value.
+    pub fn set(&mut self, layer: Layer, value: T) {
+        self.0[layer.index()] = Some(value);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_layer_is_listed_once_in_order() {
+        for (i, l) in Layer::ALL.iter().enumerate() {
+            assert_eq!(l.index(), i);
+        }
+        let mut names: Vec<_> = Layer::ALL.iter().map(|l| l.name()).collect();
+        names.dedup();
+        assert_eq!(names.len(), LAYER_COUNT);
+        assert!(Layer::Transmittance.drawn(true, false) && !Layer::RainAlpha.drawn(true, false));
+    }
+}

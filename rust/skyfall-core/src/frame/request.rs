@@ -1,0 +1,176 @@
+//! One typed request per frame: the camera, the scene, the weather and the options, as the user
+//! gave them; [`FrameSetup`] derives from it everything the passes need (the sky, the haze and
+//! its airlight, the rain region, the drops' shading, what shelters them), in the core, once.
+
+use super::SceneRef;
+use super::scene::SceneLight;
+use crate::error::Result;
+use crate::haze::Haze;
+use crate::rain::drops::RainRegion;
+use crate::rain::streaks::{RainFrame, RainShading};
+use crate::ranges;
+use crate::scene::boxes::{BoxScene, SceneBox};
+use crate::scene::camera::Camera;
+use crate::scene::lights::Light;
+use crate::sky::Sky;
+use crate::sky::ambient::AmbientMap;
+use crate::weather::Weather;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// What a frame shows.
+#[derive(Debug, Clone)]
+pub enum SceneData<'a> {
+    /// The procedural box scene, ray cast.
+    Boxes(BoxScene),
+    /// A photo (linear RGB, H·W·3) with its depth map (H·W, m, inf = sky), and the boxes in its
+    /// world that hide the sky from the drops.
+    Photo {
+        /// Linear RGB.
+        rgb: &'a [f32],
+        /// Depth, m.
+        depth_m: &'a [f32],
+        /// Occluders.
+        occluders: Vec<SceneBox>,
+    },
+    /// An 8-bit photo's depth map and occluders (its bytes go to the 8-bit output stage).
+    Photo8 {
+        /// Depth, m.
+        depth_m: &'a [f32],
+        /// Occluders.
+        occluders: Vec<SceneBox>,
+    },
+}
+
+/// Everything a frame is made of.
+#[derive(Debug, Clone)]
+pub struct FrameRequest<'a> {
+    /// The camera, at the frame's resolution.
+    pub camera: Camera,
+    /// Its exposure, s.
+    pub exposure_s: f64,
+    /// Its velocity, m/s: streaks follow the drops' motion relative to it.
+    pub camera_velocity_m_s: [f64; 3],
+    /// What it looks at.
+    pub scene: SceneData<'a>,
+    /// The scene's lamps and headlights.
+    pub lights: Vec<Light>,
+    /// The weather.
+    pub weather: Weather,
+    /// The frame's time, s.
+    pub time_s: f64,
+    /// The rain's seed.
+    pub seed: u64,
+    /// Drops whose received light is below this are not drawn.
+    pub cull_threshold: Option<f64>,
+    /// The scene's ambient-light map under this weather's sky (the open sky's light everywhere
+    /// where nothing hides it).
+    pub ambient: Arc<AmbientMap>,
+}
+
+/// What a frame's passes need, derived from its request.
+#[derive(Debug, Clone)]
+pub struct FrameSetup {
+    /// The sky through the weather.
+    pub sky: Sky,
+    /// The haze, when the weather has any.
+    pub haze: Option<Haze>,
+    ambient: Arc<AmbientMap>,
+    rain: Option<(RainRegion, RainShading)>,
+    shelter: Vec<SceneBox>,
+    exposure_s: f32,
+    camera_velocity_m_s: Vec3,
+    ground: bool,
+}
+
+impl FrameRequest<'_> {
+    /// Checks the request's own values against their ranges (the weather, the exposure, the
+    /// camera's speed, the time, the cull threshold).
+    pub fn validate(&self) -> Result<()> {
+        self.weather.validate()?;
+        ranges::EXPOSURE_S.check(self.exposure_s)?;
+        let v = self.camera_velocity_m_s;
+        ranges::VELOCITY_M_S.check((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())?;
+        ranges::TIME_S.check(self.time_s)?;
+        if let Some(t) = self.cull_threshold {
+            ranges::CULL_THRESHOLD.check(t)?;
+        }
+        Ok(())
+    }
+
+    /// The scene as the float output stage reads it.
+    pub fn scene_ref(&self) -> SceneRef<'_> {
+        match &self.scene {
+            SceneData::Boxes(b) => SceneRef::Boxes(b),
+            SceneData::Photo { rgb, depth_m, .. } => SceneRef::Photo { rgb, depth_m },
+            SceneData::Photo8 { depth_m, .. } => SceneRef::Photo { rgb: &[], depth_m },
+        }
+    }
+}
+
+impl FrameSetup {
+    /// The sky, the haze (its airlight from the ambient map at the camera), the rain region and
+    /// its shading (the lights, the sky light per drop from the map, culling) and the boxes that
+    /// shelter the drops, for `req` (validated here).
+    pub fn new(req: &FrameRequest<'_>) -> Result<Self> {
+        req.validate()?;
+        let w = &req.weather;
+        let sky = w.sky()?;
+        // Yamamoto & Tadamura: the airlight Is = ks·E_hv, the sky illuminance at the viewpoint.
+        let e_view = req.ambient.sample(req.camera.eye())[0];
+        let haze = w.haze(e_view)?;
+        let rain = match w.rain_region(req.time_s, req.seed)? {
+            Some(region) => {
+                let shading = RainShading {
+                    lights: req.lights.clone(),
+                    sky_illuminance_lux: w.sky_illuminance_lux as f32,
+                    cull_threshold: req.cull_threshold.map(|t| t as f32),
+                    ambient: Some(Arc::clone(&req.ambient)),
+                    ..RainShading::open_sky()
+                };
+                Some((region, shading))
+            }
+            None => None,
+        };
+        let (ground, mut shelter) = match &req.scene {
+            SceneData::Boxes(b) => (b.ground, b.boxes.clone()),
+            SceneData::Photo { occluders, .. } | SceneData::Photo8 { occluders, .. } => {
+                (false, occluders.clone())
+            }
+        };
+        if !w.rain_sheltered {
+            shelter.clear();
+        }
+        let v = req.camera_velocity_m_s;
+        Ok(FrameSetup {
+            sky,
+            haze,
+            ambient: Arc::clone(&req.ambient),
+            rain,
+            shelter,
+            exposure_s: req.exposure_s as f32,
+            camera_velocity_m_s: Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32),
+            ground,
+        })
+    }
+
+    /// How the scene is lit: the sky and the ambient-light map.
+    pub fn light(&self) -> SceneLight<'_> {
+        SceneLight {
+            sky: &self.sky,
+            ambient: &self.ambient,
+        }
+    }
+
+    /// The rain the frame draws, when it draws streaks.
+    pub fn rain(&self) -> Option<RainFrame<'_>> {
+        self.rain.as_ref().map(|(region, shading)| RainFrame {
+            region,
+            exposure_s: self.exposure_s,
+            camera_velocity_m_s: self.camera_velocity_m_s,
+            ground: self.ground,
+            shelter: &self.shelter,
+            shading,
+        })
+    }
+}

@@ -1,0 +1,250 @@
+//! The weather of a frame, as the user sets it (Python's `skyfall.Weather`, field for field),
+//! and what the frame's passes derive from it: the extinction of the air and the rain (the haze
+//! model), the cloud base, the sky, the haze with its airlight, the rain region.
+
+use crate::error::{Error, Param, Result};
+use crate::haze::{AIRLIGHT_RELATIVE, Haze};
+use crate::physics::extinction::rain_extinction_per_m;
+use crate::rain::drops::{RainMethod, RainRegion};
+use crate::ranges;
+use crate::sky::cie::SkyKind;
+use crate::sky::{Sky, cloud_base_m, sun_direction};
+
+/// −ln(0.02): the meteorological visibility is where contrast falls to 2 % (Koschmieder).
+pub const KOSCHMIEDER: f64 = 3.912;
+
+/// The sky's luminance distribution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SkySpec {
+    /// The CIE standard overcast sky (Yamamoto & Tadamura's).
+    Overcast,
+    /// A CIE S 011 general sky, type 1–15.
+    General(i64),
+}
+
+/// A frame's weather.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Weather {
+    /// Rain rate R, mm/h.
+    pub rain_rate_mm_h: f64,
+    /// Meteorological visibility of the air without rain, m (inf: perfectly clear).
+    pub visibility_m: f64,
+    /// Horizontal illuminance E of the open sky at the ground, lux.
+    pub sky_illuminance_lux: f64,
+    /// Wind, m/s.
+    pub wind_m_s: [f64; 3],
+    /// Radius of the rain region drawn as streaks, m.
+    pub rain_near_m: f64,
+    /// Diameters whose bins are drawn, mm.
+    pub rain_diameters_mm: Vec<f64>,
+    /// Whether drops near the camera are drawn as streaks.
+    pub rain_streaks: bool,
+    /// Drops or billboards.
+    pub rain_method: RainMethod,
+    /// Whether boxes keep the rain off what they cover.
+    pub rain_sheltered: bool,
+    /// The sky.
+    pub sky: SkySpec,
+    /// The sun's (elevation, azimuth), deg, for the skies that need one.
+    pub sun_deg: Option<(f64, f64)>,
+    /// Cloud base height, m; None: [`cloud_base_m`] of the rain rate.
+    pub cloud_base_m: Option<f64>,
+}
+
+impl Weather {
+    /// Checks every field against its range ([`crate::ranges`]).
+    pub fn validate(&self) -> Result<()> {
+        ranges::RAIN_RATE_MM_H.check(self.rain_rate_mm_h)?;
+        ranges::VISIBILITY_M.check(self.visibility_m)?;
+        ranges::SKY_ILLUMINANCE_LUX.check(self.sky_illuminance_lux)?;
+        for (i, &w) in self.wind_m_s.iter().enumerate() {
+            ranges::WIND_M_S.check_at(Some(i), w)?;
+        }
+        ranges::RAIN_NEAR_M.check(self.rain_near_m)?;
+        ranges::RAIN_DIAMETERS_MM.check_all(&self.rain_diameters_mm)?;
+        if let Some((el, az)) = self.sun_deg {
+            ranges::SUN_ELEVATION_DEG.check(el)?;
+            ranges::SUN_AZIMUTH_DEG.check(az)?;
+        }
+        if let Some(h) = self.cloud_base_m {
+            ranges::CLOUD_BASE_M.check(h)?;
+        }
+        if let SkySpec::General(t) = self.sky {
+            ranges::SKY.check(t as f64)?;
+        }
+        Ok(())
+    }
+
+    /// Koschmieder extinction of the air, 3.912 / visibility_m, 1/m (0 for infinite visibility).
+    pub fn air_extinction_per_m(&self) -> f64 {
+        if self.visibility_m.is_infinite() {
+            0.0
+        } else {
+            KOSCHMIEDER / self.visibility_m
+        }
+    }
+
+    /// Extinction by rain, 1/m ([`rain_extinction_per_m`] of the rate).
+    pub fn rain_extinction_per_m(&self) -> f64 {
+        rain_extinction_per_m(self.rain_rate_mm_h)
+    }
+
+    /// Total extinction σ = σ_air + σ_rain, 1/m.
+    pub fn extinction_per_m(&self) -> f64 {
+        self.air_extinction_per_m() + self.rain_extinction_per_m()
+    }
+
+    /// The cloud base H in use, m: the given one, or [`cloud_base_m`] of the rain rate.
+    pub fn cloud_base_height_m(&self) -> f64 {
+        self.cloud_base_m
+            .unwrap_or_else(|| cloud_base_m(self.rain_rate_mm_h))
+    }
+
+    /// The sky's kind, with its sun.
+    pub fn sky_kind(&self) -> Result<SkyKind> {
+        let sun = self.sun_deg.map(|(el, az)| sun_direction(el, az));
+        match self.sky {
+            SkySpec::Overcast => Ok(SkyKind::Overcast),
+            SkySpec::General(t) => SkyKind::general(t, sun),
+        }
+    }
+
+    /// The normalised sky seen through this weather's haze below the cloud base.
+    pub fn sky(&self) -> Result<Sky> {
+        Sky::new(
+            self.sky_kind()?,
+            self.extinction_per_m(),
+            self.cloud_base_height_m(),
+        )
+    }
+
+    /// The haze of a frame whose viewpoint receives `e_view` of the open sky's horizontal
+    /// illuminance (the ambient-light map at the camera; 1 in the open): σ, and the airlight
+    /// [`AIRLIGHT_RELATIVE`]·e_view, grey (Yamamoto & Tadamura: Is = ks·E_hv). None when σ = 0,
+    /// so that clear weather returns the scene bit for bit.
+    pub fn haze(&self, e_view: f32) -> Result<Option<Haze>> {
+        let sigma = self.extinction_per_m();
+        if sigma <= 0.0 {
+            return Ok(None);
+        }
+        Haze::new(sigma as f32, [AIRLIGHT_RELATIVE * e_view; 3]).map(Some)
+    }
+
+    /// Whether the frame draws the rain near the camera as streaks.
+    pub fn draws_streaks(&self) -> bool {
+        self.rain_rate_mm_h > 0.0 && self.rain_streaks
+    }
+
+    /// The rain region of a frame at `time_s` with `seed`, when it draws streaks.
+    pub fn rain_region(&self, time_s: f64, seed: u64) -> Result<Option<RainRegion>> {
+        if !self.draws_streaks() {
+            return Ok(None);
+        }
+        self.region(time_s, seed).map(Some)
+    }
+
+    /// The drops' region around a camera at `time_s` with `seed` (whether or not a frame would
+    /// draw them).
+    pub fn region(&self, time_s: f64, seed: u64) -> Result<RainRegion> {
+        let mut region = RainRegion::new(
+            self.rain_rate_mm_h,
+            &self.rain_diameters_mm,
+            self.rain_near_m,
+            self.wind_m_s,
+            time_s,
+            seed,
+        )?;
+        region.method = self.rain_method;
+        Ok(region)
+    }
+}
+
+impl SkySpec {
+    /// `"overcast"`, or a CIE general sky type given as a number.
+    pub fn from_type(sky_type: i64) -> Self {
+        if sky_type == 0 {
+            SkySpec::Overcast
+        } else {
+            SkySpec::General(sky_type)
+        }
+    }
+
+    /// Parses the name of a sky (only `"overcast"` has one).
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "overcast" => Ok(SkySpec::Overcast),
+            other => Err(Error::Invalid {
+                param: Param {
+                    name: "sky",
+                    index: None,
+                },
+                message: format!("{other:?} must be \"overcast\" or a CIE general sky type 1-15"),
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn weather(rate: f64, visibility_m: f64) -> Weather {
+        Weather {
+            rain_rate_mm_h: rate,
+            visibility_m,
+            sky_illuminance_lux: 10_000.0,
+            wind_m_s: [0.0; 3],
+            rain_near_m: 5.0,
+            rain_diameters_mm: vec![1.0, 1.5, 2.0],
+            rain_streaks: true,
+            rain_method: RainMethod::Billboards,
+            rain_sheltered: true,
+            sky: SkySpec::Overcast,
+            sun_deg: None,
+            cloud_base_m: None,
+        }
+    }
+
+    #[test]
+    fn the_haze_is_koschmieder_plus_rain() {
+        // Visibility V is where e^(−σ V) = 2 %: σ_air = −ln(0.02) / V.
+        let w = weather(0.0, 1000.0);
+        assert!(((-0.02f64.ln()) / 1000.0 - w.extinction_per_m()).abs() < 2e-7);
+        assert!(weather(0.0, f64::INFINITY).haze(1.0).unwrap().is_none());
+        let wet = weather(10.0, 2000.0);
+        let want = KOSCHMIEDER / 2000.0 + rain_extinction_per_m(10.0);
+        assert_eq!(wet.extinction_per_m(), want);
+        let h = wet.haze(0.5).unwrap().unwrap();
+        assert_eq!(h.extinction_per_m, want as f32);
+        assert_eq!(h.airlight, [AIRLIGHT_RELATIVE * 0.5; 3]);
+    }
+
+    #[test]
+    fn the_cloud_base_and_the_rain_follow_the_weather() {
+        let mut w = weather(10.0, f64::INFINITY);
+        assert_eq!(w.cloud_base_height_m(), cloud_base_m(10.0));
+        w.cloud_base_m = Some(700.0);
+        assert_eq!(w.cloud_base_height_m(), 700.0);
+        let r = w.rain_region(1.5, 3).unwrap().unwrap();
+        assert_eq!(
+            (r.rain_rate_mm_h, r.time_s, r.seed, r.method),
+            (10.0, 1.5, 3, RainMethod::Billboards)
+        );
+        w.rain_streaks = false;
+        assert!(w.rain_region(1.5, 3).unwrap().is_none());
+        assert!(weather(0.0, 1.0).rain_region(0.0, 0).unwrap().is_none());
+    }
+
+    #[test]
+    fn out_of_range_fields_are_named() {
+        let mut w = weather(10.0, 1000.0);
+        w.wind_m_s[2] = 61.0;
+        let e = w.validate().unwrap_err().to_string();
+        assert!(e.contains("wind_m_s[2]") && e.contains("61"), "{e}");
+        let mut w = weather(10.0, 1000.0);
+        w.sky = SkySpec::General(16);
+        assert!(w.validate().unwrap_err().to_string().contains("sky"));
+        assert!(SkySpec::parse("clear").is_err());
+        assert_eq!(SkySpec::from_type(0), SkySpec::Overcast);
+    }
+}

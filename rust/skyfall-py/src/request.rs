@@ -1,0 +1,358 @@
+//! One typed request per frame, read from the Python objects themselves (`skyfall.Weather`,
+//! `skyfall.Camera`, `BoxScene` / `PhotoScene`, the lights): attribute by attribute into the
+//! core's [`FrameRequest`], with no packed tuples in between. The core derives the rest
+//! ([`skyfall_core::frame::request::FrameSetup`]).
+
+use crate::errors::{CoreError, invalid};
+use crate::sky::AmbientLightMap;
+use glam::{DVec3, Mat3, Vec3};
+use numpy::{PyReadonlyArray2, PyReadonlyArray3};
+use pyo3::prelude::*;
+use skyfall_core::frame::request::{FrameRequest, SceneData};
+use skyfall_core::rain::drops::RainMethod;
+use skyfall_core::scene::boxes::{BoxScene, SceneBox};
+use skyfall_core::scene::camera::Camera;
+use skyfall_core::scene::lights::Light;
+use skyfall_core::weather::{SkySpec, Weather};
+use std::sync::Arc;
+
+/// `skyfall.Weather`'s fields.
+#[derive(FromPyObject)]
+pub struct WeatherSpec {
+    rain_rate_mm_h: f64,
+    visibility_m: f64,
+    sky_illuminance_lux: f64,
+    wind_m_s: [f64; 3],
+    rain_near_m: f64,
+    rain_diameters_mm: Vec<f64>,
+    rain_streaks: bool,
+    rain_method: String,
+    rain_sheltered: bool,
+    sky: SkyArg,
+    sun_elevation_deg: Option<f64>,
+    sun_azimuth_deg: Option<f64>,
+    cloud_base_m: Option<f64>,
+}
+
+/// `Weather.sky`: `"overcast"` or a CIE general sky type.
+#[derive(FromPyObject)]
+enum SkyArg {
+    Type(i64),
+    Name(String),
+}
+
+impl WeatherSpec {
+    /// The core's weather.
+    pub fn core(self) -> PyResult<Weather> {
+        let sky = match self.sky {
+            SkyArg::Type(t) => SkySpec::from_type(t),
+            SkyArg::Name(n) => SkySpec::parse(&n).map_err(CoreError)?,
+        };
+        let sun_deg = match (self.sun_elevation_deg, self.sun_azimuth_deg) {
+            (Some(el), Some(az)) => Some((el, az)),
+            (None, None) => None,
+            _ => {
+                return Err(invalid(
+                    "sun_elevation_deg",
+                    None,
+                    "give both sun_elevation_deg and sun_azimuth_deg, or neither",
+                ));
+            }
+        };
+        let w = Weather {
+            rain_rate_mm_h: self.rain_rate_mm_h,
+            visibility_m: self.visibility_m,
+            sky_illuminance_lux: self.sky_illuminance_lux,
+            wind_m_s: self.wind_m_s,
+            rain_near_m: self.rain_near_m,
+            rain_diameters_mm: self.rain_diameters_mm,
+            rain_streaks: self.rain_streaks,
+            rain_method: RainMethod::parse(&self.rain_method).map_err(CoreError)?,
+            rain_sheltered: self.rain_sheltered,
+            sky,
+            sun_deg,
+            cloud_base_m: self.cloud_base_m,
+        };
+        w.validate().map_err(CoreError)?;
+        Ok(w)
+    }
+}
+
+/// `skyfall.Camera`'s pose, exposure and motion (its intrinsics come from `intrinsics()`).
+#[derive(FromPyObject)]
+struct CameraAttrs<'py> {
+    width: Option<u32>,
+    height: Option<u32>,
+    position_m: [f64; 3],
+    rotation: PyReadonlyArray2<'py, f64>,
+    exposure_s: f64,
+    velocity_m_s: [f64; 3],
+}
+
+/// A camera with its exposure (s) and velocity (m/s).
+pub struct CameraSpec {
+    /// The core's camera.
+    pub camera: Camera,
+    exposure_s: f64,
+    velocity_m_s: [f64; 3],
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for CameraSpec {
+    type Error = PyErr;
+
+    fn extract(ob: pyo3::Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        let a: CameraAttrs<'py> = ob.extract()?;
+        let (Some(width), Some(height)) = (a.width, a.height) else {
+            return Err(invalid(
+                "camera",
+                None,
+                "has no resolution: use with_resolution()",
+            ));
+        };
+        let [fx, fy, cx, cy]: [f64; 4] = ob.call_method0("intrinsics")?.extract()?;
+        let r = a.rotation.as_array();
+        if r.shape() != [3, 3] {
+            return Err(invalid(
+                "rotation",
+                None,
+                format!("must be 3 x 3, got {:?}", r.shape()),
+            ));
+        }
+        // world_from_camera: its columns are the camera's right, up and back axes.
+        let col = |j: usize| Vec3::new(r[[0, j]] as f32, r[[1, j]] as f32, r[[2, j]] as f32);
+        let rot = Mat3::from_cols(col(0), col(1), col(2));
+        let camera = Camera::new(
+            width,
+            height,
+            [fx as f32, fy as f32, cx as f32, cy as f32],
+            DVec3::from(a.position_m),
+            rot,
+        )
+        .map_err(CoreError)?;
+        Ok(CameraSpec {
+            camera,
+            exposure_s: a.exposure_s,
+            velocity_m_s: a.velocity_m_s,
+        })
+    }
+}
+
+/// A point light's fields (`skyfall.PointLight`).
+#[derive(FromPyObject)]
+struct PointAttrs {
+    position_m: [f64; 3],
+    intensity_cd: f64,
+    color: [f64; 3],
+}
+
+/// A spot light's fields (`skyfall.SpotLight`; `inner_cone_deg` is set on construction).
+#[derive(FromPyObject)]
+struct SpotAttrs {
+    position_m: [f64; 3],
+    direction: [f64; 3],
+    intensity_cd: f64,
+    cone_deg: f64,
+    inner_cone_deg: f64,
+    color: [f64; 3],
+}
+
+#[derive(FromPyObject)]
+enum LightSpec {
+    Spot(SpotAttrs),
+    Point(PointAttrs),
+}
+
+impl LightSpec {
+    fn core(&self, index: usize) -> PyResult<Light> {
+        let f = |v: [f64; 3]| v.map(|x| x as f32);
+        // The core's light row: position, colour, intensity, then the spot's axis and the
+        // cosines of its outer and inner half-angles (zero axis: a point light).
+        let row: Vec<f32> = match self {
+            LightSpec::Point(p) => [
+                &f(p.position_m)[..],
+                &f(p.color),
+                &[p.intensity_cd as f32, 0.0, 0.0, 0.0, -1.0, -1.0],
+            ]
+            .concat(),
+            LightSpec::Spot(s) => [
+                &f(s.position_m)[..],
+                &f(s.color),
+                &[s.intensity_cd as f32],
+                &f(s.direction),
+                &[
+                    s.cone_deg.to_radians().cos() as f32,
+                    s.inner_cone_deg.to_radians().cos() as f32,
+                ],
+            ]
+            .concat(),
+        };
+        Ok(Light::from_row(&row, index).map_err(CoreError)?)
+    }
+}
+
+/// Box scene from an (N, 9) array: min xyz, max xyz, albedo rgb per row (the layout of
+/// `skyfall.scenes`' box arrays).
+pub(crate) fn box_rows(boxes: &PyReadonlyArray2<'_, f32>) -> PyResult<Vec<SceneBox>> {
+    let a = boxes.as_array();
+    if a.ncols() != 9 {
+        return Err(invalid(
+            "boxes",
+            None,
+            format!("must have shape (N, 9), got {:?}", a.shape()),
+        ));
+    }
+    Ok(a.rows()
+        .into_iter()
+        .map(|r| SceneBox {
+            min_m: Vec3::new(r[0], r[1], r[2]),
+            max_m: Vec3::new(r[3], r[4], r[5]),
+            albedo: Vec3::new(r[6], r[7], r[8]),
+        })
+        .collect())
+}
+
+/// A box scene from its rows, ground flag and ground albedo, validated by the core.
+pub(crate) fn box_scene(
+    boxes: &PyReadonlyArray2<'_, f32>,
+    ground: bool,
+    ground_albedo: [f32; 3],
+) -> PyResult<BoxScene> {
+    Ok(BoxScene::new(box_rows(boxes)?, ground, Vec3::from(ground_albedo)).map_err(CoreError)?)
+}
+
+/// `BoxScene`'s fields.
+#[derive(FromPyObject)]
+struct BoxAttrs<'py> {
+    boxes: PyReadonlyArray2<'py, f32>,
+    ground: bool,
+    ground_albedo: [f32; 3],
+    lights: Vec<LightSpec>,
+}
+
+/// `PhotoScene`'s fields (its pixels are read as each output stage needs them).
+#[derive(FromPyObject)]
+struct PhotoAttrs<'py> {
+    depth_m: PyReadonlyArray2<'py, f32>,
+    occluders: PyReadonlyArray2<'py, f32>,
+    lights: Vec<LightSpec>,
+}
+
+/// The arrays a request borrows from Python (held while the frame renders).
+pub enum SceneArrays<'py> {
+    /// A box scene (nothing borrowed).
+    Boxes(BoxScene),
+    /// A photo's linear RGB (when the float stage draws it) and its depth.
+    Photo {
+        rgb: Option<PyReadonlyArray3<'py, f32>>,
+        depth_m: PyReadonlyArray2<'py, f32>,
+        occluders: Vec<SceneBox>,
+    },
+}
+
+/// A frame request as Python hands it: a dict of the frame's objects.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct RequestArgs<'py> {
+    camera: CameraSpec,
+    weather: WeatherSpec,
+    scene: Bound<'py, PyAny>,
+    time_s: f64,
+    seed: u64,
+    cull_threshold: Option<f64>,
+    ambient: Bound<'py, AmbientLightMap>,
+}
+
+/// A request's parts: the Python arrays it borrows, and the rest, owned.
+pub struct ParsedRequest<'py> {
+    /// The scene's arrays.
+    pub arrays: SceneArrays<'py>,
+    camera: CameraSpec,
+    lights: Vec<Light>,
+    weather: Weather,
+    time_s: f64,
+    seed: u64,
+    cull_threshold: Option<f64>,
+    ambient: Arc<skyfall_core::sky::ambient::AmbientMap>,
+}
+
+impl<'py> RequestArgs<'py> {
+    /// Reads the scene (`linear`: a photo's linear RGB is wanted, for the float stage) and the
+    /// weather into the core's types.
+    pub fn parse(self, linear: bool) -> PyResult<ParsedRequest<'py>> {
+        let (arrays, lights) = if self.scene.hasattr("boxes")? {
+            let b: BoxAttrs<'py> = self.scene.extract()?;
+            (
+                SceneArrays::Boxes(box_scene(&b.boxes, b.ground, b.ground_albedo)?),
+                b.lights,
+            )
+        } else {
+            let p: PhotoAttrs<'py> = self.scene.extract()?;
+            let rgb = if linear {
+                Some(self.scene.getattr("image")?.extract()?)
+            } else {
+                None
+            };
+            (
+                SceneArrays::Photo {
+                    rgb,
+                    depth_m: p.depth_m,
+                    occluders: box_rows(&p.occluders)?,
+                },
+                p.lights,
+            )
+        };
+        let lights = lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| l.core(i))
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok(ParsedRequest {
+            arrays,
+            camera: self.camera,
+            lights,
+            weather: self.weather.core()?,
+            time_s: self.time_s,
+            seed: self.seed,
+            cull_threshold: self.cull_threshold,
+            ambient: Arc::clone(&self.ambient.get().map),
+        })
+    }
+}
+
+impl<'py> ParsedRequest<'py> {
+    /// The core's request, borrowing the scene's arrays.
+    pub fn request(&self) -> PyResult<FrameRequest<'_>> {
+        let scene = match &self.arrays {
+            SceneArrays::Boxes(b) => SceneData::Boxes(b.clone()),
+            SceneArrays::Photo {
+                rgb: Some(rgb),
+                depth_m,
+                occluders,
+            } => SceneData::Photo {
+                rgb: rgb.as_slice()?,
+                depth_m: depth_m.as_slice()?,
+                occluders: occluders.clone(),
+            },
+            SceneArrays::Photo {
+                rgb: None,
+                depth_m,
+                occluders,
+            } => SceneData::Photo8 {
+                depth_m: depth_m.as_slice()?,
+                occluders: occluders.clone(),
+            },
+        };
+        Ok(FrameRequest {
+            camera: self.camera.camera,
+            exposure_s: self.camera.exposure_s,
+            camera_velocity_m_s: self.camera.velocity_m_s,
+            scene,
+            lights: self.lights.clone(),
+            weather: self.weather.clone(),
+            time_s: self.time_s,
+            seed: self.seed,
+            cull_threshold: self.cull_threshold,
+            ambient: Arc::clone(&self.ambient),
+        })
+    }
+}
