@@ -97,3 +97,18 @@ def test_layers_are_the_cores() -> None:
     assert list(f.layers) == list(_core.LAYERS)
     assert list(r.render(scenes.street(), Weather(visibility_m=500.0)).layers) == ["transmittance"]
     assert r.render(scenes.street(), Weather()).layers == {}
+
+
+def test_map_failures_name_what_the_user_set() -> None:
+    # A camera far from a box scene's boxes, and an ambient spacing too fine for the scene:
+    # the messages name the camera's position_m and ambient_spacing_m (and what would work),
+    # not the map's bounds or its own spacing_m.
+    r = Renderer(16, 12, backend="cpu")
+    far = skyfall.Camera((1e7, 1.6, 1e7))
+    with pytest.raises(ValueError, match=r"camera at position_m = \(1e\+07, 1.6, 1e\+07\)") as e:
+        r.render(scenes.street(), Weather(rain_rate_mm_h=5.0), camera=far)
+    assert "bounds" not in str(e.value)
+    with pytest.raises(ValueError, match=r"^ambient_spacing_m = 0.05 m needs .* use ambient_spacing_m >= ([0-9.]+) m") as e:
+        r.render(scenes.street(), Weather(rain_rate_mm_h=5.0), ambient_spacing_m=0.05)
+    suggested = float(str(e.value).rsplit(">= ", 1)[1].split()[0])
+    r.render(scenes.street(), Weather(rain_rate_mm_h=5.0), ambient_spacing_m=suggested, ambient_samples=4)

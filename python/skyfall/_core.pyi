@@ -15,6 +15,8 @@ __all__ = [
     "rain_drops",
     "AIRLIGHT_RELATIVE",
     "KOSCHMIEDER",
+    "AMBIENT_MAX_NODES",
+    "AMBIENT_EXTENT_M",
     "FRAME_BUDGET_BYTES",
     "AmbientLightMap",
     "GpuDevice",
@@ -58,6 +60,8 @@ def check_range(name: str, value: float, index: int | None = None) -> float: ...
 
 AIRLIGHT_RELATIVE: float
 KOSCHMIEDER: float
+AMBIENT_MAX_NODES: int
+AMBIENT_EXTENT_M: float
 FRAME_BUDGET_BYTES: int
 
 class SkyfallError(Exception): ...

@@ -2,6 +2,7 @@
 //! package `skyfall`; this module's contract is `python/skyfall/_core.pyi`.
 
 mod alloc;
+mod boxes;
 mod color;
 mod errors;
 mod interrupt;
@@ -67,6 +68,8 @@ mod _core {
         )?;
         m.add("AIRLIGHT_RELATIVE", skyfall_core::haze::AIRLIGHT_RELATIVE)?;
         m.add("KOSCHMIEDER", skyfall_core::weather::KOSCHMIEDER)?;
+        m.add("AMBIENT_MAX_NODES", skyfall_core::sky::ambient::MAX_NODES)?;
+        m.add("AMBIENT_EXTENT_M", skyfall_core::sky::ambient::MAP_EXTENT_M)?;
         m.add(
             "FRAME_BUDGET_BYTES",
             skyfall_core::frame::FRAME_BUDGET_BYTES,

@@ -1,8 +1,9 @@
 //! The drops near a camera, as arrays: ground truth for stereo and video.
 
 use crate::alloc::filled;
+use crate::boxes::box_rows;
 use crate::errors::CoreError;
-use crate::request::{WeatherSpec, box_rows};
+use crate::request::WeatherSpec;
 use glam::DVec3;
 use numpy::ndarray::{Ix1, Ix2};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};

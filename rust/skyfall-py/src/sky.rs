@@ -1,9 +1,9 @@
 //! Skies, sky illuminance with occlusion and the ambient-light map.
 
 use crate::alloc::{filled, from_slice};
+use crate::boxes::box_scene;
 use crate::errors::{CoreError, invalid};
 use crate::interrupt::interruptible_core;
-use crate::request::box_scene;
 use glam::Vec3;
 use numpy::ndarray::{Ix1, Ix2, Ix3, Ix4};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArray4, PyReadonlyArray2};

@@ -21,6 +21,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Most nodes a map may have (16 M: 320 MB of float32).
 pub const MAX_NODES: usize = 16 << 20;
+/// The largest |coordinate| of a map's bounds, m (the box scene's world).
+pub const MAP_EXTENT_M: f64 = 1e6;
 /// Valid grid spacings.
 pub const SPACING_M: Range = crate::ranges::SPACING_M.range;
 
@@ -66,7 +68,7 @@ impl AmbientMap {
     /// Node count for a box `min_m`..`max_m` at `spacing_m`, validated.
     pub fn grid_dims(min_m: Vec3, max_m: Vec3, spacing_m: f64) -> Result<[usize; 3]> {
         SPACING_M.check("spacing_m", None, spacing_m)?;
-        let coord = Range::closed(-1e6, 1e6, "m");
+        let coord = Range::closed(-MAP_EXTENT_M, MAP_EXTENT_M, "m");
         for k in 0..3 {
             coord.check("bounds.min", Some(k), f64::from(min_m[k]))?;
             coord.check("bounds.max", Some(k), f64::from(max_m[k]))?;
