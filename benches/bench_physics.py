@@ -53,7 +53,7 @@ def numpy_beard(d_mm: np.ndarray) -> np.ndarray:
 
 
 def numpy_sphere_fixed_point(d_mm: np.ndarray, iterations: int = 60) -> np.ndarray:
-    """The seed's method: v <- sqrt(4 g D drho / (3 Cd rho_a)), Cd from Re(v), fixed iterations."""
+    """Yoshida, Dobashi & Yamamoto's method: v <- sqrt(4 g D drho / (3 Cd rho_a)), Cd from Re(v), fixed iterations."""
     return _fixed_point(d_mm, iterations)[0]
 
 
@@ -163,7 +163,7 @@ def write(vel: list[dict[str, object]], tex: list[dict[str, object]], n: int) ->
         "",
         f"## Terminal velocity: error vs Gunn & Kinzer 1949, time for {n:,} diameters",
         "",
-        "The numpy column is the same formula written in numpy in the bench (for `sphere`, the seed's",
+        "The numpy column is the same formula written in numpy in the bench (for `sphere`, Yoshida, Dobashi & Yamamoto's",
         "fixed-point iteration, 60 steps); the last column is skyfall's largest relative difference from it",
         "(for `sphere`, over the diameters where the fixed point converged: it oscillates forever for",
         f"{1 - vel[1]['numpy_reference_converged_fraction']:.2%} of them, where the drag law jumps; skyfall's bracketed solve does not).",
@@ -179,15 +179,15 @@ def write(vel: list[dict[str, object]], tex: list[dict[str, object]], n: int) ->
         )
     lines += [
         "",
-        "## Rain textures: the seed's grid (R ∈ {1, 5, 10, 20} mm/h × D ∈ {1.0, …, 2.0} mm)",
+        "## Rain textures: Yoshida, Dobashi & Yamamoto's grid (R ∈ {1, 5, 10, 20} mm/h × D ∈ {1.0, …, 2.0} mm)",
         "",
-        "The seed paper made the 512² grid in 164 s (Pentium 4). `alloc+fill` is numpy allocating and",
+        "Yoshida, Dobashi & Yamamoto made the 512² grid in 164 s (Pentium 4). `alloc+fill` is numpy allocating and",
         "filling an array of the same size in the same run: the memory floor for producing the result.",
         "Opacity: texture mean opacity against the analytic ∫N(D)D²dD over each bin, 16 seeds; bias pooled",
         "over the grid, RMS over the textures with ≥ 50 expected drops (sparser bins are dominated by",
         "drop-count noise, which the tests bound per texture).",
         "",
-        "| size | skyfall | vs seed paper | numpy alloc+fill | ratio to alloc+fill | opacity bias | opacity RMS err |",
+        "| size | skyfall | vs Yoshida et al. | numpy alloc+fill | ratio to alloc+fill | opacity bias | opacity RMS err |",
         "|---|---|---|---|---|---|---|",
     ]
     for r in tex:

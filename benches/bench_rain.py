@@ -40,7 +40,7 @@ def main() -> None:
     clear = cpu.render(street)
     photo8 = io.to_srgb8(clear.rgb)
     depth = clear.depth_m
-    weather = Weather(rain_rate_mm_h=10.0)  # the default method: seed 000's billboards
+    weather = Weather(rain_rate_mm_h=10.0)  # the default method: Yoshida, Dobashi & Yamamoto's billboards
     weather_drops = Weather(rain_rate_mm_h=10.0, rain_method="drops")
 
     rows: list[dict[str, object]] = []
@@ -100,7 +100,7 @@ def main() -> None:
     except GpuUnavailableError as exc:  # a machine without Vulkan still gets the CPU rows
         print(f"GPU row skipped: {exc}")
 
-    # Billboards (seed 000) against the per-drop reference: mean-opacity bias over 12 seeds (with
+    # Billboards (Yoshida, Dobashi & Yamamoto) against the per-drop reference: mean-opacity bias over 12 seeds (with
     # its standard error) and time, on a 640x360 frame looking into open rain, for several
     # rain-region radii.
     small = Renderer(640, 360, backend="cpu")
@@ -150,7 +150,7 @@ def main() -> None:
             }
         )
 
-    # Culling (seed 000): at dusk with lamps and headlights, drops whose light is below the
+    # Culling (Yoshida, Dobashi & Yamamoto): at dusk with lamps and headlights, drops whose light is below the
     # threshold are skipped; time saved against the error added (mean |delta rgb| over the frame).
     dusk = scenes.street(lamps=True, headlights=True)
     dusk_weather = Weather(rain_rate_mm_h=20.0, sky_illuminance_lux=30.0)
@@ -202,7 +202,7 @@ def main() -> None:
     ]
     lines += [
         "",
-        "## Billboards (seed 000) against the per-drop reference",
+        "## Billboards (Yoshida, Dobashi & Yamamoto) against the per-drop reference",
         "",
         "640x360, open rain at 20 mm/h, mean rain_alpha over 12 seeds (± one standard error of the",
         "bias); times are medians of one frame. Billboards draw a voxel's streaks at its centre's depth;",

@@ -1,4 +1,4 @@
-"""Sky light (seed 002): illuminance error vs sample count vs time, and the ambient-light map's
+"""Sky light (Yamamoto & Tadamura): illuminance error vs sample count vs time, and the ambient-light map's
 build time vs spacing with its interpolation error against direct evaluation.
 
 Writes benches/results/sky.md and sky.json. Run with `make bench`.
@@ -72,7 +72,7 @@ def main() -> None:
     env = {"cpus": os.cpu_count(), "machine": platform.machine(), "date": time.strftime("%Y-%m-%d")}
     (RESULTS / "sky.json").write_text(json.dumps({"env": env, "samples": samples_rows, "map": map_rows, "frame": frame_rows}, indent=2))
     lines = [
-        "# Sky light benchmark (seed 002)",
+        "# Sky light benchmark (Yamamoto & Tadamura)",
         "",
         f"{env['date']}, {env['cpus']} CPUs ({env['machine']}). Medians of repeated runs.",
         "",

@@ -1,5 +1,5 @@
 """Frames on both backends: GPU (wgpu on lavapipe here) against the CPU reference, and the
-haze pass against an independent numpy implementation of seed 002's eq. 2."""
+haze pass against an independent numpy implementation of Yamamoto & Tadamura's eq. 2."""
 
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ def ssim(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def numpy_haze(img, depth, cam, sigma, air):
-    """Seed 002 eq. 2 written independently: distance along each pixel's ray from the camera."""
+    """Yamamoto & Tadamura eq. 2 written independently: distance along each pixel's ray from the camera."""
     fx, fy, cx, cy = cam.intrinsics()
     y, x = np.mgrid[0 : depth.shape[0], 0 : depth.shape[1]] + 0.5
     per_depth = np.sqrt(((x - cx) / fx) ** 2 + ((y - cy) / fy) ** 2 + 1.0)

@@ -51,7 +51,7 @@ def test_the_fused_path_is_the_float_frame_encoded(cpu):
 
 
 def test_haze_matches_numpy_and_colour_science(cpu):
-    # Seed 002 eq. 2, written independently, decoded and encoded by colour-science.
+    # Yamamoto & Tadamura eq. 2, written independently, decoded and encoded by colour-science.
     scene = photo8(2, near_wall=False)
     weather = Weather(visibility_m=80.0)
     sigma = weather.extinction_per_m

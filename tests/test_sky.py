@@ -1,4 +1,4 @@
-"""Sky light (seed 002): CIE skies against an independent implementation of the published
+"""Sky light (Yamamoto & Tadamura): CIE skies against an independent implementation of the published
 formula and scipy integrals, illuminance with occlusion against high-resolution numerical
 integrals, the ambient map against direct evaluation, and its use in frames on both backends."""
 
@@ -313,7 +313,7 @@ def test_rendered_sky_is_the_cie_luminance_through_colour_science():
 
 
 def test_haze_airlight_follows_the_viewpoint_illuminance():
-    # Seed 002: Is = ks E_hv. Under a roof the camera's airlight is dimmer than in the open.
+    # Yamamoto & Tadamura: Is = ks E_hv. Under a roof the camera's airlight is dimmer than in the open.
     w = Weather(rain_rate_mm_h=20.0, rain_streaks=False)
     r = Renderer(W, H, backend="cpu")
     open_sky = r.render(roofed_photo(False), w).rgb[0, 0, 0]

@@ -12,7 +12,7 @@ io
 scenes
     Photo scenes with depth and procedural box scenes (``scenes.street()``).
 sky
-    CIE skies, sky illuminance with occlusion and the ambient-light map (seed 002).
+    CIE skies, sky illuminance with occlusion and the ambient-light map (Yamamoto & Tadamura).
 
 Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`.
 """

@@ -3,7 +3,7 @@
 Writes
 ------
 rain_textures.exr
-    The seed paper's 4 x 6 rain-texture grid (R in {1, 5, 10, 20} mm/h, D in
+    Yoshida, Dobashi & Yamamoto's 4 x 6 rain-texture grid (R in {1, 5, 10, 20} mm/h, D in
     {1.0, ..., 2.0} mm, 512 px each) as a float32 atlas with its rates and diameters.
 rain_textures.png
     A labelled contact sheet of the same grid.
@@ -15,7 +15,7 @@ street.exr, street.png
 street_rain_day.exr, street_rain_day.png, street_rain_day_alpha.png
     The street by day in 50 mm/h rain with a 3 m/s cross wind: streaks of every drop within 5 m,
     and the rain_alpha ground-truth layer (stretched for viewing). Drops under the awning
-    on the right see less sky and are dimmer (the ambient-light map, seed 002).
+    on the right see less sky and are dimmer (the ambient-light map, Yamamoto & Tadamura).
 ambient_light.png
     The street's ambient-light map in that rain: horizontal sky illuminance 1.5 m up, and a
     section across the street 20 m ahead showing the awning's shade.
@@ -168,7 +168,7 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     tex = rain.textures(rates, diams, size_px=512, seed=0)
     dt = time.perf_counter() - t0
-    print(f"rain textures: {tex.shape[0]} x {tex.shape[1]} of 512 px in {dt * 1e3:.1f} ms (the seed paper: 164 s)")
+    print(f"rain textures: {tex.shape[0]} x {tex.shape[1]} of 512 px in {dt * 1e3:.1f} ms (Yoshida, Dobashi & Yamamoto: 164 s)")
     rain.write_atlas(out / "rain_textures.exr", tex, rates, diams)
     contact_sheet(tex, rates, diams).savefig(out / "rain_textures.png", dpi=110)
     velocity_plot().savefig(out / "terminal_velocity.png", dpi=110)

@@ -41,7 +41,7 @@ __all__ = [
 ]
 
 FALL_SPEED_MODELS: Final = ("beard", "sphere", "atlas")
-"""Names accepted by ``model=``: Beard 1976 (default), the seed's rigid sphere, Atlas 1973."""
+"""Names accepted by ``model=``: Beard 1976 (default), Yoshida, Dobashi & Yamamoto's rigid sphere, Atlas 1973."""
 
 STANDARD_TEMPERATURE_C: Final = 20.0
 STANDARD_PRESSURE_HPA: Final = 1013.25
@@ -132,7 +132,7 @@ def terminal_velocity(
     model : {"beard", "sphere", "atlas"}
         ``"beard"`` (default): Beard 1976, three regimes with slip correction and drop
         deformation; matches Gunn & Kinzer 1949 to 1.6 % RMS over 0.1-5.8 mm (34 drops;
-        at most 3.6 % off over 0.2-5.8 mm). ``"sphere"``: the seed's rigid
+        at most 3.6 % off over 0.2-5.8 mm). ``"sphere"``: Yoshida, Dobashi & Yamamoto's rigid
         sphere, Cd(Re) = 24/Re (Re < 1), Schiller-Naumann (Re < 1000), 0.44, solved exactly
         for Re; good below ~1.4 mm, ~30 % too fast at 5.8 mm because real drops flatten.
         ``"atlas"``: Atlas et al. 1973, 9.65 - 10.3 exp(-0.6 D) (0 below 0.109 mm), scaled by

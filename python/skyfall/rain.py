@@ -1,4 +1,4 @@
-"""Precomputed rain-streak textures (seed 000: Yoshida, Dobashi & Yamamoto).
+"""Precomputed rain-streak textures (Yoshida, Dobashi & Yamamoto, a fast method of drawing rain streaks for rainy scenery).
 
 A rain texture F(R, D) shows a 1 m^3 cube of rain seen orthographically, perpendicular to
 the fall direction, during one camera exposure: every drop of the diameter bin around D is
@@ -36,9 +36,9 @@ __all__ = [
 ]
 
 SEED_RAIN_RATES_MM_H: Final = (1.0, 5.0, 10.0, 20.0)
-"""The rain rates of the seed paper's texture grid, mm/h."""
+"""The rain rates of Yoshida, Dobashi & Yamamoto's texture grid, mm/h."""
 SEED_DIAMETERS_MM: Final = (1.0, 1.2, 1.4, 1.6, 1.8, 2.0)
-"""The drop diameters of the seed paper's texture grid, mm."""
+"""The drop diameters of Yoshida, Dobashi & Yamamoto's texture grid, mm."""
 TEXTURE_BUDGET_BYTES: Final[int] = _core.TEXTURE_BUDGET_BYTES
 """Largest result :func:`textures` allocates (2 GiB); larger requests raise ValueError first."""
 

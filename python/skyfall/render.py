@@ -215,7 +215,7 @@ class Renderer:
             two frames with the same seed see the same drops.
         cull_threshold : float, optional
             Skip drops whose received light I_R (relative units; 1.0 is the open sky's) is
-            below this, as the seed does for unlit billboards: at dusk with lamps, 1.5 keeps
+            below this, as Yoshida, Dobashi & Yamamoto do for unlit billboards: at dusk with lamps, 1.5 keeps
             only lamp-lit drops. ``frame.stats["rain_culled"]`` counts them. None (default)
             draws every drop.
         ambient_spacing_m : float

@@ -1,4 +1,4 @@
-"""Sky light (seed 002): CIE skies, sky illuminance with occlusion, the ambient-light map.
+"""Sky light (Yamamoto & Tadamura): CIE skies, sky illuminance with occlusion, the ambient-light map.
 
 Coordinates: world metres, +Y up; azimuth is measured from -Z (north, where a default camera
 looks) towards +X (east). Every sky is normalised so that the open, unobstructed ground
@@ -48,7 +48,7 @@ CHANNELS = ("up", "+x", "-x", "+z", "-z")
 vertical surfaces facing +X, -X, +Z, -Z (every face of a box scene is one of them)."""
 
 SKY_TYPES: dict[int | str, str] = {
-    "overcast": "CIE standard overcast sky (Moon & Spencer), seed 002",
+    "overcast": "CIE standard overcast sky (Moon & Spencer), as Yamamoto & Tadamura use it",
     1: "Overcast, steep gradation, azimuthal uniformity",
     2: "Overcast, steep gradation, slight brightening towards sun",
     3: "Overcast, gentle gradation, azimuthal uniformity",
@@ -77,7 +77,7 @@ def cloud_base_m(rain_rate_mm_h: float) -> float:
     """Cloud base height for a rain rate R in [0, 500] mm/h, m: 1500 - 250 ln(1 + R / (1 mm/h)),
     clamped to [300, 1500] m.
 
-    Seed 002 makes the cloud height a function of the rain rate (after Shibata 1999) without
+    Yamamoto & Tadamura make the cloud height a function of the rain rate (after Shibata 1999) without
     printing the relation; this is skyfall's own smooth stand-in: 1500 m dry, 900 m at
     10 mm/h, 520 m at 50 mm/h, 350 m at 100 mm/h. Override it with ``Weather.cloud_base_m``.
     """
@@ -216,7 +216,7 @@ def horizontal_illuminance(
         Azimuths sampled, in [4, 65536] (default 256); the elevation integral along each is
         exact for the boxes.
     normal : {"up", "+x", "-x", "+z", "-z"}
-        The surface's normal: "up" (default) is the horizontal illuminance of seed 002.
+        The surface's normal: "up" (default) is the horizontal illuminance of Yamamoto & Tadamura.
 
     Returns
     -------
@@ -233,7 +233,7 @@ def horizontal_illuminance(
 
 @dataclass(frozen=True)
 class AmbientLightMap:
-    """Sky illuminance on a uniform grid, interpolated trilinearly (seed 002 section 4.3).
+    """Sky illuminance on a uniform grid, interpolated trilinearly (Yamamoto & Tadamura section 4.3).
 
     Nodes inside boxes (``solid``) are left out of the interpolation: a point reads the open
     corners of its cell (weights renormalised), so beneath a thin awning it reads the nodes

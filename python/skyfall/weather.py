@@ -38,7 +38,7 @@ class Weather:
         drop whose path back up along its velocity meets a box is not drawn (default True).
         Under an awning only what the wind blows in remains.
     sky : "overcast" or int
-        The sky's luminance distribution: ``"overcast"`` (default) is seed 002's CIE standard
+        The sky's luminance distribution: ``"overcast"`` (default) is Yamamoto & Tadamura's CIE standard
         overcast sky, (1 + 2 sin(elevation)) / 3 of the zenith; 1-15 the CIE S 011 general
         sky types (:data:`skyfall.sky.SKY_TYPES`).
     sun_elevation_deg, sun_azimuth_deg : float, optional
@@ -53,14 +53,14 @@ class Weather:
         slant along the drop's velocity.
     rain_near_m : float
         Radius of the rain region around the camera in which drops are drawn as streaks, m,
-        in (0, 50] (5 m as in seed 000); beyond it rain shows only as haze.
+        in (0, 50] (5 m as in Yoshida, Dobashi & Yamamoto); beyond it rain shows only as haze.
     rain_diameters_mm : sequence of float
         Strictly increasing drop diameters, mm, each in (0, 8], whose bins are drawn (see
-        :func:`skyfall.rain.diameter_bins`); the seed's 1.0-2.0 mm by default.
+        :func:`skyfall.rain.diameter_bins`); Yoshida, Dobashi & Yamamoto's 1.0-2.0 mm by default.
     rain_streaks : bool
         Draw the drops near the camera as streaks (default). False leaves rain as haze only.
     rain_method : {"billboards", "drops"}
-        ``"billboards"`` (default): seed 000's method, the bin's rain texture on a billboard
+        ``"billboards"`` (default): Yoshida, Dobashi & Yamamoto's method, the bin's rain texture on a billboard
         through each voxel's centre facing the camera (every streak of a voxel at one depth),
         its streaks widened so that they carry, in expectation, the opacity of the voxel's drops.
         ``"drops"``: every drop drawn at its own place, the reference the billboards are measured

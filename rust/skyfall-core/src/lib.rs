@@ -5,10 +5,10 @@
 //!
 //! - [`physics`]: air, sphere drag, terminal velocity (rigid sphere, Beard 1976, Atlas 1973),
 //!   the Marshall–Palmer drop-size distribution, rain extinction.
-//! - [`rain`]: precomputed rain-streak textures (seed 000).
+//! - [`rain`]: precomputed rain-streak textures (Yoshida, Dobashi & Yamamoto).
 //! - [`scene`]: cameras and the procedural box scene (ray cast).
-//! - [`haze`]: rain haze along view rays (seed 002).
-//! - [`sky`]: CIE skies, sky illuminance with occlusion, the ambient-light map (seed 002).
+//! - [`haze`]: rain haze along view rays (Yamamoto & Tadamura).
+//! - [`sky`]: CIE skies, sky illuminance with occlusion, the ambient-light map (Yamamoto & Tadamura).
 //! - [`frame`]: the frame pipeline (scene stage, effect passes, output stage) and the CPU
 //!   backend's two output stages: float32 frames and 8-bit sRGB photos.
 //! - [`particles`]: the particle toolkit shared by rain and (next) snow.

@@ -47,7 +47,7 @@ pub struct SkyModel {
 
 #[pymethods]
 impl SkyModel {
-    /// `sky_type` 0 is the seed's overcast sky, 1–15 the CIE general skies.
+    /// `sky_type` 0 is Yamamoto & Tadamura's overcast sky, 1–15 the CIE general skies.
     #[new]
     #[pyo3(signature = (sky_type, sun_elevation_deg, sun_azimuth_deg, extinction_per_m, cloud_base_m))]
     fn new(

@@ -1,7 +1,7 @@
-//! Rain haze (seed 002, eq. 2): attenuation and airlight along each pixel's view ray.
+//! Rain haze (Yamamoto & Tadamura, eq. 2): attenuation and airlight along each pixel's view ray.
 //!
 //! I = I0 e^(−σ d) + L_air (1 − e^(−σ d)), d = depth · |ray| (the distance along the view
-//! ray, not the depth), σ = σ_air + σ_rain. The seed writes the airlight as Is/σ with
+//! ray, not the depth), σ = σ_air + σ_rain. Yamamoto & Tadamura write the airlight as Is/σ with
 //! Is = ks·E_h; we set ks so that the airlight saturates at the horizon luminance of the CIE
 //! overcast sky ([`AIRLIGHT_RELATIVE`] = 3/7 of E/π): then distant objects fade into the
 //! horizon sky as in real haze, and the σ → 0 limit is exact (no division by σ). Sky pixels

@@ -1,8 +1,8 @@
-//! Drag on a rigid sphere and the rigid-sphere terminal velocity (the seed's method).
+//! Drag on a rigid sphere and the rigid-sphere terminal velocity (Yoshida, Dobashi & Yamamoto's method).
 //!
 //! Force balance on a sphere of diameter D falling at v: Cd · Re² = X, with the Best
 //! (Davies) number X = 4 ρa (ρw − ρa) g D³ / (3 η²) fixed by the drop and the air, and
-//! Re = ρa v D / η. Cd(Re) is the seed's piecewise law:
+//! Re = ρa v D / η. Cd(Re) is Yoshida, Dobashi & Yamamoto's piecewise law:
 //!
 //! | regime | Cd |
 //! |---|---|
@@ -10,7 +10,7 @@
 //! | 1 ≤ Re < 1000 (Schiller–Naumann) | 24 / Re · (1 + 0.15 Re^0.687) |
 //! | Re ≥ 1000 (Newton) | 0.44 |
 //!
-//! The seed iterates v ← √(4 g D Δρ / (3 Cd ρa)), which can oscillate where Cd jumps (at
+//! Yoshida, Dobashi & Yamamoto iterate v ← √(4 g D Δρ / (3 Cd ρa)), which can oscillate where Cd jumps (at
 //! Re = 1 the law jumps by 15 %). We solve the same equation, Cd(Re)·Re² = X, whose left side
 //! is increasing in Re: closed forms in the Stokes and Newton regimes, and a safeguarded
 //! Newton iteration in ln Re (bisection fallback, at most [`MAX_ITERATIONS`]) in between.
@@ -21,7 +21,7 @@ pub const MAX_ITERATIONS: usize = 100;
 /// Relative tolerance on Re.
 pub const TOLERANCE: f64 = 1e-13;
 
-/// The seed's sphere drag coefficient Cd(Re).
+/// Yoshida, Dobashi & Yamamoto's sphere drag coefficient Cd(Re).
 pub fn sphere_drag_coefficient(reynolds: f64) -> f64 {
     if reynolds < 1.0 {
         24.0 / reynolds

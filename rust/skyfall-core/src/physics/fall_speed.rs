@@ -1,6 +1,6 @@
 //! Terminal fall speed of raindrops: three models, vectorised.
 //!
-//! - [`FallSpeedModel::Sphere`]: the seed's rigid-sphere force balance ([`super::drag`]).
+//! - [`FallSpeedModel::Sphere`]: Yoshida, Dobashi & Yamamoto's rigid-sphere force balance ([`super::drag`]).
 //!   Good below ~1.4 mm; overestimates large drops, which flatten.
 //! - [`FallSpeedModel::Beard`] (default): Beard 1976, three regimes (Table 1 of the paper,
 //!   coefficients as in the shared reference), which follows drop deformation through the
@@ -26,7 +26,7 @@ pub const DIAMETER_MM: Range = crate::ranges::DIAMETER_MM.range;
 /// Which terminal-velocity law to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FallSpeedModel {
-    /// Rigid sphere, piecewise Cd(Re) (the seed).
+    /// Rigid sphere, piecewise Cd(Re) (Yoshida, Dobashi & Yamamoto).
     Sphere,
     /// Beard 1976 (deformation-aware; default).
     Beard,

@@ -1,10 +1,10 @@
-//! Seed 000's billboards, drawn sparsely: per voxel and diameter bin, the bin's rain texture
+//! Yoshida, Dobashi & Yamamoto's billboards, drawn sparsely: per voxel and diameter bin, the bin's rain texture
 //! ([`super::texture::draw_streaks`], one per bin, shared by all voxels) on a 1 m × 1 m
 //! billboard through the voxel centre. Billboards are cylindrical: they face the horizontal
 //! direction to the camera. Each billboard's texture scrolls down at the fall speed of its
-//! bin's middle diameter and wraps (the seed moves billboards down by v·dt and wraps them), and
+//! bin's middle diameter and wraps (the paper moves billboards down by v·dt and wraps them), and
 //! gets a random offset per voxel and bin so neighbouring voxels do not repeat one pattern
-//! (the seed repeats it). The texture's streaks become drops on the billboard plane: every
+//! (the paper repeats it). The texture's streaks become drops on the billboard plane: every
 //! streak of a billboard is drawn at the billboard's depth, which is the approximation that the
 //! per-drop reference ([`super::drops`]) measures.
 //!

@@ -6,7 +6,7 @@
 
 use crate::error::{Error, Param, Range, Result};
 
-/// Bin width used when only one diameter is given, mm (the seed's 0.2 mm step).
+/// Bin width used when only one diameter is given, mm (Yoshida, Dobashi & Yamamoto's 0.2 mm step).
 pub const SINGLE_BIN_WIDTH_MM: f64 = 0.2;
 /// Valid texture diameters, mm.
 pub const TEXTURE_DIAMETER_MM: Range = crate::ranges::DIAMETERS_MM.range;

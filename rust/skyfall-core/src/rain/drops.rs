@@ -1,4 +1,4 @@
-//! Individual raindrops near the camera, anchored in the world (seed 000's rain region, drawn
+//! Individual raindrops near the camera, anchored in the world (Yoshida, Dobashi & Yamamoto's rain region, drawn
 //! drop by drop: the reference the billboard approximation is measured against).
 //!
 //! The world is cut into 1 m voxels at integer coordinates. Each voxel holds, for each
@@ -206,7 +206,7 @@ fn voxel_drops(
 pub enum RainMethod {
     /// Every drop individually (the reference).
     Drops,
-    /// Seed 000's billboards: per voxel and diameter bin, the bin's rain texture on a 1 m
+    /// Yoshida, Dobashi & Yamamoto's billboards: per voxel and diameter bin, the bin's rain texture on a 1 m
     /// billboard through the voxel centre, facing the camera horizontally, scrolling down.
     Billboards,
 }

@@ -43,7 +43,7 @@ pub struct RainShading {
 }
 
 impl RainShading {
-    /// Seed 002's constant r (0.5 here), an open-sky drop light I_R = E/π (relative 1.0), no
+    /// Yamamoto & Tadamura's constant r (0.5 here), an open-sky drop light I_R = E/π (relative 1.0), no
     /// lights, no culling. The ambient-light map will lower I_R where drops see less sky.
     pub fn open_sky() -> Self {
         RainShading {

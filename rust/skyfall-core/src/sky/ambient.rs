@@ -1,4 +1,4 @@
-//! The ambient-light map (seed 002 §4.3): sky illuminance on the five normals at the nodes of
+//! The ambient-light map (Yamamoto & Tadamura §4.3): sky illuminance on the five normals at the nodes of
 //! a uniform 3D grid, interpolated trilinearly.
 //!
 //! Nodes inside a box (strictly inside in X and Z, from its base up to below its roof) hold no

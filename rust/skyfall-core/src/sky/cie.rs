@@ -1,6 +1,6 @@
 //! Sky luminance distributions, as L/Lz (relative to the zenith luminance).
 //!
-//! - Overcast (seed 002, eq. 4): the CIE standard overcast sky of Moon & Spencer,
+//! - Overcast (Yamamoto & Tadamura, eq. 4): the CIE standard overcast sky of Moon & Spencer,
 //!   L/Lz = (1 + 2 sin γ)/3, γ the elevation.
 //! - General sky, CIE S 011/E:2003 (ISO 15469), types 1–15: L/Lz = φ(Z) f(χ) / (φ(0) f(Z_s)),
 //!   φ(Z) = 1 + a·exp(b / cos Z) (1 at the horizon), f(χ) = 1 + c·(exp(dχ) − exp(dπ/2)) + e·cos²χ,
@@ -33,7 +33,7 @@ pub const CIE_TYPES: [[f64; 5]; 15] = [
 /// A sky luminance distribution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SkyKind {
-    /// The seed's CIE standard overcast sky (Moon & Spencer).
+    /// Yamamoto & Tadamura's CIE standard overcast sky (Moon & Spencer).
     Overcast,
     /// CIE general sky type 1–15 with the sun's unit direction.
     General {

@@ -1,4 +1,4 @@
-//! Sky illuminance with occlusion (seed 002, eq. 8): E_n(P) = ∫ L(ω) τ(ω) H(P, ω) max(0, n·ω) dω.
+//! Sky illuminance with occlusion (Yamamoto & Tadamura, eq. 8): E_n(P) = ∫ L(ω) τ(ω) H(P, ω) max(0, n·ω) dω.
 //!
 //! Per azimuth the integral over elevation is done exactly for the scene's geometry: along an
 //! azimuth each box hides one interval of elevations (seen from P, the vertical half-plane at

@@ -1,4 +1,4 @@
-//! Sky light (seed 002 §4.2–4.3): CIE sky luminance, rain attenuation along each direction,
+//! Sky light (Yamamoto & Tadamura §4.2–4.3): CIE sky luminance, rain attenuation along each direction,
 //! horizontal (and vertical) illuminance with occlusion, and the ambient-light map.
 //!
 //! Conventions: directions are unit vectors in the world (+Y up). Azimuth is measured from
@@ -6,7 +6,7 @@
 //! E/π, E the unobstructed horizontal illuminance the user gives; the frame renders in the
 //! same units (a white Lambertian surface under the open sky is 1.0).
 //!
-//! - [`cie`]: the seed's CIE standard overcast sky and the CIE S 011 general skies (types 1–15).
+//! - [`cie`]: Yamamoto & Tadamura's CIE standard overcast sky and the CIE S 011 general skies (types 1–15).
 //! - [`Sky`]: a model plus rain attenuation τ(ω) = exp(−σ·H / sin γ) (σ the haze's extinction,
 //!   H the cloud base), normalised so the open sky gives E on a horizontal surface *at the
 //!   ground*, rain included: E is what a lux meter reads in the rain; the rain reshapes the

@@ -10,7 +10,7 @@ use std::f64::consts::{PI, TAU};
 /// Cloud base height H for a rain rate, m: H = 1500 − 250·ln(1 + R / (1 mm/h)), kept in
 /// [300, 1500] m (1500 m dry, 900 m at 10 mm/h, 520 m at 50 mm/h, 350 m at 100 mm/h).
 ///
-/// Seed 002 gives H as a function of R after Shibata (1999) without printing it; this is our
+/// Yamamoto & Tadamura give H as a function of R after Shibata (1999) without printing it; this is our
 /// own smooth stand-in spanning the bases of rain-bearing nimbostratus (heavier rain, lower
 /// base). Only the *shape* of the sky depends on it (τ = exp(−σH/sin γ) per direction), since
 /// the sky is normalised to the given E; `Weather.cloud_base_m` overrides it.
