@@ -13,9 +13,11 @@ this compares the two versions in the same minutes:
 - HEAD is the skyfall of the running interpreter (`make bench-ab` uses .venv, which `make build`
   builds from the working tree, committed or not: ab.md records HEAD's hash and whether the tree was
   dirty).
-- One worker process per version (this file with `--worker`, so both run the same row code: the
-  set-up functions of benches/bench_*.py). Each round times every row once per version, in turn,
-  the two versions' order swapped every round; a worker times a block of n calls (n chosen from
+- --procs worker processes per version (this file with `--worker`, so both run the same row code:
+  the set-up functions of benches/bench_*.py), one pair per round in turn: a process's memory
+  layout can bias a memory-bound row for its whole life (an A/A run with one process each called
+  the 8-bit haze row 18 % slower), so the processes' spread lands in the band. Each round times
+  every row once per version, in turn, the two versions' order swapped every --procs rounds; a worker times a block of n calls (n chosen from
   the row's second call, about 0.25 s a block, 1-20 calls) after a 50 ms pause and an untimed call,
   and reports the block's median. The other worker waits idle meanwhile.
 - Per row: base and head medians over rounds, and the per-round ratio head/base, summarised by
@@ -315,6 +317,7 @@ def main() -> None:
     ap.add_argument("--min-rounds", type=int, default=7, help="at least this many, whatever the budget (default 7)")
     ap.add_argument("--slow-rounds", type=int, default=5, help=f"rounds of the rows slower than {SLOW_S} s (default 5)")
     ap.add_argument("--budget-s", type=float, default=360.0, help="seconds of timing after set-up (default 360)")
+    ap.add_argument("--procs", type=int, default=3, help="worker processes per version, taking turns by round (default 3)")
     ap.add_argument("--rows", help="only rows whose name contains one of these comma-separated strings")
     ap.add_argument("--out", default=str(RESULTS), help="where ab.md and ab.json go (default benches/results)")
     args = ap.parse_args()
@@ -327,10 +330,20 @@ def main() -> None:
     dirty = bool(git("status", "--porcelain", "--untracked-files=no"))
     py_base = args.base_python or base_python(commit, args.base_wheel)
     load0 = os.getloadavg()
-    base, headw = Worker(py_base, "base"), Worker(sys.executable, "head")
+    # Several processes per version, taking turns round by round: a process's memory layout
+    # (ASLR, the alignment of its frame buffers) can bias a memory-bound row by 10-20 % for its
+    # whole life, which alternation alone does not remove (an A/A run showed it), so it has to
+    # show as round-to-round noise instead.
+    bases = [Worker(py_base, "base") for _ in range(args.procs)]
+    heads = [Worker(sys.executable, "head") for _ in range(args.procs)]
     rows = make_rows()  # for the descriptions (and the order)
     names = [n for n in rows if not args.rows or any(s in n for s in args.rows.split(","))]
-    info = {"base": base.ask(cmd="setup", rows=names), "head": headw.ask(cmd="setup", rows=names)}
+    setups = {"base": [w.ask(cmd="setup", rows=names) for w in bases], "head": [w.ask(cmd="setup", rows=names) for w in heads]}
+    info = {k: v[0] for k, v in setups.items()}
+    for k, v in setups.items():  # a row counts as runnable when it ran in every process; its cost is the slowest's
+        for n in names:
+            rs = [x["rows"][n] for x in v]
+            info[k]["rows"][n] = {"ok": all(r["ok"] for r in rs), "second_s": max(r.get("second_s", 0.0) for r in rs), "error": next((r["error"] for r in rs if not r["ok"]), None)}
     t_setup = time.perf_counter() - t_start
     both = [n for n in names if info["base"]["rows"][n]["ok"] and info["head"]["rows"][n]["ok"]]
     # A row's cost: the slower version's second call (after one for one-off costs).
@@ -346,7 +359,8 @@ def main() -> None:
         if rounds >= args.min_rounds and round_s and elapsed + max(round_s[-2:]) > args.budget_s:
             break
         tr = time.perf_counter()
-        order = [base, headw] if rounds % 2 == 0 else [headw, base]
+        base, headw = bases[rounds % args.procs], heads[rounds % args.procs]
+        order = [base, headw] if (rounds // args.procs) % 2 == 0 else [headw, base]
         for n in both:
             if n in slow and rounds >= args.slow_rounds:
                 continue
@@ -355,8 +369,8 @@ def main() -> None:
         rounds += 1
         round_s.append(time.perf_counter() - tr)
         print(f"round {rounds}: {round_s[-1]:.0f} s", file=sys.stderr)
-    base.close()
-    headw.close()
+    for w in bases + heads:
+        w.close()
     load1 = os.getloadavg()
 
     results = []
@@ -390,6 +404,7 @@ def main() -> None:
         "base_skyfall": info["base"]["skyfall"],
         "head_skyfall": info["head"]["skyfall"],
         "rounds": rounds,
+        "procs_per_version": args.procs,
         "setup_s": t_setup,
         "timing_s": time.perf_counter() - t0,
         "min_effect": MIN_EFFECT,
@@ -410,8 +425,8 @@ def main() -> None:
         f"Base: `{commit[:10]}` {meta['base_subject']}",
         "",
         f"Each row was timed in {rounds} rounds ({slow_n} for rows over {SLOW_S:g} s a call); in each round each version",
-        "(its own worker process) timed a block of 1-20 calls after a 50 ms pause and an untimed call (rows over",
-        f"{SLOW_S:g} s: no untimed call), the versions' order swapped every round. Times: medians over rounds of each",
+        f"(one of its {args.procs} worker processes, in turn) timed a block of 1-20 calls after a 50 ms pause and an untimed call (rows over",
+        f"{SLOW_S:g} s: no untimed call), the versions' order swapped every {args.procs} rounds. Times: medians over rounds of each",
         "block's median. Ratio: head/base per round, its median and, in brackets, its 10-90 % range over rounds",
         f"(the noise band). Verdict: **slower** when the whole band is above 1 and the median ratio ≥ {1 + MIN_EFFECT:.2f};",
         f"**faster** when the whole band is below 1 and the median ≤ {1 - MIN_EFFECT:.2f}; otherwise within noise.",
