@@ -17,9 +17,11 @@ this compares the two versions in the same minutes:
   the set-up functions of benches/bench_*.py), one pair per round in turn: a process's memory
   layout can bias a memory-bound row for its whole life (an A/A run with one process each called
   the 8-bit haze row 18 % slower), so the processes' spread lands in the band. Each round times
-  every row once per version, in turn, the two versions' order swapped every --procs rounds; a worker times a block of n calls (n chosen from
-  the row's second call, about 0.25 s a block, 1-20 calls) after a 50 ms pause and an untimed call,
-  and reports the block's median. The other worker waits idle meanwhile.
+  every row once per version, in turn, the two versions' order swapped every round; a worker
+  times a block of n calls (n chosen from the row's second call, about 0.25 s a block, 1-20
+  calls) after a 50 ms pause and an untimed call, and reports the block's median. The other
+  workers wait idle meanwhile. Default 13-15 rounds, about 6-7 minutes with BASE cached (building
+  BASE's wheel first adds about 3 minutes on a 2-CPU machine).
 - Per row: base and head medians over rounds, and the per-round ratio head/base, summarised by
   its median and 10-90 % range (the noise band). Verdict: "slower" when the whole band lies
   above 1 and the median ratio is at least 1 + MIN_EFFECT; "faster" when the whole band lies below
@@ -304,7 +306,7 @@ def cpu_model() -> str:
 
 
 def fmt_ms(s: float) -> str:
-    return f"{s * 1e3:.1f} ms" if s < 10 else f"{s:.2f} s"
+    return f"{s * 1e3:.1f} ms" if s < 1 else f"{s:.2f} s"
 
 
 def main() -> None:
@@ -315,7 +317,7 @@ def main() -> None:
     ap.add_argument("--base-python", help="an interpreter that already has BASE's skyfall (skips the cache)")
     ap.add_argument("--rounds", type=int, default=15, help="at most this many rounds (default 15)")
     ap.add_argument("--min-rounds", type=int, default=7, help="at least this many, whatever the budget (default 7)")
-    ap.add_argument("--slow-rounds", type=int, default=5, help=f"rounds of the rows slower than {SLOW_S} s (default 5)")
+    ap.add_argument("--slow-rounds", type=int, default=6, help=f"rounds of the rows slower than {SLOW_S} s (default 6: each of 3 process pairs in both orders)")
     ap.add_argument("--budget-s", type=float, default=360.0, help="seconds of timing after set-up (default 360)")
     ap.add_argument("--procs", type=int, default=3, help="worker processes per version, taking turns by round (default 3)")
     ap.add_argument("--rows", help="only rows whose name contains one of these comma-separated strings")
@@ -360,7 +362,10 @@ def main() -> None:
             break
         tr = time.perf_counter()
         base, headw = bases[rounds % args.procs], heads[rounds % args.procs]
-        order = [base, headw] if (rounds // args.procs) % 2 == 0 else [headw, base]
+        # The order flips every round (and every cycle of processes too, when there is an even
+        # number of them), so every pair of processes meets both orders.
+        flip = rounds % 2 ^ ((rounds // args.procs) % 2 if args.procs % 2 == 0 else 0)
+        order = [headw, base] if flip else [base, headw]
         for n in both:
             if n in slow and rounds >= args.slow_rounds:
                 continue
@@ -426,8 +431,9 @@ def main() -> None:
         "",
         f"Each row was timed in {rounds} rounds ({slow_n} for rows over {SLOW_S:g} s a call); in each round each version",
         f"(one of its {args.procs} worker processes, in turn) timed a block of 1-20 calls after a 50 ms pause and an untimed call (rows over",
-        f"{SLOW_S:g} s: no untimed call), the versions' order swapped every {args.procs} rounds. Times: medians over rounds of each",
-        "block's median. Ratio: head/base per round, its median and, in brackets, its 10-90 % range over rounds",
+        f"{SLOW_S:g} s: no untimed call), the versions' order swapped every round. Times: medians over rounds of each",
+        "block's median (each version's own; they move with the machine's load, so read the ratio, which pairs the",
+        "versions round by round). Ratio: head/base per round, its median and, in brackets, its 10-90 % range over rounds",
         f"(the noise band). Verdict: **slower** when the whole band is above 1 and the median ratio ≥ {1 + MIN_EFFECT:.2f};",
         f"**faster** when the whole band is below 1 and the median ≤ {1 - MIN_EFFECT:.2f}; otherwise within noise.",
         "",
