@@ -13,12 +13,13 @@ export VIRTUAL_ENV := $(abspath $(VENV))
 # Vulkan loaders complain on stderr without a runtime dir; give them a private one.
 export XDG_RUNTIME_DIR ?= $(abspath $(VENV))/xdg-runtime
 
-.PHONY: help setup vulkan build demo test test-rust test-python lint bench clean
+.PHONY: help setup vulkan build demo test test-rust test-python lint bench bench-ab clean
 
 help:
 	@echo "make demo   build, then render the demo outputs into $(OUT)/"
 	@echo "make test   build, then cargo test, clippy, stub check and pytest (notebooks included)"
 	@echo "make bench  build, then write benches/results/"
+	@echo "make bench-ab BASE=<rev>  A/B of the bench rows, BASE (default HEAD~1) against the working tree"
 	@echo "make lint   cargo clippy and mypy"
 
 $(PY):
@@ -74,6 +75,12 @@ bench: build vulkan
 	$(PY) benches/bench_render.py
 	$(PY) benches/bench_rain.py
 	$(PY) benches/bench_sky.py
+
+# A/B of the bench rows against BASE, timed alternately in one run: benches/results/ab.md.
+# BASE's wheel and venv are cached under .ab-cache/ by commit; BASE_WHEEL=<wheel of BASE> skips its build.
+BASE ?= HEAD~1
+bench-ab: build vulkan
+	$(PY) benches/ab.py --base $(BASE) $(if $(BASE_WHEEL),--base-wheel $(BASE_WHEEL))
 
 clean:
 	rm -rf target $(VENV) $(OUT)

@@ -19,8 +19,12 @@ from skyfall.reference import gunn_kinzer_1949
 
 RESULTS = Path(__file__).parent / "results"
 G = 9.80665
+TEXTURE_SIZES = (512, 1024, 2048)
 
 
+def diameters(n: int) -> np.ndarray:
+    """The terminal-velocity rows' n random diameters, 0-8 mm (shared with benches/ab.py)."""
+    return np.random.default_rng(0).uniform(0.0, 8.0, n)
 
 
 # --- numpy references of the same formulas (written here, independently of the Rust core) ---
@@ -71,7 +75,7 @@ def _fixed_point(d_mm: np.ndarray, iterations: int) -> tuple[np.ndarray, np.ndar
 
 def velocity_section(n: int) -> list[dict[str, object]]:
     d_gk, v_gk = gunn_kinzer_1949()
-    d = np.random.default_rng(0).uniform(0.0, 8.0, n)
+    d = diameters(n)
     refs = {"beard": numpy_beard, "sphere": numpy_sphere_fixed_point, "atlas": numpy_atlas}
     rows = []
     for model in physics.FALL_SPEED_MODELS:
@@ -123,7 +127,7 @@ def opacity_error(size: int, seeds: int, rates: tuple[float, ...], diams: tuple[
 def texture_section() -> list[dict[str, object]]:
     rates, diams = rain.SEED_RAIN_RATES_MM_H, rain.SEED_DIAMETERS_MM
     rows = []
-    for size in (512, 1024, 2048):
+    for size in TEXTURE_SIZES:
         repeat = 7 if size <= 1024 else 3
         t = median_s(lambda s=size: rain.textures(rates, diams, size_px=s, seed=0), repeat=repeat)
         nbytes = len(rates) * len(diams) * size * size * 4

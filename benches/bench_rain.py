@@ -16,6 +16,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import json
 import platform
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -29,53 +31,58 @@ RESULTS = Path(__file__).parent / "results"
 W, H = 1920, 1080
 
 
+@dataclass
+class StreetPhoto:
+    """The bench's "photo": the street rendered clear at W x H, as 8-bit sRGB, with its depth map,
+    and the 10 mm/h weathers drawn on it (shared with benches/ab.py)."""
+
+    photo8: np.ndarray
+    depth: np.ndarray
+    camera: object
+    weather: Weather  # the default method: Yoshida, Dobashi & Yamamoto's billboards
+    weather_drops: Weather
+
+    def scene(self) -> PhotoScene:
+        return PhotoScene(self.photo8, self.depth, camera=self.camera)  # type: ignore[arg-type]
+
+
+def street_photo(cpu: Renderer) -> StreetPhoto:
+    street = scenes.street()
+    clear = cpu.render(street)
+    return StreetPhoto(io.to_srgb8(clear.rgb), clear.depth_m, street.camera, Weather(rain_rate_mm_h=10.0), Weather(rain_rate_mm_h=10.0, rain_method="drops"))
+
+
+def photo_rows(cpu: Renderer, p: StreetPhoto) -> dict[str, Callable[[], object]]:
+    """skyfall's CPU rows on the photo, each a call to time (the peer's row is added by main)."""
+    out8 = np.empty_like(p.photo8)
+    scene_f = p.scene()
+    frame_out = cpu.render(scene_f, p.weather)  # the arrays the out= row renders into
+    return {
+        # What an augmentation pipeline does per image: wrap the bytes, render straight to bytes.
+        "fused": lambda: cpu.render_srgb8(p.scene(), p.weather),
+        "fused_drops": lambda: cpu.render_srgb8(p.scene(), p.weather_drops),
+        "fused_out": lambda: cpu.render_srgb8(p.scene(), p.weather, out=out8),
+        "haze": lambda: cpu.render_srgb8(p.scene(), Weather(rain_rate_mm_h=10.0, rain_streaks=False)),
+        "float_u8": lambda: io.to_srgb8(cpu.render(p.scene(), p.weather).rgb),
+        "float": lambda: cpu.render(scene_f, p.weather),
+        "float_out": lambda: cpu.render(scene_f, p.weather, out=frame_out),
+    }
 
 
 def main() -> None:
     import albumentations as A
 
-    # The "photo": the street rendered clear, as 8-bit sRGB, with its depth map.
     cpu = Renderer(W, H, backend="cpu")
-    street = scenes.street()
-    clear = cpu.render(street)
-    photo8 = io.to_srgb8(clear.rgb)
-    depth = clear.depth_m
-    weather = Weather(rain_rate_mm_h=10.0)  # the default method: Yoshida, Dobashi & Yamamoto's billboards
-    weather_drops = Weather(rain_rate_mm_h=10.0, rain_method="drops")
+    p = street_photo(cpu)
+    photo8, weather = p.photo8, p.weather
+    scene_f = p.scene()
 
     rows: list[dict[str, object]] = []
     rain_aug = A.RandomRain(p=1.0)
 
-    def skyfall_uint8() -> np.ndarray:
-        scene = PhotoScene(photo8, depth, camera=street.camera)
-        return io.to_srgb8(cpu.render(scene, weather).rgb)
-
-    def skyfall_fused() -> np.ndarray:
-        # What an augmentation pipeline does per image: wrap the bytes, render straight to bytes.
-        return cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), weather)
-
-    def skyfall_fused_haze() -> np.ndarray:
-        return cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), Weather(rain_rate_mm_h=10.0, rain_streaks=False))
-
     # The peer and the fused paths timed in alternating blocks (the machine is shared and its
     # speed drifts): the ratios below compare times taken in the same rounds.
-    out8 = np.empty_like(photo8)
-    scene_f = PhotoScene(photo8, depth, camera=street.camera)
-    frame_out = cpu.render(scene_f, weather)  # the arrays the out= row renders into
-    rounds = block_times_s(
-        {
-            "alb": lambda: rain_aug(image=photo8)["image"],
-            "fused": skyfall_fused,
-            "fused_drops": lambda: cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), weather_drops),
-            "fused_out": lambda: cpu.render_srgb8(PhotoScene(photo8, depth, camera=street.camera), weather, out=out8),
-            "haze": skyfall_fused_haze,
-            "float_u8": skyfall_uint8,
-            "float": lambda: cpu.render(scene_f, weather),
-            "float_out": lambda: cpu.render(scene_f, weather, out=frame_out),
-        },
-        blocks=7,
-        per_block=5,
-    )
+    rounds = block_times_s({"alb": lambda: rain_aug(image=photo8)["image"], **photo_rows(cpu, p)}, blocks=7, per_block=5)
     t = {k: statistics.median(v) for k, v in rounds.items()}
     t_alb, t_fused, t_fused_drops, t_fused_out, t_fused_haze, t_u8, t_f, t_f_out = (
         t[k] for k in ("alb", "fused", "fused_drops", "fused_out", "haze", "float_u8", "float", "float_out")

@@ -20,20 +20,24 @@ RESULTS = Path(__file__).parent / "results"
 W, H = 1920, 1080
 
 
-
-
 def numpy_haze(img: np.ndarray, depth: np.ndarray, per_depth: np.ndarray, sigma: float, air: float) -> np.ndarray:
     t = np.exp(np.float32(-sigma) * depth * per_depth)
     return img * t[..., None] + np.float32(air) * (np.float32(1) - t[..., None])
 
 
-def main() -> None:
+def haze_photo() -> tuple[np.ndarray, np.ndarray, PhotoScene, Weather]:
+    """The haze rows' W x H random float photo, its depths, the scene and the haze-only weather
+    (shared with benches/ab.py)."""
     rng = np.random.default_rng(0)
     img = rng.uniform(0, 1, (H, W, 3)).astype(np.float32)
     depth = rng.uniform(1, 2000, (H, W)).astype(np.float32)
     cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=50.0)
-    photo = PhotoScene(img, depth, camera=cam)
     weather = Weather(rain_rate_mm_h=10.0, visibility_m=2000.0, rain_streaks=False)  # the haze alone
+    return img, depth, PhotoScene(img, depth, camera=cam), weather
+
+
+def main() -> None:
+    img, depth, photo, weather = haze_photo()
     fx, fy, cx, cy = photo.camera.intrinsics()
     y, x = np.mgrid[0:H, 0:W].astype(np.float32) + np.float32(0.5)
     per_depth = np.sqrt(((x - cx) / fx) ** 2 + ((y - cy) / fy) ** 2 + 1).astype(np.float32)

@@ -20,6 +20,25 @@ from skyfall.reference import canyon_illuminance
 
 RESULTS = Path(__file__).parent / "results"
 E = 10000.0
+SAMPLES = (8, 16, 32, 64, 128, 256, 1024)  # azimuths of the street-points rows
+MAP_SPACINGS = (4.0, 2.0, 1.0, 0.5)  # m, the map-build rows
+FRAME_SPACINGS = (2.0, 1.0)  # m, the frame rows
+
+
+# The timed rows' set-up, shared with benches/ab.py.
+def street_points() -> np.ndarray:
+    """1000 random points in the default street."""
+    return np.random.default_rng(0).uniform([-6.5, 0.0, -100.0], [6.5, 8.0, -2.0], size=(1000, 3))
+
+
+def street_map(street: scenes.BoxScene, spacing: float) -> sky.AmbientLightMap:
+    """The ambient-light map over the street's full extent, 64 azimuths per node."""
+    return sky.ambient_light_map(street, spacing_m=spacing, samples=64, bounds=[[-19.0 - spacing, 0.0, -140.0], [19.0, 31.0, 1.0 + spacing * 1e-3]])
+
+
+def frame_setup() -> tuple[Renderer, Weather]:
+    """The 640x360 CPU renderer and the 10 mm/h rain of the frame rows."""
+    return Renderer(640, 360, backend="cpu"), Weather(rain_rate_mm_h=10.0)
 
 
 def main() -> None:
@@ -33,9 +52,9 @@ def main() -> None:
     ]
     pts = np.array([[x, 0.0, 0.0] for x, _, _ in cases])
     street = scenes.street()
-    street_pts = np.random.default_rng(0).uniform([-6.5, 0.0, -100.0], [6.5, 8.0, -2.0], size=(1000, 3))
+    street_pts = street_points()
     samples_rows: list[dict[str, float]] = []
-    for n in (8, 16, 32, 64, 128, 256, 1024):
+    for n in SAMPLES:
         errs = [abs(sky.horizontal_illuminance(p, c, samples=n)[0] / r - 1) for p, c, r in zip(pts, canyons, refs)]
         clear = sky.horizontal_illuminance([0, 0, 0], sky=12, sun_elevation_deg=35.0, sun_azimuth_deg=180.0, samples=n)[0]
         t = median_s(lambda n=n: sky.horizontal_illuminance(street_pts, street, samples=n), 3)
@@ -50,18 +69,17 @@ def main() -> None:
     probe = cand[~inside][:1000]
     direct = sky.horizontal_illuminance(probe, street, samples=64)
     map_rows: list[dict[str, float]] = []
-    for spacing in (4.0, 2.0, 1.0, 0.5):
+    for spacing in MAP_SPACINGS:
         t0 = time.perf_counter()
-        m = sky.ambient_light_map(street, spacing_m=spacing, samples=64, bounds=[[-19.0 - spacing, 0.0, -140.0], [19.0, 31.0, 1.0 + spacing * 1e-3]])
+        m = street_map(street, spacing)
         build = time.perf_counter() - t0
         err = np.abs(m.sample(probe) - direct) / E
         map_rows.append({"spacing_m": spacing, "nodes": float(np.prod(m.grid.shape[:3])), "build_s": build, "mean_abs_err": float(err.mean()), "p95_abs_err": float(np.quantile(err, 0.95)), "max_abs_err": float(err.max())})
 
     # 3. What the map costs a frame: a rainy street at 640x360, map cached vs first frame.
-    r = Renderer(640, 360, backend="cpu")
-    w = Weather(rain_rate_mm_h=10.0)
+    r, w = frame_setup()
     frame_rows = []
-    for spacing in (2.0, 1.0):
+    for spacing in FRAME_SPACINGS:
         t0 = time.perf_counter()
         r.render(street, w, ambient_spacing_m=spacing * 1.0001)  # a fresh key: builds the map
         first = time.perf_counter() - t0
