@@ -111,7 +111,7 @@ impl Weather {
 
     /// The normalised sky seen through this weather's haze below the cloud base.
     pub fn sky(&self) -> Result<Sky> {
-        Sky::new(
+        Sky::cached(
             self.sky_kind()?,
             self.extinction_per_m(),
             self.cloud_base_height_m(),

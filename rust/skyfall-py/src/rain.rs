@@ -1,12 +1,12 @@
 //! Wrappers of `skyfall_core::rain`.
 
-use crate::alloc::from_slice;
+use crate::alloc::{filled, from_slice};
 use crate::errors::CoreError;
 use numpy::ndarray::{Ix1, Ix4};
 use numpy::{PyArray1, PyArray4, PyReadonlyArray1};
 use pyo3::prelude::*;
 use skyfall_core::rain::bins::diameter_bins;
-use skyfall_core::rain::texture::{TextureRequest, render_textures};
+use skyfall_core::rain::texture::{TextureRequest, render_textures_into};
 
 /// Rain textures, float32 (n_rates, n_diameters, size_px, size_px).
 #[pyfunction]
@@ -31,8 +31,13 @@ pub fn rain_textures<'py>(
         size_px,
         size_px,
     );
-    let data = py.detach(|| render_textures(&req)).map_err(CoreError)?;
-    from_slice::<f32, Ix4>(py, &[shape.0, shape.1, shape.2, shape.3], &data)
+    // Checked (the texture budget included) before numpy allocates the textures, then drawn
+    // straight into numpy's array.
+    req.validate().map_err(CoreError)?;
+    filled::<f32, Ix4>(py, &[shape.0, shape.1, shape.2, shape.3], |out| {
+        py.detach(|| render_textures_into(&req, out))
+            .map_err(|e| CoreError(e).into())
+    })
 }
 
 type BinEdges<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);

@@ -196,21 +196,40 @@ fn splat_all(
 }
 
 /// Renders every (rate, diameter) texture, shape (n_rates, n_diameters, size, size) flattened,
-/// textures in parallel. The result is zeroed in parallel and each pixel is then written only
-/// where a streak covers it.
+/// textures in parallel (see [`render_textures_into`]).
 pub fn render_textures(req: &TextureRequest<'_>) -> Result<Vec<f32>> {
     let n = req.validate()?;
+    // Reserved fallibly: out of memory is an error, not an abort.
+    let mut out = crate::error::try_filled("the rain textures", n, 0.0f32)?;
+    render_textures_into(req, &mut out)?;
+    Ok(out)
+}
+
+/// [`render_textures`] into `out` (the caller's buffer of exactly the textures' size: numpy's,
+/// from the Python binding, whose zeroed pages cost nothing until the textures touch them).
+/// Every value is written: each texture is cleared in parallel, then drawn.
+pub fn render_textures_into(req: &TextureRequest<'_>, out: &mut [f32]) -> Result<()> {
+    let n = req.validate()?;
+    if out.len() != n {
+        return Err(Error::Length {
+            param: crate::error::Param {
+                name: "out",
+                index: None,
+            },
+            len: out.len(),
+            expected: n,
+        });
+    }
     let bins = diameter_bins(req.diameters_mm)?;
     let plane = req.size_px * req.size_px;
     let nd = bins.len();
-    // Zeroed in parallel, fallibly: out of memory is an error, not an abort.
-    let mut out = crate::error::try_filled_par("the rain textures", n, 0.0f32)?;
     out.par_chunks_mut(plane).enumerate().for_each(|(k, tex)| {
         let rate = req.rain_rates_mm_h[k / nd];
         let (lo, hi) = bins[k % nd];
+        tex.fill(0.0);
         splat_all(rate, lo, hi, req.size_px, req.exposure_s, req.seed, tex);
     });
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]
