@@ -91,11 +91,21 @@ where
     })
 }
 
-/// [`interruptible`] for work that returns a core result.
-pub fn interruptible_core<T, F>(py: Python<'_>, work: F) -> PyResult<T>
+/// Work below this many elementary steps (points × azimuths, for the sky) runs inline with the
+/// GIL released: it ends within about 0.1 s anyway, and the worker thread would cost it a
+/// measurable share (1000 points at 16 azimuths: 1.6 ms inline, 2.6 ms through the worker).
+pub const INLINE_STEPS: u128 = 1 << 20;
+
+/// [`interruptible`] for work that returns a core result; `steps` estimates its size (work
+/// under [`INLINE_STEPS`] runs inline, uninterruptible and without the worker's overhead).
+pub fn interruptible_core<T, F>(py: Python<'_>, steps: u128, work: F) -> PyResult<T>
 where
     T: Send,
     F: FnOnce(&AtomicBool) -> skyfall_core::Result<T> + Send,
 {
+    if steps < INLINE_STEPS {
+        let never = AtomicBool::new(false);
+        return Ok(py.detach(|| work(&never)).map_err(CoreError)?);
+    }
     Ok(interruptible(py, work)?.map_err(CoreError)?)
 }

@@ -128,8 +128,10 @@ impl SkyModel {
         let pts = points(&points_m, "points_m")?;
         let scene = box_scene(&boxes, true, [0.0; 3])?;
         let sky = &self.sky;
+        // (the sky table itself costs about as much as 512 points)
+        let steps = (pts.len() as u128 + 512) * samples as u128;
         filled::<f32, Ix2>(py, &[pts.len(), CHANNELS], |out| {
-            interruptible_core(py, |cancel| {
+            interruptible_core(py, steps, |cancel| {
                 let s = SkyTable::new_cancellable(sky, samples, cancel)?;
                 out.par_chunks_mut(CHANNELS)
                     .zip(pts.par_iter())
@@ -157,7 +159,13 @@ impl SkyModel {
         let scene: BoxScene = box_scene(&boxes, true, [0.0; 3])?;
         let (lo, hi) = (Vec3::from(bounds_min_m), Vec3::from(bounds_max_m));
         let sky = &self.sky;
-        let map = interruptible_core(py, |cancel| {
+        let nodes = AmbientMap::grid_dims(lo, hi, spacing_m)
+            .map_err(CoreError)?
+            .iter()
+            .map(|&d| d as u128)
+            .product::<u128>();
+        let steps = (if scene.boxes.is_empty() { 0 } else { nodes } + 512) * samples as u128;
+        let map = interruptible_core(py, steps, |cancel| {
             let s = SkyTable::new_cancellable(sky, samples, cancel)?;
             if scene.boxes.is_empty() {
                 AmbientMap::grid_dims(lo, hi, spacing_m)?;
