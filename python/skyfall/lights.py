@@ -15,7 +15,7 @@ import numpy as np
 
 from skyfall._validate import all_in_range, finite_vec3, in_range, real, world_position
 
-__all__ = ["PointLight", "SpotLight", "pack"]
+__all__ = ["PointLight", "SpotLight"]
 
 
 def _vec3(name: str, value: Any) -> tuple[float, float, float]:
