@@ -1,0 +1,20 @@
+"""The public names: every module's ``__all__`` lists names that exist (a name removed from a
+module but left in its ``__all__`` breaks ``from skyfall.x import *``)."""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+import pytest
+
+import skyfall
+
+MODULES = ["skyfall", *(f"skyfall.{m.name}" for m in pkgutil.iter_modules(skyfall.__path__) if not m.name.startswith("_"))]
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_every_exported_name_exists(name: str) -> None:
+    mod = importlib.import_module(name)
+    missing = [n for n in getattr(mod, "__all__", []) if not hasattr(mod, n)]
+    assert not missing, f"{name}.__all__ lists {missing}"
