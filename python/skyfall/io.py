@@ -77,12 +77,25 @@ def decode_srgb8(encoded: Any) -> NDArray[np.float32]:
     """Decode 8-bit sRGB to linear float32 through a 256-entry table (same values as
     :func:`decode_srgb` of ``encoded / 255``), in Rust, in parallel.
 
+    Raises
+    ------
+    ValueError
+        When a value is not a whole number in [0, 255] (it would wrap around as a byte).
+
     Examples
     --------
     >>> np.round(decode_srgb8(np.array([0, 128, 255], np.uint8)), 4)
     array([0.    , 0.2159, 1.    ], dtype=float32)
     """
-    return _core.apply_lut8(np.ascontiguousarray(encoded, dtype=np.uint8), srgb8_table())
+    arr = np.asarray(encoded)
+    if arr.dtype != np.uint8:
+        if arr.dtype.kind not in "fiub":
+            raise TypeError(f"encoded must hold 8-bit codes, got dtype {arr.dtype}")
+        bad = ~((arr >= 0) & (arr <= 255) & (arr == np.round(arr)))
+        if np.any(bad):
+            first = arr.reshape(-1)[int(np.argmax(bad.reshape(-1)))]
+            raise ValueError(f"encoded holds {first!r}, which is not an 8-bit code (a whole number in [0, 255])")
+    return _core.apply_lut8(np.ascontiguousarray(arr, dtype=np.uint8), srgb8_table())
 
 
 def to_srgb8(linear: Any, *, alpha_channel: int | None = None) -> NDArray[np.uint8]:
@@ -114,12 +127,31 @@ def _as_hwc(image: Any) -> NDArray[Any]:
     return arr
 
 
+def _codes(p: Path, arr: NDArray[Any]) -> str:
+    """What an 8-bit (or PNG 16-bit) file stores of ``arr``: "uint8" or "uint16"; integer types
+    that are not codes, and NaN, are refused."""
+    if arr.dtype == np.uint16 and p.suffix.lower() == ".png":
+        return "uint16"
+    if arr.dtype.kind in "iub" and arr.dtype != np.uint8:
+        hint = " (PNG stores uint16 as it is)" if arr.dtype == np.uint16 else ""
+        raise TypeError(
+            f"image has dtype {arr.dtype}: an {p.suffix or 'image'} file stores uint8 codes{hint}; pass uint8 codes, "
+            "or floats (encoded as sRGB, or with encoding='linear' as data)"
+        )
+    if arr.dtype.kind == "f":
+        nan = int(np.count_nonzero(np.isnan(arr)))
+        if nan:
+            raise ValueError(f"image holds {nan} NaN values, which an 8-bit file cannot store: replace them (np.nan_to_num) or write EXR")
+    return "uint8"
+
+
 def write_image(
     path: str | Path,
     image: Any,
     *,
     channel_names: Sequence[str] | None = None,
     metadata: Mapping[str, str | int | float] | None = None,
+    encoding: str = "srgb",
 ) -> None:
     """Write an image file; the format follows the extension.
 
@@ -127,17 +159,26 @@ def write_image(
     ----------
     path : str or Path
         Output file. ``.exr`` (and other float formats) store float32 as given; ``.png``,
-        ``.jpg`` store 8-bit sRGB (linear float input is encoded; uint8 input is written as
-        already-encoded bytes).
+        ``.jpg`` store 8-bit codes (uint8 input is written as it is; float input is encoded as
+        ``encoding`` says); ``.png`` also stores uint16 input as 16-bit codes, as it is.
     image : array_like, shape (H, W) or (H, W, C)
-        Linear-light values (float) or encoded bytes (uint8).
+        Linear values (float), or codes (uint8; uint16 for PNG). Other integer types are refused:
+        their range says nothing of how to encode them.
     channel_names : sequence of str, optional
         One name per channel; defaults to Y, Y/A, R/G/B, R/G/B/A, else C0, C1, ...
     metadata : mapping, optional
         Extra attributes stored in the file header.
+    encoding : {"srgb", "linear"}
+        How float input becomes 8-bit codes: ``"srgb"`` (default) encodes linear light for
+        viewing; ``"linear"`` stores data as it is, ``round(255 * clip(x, 0, 1))``, for masks and
+        data layers (``rain_alpha``, ``transmittance``).
 
     Raises
     ------
+    TypeError
+        For integer input other than uint8 (and uint16 into PNG).
+    ValueError
+        For NaN in float input to an 8-bit file (it has no NaN), or an unknown ``encoding``.
     OSError
         When OpenImageIO cannot create or write the file.
     """
@@ -151,14 +192,26 @@ def write_image(
     p = Path(path)
     is_float = p.suffix.lower() in _FLOAT_EXTS
     alpha = names.index("A") if "A" in names else None
+    if encoding not in ("srgb", "linear"):
+        raise ValueError(f"encoding = {encoding!r} must be \"srgb\" or \"linear\"")
     if is_float:
         data: NDArray[Any] = np.ascontiguousarray(arr, dtype=np.float32)
         spec = oiio.ImageSpec(w, h, c, "float")
         spec.attribute("compression", "zip")
     else:
-        data = np.ascontiguousarray(arr) if arr.dtype == np.uint8 else to_srgb8(arr, alpha_channel=alpha)
-        spec = oiio.ImageSpec(w, h, c, "uint8")
-        spec.attribute("oiio:ColorSpace", "sRGB")
+        kind = _codes(p, arr)
+        if kind == "uint16":
+            data, spec = np.ascontiguousarray(arr), oiio.ImageSpec(w, h, c, "uint16")
+        else:
+            if arr.dtype == np.uint8:
+                data = np.ascontiguousarray(arr)
+            elif encoding == "linear":
+                data = np.rint(np.clip(arr.astype(np.float32), 0.0, 1.0) * 255.0).astype(np.uint8)
+            else:
+                data = to_srgb8(arr, alpha_channel=alpha)
+            spec = oiio.ImageSpec(w, h, c, "uint8")
+        if arr.dtype == np.uint8 or (arr.dtype.kind == "f" and encoding == "srgb"):
+            spec.attribute("oiio:ColorSpace", "sRGB")
         if alpha is not None:
             spec.alpha_channel = alpha
             spec.attribute("oiio:UnassociatedAlpha", 1)
