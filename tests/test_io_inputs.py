@@ -63,3 +63,24 @@ def test_codes_outside_a_byte_do_not_wrap() -> None:
     with pytest.raises(TypeError):
         io.decode_srgb8(np.array(["a"]))
     np.testing.assert_array_equal(io.decode_srgb8(np.array([0, 128, 255], np.int64)), io.decode_srgb8(np.array([0, 128, 255], np.uint8)))
+
+
+def test_integer_depth_maps_state_their_unit() -> None:
+    # uint16 millimetres read as metres put a wall 2.5 m away at 2.5 km: fully fogged.
+    from skyfall import PhotoScene, Renderer, Weather
+
+    mm = np.full((12, 16), 2500, np.uint16)
+    img = np.full((12, 16, 3), 0.3, np.float32)
+    with pytest.raises(TypeError, match="depth_scale_m"):
+        PhotoScene(img, mm)
+    photo = PhotoScene(img, mm, depth_scale_m=0.001)
+    np.testing.assert_allclose(photo.depth_m, 2.5)
+    fog = Weather(visibility_m=1000.0)
+    t = Renderer(16, 12, backend="cpu").render(photo, fog).layers["transmittance"]
+    assert t.min() > 0.98  # 2.5 m of 1 km visibility (2.5 km would leave about 1e-4)
+    for bad in (0.0, -1.0, float("inf"), float("nan")):
+        with pytest.raises(ValueError, match="depth_scale_m"):
+            PhotoScene(img, mm, depth_scale_m=bad)
+    # a float map is metres, scaled only when asked
+    np.testing.assert_allclose(PhotoScene(img, np.full((12, 16), 2.5, np.float32)).depth_m, 2.5)
+    np.testing.assert_allclose(PhotoScene(img, np.full((12, 16), 250.0), depth_scale_m=0.01).depth_m, 2.5)

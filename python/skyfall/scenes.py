@@ -6,6 +6,7 @@ Procedural scenes are lit by the weather's sky through the ambient-light map (se
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -294,8 +295,14 @@ class PhotoScene:
         8-bit path) and decoded to linear with the sRGB transfer function when ``image`` is
         first read.
     depth_m : array_like, shape (H, W)
-        Depth along the optical axis, m, >= 0; ``inf`` marks sky. From a sensor or a depth
-        estimator.
+        Depth along the optical axis, >= 0: metres for a float map (``inf`` marks sky), or
+        integer units of ``depth_scale_m`` (uint16 millimetres, as depth sensors write them,
+        with ``depth_scale_m=0.001``). From a sensor or a depth estimator.
+    depth_scale_m : float, optional
+        Metres per unit of ``depth_m``: required for an integer map (there is no safe guess:
+        millimetres read as metres put everything 1000x too far, into the fog), optional for a
+        float one (default 1). A 0 stays 0 m (at the lens: rain in front of it is hidden); mark
+        missing readings yourself, e.g. as ``inf`` in a float map.
     camera : Camera, optional
         The camera that took the photo; by default one at the origin looking along -Z with
         ``vertical_fov_deg``.
@@ -328,6 +335,7 @@ class PhotoScene:
         vertical_fov_deg: float = 60.0,
         lights: tuple[PointLight | SpotLight, ...] = (),
         occluders: Sequence[Mapping[str, Any]] = (),
+        depth_scale_m: float | None = None,
     ) -> None:
         img = _array("image", image, "a file: read it with skyfall.io.read_image")
         if img.dtype != np.uint8 and img.dtype.kind != "f":
@@ -344,7 +352,15 @@ class PhotoScene:
         d = _array("depth_m", depth_m, "a file: read it with skyfall.io.read_channels")
         if d.dtype.kind not in "fiu":
             raise TypeError(f"depth_m must be numeric, got dtype {d.dtype}")
-        d = np.ascontiguousarray(d, dtype=np.float32)
+        if depth_scale_m is None and d.dtype.kind in "iu":
+            raise TypeError(
+                f"depth_m is {d.dtype}: give depth_scale_m, its metres per unit (0.001 for millimetres, "
+                "as depth sensors write them); integer depth has no unit of its own"
+            )
+        scale = 1.0 if depth_scale_m is None else real("depth_scale_m", depth_scale_m)
+        if not (math.isfinite(scale) and scale > 0.0):
+            raise ValueError(f"depth_scale_m = {scale} must be a positive finite number of metres per unit")
+        d = np.ascontiguousarray(d, dtype=np.float32) if scale == 1.0 else np.ascontiguousarray(d.astype(np.float64) * scale, dtype=np.float32)
         if d.shape != img.shape[:2]:
             raise ValueError(f"depth_m has shape {d.shape}, the image is {img.shape[:2]}")
         _at_least_zero("depth_m", d, " m (inf for sky)", finite=False)
