@@ -111,7 +111,7 @@ def main() -> None:
     # its standard error) and time, on a 640x360 frame looking into open rain, for several
     # rain-region radii.
     small = Renderer(640, 360, backend="cpu")
-    open_rain = PhotoScene(np.full((360, 640, 3), 0.1, np.float32), np.full((360, 640), np.inf, np.float32))
+    open_rain = PhotoScene(np.full((360, 640, 3), 0.1, np.float32), np.full((360, 640), np.inf, np.float32), encoding="linear")
     methods: list[dict[str, object]] = []
     for near in (2.0, 3.0, 5.0, 8.0):
         row: dict[str, object] = {"rain_near_m": near}

@@ -33,7 +33,7 @@ def haze_photo() -> tuple[np.ndarray, np.ndarray, PhotoScene, Weather]:
     depth = rng.uniform(1, 2000, (H, W)).astype(np.float32)
     cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=50.0)
     weather = Weather(rain_rate_mm_h=10.0, visibility_m=2000.0, rain_streaks=False)  # the haze alone
-    return img, depth, PhotoScene(img, depth, camera=cam), weather
+    return img, depth, PhotoScene(img, depth, camera=cam, encoding="linear"), weather
 
 
 def main() -> None:

@@ -21,7 +21,7 @@ FAR = [(5e6, 1.6, 5e6), (-3e6, 101.6, 4e6)]
 
 def _stats(position_m: tuple[float, float, float], seed: int, method: str) -> tuple[float, float, int]:
     cam = Camera(position_m, yaw_deg=20.0, pitch_deg=3.0, vertical_fov_deg=60.0, width=W, height=H)
-    photo = PhotoScene(np.full((H, W, 3), 0.2, np.float32), np.full((H, W), 30.0, np.float32), camera=cam)
+    photo = PhotoScene(np.full((H, W, 3), 0.2, np.float32), np.full((H, W), 30.0, np.float32), camera=cam, encoding="linear")
     frame = Renderer(W, H, backend="cpu").render(photo, Weather(rain_rate_mm_h=40.0, rain_method=method), seed=seed, time_s=0.37)
     alpha = frame.layers["rain_alpha"]
     return float(alpha.mean()), float((alpha > 1e-3).mean()), frame.stats["rain_streaks"]

@@ -72,15 +72,35 @@ def test_integer_depth_maps_state_their_unit() -> None:
     mm = np.full((12, 16), 2500, np.uint16)
     img = np.full((12, 16, 3), 0.3, np.float32)
     with pytest.raises(TypeError, match="depth_scale_m"):
-        PhotoScene(img, mm)
-    photo = PhotoScene(img, mm, depth_scale_m=0.001)
+        PhotoScene(img, mm, encoding="linear")
+    photo = PhotoScene(img, mm, depth_scale_m=0.001, encoding="linear")
     np.testing.assert_allclose(photo.depth_m, 2.5)
     fog = Weather(visibility_m=1000.0)
     t = Renderer(16, 12, backend="cpu").render(photo, fog).layers["transmittance"]
     assert t.min() > 0.98  # 2.5 m of 1 km visibility (2.5 km would leave about 1e-4)
     for bad in (0.0, -1.0, float("inf"), float("nan")):
         with pytest.raises(ValueError, match="depth_scale_m"):
-            PhotoScene(img, mm, depth_scale_m=bad)
+            PhotoScene(img, mm, depth_scale_m=bad, encoding="linear")
     # a float map is metres, scaled only when asked
-    np.testing.assert_allclose(PhotoScene(img, np.full((12, 16), 2.5, np.float32)).depth_m, 2.5)
-    np.testing.assert_allclose(PhotoScene(img, np.full((12, 16), 250.0), depth_scale_m=0.01).depth_m, 2.5)
+    np.testing.assert_allclose(PhotoScene(img, np.full((12, 16), 2.5, np.float32), encoding="linear").depth_m, 2.5)
+    np.testing.assert_allclose(PhotoScene(img, np.full((12, 16), 250.0), depth_scale_m=0.01, encoding="linear").depth_m, 2.5)
+
+
+def test_float_photos_state_their_encoding() -> None:
+    # scikit-image's img_as_float gives sRGB-encoded floats; read as linear, a mean code of 65
+    # came out as 133 in clear weather.
+    from skyfall import PhotoScene, Renderer, Weather
+
+    codes = np.full((6, 8, 3), 65, np.uint8)
+    as_float = codes.astype(np.float32) / 255.0  # what img_as_float returns
+    with pytest.raises(ValueError, match="encoding"):
+        PhotoScene(as_float, np.full((6, 8), np.inf, np.float32))
+    photo = PhotoScene(as_float, np.full((6, 8), np.inf, np.float32), encoding="srgb")
+    out = Renderer(8, 6, backend="cpu").render_srgb8(photo, Weather())
+    assert np.all(out == 65)  # clear weather gives the photo back
+    np.testing.assert_allclose(photo.image, io.decode_srgb8(codes), atol=1e-6)
+    with pytest.raises(ValueError, match=r"\[0, 1\]"):
+        PhotoScene(as_float * 5.0, np.full((6, 8), np.inf, np.float32), encoding="srgb")
+    with pytest.raises(ValueError, match="uint8"):
+        PhotoScene(codes, np.full((6, 8), np.inf, np.float32), encoding="linear")
+    assert PhotoScene(codes, np.full((6, 8), np.inf, np.float32), encoding="srgb").srgb8 is not None

@@ -30,7 +30,7 @@ def photo(seed: int = 0) -> PhotoScene:
     img = rng.uniform(0, 1, (H, W, 3)).astype(np.float32)
     depth = rng.uniform(0.5, 3000, (H, W)).astype(np.float32)
     depth[:10] = np.inf
-    return PhotoScene(img, depth, vertical_fov_deg=50.0)
+    return PhotoScene(img, depth, vertical_fov_deg=50.0, encoding="linear")
 
 
 def ssim(a: np.ndarray, b: np.ndarray) -> float:
@@ -129,7 +129,7 @@ def test_rendering_into_a_previous_frame_reuses_its_arrays(backend, cpu, gpu):
     with pytest.raises(ValueError, match="out's rain_alpha"):
         r.render(scene, rainy, out=skyfall.Frame(rgb=want.rgb.copy(), depth_m=want.depth_m.copy(), layers={"rain_alpha": np.zeros((H, W + 1), np.float32)}))
     with pytest.raises(ValueError, match="out rgb is in use elsewhere"):
-        r.render(PhotoScene(want.rgb, want.depth_m, vertical_fov_deg=50.0), rainy, out=want)
+        r.render(PhotoScene(want.rgb, want.depth_m, vertical_fov_deg=50.0, encoding="linear"), rainy, out=want)
     with pytest.raises(TypeError, match="out must be a skyfall.Frame"):
         r.render(scene, rainy, out=want.rgb)  # type: ignore[arg-type]
 
@@ -139,7 +139,7 @@ def test_koschmieder_contrast_at_the_visibility_distance(cpu):
     cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=40.0)
     img = np.zeros((H, W, 3), np.float32)
     depth = np.full((H, W), 1000.0, np.float32)
-    frame = cpu.render(PhotoScene(img, depth, camera=cam), Weather(visibility_m=1000.0))
+    frame = cpu.render(PhotoScene(img, depth, camera=cam, encoding="linear"), Weather(visibility_m=1000.0))
     centre = frame.rgb[H // 2, W // 2, 0]
     air = 3 / 7
     # the centre pixel is half a pixel off axis: its ray is a hair longer than 1000 m.
@@ -199,15 +199,15 @@ def test_frame_saves_exr_layers_and_png(cpu, tmp_path):
 
 def test_bad_inputs_give_clear_errors(cpu):
     with pytest.raises(ValueError, match="photo is 10x10"):
-        cpu.render(PhotoScene(np.zeros((10, 10, 3), np.float32), np.ones((10, 10))))
+        cpu.render(PhotoScene(np.zeros((10, 10, 3), np.float32), np.ones((10, 10)), encoding="linear"))
     with pytest.raises(ValueError, match="depth_m"):
-        PhotoScene(np.zeros((4, 4, 3), np.float32), np.full((4, 4), np.nan))
+        PhotoScene(np.zeros((4, 4, 3), np.float32), np.full((4, 4), np.nan), encoding="linear")
     with pytest.raises(ValueError, match="depth_m"):
-        PhotoScene(np.zeros((4, 4, 3), np.float32), -np.ones((4, 4)))
+        PhotoScene(np.zeros((4, 4, 3), np.float32), -np.ones((4, 4)), encoding="linear")
     with pytest.raises(ValueError, match="depth_m has shape"):
-        PhotoScene(np.zeros((4, 4, 3), np.float32), np.ones((4, 5)))
+        PhotoScene(np.zeros((4, 4, 3), np.float32), np.ones((4, 5)), encoding="linear")
     with pytest.raises(ValueError, match=r"image\[0, 0, 0\] = -1.0 is outside the valid range \[0, inf\)"):
-        PhotoScene(-np.ones((4, 4, 3), np.float32), np.ones((4, 4)))
+        PhotoScene(-np.ones((4, 4, 3), np.float32), np.ones((4, 4)), encoding="linear")
     with pytest.raises(TypeError, match="dtype"):
         PhotoScene(np.zeros((4, 4, 3), np.int32), np.ones((4, 4)))
     with pytest.raises(ValueError, match="rain_rate_mm_h"):

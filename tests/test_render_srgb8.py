@@ -83,7 +83,7 @@ def test_other_scenes_and_float_photos_render_then_encode(cpu):
     street = scenes.street()
     want = io.to_srgb8(cpu.render(street, weather, seed=1).rgb)
     assert cpu.render_srgb8(street, weather, seed=1).tobytes() == want.tobytes()
-    lin = PhotoScene(photo8(4).image, photo8(4).depth_m, camera=photo8(4).camera)
+    lin = PhotoScene(photo8(4).image, photo8(4).depth_m, camera=photo8(4).camera, encoding="linear")
     alpha = np.empty((H, W), np.float32)
     got = cpu.render_srgb8(lin, weather, seed=1, rain_alpha_out=alpha)
     frame = cpu.render(lin, weather, seed=1)
@@ -157,6 +157,6 @@ def test_outputs_that_overlap_the_inputs_are_refused(backend):
     with pytest.raises(ValueError, match="out overlaps rain_alpha_out"):
         r.render_srgb8(scene, rain, out=buf.view(np.uint8)[: H * W * 3].reshape(H, W, 3), rain_alpha_out=buf[: H * W].reshape(H, W))
     assert np.array_equal(img, before[0]) and np.array_equal(depth, before[1])
-    float_scene = PhotoScene(io.decode_srgb8(img), depth, camera=Camera((0.0, 1.6, 0.0)))
+    float_scene = PhotoScene(io.decode_srgb8(img), depth, camera=Camera((0.0, 1.6, 0.0)), encoding="linear")
     with pytest.raises(ValueError, match="rain_alpha_out overlaps the scene's image"):
         r.render_srgb8(float_scene, rain, rain_alpha_out=float_scene.image.reshape(-1)[: H * W].reshape(H, W))

@@ -44,7 +44,7 @@ def test_a_frame_is_one_core_call(core_calls: Counter[str], kind: str) -> None:
     else:
         clear = r.render(street, Weather())
         image = io.to_srgb8(clear.rgb) if kind == "photo8" else clear.rgb
-        scene = PhotoScene(image, clear.depth_m, camera=street.camera.with_resolution(64, 48), lights=street.lights)
+        scene = PhotoScene(image, clear.depth_m, camera=street.camera.with_resolution(64, 48), lights=street.lights, encoding=None if kind == "photo8" else "linear")
         draw = (lambda: r.render_srgb8(scene, w, seed=1)) if kind == "photo8" else (lambda: r.render(scene, w, seed=1))
     draw()  # the scene's ambient-light map is built and cached
     core_calls.clear()
@@ -83,7 +83,7 @@ def test_the_haze_model_is_the_cores() -> None:
     # and a frame's transmittance is e^(-σ d) with that σ along the ray of each pixel
     r = Renderer(32, 24, backend="cpu")
     depth = np.full((24, 32), 100.0, np.float32)
-    photo = PhotoScene(np.full((24, 32, 3), 0.3, np.float32), depth, vertical_fov_deg=40.0)
+    photo = PhotoScene(np.full((24, 32, 3), 0.3, np.float32), depth, vertical_fov_deg=40.0, encoding="linear")
     t = r.render(photo, Weather(visibility_m=2000.0)).layers["transmittance"]
     fx, fy, cx, cy = photo.camera.intrinsics()
     y, x = np.mgrid[0:24, 0:32] + 0.5

@@ -237,7 +237,7 @@ def renderer(request) -> Renderer:
 def roofed_photo(roof: bool) -> PhotoScene:
     """A black photo (so a streak shows r I_R alone) under a roof over the left half (x < 0)."""
     occ = [{"min": (-30.0, 1.5, -30.0), "max": (0.0, 1.8, 30.0)}] if roof else []
-    return PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), vertical_fov_deg=60.0, occluders=occ)
+    return PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), vertical_fov_deg=60.0, occluders=occ, encoding="linear")
 
 
 def test_streaks_under_a_roof_are_darker(renderer):
@@ -318,7 +318,7 @@ def test_haze_airlight_follows_the_viewpoint_illuminance():
     r = Renderer(W, H, backend="cpu")
     open_sky = r.render(roofed_photo(False), w).rgb[0, 0, 0]
     occ = [{"min": (-30.0, 0.5, -30.0), "max": (30.0, 0.8, 30.0)}]
-    under = PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), occluders=occ)
+    under = PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), occluders=occ, encoding="linear")
     roofed = r.render(under, w).rgb[0, 0, 0]
     assert open_sky == pytest.approx(3 / 7, rel=1e-3)
     e_view = sky.horizontal_illuminance([0, 0, 0], under, weather=w, samples=sky.MAP_SAMPLES)[0] / w.sky_illuminance_lux

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from skyfall._validate import float_array, integer, real
 from skyfall.camera import Camera
-from skyfall.io import decode_srgb8
+from skyfall.io import decode_srgb, decode_srgb8
 from skyfall.lights import PointLight, SpotLight
 
 __all__ = ["BoxScene", "PhotoScene", "boxes", "empty", "street"]
@@ -290,14 +290,19 @@ class PhotoScene:
     Parameters
     ----------
     image : array_like, shape (H, W, 3)
-        Linear RGB float (any float dtype, stored as float32), or uint8 sRGB, which is kept
-        as given in ``srgb8`` (the input of :meth:`skyfall.Renderer.render_srgb8`'s fused
-        8-bit path) and decoded to linear with the sRGB transfer function when ``image`` is
-        first read.
+        uint8 sRGB codes, kept as given in ``srgb8`` (the input of
+        :meth:`skyfall.Renderer.render_srgb8`'s fused 8-bit path) and decoded to linear with
+        the sRGB transfer function when ``image`` is first read; or floats (any float dtype,
+        stored as float32) whose encoding ``encoding`` states.
     depth_m : array_like, shape (H, W)
         Depth along the optical axis, >= 0: metres for a float map (``inf`` marks sky), or
         integer units of ``depth_scale_m`` (uint16 millimetres, as depth sensors write them,
         with ``depth_scale_m=0.001``). From a sensor or a depth estimator.
+    encoding : {"linear", "srgb"}, optional
+        How float pixels are encoded, required for a float image (no guess: scikit-image's
+        ``img_as_float`` gives sRGB-encoded floats, a skyfall frame's ``rgb`` is linear light):
+        ``"linear"`` as they are, ``"srgb"`` values in [0, 1] decoded with the sRGB transfer
+        function. A uint8 image is sRGB codes (``None`` or ``"srgb"``).
     depth_scale_m : float, optional
         Metres per unit of ``depth_m``: required for an integer map (there is no safe guess:
         millimetres read as metres put everything 1000x too far, into the fog), optional for a
@@ -336,10 +341,23 @@ class PhotoScene:
         lights: tuple[PointLight | SpotLight, ...] = (),
         occluders: Sequence[Mapping[str, Any]] = (),
         depth_scale_m: float | None = None,
+        encoding: str | None = None,
     ) -> None:
         img = _array("image", image, "a file: read it with skyfall.io.read_image")
         if img.dtype != np.uint8 and img.dtype.kind != "f":
-            raise TypeError(f"image must be uint8 (sRGB) or float (linear), got dtype {img.dtype}")
+            raise TypeError(f"image must be uint8 (sRGB codes) or float, got dtype {img.dtype}")
+        if encoding not in (None, "linear", "srgb"):
+            raise ValueError(f"encoding = {encoding!r} must be \"linear\" or \"srgb\"")
+        if img.dtype == np.uint8 and encoding == "linear":
+            raise ValueError("encoding = 'linear' does not fit a uint8 image: 8-bit images are sRGB codes")
+        if img.dtype != np.uint8 and encoding is None:
+            # No guess: scikit-image's img_as_float gives sRGB-encoded floats, a skyfall frame
+            # linear ones, and reading one as the other shifts every colour.
+            raise ValueError(
+                f"image is {img.dtype}: say how it is encoded, encoding='linear' (linear light, e.g. a "
+                "skyfall frame's rgb) or encoding='srgb' (sRGB-encoded values in [0, 1], e.g. "
+                "skimage.img_as_float of a photo)"
+            )
         if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
             raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
         srgb8: NDArray[np.uint8] | None = None
@@ -347,6 +365,10 @@ class PhotoScene:
             srgb8 = np.ascontiguousarray(img)  # decoded when `image` is first read
         else:
             lin = np.ascontiguousarray(img, dtype=np.float32)
+            if encoding == "srgb":
+                if not np.all((lin >= 0.0) & (lin <= 1.0)):
+                    raise ValueError("image: sRGB-encoded values must lie in [0, 1] (NaN included in the check)")
+                lin = decode_srgb(lin)
             _at_least_zero("image", lin, " (linear RGB)", finite=True)
             self.__dict__["image"] = lin  # the cached value of the `image` property
         d = _array("depth_m", depth_m, "a file: read it with skyfall.io.read_channels")
