@@ -39,11 +39,12 @@ def test_heavier_rain_covers_more(renderer):
 
 @pytest.mark.parametrize("exposure_s", [1 / 30, 1e-3, 1e-4])
 def test_opacity_area_matches_the_drops_seen(renderer, exposure_s):
-    # Every streak adds alpha * w * L = w^2 px^2 of coverage, w = D f / z its projected width:
+    # Every streak adds alpha * w * L = pi w^2 / 4 px^2 of coverage (the drop's cross-section),
+    # w = D f / z its projected width:
     # summed over the drops in view (computed here from the drops' positions), it is the
     # frame's total rain_alpha, up to the capsule caps, overlaps and the frame edges (5 %).
     # The per-drop reference draws exactly the drops rain.drops lists. Short exposures too:
-    # drops that move less than a pixel (most here at 1e-4 s) still carry w^2 (they carried
+    # drops that move less than a pixel (most here at 1e-4 s) still carry pi w^2 / 4 (they carried
     # 1.6x and 3.7x that at 1e-3 and 1e-4 s before paths were lengthened to a pixel).
     weather = Weather(rain_rate_mm_h=20.0, rain_near_m=4.0, rain_method="drops")
     img = np.full((H, W, 3), 0.1, np.float32)
@@ -59,7 +60,7 @@ def test_opacity_area_matches_the_drops_seen(renderer, exposure_s):
     assert inside.sum() > 500
     got = frame.layers["rain_alpha"][20 : H - 20, 30 : W - 30].sum()
     # streaks of drops near the window's edge spill in or out: compare with both bounds' mean
-    assert got == pytest.approx(np.sum(w**2), rel=0.1)
+    assert got == pytest.approx(np.pi / 4 * np.sum(w**2), rel=0.1)
 
 
 @pytest.mark.parametrize(("method", "depth"), [("drops", 0.3), ("billboards", 0.8)])

@@ -29,9 +29,10 @@ def bin_moments(r: float, lo: float, hi: float) -> tuple[float, float, float]:
 
 
 def test_mean_opacity_matches_analytic_expectation():
-    # Every streak adds alpha * D * L = (D / (v T)) * D * (v T) = D^2 of opacity-area (m^2) to the
-    # 1 m^2 texture (box filtering and wrapping conserve it), so the expected mean opacity of a
-    # texture is lambda * E[D^2] = integral of N(D) D^2 over the bin: independent of fall speed.
+    # Every streak adds alpha * D * L = (pi/4) (D / (v T)) * D * (v T) = pi D^2 / 4 of
+    # opacity-area (m^2), the drop's cross-section, to the 1 m^2 texture (box filtering and
+    # wrapping conserve it), so the expected mean opacity of a texture is
+    # lambda * E[pi D^2 / 4] = integral of N(D) pi D^2 / 4 over the bin: independent of fall speed.
     # Tolerance: 4 standard deviations of the mean over seeds, from the drop-count rounding and
     # the spread of D^2 within the bin, plus 0.5 % for overlaps (1 - prod vs sum) and float32.
     seeds = 12
@@ -40,9 +41,9 @@ def test_mean_opacity_matches_analytic_expectation():
     for i, r in enumerate(SEED_R):
         for j in range(len(SEED_D)):
             n, e_d2, var_d2 = bin_moments(r, lo[j], hi[j])
-            expected = n * e_d2
+            expected = n * e_d2 * np.pi / 4
             frac = n - np.floor(n)
-            sd_one = np.sqrt(n * var_d2 + frac * (1 - frac) * e_d2**2)
+            sd_one = np.pi / 4 * np.sqrt(n * var_d2 + frac * (1 - frac) * e_d2**2)
             tol = 4 * sd_one / np.sqrt(seeds) + 0.005 * expected
             got = tex[:, i, j].mean(dtype=np.float64)
             assert abs(got - expected) <= tol, (r, SEED_D[j], got, expected, tol)
@@ -57,8 +58,10 @@ def test_long_exposures_wrap_and_conserve_opacity():
     lo, hi = rain.diameter_bins(d)
     for j in range(len(d)):
         n, e_d2, var_d2 = bin_moments(r, lo[j], hi[j])
-        tol = 4 * np.sqrt(n * var_d2 + 0.25 * e_d2**2) / np.sqrt(seeds) + 0.01 * n * e_d2
-        assert abs(tex[:, j].mean(dtype=np.float64) - n * e_d2) <= tol
+        # (each streak carries the drop's cross-section pi D^2 / 4)
+        area = np.pi / 4
+        tol = area * (4 * np.sqrt(n * var_d2 + 0.25 * e_d2**2) / np.sqrt(seeds) + 0.01 * n * e_d2)
+        assert abs(tex[:, j].mean(dtype=np.float64) - area * n * e_d2) <= tol
     rows = tex.mean(axis=(0, 1, 3), dtype=np.float64)
     top, bottom = rows[:16].mean(), rows[-16:].mean()
     assert abs(top - bottom) < 0.15 * rows.mean()

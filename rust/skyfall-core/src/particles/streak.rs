@@ -10,8 +10,10 @@
 //! rain streaks),
 //! times the pixel's coverage of the band, box-filtered: across, clamp(w/2 + ½ − dist, 0, 1)
 //! for w ≥ 1 px and w·clamp(1 − dist, 0, 1) below (a particle narrower than a pixel covers it
-//! partially); along, a one-pixel ramp at each end. Each streak so adds α·w·L = w² of
-//! opacity-area. [`ScreenStreak::fragment`] is the per-pixel definition; the walks of
+//! partially); along, a one-pixel ramp at each end. α carries the particle's silhouette: a
+//! sphere's time-averaged shadow on its w-wide band is π/4 of the band ([`SILHOUETTE`]), so
+//! each streak adds α·w·L = (π/4)·w² of opacity-area, the drop's πD²/4 cross-section on
+//! screen (the same cross-section the haze's extinction counts). [`ScreenStreak::fragment`] is the per-pixel definition; the walks of
 //! [`super::walk`] and the GPU's `rain.wgsl` compute the same values, and
 //! [`ScreenStreak::packed`] is the GPU's packing contract.
 
@@ -19,6 +21,10 @@ use super::Particle;
 use super::num::{ceil_nonneg, clamp01, floor_nonneg, idx_f32, least, pos};
 use crate::scene::camera::Camera;
 use glam::{Vec2, Vec3, Vec4};
+
+/// The share of a particle's band a sphere's silhouette covers, averaged along its path: a
+/// disc of diameter w passing over a w-wide band shades π/4 of it (πw²/4 of a w × w square).
+pub const SILHOUETTE: f32 = std::f32::consts::FRAC_PI_4;
 
 /// Streak ends nearer than this (m along the axis) are clipped.
 pub const NEAR_CLIP_M: f32 = 0.05;
@@ -94,7 +100,7 @@ pub fn screen_streak(
     let (wa, wb) = (d.diameter_m * f / za, d.diameter_m * f / zb);
     let mut len = a.distance(b);
     let w_mid = 0.5 * (wa + wb);
-    // Every streak carries w² of opacity-area, whatever the exposure: its pixels' coverage
+    // Every streak carries (π/4)·w² of opacity-area, whatever the exposure: its pixels' coverage
     // sums to α·w·L for L ≥ 1 px, wherever it falls on the pixel grid (the anti-aliased ends
     // are one pixel long), so α = w / L. A path shorter than a pixel or than the drop is wide
     // (a near drop in a short exposure, a drop moving with the camera) is lengthened about its
@@ -106,7 +112,7 @@ pub fn screen_streak(
         (a, b) = (a - dir * grow, b + dir * grow);
         len = l;
     }
-    let alpha = w_mid / l;
+    let alpha = SILHOUETTE * w_mid / l;
     let r = 0.5 * wa.max(wb) + 1.0;
     let min = a.min(b) - Vec2::splat(r);
     let max = a.max(b) + Vec2::splat(r);
@@ -189,7 +195,7 @@ impl ScreenStreak {
 
     /// The streak's opacity-area inside a `width` × `height` frame, px²: α times the length of
     /// its axis inside the frame times its mean width there, the sum of its pixels' α·coverage
-    /// up to the anti-aliased ends. Over the whole axis it is w² (streaks are at least a pixel
+    /// up to the anti-aliased ends. Over the whole axis it is (π/4)·w² (streaks are at least a pixel
     /// long, see [`screen_streak`]), which goes as 1/z² with the drop's depth z.
     pub fn opacity_area_in(&self, width: f32, height: f32) -> f32 {
         let inside = |p: Vec2| p.x >= 0.0 && p.y >= 0.0 && p.x <= width && p.y <= height;

@@ -359,9 +359,11 @@ mod tests {
             }
         );
         let w = 2e-3 * 300.0;
+        // The drop's cross-section on screen, π w²/4 px² (a sphere of diameter D: π D²/4).
+        let disc = |w: f32| std::f32::consts::PI / 4.0 * w * w;
         let sum: f32 = alpha.iter().sum();
-        // α w L = w² (plus round caps of the capsule, ≤ w² π/4 α): within 5 %.
-        assert!((sum / (w * w) - 1.0).abs() < 0.05, "{sum} vs {}", w * w);
+        // α w L = π w²/4 (plus round caps of the capsule): within 5 %.
+        assert!((sum / disc(w) - 1.0).abs() < 0.05, "{sum} vs {}", disc(w));
         // with r = 1 and I_R = 1 on black, rgb equals the coverage
         assert!((rgb.iter().step_by(3).sum::<f32>() - sum).abs() < 1e-3);
         let nearest = rd.iter().cloned().fold(f32::INFINITY, f32::min);
@@ -409,16 +411,16 @@ mod tests {
             }
         );
         // a camera moving with the drop sees a dot (the drop's disc), not a streak: a pixel
-        // long, at α = w, so that it still carries w²
+        // long, at α = π w/4, so that it still carries π w²/4
         let s = screen_streak(&cam, &d, 1.0 / 30.0, d.velocity_m_s).unwrap();
         assert!(
-            (s.len - 1.0).abs() < 1e-6 && (s.alpha - w).abs() < 1e-6,
+            (s.len - 1.0).abs() < 1e-6 && (s.alpha - std::f32::consts::FRAC_PI_4 * w).abs() < 1e-6,
             "{} {}",
             s.len,
             s.alpha
         );
-        assert!((s.opacity_area_in(400.0, 400.0) / (w * w) - 1.0).abs() < 1e-4);
-        // whatever the exposure, the pixels sum to w² (a still drop: a dot; a near drop in a
+        assert!((s.opacity_area_in(400.0, 400.0) / disc(w) - 1.0).abs() < 1e-4);
+        // whatever the exposure, the pixels sum to π w²/4 (a still drop: a dot; a near drop in a
         // short exposure: lengthened; 1/30 s: a streak)
         for (v, z, t) in [
             (0.0, 1.0, 1.0 / 30.0),
@@ -450,9 +452,9 @@ mod tests {
             .unwrap();
             let sum: f32 = alpha.iter().sum();
             assert!(
-                (sum / (w * w) - 1.0).abs() < 0.02,
+                (sum / disc(w) - 1.0).abs() < 0.02,
                 "v {v} z {z} T {t}: {sum} vs {}",
-                w * w
+                disc(w)
             );
         }
         // a camera moving up at 6.5 m/s doubles the streak

@@ -82,7 +82,7 @@ pub struct Streak {
     pub diameter_m: f64,
     /// Streak length v·T, m.
     pub length_m: f64,
-    /// Opacity along the streak, min(1, D / (v T)).
+    /// Opacity along the streak, (π/4)·min(1, D / (v T)): the drop's silhouette on its band.
     pub alpha: f64,
 }
 
@@ -116,11 +116,14 @@ pub fn draw_streaks(
             let v = law.m_s(d_mm);
             let diameter_m = d_mm * 1e-3;
             let length_m = v * exposure_s;
-            let alpha = if length_m > 0.0 {
+            // D / (v T) of the exposure, times the sphere's silhouette on its D-wide band (π/4):
+            // each streak carries the drop's cross-section πD²/4 of opacity-area.
+            let covered = if length_m > 0.0 {
                 (diameter_m / length_m).min(1.0)
             } else {
                 1.0
             };
+            let alpha = std::f64::consts::FRAC_PI_4 * covered;
             Streak {
                 x_m: rng.random(),
                 y_m: rng.random(),
