@@ -15,7 +15,6 @@ __all__ = [
     "rain_drops",
     "AIRLIGHT_RELATIVE",
     "KOSCHMIEDER",
-    "AMBIENT_MAX_NODES",
     "AMBIENT_EXTENT_M",
     "FRAME_BUDGET_BYTES",
     "AmbientLightMap",
@@ -60,7 +59,6 @@ def check_range(name: str, value: float, index: int | None = None) -> float: ...
 
 AIRLIGHT_RELATIVE: float
 KOSCHMIEDER: float
-AMBIENT_MAX_NODES: int
 AMBIENT_EXTENT_M: float
 FRAME_BUDGET_BYTES: int
 
@@ -117,6 +115,7 @@ class SkyModel:
         bounds_max_m: list[float],
         spacing_m: float,
         samples: int,
+        spacing_name: str | None = None,
     ) -> AmbientLightMap: ...
 
 @final

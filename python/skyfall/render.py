@@ -8,7 +8,6 @@ otherwise: on a software-only machine the CPU backend is much faster than lavapi
 
 from __future__ import annotations
 
-import math
 import os
 import tempfile
 import threading
@@ -394,13 +393,11 @@ class Renderer:
         scene: BoxScene | PhotoScene, weather: Weather, cam: Camera, spacing_m: float, samples: int
     ) -> _core.AmbientLightMap:
         """The frame's ambient-light map (a single node of open sky where nothing hides it), cached."""
-        s = real("ambient_spacing_m", spacing_m)
-        if not 0.05 <= s <= 100.0:
-            raise ValueError(f"ambient_spacing_m = {s} is outside the valid range [0.05, 100] m")
+        s = in_range("ambient_spacing_m", spacing_m)
         n = integer("ambient_samples", samples, 4, 65_536)
         occluders = np.ascontiguousarray(scene.boxes if isinstance(scene, BoxScene) else scene.occluders, dtype=np.float32)
         if len(occluders) == 0:
-            return sky.cached_core_map(occluders, weather, np.zeros(3), np.zeros(3), s, n)
+            return sky.cached_core_map(occluders, weather, np.zeros(3), np.zeros(3), s, n, "ambient_spacing_m")
         reach = weather.rain_near_m + 1.0 if weather.rain_rate_mm_h > 0 and weather.rain_streaks else 1.0
         lo, hi = sky.default_bounds(scene, s, around_m=cam.position_m, radius_m=reach)
         # The map spans the scene's boxes and the rain region around the camera: say so in the
@@ -413,22 +410,7 @@ class Renderer:
                 f"map must span both, within [-{limit:g}, {limit:g}] m; put the camera near the boxes "
                 "(a box scene's world is the boxes' own; far from the origin, use a PhotoScene)"
             )
-        # (the map's own count: each axis' float32 extent over the spacing, rounded up, plus one)
-        extent = (hi.astype(np.float32) - lo.astype(np.float32)).astype(np.float64)
-
-        def count(sp: float) -> int:
-            return int(np.prod(np.ceil(extent / sp).astype(np.int64) + 1))
-
-        nodes = np.ceil(extent / s).astype(np.int64) + 1
-        if count(s) > _core.AMBIENT_MAX_NODES:
-            coarsest = s * (count(s) / _core.AMBIENT_MAX_NODES) ** (1.0 / 3.0)
-            while count(coarsest) > _core.AMBIENT_MAX_NODES:
-                coarsest *= 1.02
-            raise ValueError(
-                f"ambient_spacing_m = {s:g} m needs {nodes[0]}x{nodes[1]}x{nodes[2]} = {int(np.prod(nodes))} map nodes "
-                f"over this scene, more than the {_core.AMBIENT_MAX_NODES} a map may have: use ambient_spacing_m >= {math.ceil(coarsest * 100) / 100:g} m"
-            )
-        return sky.cached_core_map(occluders, weather, lo, hi, s, n)
+        return sky.cached_core_map(occluders, weather, lo, hi, s, n, "ambient_spacing_m")
 
     def render_sequence(
         self,

@@ -277,9 +277,16 @@ _CACHE_SIZE = 8
 
 
 def cached_core_map(
-    boxes: NDArray[np.float32], w: Weather, lo: NDArray[np.float64], hi: NDArray[np.float64], spacing: float, samples: int
+    boxes: NDArray[np.float32],
+    w: Weather,
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+    spacing: float,
+    samples: int,
+    spacing_name: str = "spacing_m",
 ) -> _core.AmbientLightMap:
-    """The core map, built once per (geometry, sky, bounds, spacing, samples) in a process."""
+    """The core map, built once per (geometry, sky, bounds, spacing, samples) in a process;
+    errors name the spacing ``spacing_name`` (the caller's own parameter)."""
     model = w.sky_model()
     sky_key = (w.sky, w.sun_elevation_deg, w.sun_azimuth_deg, w.extinction_per_m, w.cloud_base_height_m)
     key = (boxes.tobytes(), boxes.shape, sky_key, tuple(lo), tuple(hi), spacing, samples)
@@ -287,7 +294,9 @@ def cached_core_map(
         if key in _cache:
             _cache.move_to_end(key)
             return _cache[key]
-    built = model.ambient_map(boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=spacing, samples=samples)
+    built = model.ambient_map(
+        boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=spacing, samples=samples, spacing_name=spacing_name
+    )
     with _cache_lock:
         _cache[key] = built
         while len(_cache) > _CACHE_SIZE:

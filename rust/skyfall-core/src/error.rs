@@ -45,6 +45,16 @@ pub enum Error {
         /// What is wrong and what is accepted.
         message: String,
     },
+    /// A value within its range that this request cannot use, with what would work.
+    #[error("{param} = {value:?} {message}")]
+    Unusable {
+        /// The offending parameter.
+        param: Param,
+        /// Its value.
+        value: f64,
+        /// Why, and what would work.
+        message: String,
+    },
     /// A request whose result would exceed the memory budget; refused before allocating.
     #[error(
         "{what} would need {bytes} bytes ({gib:.2} GiB), over the budget of {budget} bytes ({budget_gib:.2} GiB); ask for fewer or smaller items"

@@ -65,6 +65,7 @@ impl From<CoreError> for PyErr {
             // A value the caller passed.
             err @ (E::OutOfRange { .. }
             | E::Invalid { .. }
+            | E::Unusable { .. }
             | E::TooLarge { .. }
             | E::Length { .. }) => PyValueError::new_err(err.to_string()),
             err @ E::OutOfMemory { .. } => PyMemoryError::new_err(err.to_string()),

@@ -68,7 +68,6 @@ mod _core {
         )?;
         m.add("AIRLIGHT_RELATIVE", skyfall_core::haze::AIRLIGHT_RELATIVE)?;
         m.add("KOSCHMIEDER", skyfall_core::weather::KOSCHMIEDER)?;
-        m.add("AMBIENT_MAX_NODES", skyfall_core::sky::ambient::MAX_NODES)?;
         m.add("AMBIENT_EXTENT_M", skyfall_core::sky::ambient::MAP_EXTENT_M)?;
         m.add(
             "FRAME_BUDGET_BYTES",

@@ -146,7 +146,8 @@ impl SkyModel {
     }
 
     /// The ambient-light map of boxes (M, 9) over `bounds_min_m`..`bounds_max_m`.
-    #[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples))]
+    #[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples, spacing_name=None))]
+    #[allow(clippy::too_many_arguments)]
     fn ambient_map(
         &self,
         py: Python<'_>,
@@ -155,11 +156,15 @@ impl SkyModel {
         bounds_max_m: [f32; 3],
         spacing_m: f64,
         samples: usize,
+        spacing_name: Option<String>,
     ) -> PyResult<AmbientLightMap> {
         let scene: BoxScene = box_scene(&boxes, true, [0.0; 3])?;
         let (lo, hi) = (Vec3::from(bounds_min_m), Vec3::from(bounds_max_m));
         let sky = &self.sky;
-        let nodes = AmbientMap::grid_dims(lo, hi, spacing_m)
+        let name = spacing_name
+            .and_then(|n| skyfall_core::ranges::find(&n))
+            .map_or("spacing_m", |l| l.name);
+        let nodes = AmbientMap::grid_dims_for(lo, hi, spacing_m, name)
             .map_err(CoreError)?
             .iter()
             .map(|&d| d as u128)
@@ -168,7 +173,7 @@ impl SkyModel {
         let map = interruptible_core(py, steps, |cancel| {
             let s = SkyTable::new_cancellable(sky, samples, cancel)?;
             if scene.boxes.is_empty() {
-                AmbientMap::grid_dims(lo, hi, spacing_m)?;
+                // (the bounds and spacing were checked above)
                 Ok(AmbientMap::uniform(irradiance(&[], &s, Vec3::ZERO)))
             } else {
                 AmbientMap::build_cancellable(&scene, &s, lo, hi, spacing_m, cancel)

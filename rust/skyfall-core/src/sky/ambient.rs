@@ -67,7 +67,19 @@ impl AmbientMap {
 
     /// Node count for a box `min_m`..`max_m` at `spacing_m`, validated.
     pub fn grid_dims(min_m: Vec3, max_m: Vec3, spacing_m: f64) -> Result<[usize; 3]> {
-        SPACING_M.check("spacing_m", None, spacing_m)?;
+        Self::grid_dims_for(min_m, max_m, spacing_m, "spacing_m")
+    }
+
+    /// [`Self::grid_dims`], errors naming the spacing as its caller's user knows it
+    /// (`ambient_spacing_m` for a frame's map); too fine a spacing is refused with the
+    /// coarsest that fits.
+    pub fn grid_dims_for(
+        min_m: Vec3,
+        max_m: Vec3,
+        spacing_m: f64,
+        name: &'static str,
+    ) -> Result<[usize; 3]> {
+        SPACING_M.check(name, None, spacing_m)?;
         let coord = Range::closed(-MAP_EXTENT_M, MAP_EXTENT_M, "m");
         for k in 0..3 {
             coord.check("bounds.min", Some(k), f64::from(min_m[k]))?;
@@ -82,17 +94,24 @@ impl AmbientMap {
                 });
             }
         }
-        let dims =
-            [0, 1, 2].map(|k| (f64::from(max_m[k] - min_m[k]) / spacing_m).ceil() as usize + 1);
-        let nodes = dims.iter().map(|&d| d as u128).product::<u128>();
+        let extent = [0, 1, 2].map(|k| f64::from(max_m[k] - min_m[k]));
+        let dims_at = |s: f64| extent.map(|e| (e / s).ceil() as usize + 1);
+        let count = |d: [usize; 3]| d.iter().map(|&n| n as u128).product::<u128>();
+        let dims = dims_at(spacing_m);
+        let nodes = count(dims);
         if nodes > MAX_NODES as u128 {
-            return Err(Error::Invalid {
-                param: Param {
-                    name: "spacing_m",
-                    index: None,
-                },
+            // The coarsest spacing that fits, rounded up to two significant digits.
+            let mut s = spacing_m * (nodes as f64 / MAX_NODES as f64).cbrt();
+            while count(dims_at(s)) > MAX_NODES as u128 {
+                s *= 1.02;
+            }
+            let per = 10f64.powi(1 - s.log10().floor() as i32);
+            let s = (s * per).ceil() / per;
+            return Err(Error::Unusable {
+                param: Param { name, index: None },
+                value: spacing_m,
                 message: format!(
-                    "{}x{}x{} = {nodes} nodes exceed the {MAX_NODES} a map may have; use a larger spacing or smaller bounds",
+                    "m needs {}x{}x{} = {nodes} map nodes over these bounds, more than the {MAX_NODES} a map may have: use {name} >= {s} m or smaller bounds",
                     dims[0], dims[1], dims[2]
                 ),
             });
