@@ -13,7 +13,6 @@ use super::walk::{for_each_fragment_in, for_each_fragment_x4};
 use crate::error::Result;
 use crate::scene::camera::Camera;
 use glam::{Vec3, Vec4, Vec4Swizzles};
-use rayon::prelude::*;
 
 /// Rows per band of the float frame (a task).
 pub const BAND_ROWS: usize = 16;
@@ -161,7 +160,9 @@ impl Accumulator for ColourAccumulator<'_> {
     }
 }
 
-/// Per-pixel buffers the rain pass writes.
+/// Per-pixel buffers of a whole frame, for [`composite_streaks`] (the tests' whole-frame
+/// compositor; the output stages composite band by band).
+#[cfg(test)]
 pub struct RainTargets<'a> {
     /// Linear RGB, H·W·3, composited in place.
     pub rgb: &'a mut [f32],
@@ -181,7 +182,9 @@ pub fn bin_by_bands(cam: &Camera, streaks: &[ScreenStreak]) -> Result<(Vec<u32>,
 
 /// Composites prepared streaks (far to near, see [`crate::rain::streaks::prepare`]) over a
 /// whole frame, bands of rows in parallel; each band draws only the streaks binned to it.
+#[cfg(test)]
 pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], t: RainTargets<'_>) -> Result<()> {
+    use rayon::prelude::*;
     let w = cam.width as usize;
     let band = BAND_ROWS * w;
     let (offsets, indices) = bin_by_bands(cam, streaks)?;

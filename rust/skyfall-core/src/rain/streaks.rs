@@ -14,6 +14,7 @@
 
 use super::drops::Drop;
 use crate::error::Result;
+#[cfg(test)]
 use crate::particles::composite::{RainTargets, composite_streaks};
 use crate::particles::order::permute_in_place;
 use crate::particles::streak::{ScreenStreak, screen_streak};
@@ -176,7 +177,9 @@ impl RainFrame<'_> {
     }
 }
 
-/// Composites the drops' streaks over the frame, far to near, for a camera at rest.
+/// Composites the drops' streaks over the frame, far to near, for a camera at rest (the tests'
+/// whole-frame reference).
+#[cfg(test)]
 pub fn composite(
     cam: &Camera,
     drops: &[Drop],

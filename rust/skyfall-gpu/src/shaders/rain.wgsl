@@ -1,5 +1,5 @@
 // Rain streaks over the frame, per pixel over its tile's streaks (sorted far to near on the
-// CPU). CPU reference: skyfall_core::rain::splat (ScreenStreak::fragment, composite_streaks),
+// CPU). CPU reference: skyfall_core::particles (ScreenStreak::fragment, composite_band),
 // kept line for line comparable. Prepended with common.wgsl.
 
 struct RainParams {
