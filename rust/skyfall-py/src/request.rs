@@ -294,7 +294,7 @@ impl<'py> ParsedRequest<'py> {
     /// The core's request, borrowing the scene's arrays.
     pub fn request(&self) -> PyResult<FrameRequest<'_>> {
         let scene = match &self.arrays {
-            SceneArrays::Boxes(b) => SceneData::Boxes(b.clone()),
+            SceneArrays::Boxes(b) => SceneData::Boxes(b),
             SceneArrays::Photo {
                 rgb: Some(rgb),
                 depth_m,
@@ -302,7 +302,7 @@ impl<'py> ParsedRequest<'py> {
             } => SceneData::Photo {
                 rgb: rgb.as_slice()?,
                 depth_m: depth_m.as_slice()?,
-                occluders: occluders.clone(),
+                occluders,
             },
             SceneArrays::Photo {
                 rgb: None,
@@ -310,7 +310,7 @@ impl<'py> ParsedRequest<'py> {
                 occluders,
             } => SceneData::Photo8 {
                 depth_m: depth_m.as_slice()?,
-                occluders: occluders.clone(),
+                occluders,
             },
         };
         Ok(FrameRequest {
@@ -318,8 +318,8 @@ impl<'py> ParsedRequest<'py> {
             exposure_s: self.camera.exposure_s,
             camera_velocity_m_s: self.camera.velocity_m_s,
             scene,
-            lights: self.lights.clone(),
-            weather: self.weather.clone(),
+            lights: &self.lights,
+            weather: &self.weather,
             time_s: self.time_s,
             seed: self.seed,
             cull_threshold: self.cull_threshold,

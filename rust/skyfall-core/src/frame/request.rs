@@ -22,7 +22,7 @@ use std::sync::Arc;
 #[derive(Debug, Clone)]
 pub enum SceneData<'a> {
     /// The procedural box scene, ray cast.
-    Boxes(BoxScene),
+    Boxes(&'a BoxScene),
     /// A photo (linear RGB, H·W·3) with its depth map (H·W, m, inf = sky), and the boxes in its
     /// world that hide the sky from the drops.
     Photo {
@@ -31,14 +31,14 @@ pub enum SceneData<'a> {
         /// Depth, m.
         depth_m: &'a [f32],
         /// Occluders.
-        occluders: Vec<SceneBox>,
+        occluders: &'a [SceneBox],
     },
     /// An 8-bit photo's depth map and occluders (its bytes go to the 8-bit output stage).
     Photo8 {
         /// Depth, m.
         depth_m: &'a [f32],
         /// Occluders.
-        occluders: Vec<SceneBox>,
+        occluders: &'a [SceneBox],
     },
 }
 
@@ -54,9 +54,9 @@ pub struct FrameRequest<'a> {
     /// What it looks at.
     pub scene: SceneData<'a>,
     /// The scene's lamps and headlights.
-    pub lights: Vec<Light>,
+    pub lights: &'a [Light],
     /// The weather.
-    pub weather: Weather,
+    pub weather: &'a Weather,
     /// The frame's time, s.
     pub time_s: f64,
     /// The rain's seed.
@@ -122,7 +122,7 @@ impl FrameSetup {
         let rain = match w.rain_region(req.time_s, req.seed)? {
             Some(region) => {
                 let shading = RainShading {
-                    lights: req.lights.clone(),
+                    lights: req.lights.to_vec(),
                     sky_illuminance_lux: w.sky_illuminance_lux as f32,
                     cull_threshold: req.cull_threshold.map(|t| t as f32),
                     ambient: Some(Arc::clone(&req.ambient)),
@@ -132,15 +132,18 @@ impl FrameSetup {
             }
             None => None,
         };
-        let (ground, mut shelter) = match &req.scene {
-            SceneData::Boxes(b) => (b.ground, b.boxes.clone()),
+        let (ground, boxes): (bool, &[SceneBox]) = match &req.scene {
+            SceneData::Boxes(b) => (b.ground, &b.boxes),
             SceneData::Photo { occluders, .. } | SceneData::Photo8 { occluders, .. } => {
-                (false, occluders.clone())
+                (false, occluders)
             }
         };
-        if !w.rain_sheltered {
-            shelter.clear();
-        }
+        // The boxes that keep the rain off what they cover, when it rains and they do.
+        let shelter = if rain.is_some() && w.rain_sheltered {
+            boxes.to_vec()
+        } else {
+            Vec::new()
+        };
         let v = req.camera_velocity_m_s;
         Ok(FrameSetup {
             sky,
