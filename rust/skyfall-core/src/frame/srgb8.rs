@@ -188,33 +188,13 @@ pub fn render_photo8(
                                 c.fill(1.0);
                             }
                         }
-                        if grey {
-                            raster_tile::<1>(
-                                streaks,
-                                mine,
-                                y0,
-                                rows,
-                                w,
-                                cols.clone(),
-                                depth,
-                                p,
-                                q,
-                                cover,
-                            );
+                        // One Q plane when every light is grey, three otherwise.
+                        let raster = if grey {
+                            raster_tile::<1>
                         } else {
-                            raster_tile::<3>(
-                                streaks,
-                                mine,
-                                y0,
-                                rows,
-                                w,
-                                cols.clone(),
-                                depth,
-                                p,
-                                q,
-                                cover,
-                            );
-                        }
+                            raster_tile::<3>
+                        };
+                        raster(streaks, mine, y0, rows, w, cols.clone(), depth, p, q, cover);
                     }
                     let t_seg = &mut t_row[..cols.len()];
                     for row in 0..rows {
