@@ -157,3 +157,10 @@ def real(name: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a real number, got {type(value).__name__}")
     return float(value)
+
+
+def flag(name: str, value: Any) -> bool:
+    """A switch: a bool or numpy bool only (``"no"`` or 0 would turn a switch on or off by accident)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
+    return bool(value)

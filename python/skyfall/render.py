@@ -20,10 +20,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core, io, sky
-from skyfall._validate import choice, in_range, integer, real
+from skyfall._validate import choice, flag, in_range, integer, real
 from skyfall.camera import Camera
 from skyfall.scenes import BoxScene, PhotoScene
-from skyfall.scenes import _flag  # (a bool or np.bool_, TypeError otherwise; move to _validate)
 from skyfall.weather import Weather
 
 if TYPE_CHECKING:
@@ -549,7 +548,7 @@ class Renderer:
         keyword arguments every frame is rendered with."""
         weather = weather if weather is not None else Weather()
         times = _frame_times(n_frames, fps, start_s)
-        show = _flag("progress", progress)
+        show = flag("progress", progress)
         self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples)
         options: dict[str, Any] = dict(
             camera=camera, seed=seed, cull_threshold=cull_threshold, ambient_spacing_m=ambient_spacing_m, ambient_samples=ambient_samples

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from skyfall._validate import flag as _flag
 from skyfall._validate import float_array, integer, real
 from skyfall.camera import Camera
 from skyfall.io import decode_srgb, decode_srgb8
@@ -66,13 +67,6 @@ class BoxScene:
 
 BOX_KEYS = ("min", "max", "albedo")
 """The keys of a box's dict (:func:`boxes`)."""
-
-
-def _flag(name: str, value: Any) -> bool:
-    """A switch: a bool or numpy bool only (``"no"`` or 0 would turn a switch on or off by accident)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise TypeError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
-    return bool(value)
 
 
 def _camera(value: Any) -> Camera | None:

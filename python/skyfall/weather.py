@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core
-from skyfall._validate import all_in_range, choice, float_array, in_range, inside
+from skyfall._validate import all_in_range, choice, flag, float_array, in_range, inside
 
 __all__ = ["Weather"]
 
@@ -99,10 +99,8 @@ class Weather:
         object.__setattr__(self, "rain_near_m", near)
         object.__setattr__(self, "rain_diameters_mm", diams)
         choice("rain_method", self.rain_method, ("drops", "billboards"))
-        for flag in ("rain_streaks", "rain_sheltered"):
-            if not isinstance(getattr(self, flag), (bool, np.bool_)):
-                raise TypeError(f"{flag} must be a bool, got {type(getattr(self, flag)).__name__}")
-            object.__setattr__(self, flag, bool(getattr(self, flag)))
+        for name in ("rain_streaks", "rain_sheltered"):
+            object.__setattr__(self, name, flag(name, getattr(self, name)))
         object.__setattr__(self, "rain_rate_mm_h", r)
         object.__setattr__(self, "visibility_m", v)
         object.__setattr__(self, "sky_illuminance_lux", e)
