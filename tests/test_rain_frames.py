@@ -21,7 +21,7 @@ def renderer(request: pytest.FixtureRequest) -> Renderer:
 def open_air(depth: float = np.inf) -> PhotoScene:
     img = np.full((H, W, 3), 0.1, np.float32)
     cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0)
-    return PhotoScene(img, np.full((H, W), depth, np.float32), camera=cam, encoding="linear")
+    return PhotoScene(img, np.full((H, W), depth, np.float32), camera=cam, encoding="linear", airlight="sky")
 
 
 def test_no_rain_is_the_haze_only_frame(renderer):
@@ -49,7 +49,7 @@ def test_opacity_area_matches_the_drops_seen(renderer, exposure_s):
     weather = Weather(rain_rate_mm_h=20.0, rain_near_m=4.0, rain_method="drops")
     img = np.full((H, W, 3), 0.1, np.float32)
     cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0, exposure_s=exposure_s)
-    scene = PhotoScene(img, np.full((H, W), np.inf, np.float32), camera=cam, encoding="linear")
+    scene = PhotoScene(img, np.full((H, W), np.inf, np.float32), camera=cam, encoding="linear", airlight="sky")
     frame = renderer.render(scene, weather, seed=2)
     cam = scene.camera
     d = rain.drops(cam.position_m, weather, seed=2, ground=False)
@@ -141,8 +141,8 @@ def test_longer_exposures_give_longer_streaks_of_the_same_opacity_area(renderer)
     long = Camera((0.0, 1.6, 0.0), exposure_s=1 / 30)
     img = np.full((H, W, 3), 0.1, np.float32)
     inf = np.full((H, W), np.inf, np.float32)
-    a = renderer.render(PhotoScene(img, inf, camera=short, encoding="linear"), w, seed=1).layers["rain_alpha"]
-    b = renderer.render(PhotoScene(img, inf, camera=long, encoding="linear"), w, seed=1).layers["rain_alpha"]
+    a = renderer.render(PhotoScene(img, inf, camera=short, encoding="linear", airlight="sky"), w, seed=1).layers["rain_alpha"]
+    b = renderer.render(PhotoScene(img, inf, camera=long, encoding="linear", airlight="sky"), w, seed=1).layers["rain_alpha"]
 
     def vertical_correlation(x: np.ndarray, lag: int = 6) -> float:
         x = x - x.mean()
@@ -159,7 +159,7 @@ def test_streaks_are_lit_by_the_sky(renderer, background):
     # darkens one brighter than I_R; where one streak covers a pixel with a, the change is
     # a r (I_R - C). Background 20 m away, behind the 5 m rain region.
     img = np.full((H, W, 3), background, np.float32)
-    scene = PhotoScene(img, np.full((H, W), 20.0, np.float32), camera=Camera((0.0, 1.6, 0.0)), encoding="linear")
+    scene = PhotoScene(img, np.full((H, W), 20.0, np.float32), camera=Camera((0.0, 1.6, 0.0)), encoding="linear", airlight="sky")
     w = Weather(rain_rate_mm_h=50.0)
     clear = renderer.render(scene, Weather(rain_rate_mm_h=50.0, rain_near_m=1e-3), seed=1)  # haze, (almost) no streaks
     wet = renderer.render(scene, w, seed=1)
@@ -229,7 +229,7 @@ def test_rain_beyond_the_memory_budget_is_refused(renderer):
 def dusk_scene(lights=()):
     img = np.full((H, W, 3), 0.05, np.float32)
     cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0)
-    return PhotoScene(img, np.full((H, W), 30.0, np.float32), camera=cam, lights=tuple(lights), encoding="linear")
+    return PhotoScene(img, np.full((H, W), 30.0, np.float32), camera=cam, lights=tuple(lights), encoding="linear", airlight="sky")
 
 
 def test_streaks_near_a_lamp_are_brighter(renderer):
@@ -315,9 +315,9 @@ def test_a_moving_camera_sees_the_drops_relative_motion(renderer):
     img = np.full((H, W, 3), 0.1, np.float32)
     inf = np.full((H, W), np.inf, np.float32)
     w = Weather(rain_rate_mm_h=30.0, rain_near_m=3.0)
-    still = renderer.render(PhotoScene(img, inf, camera=Camera((0.0, 1.6, 0.0)), encoding="linear"), w, seed=6).layers["rain_alpha"]
+    still = renderer.render(PhotoScene(img, inf, camera=Camera((0.0, 1.6, 0.0)), encoding="linear", airlight="sky"), w, seed=6).layers["rain_alpha"]
     moving_cam = Camera((0.0, 1.6, 0.0), velocity_m_s=(25.0, 0.0, 0.0))
-    moving = renderer.render(PhotoScene(img, inf, camera=moving_cam, encoding="linear"), w, seed=6).layers["rain_alpha"]
+    moving = renderer.render(PhotoScene(img, inf, camera=moving_cam, encoding="linear", airlight="sky"), w, seed=6).layers["rain_alpha"]
     assert lag_corr(still, 0) > lag_corr(still, 1)
     assert lag_corr(moving, 1) > lag_corr(moving, 0)
     with pytest.raises(ValueError, match="velocity_m_s"):
@@ -331,7 +331,7 @@ def test_billboards_carry_the_drops_mean_opacity(renderer):
     # all. The billboards widen their streaks to carry the drops' expected opacity: over 24
     # seeds the two means agree to within their noise (1.1 % std of the ratio at this size).
     img = np.full((H, W, 3), 0.1, np.float32)
-    scene = PhotoScene(img, np.full((H, W), np.inf, np.float32), camera=Camera((0.3, 1.6, 0.2)), encoding="linear")
+    scene = PhotoScene(img, np.full((H, W), np.inf, np.float32), camera=Camera((0.3, 1.6, 0.2)), encoding="linear", airlight="sky")
 
     def mean_alpha(method: str) -> float:
         w = Weather(rain_rate_mm_h=20.0, rain_method=method)

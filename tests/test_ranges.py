@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skyfall import Camera, PointLight, Renderer, SpotLight, Weather, _core, physics, rain, scenes, sky
+from skyfall import Camera, PhotoScene, PointLight, Renderer, SpotLight, Weather, _core, physics, rain, scenes, sky
 
 RANGES = _core.RANGES
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -90,6 +90,10 @@ DOCUMENTED: list[tuple[Any, str]] = [
     (SpotLight, "intensity_cd"),
     (SpotLight, "cone_deg"),
     (SpotLight, "color"),
+    (PhotoScene, "vertical_fov_deg"),
+    (PhotoScene, "airlight"),
+    (PhotoScene, "camera_height_m"),
+    (PhotoScene, "horizon_row"),
     (Renderer, "width"),
     (Renderer, "height"),
     (Renderer.render, "time_s"),
@@ -177,6 +181,7 @@ def test_table_shape() -> None:
 
 _tiny = Renderer(8, 6, backend="cpu")
 _street = scenes.street()
+_photo = np.full((6, 8, 3), 128, np.uint8)
 
 INTEGERS = {"width", "height", "seed", "samples", "ambient_samples", "sky", "size_px"}
 
@@ -223,6 +228,9 @@ PUBLIC: dict[str, Callable[[Any], object]] = {
     "relative_humidity": lambda v: physics.air_density_kg_m3(20.0, 1000.0, v),
     "d_min_mm": lambda v: physics.drops_per_m3(10.0, v, 9.0),
     "size_px": lambda v: rain.textures([10.0], [1.0], size_px=v),
+    "airlight": lambda v: PhotoScene(_photo, airlight=(0.5, v, 0.5)),
+    "camera_height_m": lambda v: PhotoScene(_photo, camera_height_m=v),
+    "horizon_row": lambda v: PhotoScene(_photo, horizon_row=v),
 }
 
 

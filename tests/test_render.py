@@ -26,11 +26,12 @@ def cpu() -> Renderer:
 
 
 def photo(seed: int = 0) -> PhotoScene:
+    """A random photo in the renderer's relative units (the weather's own airlight)."""
     rng = np.random.default_rng(seed)
     img = rng.uniform(0, 1, (H, W, 3)).astype(np.float32)
     depth = rng.uniform(0.5, 3000, (H, W)).astype(np.float32)
     depth[:10] = np.inf
-    return PhotoScene(img, depth, vertical_fov_deg=50.0, encoding="linear")
+    return PhotoScene(img, depth, vertical_fov_deg=50.0, encoding="linear", airlight="sky")
 
 
 def ssim(a: np.ndarray, b: np.ndarray) -> float:
@@ -38,14 +39,21 @@ def ssim(a: np.ndarray, b: np.ndarray) -> float:
     return float(structural_similarity(a, b, data_range=rng, channel_axis=-1 if a.ndim == 3 else None))
 
 
-def numpy_haze(img, depth, cam, sigma, air):
-    """Yamamoto & Tadamura eq. 2 written independently: distance along each pixel's ray from the camera."""
+def numpy_haze(img, depth, cam, sigma, air, ceiling_m=np.inf):
+    """Yamamoto & Tadamura eq. 2 written independently: distance along each pixel's ray from
+    the camera; a sky pixel's path ends at the cloud base, a shell ``ceiling_m`` above the eye
+    (its elevation from the world ray R (u, -v, -1))."""
     fx, fy, cx, cy = cam.intrinsics()
     y, x = np.mgrid[0 : depth.shape[0], 0 : depth.shape[1]] + 0.5
-    per_depth = np.sqrt(((x - cx) / fx) ** 2 + ((y - cy) / fy) ** 2 + 1.0)
-    with np.errstate(invalid="ignore"):
+    u, v = (x - cx) / fx, (y - cy) / fy
+    per_depth = np.sqrt(u**2 + v**2 + 1.0)
+    ray = np.stack([u, -v, -np.ones_like(u)], axis=-1) @ cam.rotation.T
+    sin_el = ray[..., 1] / per_depth
+    r = 6.371e6  # the cloud base is a shell over the Earth's sphere
+    with np.errstate(invalid="ignore", over="ignore"):
         t = np.exp(-sigma * depth.astype(np.float64) * per_depth)
-    t = np.where(np.isinf(depth), 0.0, t)
+        t_sky = np.exp(-sigma * (np.sqrt((r + ceiling_m) ** 2 - r**2 * (1 - sin_el**2)) - r * sin_el))
+    t = np.where(np.isinf(depth), t_sky, t)
     return img * t[..., None] + air * (1 - t[..., None]), t
 
 
@@ -85,11 +93,17 @@ def test_haze_matches_independent_formula(backend, cpu, gpu):
     sigma = 3.912 / 1500.0 + float(skyfall.physics.rain_extinction_per_m(50.0))
     assert weather.extinction_per_m == pytest.approx(sigma)
     frame = r.render(scene, weather)
-    want, t = numpy_haze(scene.image, scene.depth_m, scene.camera, sigma, 3 / 7)
+    # The airlight is the overcast cloud base's horizon luminance, between its clear 3/7 and
+    # the uniform 1 of a sky lost in the rain; sky pixels are hazed up to the cloud base.
+    air = weather.airlight_relative
+    assert 3 / 7 < air < 1
+    want, t = numpy_haze(scene.image, scene.depth_m, scene.camera, sigma, air, weather.cloud_base_height_m)
     np.testing.assert_allclose(frame.rgb, want, atol=3e-6)
     np.testing.assert_allclose(frame.layers["transmittance"], t, atol=3e-6)
-    # Sky pixels (depth inf) are pure airlight: the overcast sky's horizon luminance, 3/7.
-    np.testing.assert_allclose(frame.rgb[:10], 3 / 7, atol=1e-6)
+    # ... and a photo with its own airlight gets that one, the same law.
+    own = r.render(PhotoScene(scene.image, scene.depth_m, vertical_fov_deg=50.0, encoding="linear", airlight=(0.2, 0.3, 0.4)), weather)
+    want_own, _ = numpy_haze(scene.image, scene.depth_m, scene.camera, sigma, np.array([0.2, 0.3, 0.4]), weather.cloud_base_height_m)
+    np.testing.assert_allclose(own.rgb, want_own, atol=3e-6)
 
 
 @pytest.mark.parametrize("backend", ["cpu", "gpu"])
@@ -139,9 +153,10 @@ def test_koschmieder_contrast_at_the_visibility_distance(cpu):
     cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=40.0)
     img = np.zeros((H, W, 3), np.float32)
     depth = np.full((H, W), 1000.0, np.float32)
-    frame = cpu.render(PhotoScene(img, depth, camera=cam, encoding="linear"), Weather(visibility_m=1000.0))
+    weather = Weather(visibility_m=1000.0)
+    frame = cpu.render(PhotoScene(img, depth, camera=cam, encoding="linear", airlight="sky"), weather)
     centre = frame.rgb[H // 2, W // 2, 0]
-    air = 3 / 7
+    air = weather.airlight_relative
     # the centre pixel is half a pixel off axis: its ray is a hair longer than 1000 m.
     assert (air - centre) / air == pytest.approx(0.02, rel=1e-3)
 
@@ -272,12 +287,16 @@ def test_without_vulkan_gpu_is_a_clear_error_and_auto_falls_back():
 def test_dense_fog_shows_the_airlight_in_the_sky(backend, weather):
     # Optical depths of hundreds below the cloud base: the cloud base must be e^(sigma H) times
     # brighter than E to light the ground through it (1e44 at 60 m visibility; these frames
-    # were NaN in the sky, or refused with "airlight = NaN"). Sky pixels (d = inf) are the
-    # airlight, AIRLIGHT_RELATIVE times the sky illuminance at the camera (1 in the open).
+    # were NaN in the sky, or refused with "airlight = NaN"). Now the sky is the airlight, and
+    # lost in so much rain the airlight is the uniform sky's E/pi (times the sky illuminance at
+    # the camera, 1 in the open).
     r = Renderer(32, 24, backend=backend)
     f = r.render(scenes.street(), weather)
     assert np.isfinite(f.rgb).all()
     sky = np.isinf(f.depth_m) & (f.layers.get("rain_alpha", 0.0) == 0)  # streaks aside
     assert sky.any()
-    np.testing.assert_allclose(f.rgb[sky], skyfall._core.AIRLIGHT_RELATIVE, rtol=1e-3)
+    assert weather.airlight_relative == pytest.approx(1.0, rel=1e-6)
+    street = scenes.street()
+    e_view = skyfall.sky.horizontal_illuminance(street.camera.position_m, street, weather=weather, samples=skyfall.sky.MAP_SAMPLES)[0]
+    np.testing.assert_allclose(f.rgb[sky], e_view / weather.sky_illuminance_lux, rtol=2e-3)
     assert np.isfinite(r.render(scenes.empty(), weather).rgb).all()

@@ -58,10 +58,19 @@ def test_haze_matches_numpy_and_colour_science(cpu):
     got = cpu.render_srgb8(scene, weather)
     fx, fy, cx, cy = scene.camera.intrinsics()
     y, x = np.mgrid[0:H, 0:W] + 0.5
-    dist = scene.depth_m.astype(np.float64) * np.sqrt(((x - cx) / fx) ** 2 + ((y - cy) / fy) ** 2 + 1)
-    with np.errstate(invalid="ignore"):
-        t = np.where(np.isinf(dist), 0.0, np.exp(-sigma * dist))[..., None]
-    linear = colour.cctf_decoding(scene.srgb8 / 255.0, function="sRGB") * t + 3 / 7 * (1 - t)
+    u, v = (x - cx) / fx, (y - cy) / fy
+    per_depth = np.sqrt(u**2 + v**2 + 1)
+    dist = scene.depth_m.astype(np.float64) * per_depth
+    # a sky pixel is hazed up to the cloud base above the eye, a shell over the Earth's sphere
+    # (a level camera: sin el = -v / |ray|)
+    sin_el, r = -v / per_depth, 6.371e6
+    ceiling = weather.cloud_base_height_m - 1.6
+    with np.errstate(invalid="ignore", over="ignore"):
+        t_sky = np.exp(-sigma * (np.sqrt((r + ceiling) ** 2 - r**2 * (1 - sin_el**2)) - r * sin_el))
+        t = np.where(np.isinf(dist), t_sky, np.exp(-sigma * dist))[..., None]
+    # the airlight is the photo's own, estimated from it (He, Sun & Tang)
+    air = np.array(scene.airlight_linear)
+    linear = colour.cctf_decoding(scene.srgb8 / 255.0, function="sRGB") * t + air * (1 - t)
     want = np.round(255 * colour.cctf_encoding(np.clip(linear, 0, 1), function="sRGB")).astype(int)
     diff = np.abs(got.astype(int) - want)
     assert diff.max() <= 1 and np.mean(diff > 0) < 1e-3

@@ -108,16 +108,25 @@ def test_sky_inputs_are_checked():
         sky.ambient_light_map(scenes.street(), spacing_m=0.05)
 
 
-def test_rain_darkens_the_low_sky_but_keeps_e():
+def test_rain_flattens_the_sky_towards_its_airlight_but_keeps_e():
     wet = Weather(rain_rate_mm_h=50.0)
     assert wet.cloud_base_height_m == pytest.approx(1500 - 250 * np.log1p(50.0))
-    el = np.array([5.0, 30.0, 90.0])
-    ratio = sky.luminance(el, 0.0, weather=wet) / sky.luminance(el, 0.0)
-    assert ratio[0] < ratio[1] < ratio[2]
-    # tau = exp(-sigma H / sin(el)) relative between directions, as documented.
-    sigma, h = wet.extinction_per_m, wet.cloud_base_height_m
-    tau = np.exp(-sigma * h / np.sin(np.radians(el)))
-    np.testing.assert_allclose(ratio / ratio[-1], tau / tau[-1], rtol=1e-5)
+    el = np.array([0.0, 5.0, 30.0, 90.0])
+    clear = sky.luminance(el, 0.0)
+    seen = sky.luminance(el, 0.0, weather=wet)
+    # L = s (l tau + l_h (1 - tau)), tau = exp(-sigma d): the cloud base's overcast shape
+    # l = (1 + 2 sin el) / 3 attenuated along the path d to a base H up on the Earth's sphere,
+    # plus the in-scattered light saturating at its horizon luminance l_h = 1/3, as
+    # documented; s keeps E.
+    sigma, h, r = wet.extinction_per_m, wet.cloud_base_height_m, 6.371e6
+    g = np.radians(el)
+    tau = np.exp(-sigma * (np.sqrt((r + h) ** 2 - (r * np.cos(g)) ** 2) - r * np.sin(g)))
+    shape = (1 + 2 * np.sin(np.radians(el))) / 3
+    model = shape * tau + (1 - tau) / 3
+    np.testing.assert_allclose(seen / seen[-1], model / model[-1], rtol=1e-5)
+    assert tau[0] < 1e-100  # 91 km of 50 mm/h rain along the horizon
+    assert seen[0] == pytest.approx(wet.airlight_relative * wet.sky_illuminance_lux / np.pi, rel=1e-6)
+    assert seen[1] > clear[1] and seen[-1] < clear[-1]  # the low sky brightens, the zenith dims
     assert sky.horizontal_illuminance([0, 0, 0], weather=wet)[0] == pytest.approx(wet.sky_illuminance_lux, rel=1e-3)
 
 
@@ -148,9 +157,35 @@ def test_rain_attenuation_enters_the_occluded_integral():
     dry = canyon_illuminance(0.0, 12.0, 10.0)
     got = sky.horizontal_illuminance([0.0, 0.0, 0.0], canyon(12.0, 10.0), weather=wet)[0]
     assert got / E == pytest.approx(ref, rel=1e-3)
-    # E is held fixed and rain moves the sky's light towards the zenith, which the canyon floor
-    # sees: its share of E grows (0.44 dry, 0.62 at 30 mm/h here).
-    assert ref > dry + 0.1
+    # E is held fixed and the rain scatters the cloud base's light into every direction: the
+    # sky flattens, and the canyon floor, which sees only the high sky, gets a smaller share
+    # of E (0.438 dry, 0.408 at 30 mm/h here).
+    assert ref < dry - 0.02
+
+
+def test_a_canyon_floor_darkens_in_rain_and_an_open_wall_tends_to_the_uniform_sky():
+    # H/W = 2, the issue's case: floor 0.28 E dry; it rose to 0.38 at 10 mm/h and 0.54 at
+    # 1 km visibility under the attenuation-only sky. Now the rain flattens the sky towards
+    # its airlight: past a bump of at most 1.6 % in drizzle (sigma H ~ 0.3: to first order the
+    # in-scattered light at the horizon luminance takes the same amount off every direction,
+    # a little more off the low sky than it adds back) the floor's share falls monotonically
+    # towards the uniform sky's. An open wall's (after a dip under 1 %) rises to the uniform sky's E/2.
+    street = canyon(20.0, 10.0)
+    weathers = [Weather(rain_rate_mm_h=r) for r in (0.0, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0)] + [Weather(visibility_m=v) for v in (1000.0, 50.0)]
+    depth = [w.extinction_per_m * w.cloud_base_height_m for w in weathers]
+    assert depth == sorted(depth)
+    floors = [sky.horizontal_illuminance([0.0, 0.0, 0.0], street, weather=w)[0] / w.sky_illuminance_lux for w in weathers]
+    walls = [sky.horizontal_illuminance([0.0, 1.0, 0.0], weather=w, normal="+x")[0] / w.sky_illuminance_lux for w in weathers]
+    for w, f in zip(weathers[:5], floors):
+        ref = canyon_illuminance(0.0, 20.0, 10.0, extinction_per_m=w.extinction_per_m, cloud_base_m=w.cloud_base_height_m)
+        assert f == pytest.approx(ref, rel=1e-3)
+    assert max(floors) <= floors[0] * 1.016, floors
+    assert all(f < floors[0] for f in floors[4:]), floors  # from 10 mm/h on, below the dry floor
+    assert all(b <= a for a, b in zip(floors[2:], floors[3:])), floors
+    assert floors[-1] < 0.25
+    assert walls[0] == pytest.approx(3 / 14 + 4 / (7 * np.pi), rel=1e-3)  # the clear overcast sky's
+    assert min(walls) >= walls[0] * 0.99 and all(b >= a for a, b in zip(walls[2:], walls[3:])), walls
+    assert walls[-1] == pytest.approx(0.5, rel=1e-3)
 
 
 def test_points_inside_boxes_see_no_sky_and_roofs_see_all():
@@ -237,7 +272,7 @@ def renderer(request) -> Renderer:
 def roofed_photo(roof: bool) -> PhotoScene:
     """A black photo (so a streak shows r I_R alone) under a roof over the left half (x < 0)."""
     occ = [{"min": (-30.0, 1.5, -30.0), "max": (0.0, 1.8, 30.0)}] if roof else []
-    return PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), vertical_fov_deg=60.0, occluders=occ, encoding="linear")
+    return PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), vertical_fov_deg=60.0, occluders=occ, encoding="linear", airlight="sky")
 
 
 def test_streaks_under_a_roof_are_darker(renderer):
@@ -316,13 +351,16 @@ def test_haze_airlight_follows_the_viewpoint_illuminance():
     # Yamamoto & Tadamura: Is = ks E_hv. Under a roof the camera's airlight is dimmer than in the open.
     w = Weather(rain_rate_mm_h=20.0, rain_streaks=False)
     r = Renderer(W, H, backend="cpu")
-    open_sky = r.render(roofed_photo(False), w).rgb[0, 0, 0]
+    # A black photo's sky pixel, hazed up to the cloud base: A (1 - t).
+    f = r.render(roofed_photo(False), w)
+    open_sky = f.rgb[0, 0, 0] / (1 - f.layers["transmittance"][0, 0])
     occ = [{"min": (-30.0, 0.5, -30.0), "max": (30.0, 0.8, 30.0)}]
-    under = PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), occluders=occ, encoding="linear")
-    roofed = r.render(under, w).rgb[0, 0, 0]
-    assert open_sky == pytest.approx(3 / 7, rel=1e-3)
+    under = PhotoScene(np.zeros((H, W, 3), np.float32), np.full((H, W), np.inf, np.float32), occluders=occ, encoding="linear", airlight="sky")
+    g = r.render(under, w)
+    roofed = g.rgb[0, 0, 0] / (1 - g.layers["transmittance"][0, 0])
+    assert open_sky == pytest.approx(w.airlight_relative, rel=1e-3)
     e_view = sky.horizontal_illuminance([0, 0, 0], under, weather=w, samples=sky.MAP_SAMPLES)[0] / w.sky_illuminance_lux
-    assert roofed == pytest.approx(3 / 7 * e_view, rel=1e-4)
+    assert roofed == pytest.approx(w.airlight_relative * e_view, rel=1e-4)
     assert e_view < 0.2
 
 

@@ -13,8 +13,11 @@ __all__ = [
     "apply_lut8",
     "encode_srgb8",
     "rain_drops",
-    "AIRLIGHT_RELATIVE",
     "KOSCHMIEDER",
+    "AIRLIGHT_PATCH_PX",
+    "AIRLIGHT_TOP_FRACTION",
+    "atmospheric_light_pixel",
+    "dark_channel",
     "AMBIENT_EXTENT_M",
     "FRAME_BUDGET_BYTES",
     "AmbientLightMap",
@@ -57,8 +60,12 @@ RANGE_MEANINGS: dict[str, str]
 
 def check_range(name: str, value: float, index: int | None = None) -> float: ...
 
-AIRLIGHT_RELATIVE: float
 KOSCHMIEDER: float
+AIRLIGHT_PATCH_PX: int
+AIRLIGHT_TOP_FRACTION: float
+
+def dark_channel(image: NDArray[np.uint8] | NDArray[np.float32], patch_px: int) -> NDArray[np.float32]: ...
+def atmospheric_light_pixel(image: NDArray[np.uint8] | NDArray[np.float32], patch_px: int, top_fraction: float) -> tuple[int, int]: ...
 AMBIENT_EXTENT_M: float
 FRAME_BUDGET_BYTES: int
 
@@ -90,7 +97,7 @@ def render_photo8(
     *,
     rain_alpha_out: NDArray[np.float32] | None = None,
 ) -> dict[str, int]: ...
-def weather_optics(weather: Weather) -> tuple[float, float, float, float]: ...
+def weather_optics(weather: Weather) -> tuple[float, float, float, float, float]: ...
 
 def cloud_base_m(rain_rate_mm_h: float) -> float: ...
 @final

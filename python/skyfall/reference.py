@@ -36,7 +36,10 @@ def canyon_illuminance(
 
     An independent reference for :func:`skyfall.sky.horizontal_illuminance` (adaptive scipy
     quadrature, not skyfall's sampler): the CIE standard overcast sky,
-    L = Lz (1 + 2 sin g) / 3, attenuated by tau = exp(-sigma H / sin g), over the directions
+    L = Lz (1 + 2 sin g) / 3, seen through the rain as L tau + Lz / 3 (1 - tau) (attenuated
+    by tau = exp(-sigma d(g)) along the path d to a cloud base H up on the Earth's sphere,
+    sqrt((R + H)^2 - (R cos g)^2) - R sin g, plus the light scattered into the path, which saturates at
+    the cloud base's horizon luminance Lz / 3: :mod:`skyfall.sky`), over the directions
     that clear walls of height ``height_m`` at x = +-width_m / 2 (the canyon runs along Z),
     seen from the point (``x_m``, 0, z); divided by the same integral over the open sky.
     Needs scipy.
@@ -47,8 +50,10 @@ def canyon_illuminance(
         raise ImportError("skyfall.reference.canyon_illuminance needs scipy: pip install scipy") from exc
 
     def radiance(g: float) -> float:
-        tau = float(np.exp(-extinction_per_m * cloud_base_m / np.sin(g))) if extinction_per_m > 0 else 1.0
-        return float((1 + 2 * np.sin(g)) / 3 * tau * np.sin(g) * np.cos(g))
+        r = 6.371e6
+        path = np.sqrt((r + cloud_base_m) ** 2 - (r * np.cos(g)) ** 2) - r * np.sin(g)
+        tau = float(np.exp(-extinction_per_m * path)) if extinction_per_m > 0 else 1.0
+        return float(((1 + 2 * np.sin(g)) / 3 * tau + (1 - tau) / 3) * np.sin(g) * np.cos(g))
 
     def over_elevation(phi: float, h: float) -> float:
         sx = np.sin(phi)  # horizontal direction (sin phi, 0, -cos phi)

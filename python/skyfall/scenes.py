@@ -17,10 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall._validate import flag as _flag
-from skyfall._validate import float_array, integer, real
+from skyfall._validate import all_in_range, float_array, integer, real
 from skyfall.camera import Camera
 from skyfall.io import decode_srgb, decode_srgb8
 from skyfall.lights import PointLight, SpotLight
+from skyfall.photo import estimate_airlight, ground_plane_depth, level_camera
 
 __all__ = ["BoxScene", "PhotoScene", "boxes", "empty", "street"]
 
@@ -277,6 +278,21 @@ def _at_least_zero(name: str, a: NDArray[np.float32], unit: str, *, finite: bool
         raise ValueError(f"{name}[{', '.join(map(str, at))}] = {a[at]} is outside the valid range {valid}{unit}")
 
 
+def _airlight(value: Any) -> str | tuple[float, float, float]:
+    """``"estimate"``, ``"sky"``, or three linear values >= 0 (one is taken as grey)."""
+    if isinstance(value, str):
+        if value not in ("estimate", "sky"):
+            raise ValueError(f"airlight = {value!r} must be \"estimate\", \"sky\" or 3 linear RGB values")
+        return value
+    a = float_array("airlight", value).reshape(-1)
+    if a.size == 1:
+        a = np.repeat(a, 3)
+    if a.size != 3:
+        raise ValueError(f"airlight must be \"estimate\", \"sky\" or 3 linear RGB values, got {a.size} values")
+    a = all_in_range("airlight", a)
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
 @dataclass(frozen=True)
 class PhotoScene:
     """A photo with its depth map: how datasets are made from real images.
@@ -288,10 +304,13 @@ class PhotoScene:
         :meth:`skyfall.Renderer.render_srgb8`'s fused 8-bit path) and decoded to linear with
         the sRGB transfer function when ``image`` is first read; or floats (any float dtype,
         stored as float32) whose encoding ``encoding`` states.
-    depth_m : array_like, shape (H, W)
+    depth_m : array_like, shape (H, W), optional
         Depth along the optical axis, >= 0: metres for a float map (``inf`` marks sky), or
         integer units of ``depth_scale_m`` (uint16 millimetres, as depth sensors write them,
-        with ``depth_scale_m=0.001``). From a sensor or a depth estimator.
+        with ``depth_scale_m=0.001``). From a sensor or a depth estimator. Left out, the
+        photo is taken to show a level ground below its horizon and sky above it
+        (:func:`skyfall.photo.ground_plane_depth`, seen by ``camera`` or by a camera
+        ``camera_height_m`` up whose horizon is ``horizon_row``).
     encoding : {"linear", "srgb"}, optional
         How float pixels are encoded, required for a float image (no guess: scikit-image's
         ``img_as_float`` gives sRGB-encoded floats, a skyfall frame's ``rgb`` is linear light):
@@ -304,7 +323,7 @@ class PhotoScene:
         missing readings yourself, e.g. as ``inf`` in a float map.
     camera : Camera, optional
         The camera that took the photo; by default one at the origin looking along -Z with
-        ``vertical_fov_deg``.
+        ``vertical_fov_deg`` (without a depth map: ``camera_height_m`` above the ground).
     vertical_fov_deg : float
         Vertical field of view, degrees, in [0.001, 179), when no camera is given (a given
         camera has its own).
@@ -317,6 +336,23 @@ class PhotoScene:
         camera. Drops beneath them receive less sky light (:mod:`skyfall.sky`). The depth map
         is not turned into occluders: seen from one viewpoint it says nothing of what hangs
         over a drop.
+    airlight : "estimate", "sky" or array_like of 3 float
+        The photo's airlight, the light its rain and mist tend to with distance (and its sky
+        at the horizon), linear RGB in the photo's own units, each in [0, 1e6]: everything
+        the weather adds is put in these units, the haze's airlight and the drops' and lamps'
+        light alike, so a dusk photo stays dusky and a photo at a quarter of the exposure
+        gets a quarter of the light. ``"estimate"`` (default): the photo's horizon sky, the
+        median of its lowest sky pixels, or He, Sun & Tang's atmospheric light where the depth
+        map shows no sky (:func:`skyfall.photo.estimate_airlight`; give it yourself for a
+        photo without sky). ``"sky"``: the photo is in the renderer's relative units
+        (1 = E/pi, e.g. a skyfall frame's ``rgb``) and the weather's own airlight applies.
+    camera_height_m : float, optional
+        Without a depth map and a camera: the camera's height above the ground, m, in
+        (0, 1e4] (default 1.6).
+    horizon_row : float, optional
+        Without a depth map and a camera: the image row of the level horizon, px from the top,
+        in [-1e9, 1e9] (pixel centres at k + 0.5; default the middle, a level camera). It sets
+        the pitch, which must stay within [-89, 89] degrees.
     """
 
     depth_m: NDArray[np.float32]
@@ -324,11 +360,12 @@ class PhotoScene:
     lights: tuple[PointLight | SpotLight, ...]
     occluders: NDArray[np.float32]
     srgb8: NDArray[np.uint8] | None = field(repr=False)
+    airlight: str | tuple[float, float, float]
 
     def __init__(
         self,
         image: Any,
-        depth_m: Any,
+        depth_m: Any = None,
         *,
         camera: Camera | None = None,
         vertical_fov_deg: float = 60.0,
@@ -336,6 +373,9 @@ class PhotoScene:
         occluders: Sequence[Mapping[str, Any]] = (),
         depth_scale_m: float | None = None,
         encoding: str | None = None,
+        airlight: Any = "estimate",
+        camera_height_m: float | None = None,
+        horizon_row: float | None = None,
     ) -> None:
         img = _array("image", image, "a file: read it with skyfall.io.read_image")
         if img.dtype != np.uint8 and img.dtype.kind != "f":
@@ -365,6 +405,34 @@ class PhotoScene:
                 lin = decode_srgb(lin)
             _at_least_zero("image", lin, " (linear RGB)", finite=True)
             self.__dict__["image"] = lin  # the cached value of the `image` property
+        h, w = img.shape[:2]
+        fov = real("vertical_fov_deg", vertical_fov_deg)
+        cam = _camera(camera)
+        if depth_m is None:
+            if cam is not None and (camera_height_m is not None or horizon_row is not None):
+                raise ValueError("give either a camera or camera_height_m / horizon_row: the camera has its own height and pitch")
+            if cam is None:
+                height_m = 1.6 if camera_height_m is None else camera_height_m
+                cam = level_camera(w, h, camera_height_m=height_m, horizon_row=horizon_row, vertical_fov_deg=fov)
+            if depth_scale_m is not None:
+                raise ValueError("depth_scale_m needs a depth_m to scale")
+            d = ground_plane_depth(cam.with_resolution(w, h))
+        else:
+            if camera_height_m is not None or horizon_row is not None:
+                raise ValueError("camera_height_m and horizon_row shape the ground-plane depth used without a depth map; this photo has one")
+            d = self._depth(depth_m, depth_scale_m, img.shape[:2])
+        if cam is None:
+            cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=fov)
+        object.__setattr__(self, "srgb8", srgb8)
+        object.__setattr__(self, "depth_m", d)
+        object.__setattr__(self, "camera", cam.with_resolution(w, h))
+        object.__setattr__(self, "lights", _lights(lights))
+        object.__setattr__(self, "occluders", _box_rows(occluders, "occluders"))
+        object.__setattr__(self, "airlight", _airlight(airlight))
+
+    @staticmethod
+    def _depth(depth_m: Any, depth_scale_m: float | None, shape: tuple[int, ...]) -> NDArray[np.float32]:
+        """A given depth map in metres (float32), checked."""
         d = _array("depth_m", depth_m, "a file: read it with skyfall.io.read_channels")
         if d.dtype.kind not in "fiu":
             raise TypeError(f"depth_m must be numeric, got dtype {d.dtype}")
@@ -377,19 +445,23 @@ class PhotoScene:
         if not (math.isfinite(scale) and scale > 0.0):
             raise ValueError(f"depth_scale_m = {scale} must be a positive finite number of metres per unit")
         d = np.ascontiguousarray(d, dtype=np.float32) if scale == 1.0 else np.ascontiguousarray(d.astype(np.float64) * scale, dtype=np.float32)
-        if d.shape != img.shape[:2]:
-            raise ValueError(f"depth_m has shape {d.shape}, the image is {img.shape[:2]}")
+        if d.shape != shape:
+            raise ValueError(f"depth_m has shape {d.shape}, the image is {shape}")
         _at_least_zero("depth_m", d, " m (inf for sky)", finite=False)
-        h, w = img.shape[:2]
-        fov = real("vertical_fov_deg", vertical_fov_deg)
-        cam = _camera(camera)
-        if cam is None:
-            cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=fov)
-        object.__setattr__(self, "srgb8", srgb8)
-        object.__setattr__(self, "depth_m", d)
-        object.__setattr__(self, "camera", cam.with_resolution(w, h))
-        object.__setattr__(self, "lights", _lights(lights))
-        object.__setattr__(self, "occluders", _box_rows(occluders, "occluders"))
+        return d
+
+    @cached_property
+    def airlight_linear(self) -> tuple[float, float, float] | None:
+        """The airlight in use, linear RGB in the photo's units (estimated on first use for
+        ``airlight="estimate"``), or None for ``airlight="sky"``."""
+        if self.airlight == "sky":
+            return None
+        if self.airlight == "estimate":
+            src = self.srgb8 if self.srgb8 is not None else self.image
+            a = estimate_airlight(src, depth_m=self.depth_m, camera=self.camera)
+            return (float(a[0]), float(a[1]), float(a[2]))
+        assert not isinstance(self.airlight, str)
+        return self.airlight
 
     @cached_property
     def image(self) -> NDArray[np.float32]:

@@ -121,8 +121,8 @@ class Weather:
         self.sky_model()  # the sky's own checks (a sun for the types that need one)
 
     @cached_property
-    def _optics(self) -> tuple[float, float, float, float]:
-        """(sigma_air, sigma_rain, sigma, cloud base) from the core, which the frames use."""
+    def _optics(self) -> tuple[float, float, float, float, float]:
+        """(sigma_air, sigma_rain, sigma, cloud base, airlight) from the core, which the frames use."""
         return _core.weather_optics(self)
 
     @property
@@ -144,6 +144,14 @@ class Weather:
     def cloud_base_height_m(self) -> float:
         """The cloud base H in use, m: ``cloud_base_m`` or :func:`skyfall.sky.cloud_base_m` of the rain rate."""
         return self._optics[3]
+
+    @property
+    def airlight_relative(self) -> float:
+        """The airlight, relative to E/pi: the luminance the haze tends to with distance and
+        the sky at the horizon, the cloud base's horizon luminance under this sky (3/7 for the
+        clear overcast sky, 1 for the uniform sky, tending to 1 as the rain thickens: see
+        :mod:`skyfall.sky`). A photo's frames scale it to the photo's own airlight."""
+        return self._optics[4]
 
     def sky_model(self) -> _core.SkyModel:
         """The normalised sky with the rain's attenuation, as ``_core`` uses it (cached)."""

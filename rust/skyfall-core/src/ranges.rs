@@ -240,6 +240,24 @@ pub const CULL_THRESHOLD: Limit = Limit::new(
     Range::closed_open(0.0, INF, ""),
     "skip drops whose received light I_R (1.0: the open sky's) is below this",
 );
+/// A photo's airlight, in its own linear units.
+pub const AIRLIGHT: Limit = Limit::new(
+    "airlight",
+    Range::closed(0.0, 1e6, ""),
+    "a photo's airlight, linear RGB in the photo's own units, each channel",
+);
+/// Height of a photo's camera above its ground plane (the depth fallback).
+pub const CAMERA_HEIGHT_M: Limit = Limit::new(
+    "camera_height_m",
+    Range::open_closed(0.0, 1e4, "m"),
+    "height of a photo's camera above the ground plane its depth fallback assumes",
+);
+/// Image row of a photo's horizon (the depth fallback).
+pub const HORIZON_ROW: Limit = Limit::new(
+    "horizon_row",
+    Range::closed(-1e9, 1e9, "px"),
+    "image row (from the top, pixel centres at k + 0.5) where a photo's level horizon lies",
+);
 /// Node spacing of an ambient-light map.
 pub const SPACING_M: Limit = Limit::new(
     "spacing_m",
@@ -337,6 +355,9 @@ pub const ALL: &[Limit] = &[
     TIME_S,
     SEED,
     CULL_THRESHOLD,
+    AIRLIGHT,
+    CAMERA_HEIGHT_M,
+    HORIZON_ROW,
     SPACING_M,
     AMBIENT_SPACING_M,
     SAMPLES,

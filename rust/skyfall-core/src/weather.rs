@@ -3,7 +3,7 @@
 //! model), the cloud base, the sky, the haze with its airlight, the rain region.
 
 use crate::error::{Error, Param, Result};
-use crate::haze::{AIRLIGHT_RELATIVE, Haze};
+use crate::haze::Haze;
 use crate::physics::extinction::rain_extinction_per_m;
 use crate::rain::drops::{RainMethod, RainRegion};
 use crate::ranges;
@@ -118,16 +118,18 @@ impl Weather {
         )
     }
 
-    /// The haze of a frame whose viewpoint receives `e_view` of the open sky's horizontal
-    /// illuminance (the ambient-light map at the camera; 1 in the open): σ, and the airlight
-    /// [`AIRLIGHT_RELATIVE`]·e_view, grey (Yamamoto & Tadamura: Is = ks·E_hv). None when σ = 0,
-    /// so that clear weather returns the scene bit for bit.
-    pub fn haze(&self, e_view: f32) -> Result<Option<Haze>> {
+    /// The haze of a frame seen from `eye_height_m` above the ground with the airlight
+    /// `airlight` (linear RGB in the frame's units: the sky's [`Sky::airlight`] times the
+    /// viewpoint's share of the open sky's light, Yamamoto & Tadamura's Is = ks·E_hv; or a
+    /// photo's own): σ, the airlight, and the cloud base's height above the eye, where sky
+    /// pixels' paths end. None when σ = 0, so that clear weather returns the scene bit for bit.
+    pub fn haze(&self, airlight: [f32; 3], eye_height_m: f64) -> Result<Option<Haze>> {
         let sigma = self.extinction_per_m();
         if sigma <= 0.0 {
             return Ok(None);
         }
-        Haze::new(sigma as f32, [AIRLIGHT_RELATIVE * e_view; 3]).map(Some)
+        let ceiling = (self.cloud_base_height_m() - eye_height_m).max(0.0);
+        Haze::new(sigma as f32, airlight, ceiling as f32).map(Some)
     }
 
     /// Whether the frame draws the rain near the camera as streaks.
@@ -210,13 +212,20 @@ mod tests {
         // Visibility V is where e^(−σ V) = 2 %: σ_air = −ln(0.02) / V.
         let w = weather(0.0, 1000.0);
         assert!(((-0.02f64.ln()) / 1000.0 - w.extinction_per_m()).abs() < 2e-7);
-        assert!(weather(0.0, f64::INFINITY).haze(1.0).unwrap().is_none());
+        assert!(
+            weather(0.0, f64::INFINITY)
+                .haze([0.4; 3], 0.0)
+                .unwrap()
+                .is_none()
+        );
         let wet = weather(10.0, 2000.0);
         let want = KOSCHMIEDER / 2000.0 + rain_extinction_per_m(10.0);
         assert_eq!(wet.extinction_per_m(), want);
-        let h = wet.haze(0.5).unwrap().unwrap();
+        let h = wet.haze([0.2, 0.3, 0.4], 1.6).unwrap().unwrap();
         assert_eq!(h.extinction_per_m, want as f32);
-        assert_eq!(h.airlight, [AIRLIGHT_RELATIVE * 0.5; 3]);
+        assert_eq!(h.airlight, [0.2, 0.3, 0.4]);
+        // sky pixels are hazed up to the cloud base, above the eye
+        assert_eq!(h.sky_ceiling_m, (cloud_base_m(10.0) - 1.6) as f32);
     }
 
     #[test]

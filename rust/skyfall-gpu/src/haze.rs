@@ -36,7 +36,7 @@ impl FramePass for HazePass {
         let transmittance = t.layer(Layer::Transmittance)?;
         let a = haze.airlight;
         let block = HazeUniform {
-            params: [haze.extinction_per_m, 0.0, 0.0, 0.0],
+            params: [haze.extinction_per_m, haze.sky_ceiling_m, 0.0, 0.0],
             airlight: [a[0], a[1], a[2], 0.0],
         };
         let cam = f.uniform("camera", &CameraUniform::new(f.cam));

@@ -66,7 +66,7 @@ impl FramePass for SceneRaycastPass {
             1.0
         };
         let p = if kind == 0.0 { [0.0; 5] } else { p };
-        let scale = light.sky.scale.min(skyfall_core::sky::SKY_PIXEL_MAX) as f32;
+        let scale = light.sky.scale as f32;
         let sky = SkyUniform {
             abcd: [p[0], p[1], p[2], p[3]],
             e_scale: [p[4], scale, kind, 0.0],

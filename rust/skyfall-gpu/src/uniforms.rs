@@ -42,7 +42,7 @@ impl CameraUniform {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
 pub struct HazeUniform {
-    /// Extinction σ, 1/m (x).
+    /// Extinction σ, 1/m (x); the cloud base's height above the eye, m (y, may be ∞).
     pub params: [f32; 4],
     /// Airlight, linear RGB.
     pub airlight: [f32; 4],

@@ -74,7 +74,7 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     let gpu = GpuRenderer::new(AdapterChoice::Any)
         .expect("a Vulkan adapter (lavapipe) is required: make test installs it");
     let (scene, cam) = street();
-    let haze = Haze::new(0.004, [3.0 / 7.0; 3]).unwrap();
+    let haze = Haze::new(0.004, [3.0 / 7.0; 3], 1200.0).unwrap();
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight {
@@ -269,7 +269,7 @@ fn pooled_buffers_give_the_same_frames_and_do_not_grow() {
         sky: &sky,
         ambient: &amb,
     };
-    let h = Haze::new(0.01, [0.4; 3]).unwrap();
+    let h = Haze::new(0.01, [0.4; 3], 500.0).unwrap();
     let region = RainRegion::new(30.0, &[1.0, 1.5, 2.0], 4.0, [1.0, 0.0, 0.0], 0.2, 3).unwrap();
     let shading = RainShading::open_sky();
     let rf = RainFrame {

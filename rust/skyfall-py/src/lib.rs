@@ -6,6 +6,7 @@ mod boxes;
 mod color;
 mod errors;
 mod interrupt;
+mod photo;
 mod physics;
 mod rain;
 mod rain_frame;
@@ -23,6 +24,8 @@ mod _core {
     use super::color::{apply_lut8, encode_srgb8};
     #[pymodule_export]
     use super::errors::{GpuUnavailableError, SkyfallError};
+    #[pymodule_export]
+    use super::photo::{atmospheric_light_pixel, dark_channel};
     #[pymodule_export]
     use super::physics::{
         air_density_kg_m3, air_viscosity, drops_per_m3, marshall_palmer, rain_extinction_per_m,
@@ -66,8 +69,12 @@ mod _core {
             "MAX_RAIN_RATE_MM_H",
             skyfall_core::physics::dsd::RAIN_RATE_MM_H.hi,
         )?;
-        m.add("AIRLIGHT_RELATIVE", skyfall_core::haze::AIRLIGHT_RELATIVE)?;
         m.add("KOSCHMIEDER", skyfall_core::weather::KOSCHMIEDER)?;
+        m.add("AIRLIGHT_PATCH_PX", skyfall_core::haze::airlight::PATCH_PX)?;
+        m.add(
+            "AIRLIGHT_TOP_FRACTION",
+            skyfall_core::haze::airlight::TOP_FRACTION,
+        )?;
         m.add("AMBIENT_EXTENT_M", skyfall_core::sky::ambient::MAP_EXTENT_M)?;
         m.add(
             "FRAME_BUDGET_BYTES",

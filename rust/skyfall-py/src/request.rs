@@ -206,6 +206,9 @@ struct PhotoAttrs<'py> {
     depth_m: PyReadonlyArray2<'py, f32>,
     occluders: PyReadonlyArray2<'py, f32>,
     lights: Vec<LightSpec>,
+    /// Linear RGB in the photo's units (estimated or given), or None for a photo in the
+    /// renderer's relative units.
+    airlight_linear: Option<[f32; 3]>,
 }
 
 /// The arrays a request borrows from Python (held while the frame renders).
@@ -217,6 +220,7 @@ pub enum SceneArrays<'py> {
         rgb: Option<PyReadonlyArray3<'py, f32>>,
         depth_m: PyReadonlyArray2<'py, f32>,
         occluders: Vec<SceneBox>,
+        airlight: Option<[f32; 3]>,
     },
 }
 
@@ -268,6 +272,7 @@ impl<'py> RequestArgs<'py> {
                     rgb,
                     depth_m: p.depth_m,
                     occluders: box_rows(&p.occluders)?,
+                    airlight: p.airlight_linear,
                 },
                 p.lights,
             )
@@ -299,18 +304,22 @@ impl<'py> ParsedRequest<'py> {
                 rgb: Some(rgb),
                 depth_m,
                 occluders,
+                airlight,
             } => SceneData::Photo {
                 rgb: rgb.as_slice()?,
                 depth_m: depth_m.as_slice()?,
                 occluders,
+                airlight: *airlight,
             },
             SceneArrays::Photo {
                 rgb: None,
                 depth_m,
                 occluders,
+                airlight,
             } => SceneData::Photo8 {
                 depth_m: depth_m.as_slice()?,
                 occluders,
+                airlight: *airlight,
             },
         };
         Ok(FrameRequest {

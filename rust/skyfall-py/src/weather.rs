@@ -1,17 +1,20 @@
 //! What a `skyfall.Weather` implies, computed by the core (one definition of the haze model).
 
+use crate::errors::CoreError;
 use crate::request::WeatherSpec;
 use pyo3::prelude::*;
 
-/// (air extinction, rain extinction, total extinction σ, all 1/m; the cloud base in use, m)
-/// of `weather`, a `skyfall.Weather`.
+/// (air extinction, rain extinction, total extinction σ, all 1/m; the cloud base in use, m;
+/// the sky's airlight relative to E/π) of `weather`, a `skyfall.Weather`.
 #[pyfunction]
-pub fn weather_optics(weather: WeatherSpec) -> PyResult<(f64, f64, f64, f64)> {
+pub fn weather_optics(weather: WeatherSpec) -> PyResult<(f64, f64, f64, f64, f64)> {
     let w = weather.core()?;
+    let sky = w.sky().map_err(CoreError)?;
     Ok((
         w.air_extinction_per_m(),
         w.rain_extinction_per_m(),
         w.extinction_per_m(),
         w.cloud_base_height_m(),
+        sky.airlight,
     ))
 }

@@ -6,7 +6,7 @@ use super::passes::Passes;
 use super::scene::{SceneLight, shade_pixel};
 use super::{FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo};
 use crate::error::Result;
-use crate::haze::{Haze, apply_row};
+use crate::haze::{Haze, ViewRays, apply_row};
 use crate::particles::composite::{BAND_ROWS, bin_by_bands, composite_band_colour};
 use crate::rain::streaks::RainFrame;
 use crate::scene::camera::Camera;
@@ -72,7 +72,7 @@ pub fn render_into(
             .collect(),
         None => (0..bands).map(|_| None).collect(),
     };
-    let u2 = cam.column_slopes_sq();
+    let rays = ViewRays::new(cam);
     let particles = binned.as_ref().map(|(streaks, bins)| (*streaks, bins));
     // The pipeline, band by band while the band is in cache: the scene stage, then the effect
     // passes in physical order (haze, rain).
@@ -92,14 +92,7 @@ pub fn render_into(
                 scene_row(scene, cam, light, y, rgb_row, depth_row);
                 if let (Some(h), Some(t_band)) = (haze, t_band.as_deref_mut()) {
                     let t_row = &mut t_band[k * w..(k + 1) * w];
-                    apply_row(
-                        h,
-                        &u2,
-                        cam.row_slope_sq(y as u32),
-                        rgb_row,
-                        depth_row,
-                        t_row,
-                    );
+                    apply_row(h, &rays.row(y as u32, 0..w), rgb_row, depth_row, t_row);
                 }
             }
             if let (Some((streaks, (offsets, indices))), Some((alpha, rain_depth))) =
@@ -165,10 +158,7 @@ mod tests {
             albedo: Vec3::new(0.6, 0.5, 0.4),
         };
         let scene = BoxScene::new(vec![b], true, Vec3::splat(0.1)).unwrap();
-        let h = Haze {
-            extinction_per_m: 0.02,
-            airlight: [0.43; 3],
-        };
+        let h = Haze::new(0.02, [0.43; 3], 700.0).unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
         let light = SceneLight {
@@ -182,7 +172,13 @@ mod tests {
                 let i = (y * 40 + x) as usize;
                 let (c, d) = super::super::scene::shade_pixel(&scene, &cam, &light, x, y);
                 let t = if d.is_infinite() {
-                    0.0
+                    // the sky is hazed up to the cloud base, 700 m above the eye
+                    let up = cam.ray_direction(x, y).normalize().y;
+                    if up > 0.0 {
+                        (-0.02 * 700.0 / up).exp()
+                    } else {
+                        0.0
+                    }
                 } else {
                     (-0.02 * d * cam.distance_per_depth(x, y)).exp()
                 };
@@ -235,10 +231,7 @@ mod tests {
             rgb: &photo,
             depth_m: &depth,
         };
-        let h = Haze {
-            extinction_per_m: 0.02,
-            airlight: [0.43; 3],
-        };
+        let h = Haze::new(0.02, [0.43; 3], f32::INFINITY).unwrap();
         let region = RainRegion::new(40.0, &[1.0, 1.5, 2.0], 3.0, [0.0; 3], 0.0, 4).unwrap();
         let shading = RainShading::open_sky();
         let rf = RainFrame {

@@ -32,13 +32,20 @@ pub enum SceneData<'a> {
         depth_m: &'a [f32],
         /// Occluders.
         occluders: &'a [SceneBox],
+        /// The photo's airlight, linear RGB in its own units ([`FrameSetup`] puts the rain's
+        /// and the lights' radiance in them too); None: the photo is in the renderer's
+        /// relative units (E/π = 1) and the sky's airlight is used.
+        airlight: Option<[f32; 3]>,
     },
-    /// An 8-bit photo's depth map and occluders (its bytes go to the 8-bit output stage).
+    /// An 8-bit photo's depth map, occluders and airlight (its bytes go to the 8-bit output
+    /// stage).
     Photo8 {
         /// Depth, m.
         depth_m: &'a [f32],
         /// Occluders.
         occluders: &'a [SceneBox],
+        /// As for [`SceneData::Photo`].
+        airlight: Option<[f32; 3]>,
     },
 }
 
@@ -112,13 +119,33 @@ impl FrameSetup {
     /// The sky, the haze (its airlight from the ambient map at the camera), the rain region and
     /// its shading (the lights, the sky light per drop from the map, culling) and the boxes that
     /// shelter the drops, for `req` (validated here).
+    ///
+    /// A photo with its own airlight A_p sets the frame's units: everything the weather adds
+    /// (the airlight, the drops' light from the sky and the lamps) is scaled by A_p / A, A the
+    /// sky's airlight in relative units, so the horizon haze has the photo's colour and level
+    /// and the rain is lit as brightly relative to it as in a rendered frame.
     pub fn new(req: &FrameRequest<'_>) -> Result<Self> {
         req.validate()?;
         let w = &req.weather;
         let sky = w.sky()?;
         // Yamamoto & Tadamura: the airlight Is = ks·E_hv, the sky illuminance at the viewpoint.
         let e_view = req.ambient.sample(req.camera.eye())[0];
-        let haze = w.haze(e_view)?;
+        let sky_airlight = sky.airlight as f32;
+        let photo_airlight = match &req.scene {
+            SceneData::Photo { airlight, .. } | SceneData::Photo8 { airlight, .. } => *airlight,
+            SceneData::Boxes(_) => None,
+        };
+        let units = match photo_airlight {
+            Some(a) => {
+                for (i, &c) in a.iter().enumerate() {
+                    ranges::AIRLIGHT.check_at(Some(i), f64::from(c))?;
+                }
+                Vec3::from(a) / sky_airlight
+            }
+            None => Vec3::ONE,
+        };
+        let airlight = (units * sky_airlight * e_view).to_array();
+        let haze = w.haze(airlight, req.camera.position_m.y)?;
         let rain = match w.rain_region(req.time_s, req.seed)? {
             Some(region) => {
                 let shading = RainShading {
@@ -126,6 +153,7 @@ impl FrameSetup {
                     sky_illuminance_lux: w.sky_illuminance_lux as f32,
                     cull_threshold: req.cull_threshold.map(|t| t as f32),
                     ambient: Some(Arc::clone(&req.ambient)),
+                    radiance_scale: units,
                     ..RainShading::open_sky()
                 };
                 Some((region, shading))

@@ -16,7 +16,7 @@ use super::check_frame_size;
 use super::passes::Passes;
 use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
-use crate::haze::Haze;
+use crate::haze::{Haze, ViewRays};
 use crate::particles::binning::bin_by_tiles;
 use crate::particles::composite::{Accumulator, composite_band};
 use crate::particles::streak::ScreenStreak;
@@ -137,7 +137,7 @@ pub fn render_photo8(
         TILE_W as u32,
         BAND_ROWS as u32,
     )?;
-    let u2 = cam.column_slopes_sq();
+    let rays = ViewRays::new(cam);
     let enc = Srgb8Encoder::new();
     let band = BAND_ROWS * w;
     let mut alpha_bands: Vec<Option<&mut [f32]>> = match out.rain_alpha {
@@ -200,10 +200,8 @@ pub fn render_photo8(
                     for row in 0..rows {
                         let seg = row * w + cols.start..row * w + cols.end;
                         if let Some(h) = haze {
-                            transmittance_row(
-                                h,
-                                &u2[cols.clone()],
-                                cam.row_slope_sq((y0 + row) as u32),
+                            h.transmittance_row(
+                                &rays.row((y0 + row) as u32, cols.clone()),
                                 &depth[seg.clone()],
                                 t_seg,
                             );
@@ -342,14 +340,6 @@ fn raster_tile<const K: usize>(
 #[inline(always)]
 fn load4(s: &[f32]) -> Vec4 {
     s.first_chunk::<4>().map_or(Vec4::ZERO, |a| Vec4::from(*a))
-}
-
-/// A row's haze transmittance (branch-free: the loop vectorises).
-#[inline(never)]
-fn transmittance_row(h: &Haze, u2: &[f32], v2: f32, depth: &[f32], t: &mut [f32]) {
-    for ((t, &d), &u) in t.iter_mut().zip(depth).zip(u2) {
-        *t = h.transmittance(d * (u + v2 + 1.0).sqrt());
-    }
 }
 
 /// A row's bytes: decoded, hazed (eq. 2; t = 1 without haze), mapped by the rain's P·C + Q
@@ -548,7 +538,7 @@ mod tests {
         let (srgb, depth) = photo(w, h);
         let dec = decode_table();
         let linear: Vec<f32> = srgb.iter().map(|&b| dec[usize::from(b)]).collect();
-        let haze = Haze::new(0.03, [0.4, 0.42, 0.45]).unwrap();
+        let haze = Haze::new(0.03, [0.4, 0.42, 0.45], 600.0).unwrap();
         let region =
             RainRegion::new(60.0, &[1.0, 1.5, 2.0, 3.0], 4.0, [1.5, 0.0, 0.0], 0.3, 5).unwrap();
         let rf = RainFrame {
@@ -697,7 +687,7 @@ mod tests {
             decode: &dec,
         };
         let mut out = vec![0u8; srgb.len()];
-        let haze = Haze::new(0.5, [0.4; 3]).unwrap();
+        let haze = Haze::new(0.5, [0.4; 3], 900.0).unwrap();
         render_photo8(
             &cam,
             &photo,

@@ -1,20 +1,26 @@
 //! Rain haze (Yamamoto & Tadamura, eq. 2): attenuation and airlight along each pixel's view ray.
 //!
-//! I = I0 e^(−σ d) + L_air (1 − e^(−σ d)), d = depth · |ray| (the distance along the view
-//! ray, not the depth), σ = σ_air + σ_rain. Yamamoto & Tadamura write the airlight as Is/σ with
-//! Is = ks·E_h; we set ks so that the airlight saturates at the horizon luminance of the CIE
-//! overcast sky ([`AIRLIGHT_RELATIVE`] = 3/7 of E/π): then distant objects fade into the
-//! horizon sky as in real haze, and the σ → 0 limit is exact (no division by σ). Sky pixels
-//! (d = ∞) become the airlight when σ > 0; with σ = 0 every pixel is returned unchanged.
+//! I = I0 e^(−σ d) + L_air (1 − e^(−σ d)), d the distance along the view ray (depth · |ray|,
+//! not the depth), σ = σ_air + σ_rain. Yamamoto & Tadamura write the airlight as Is/σ with
+//! Is = ks·E_h; we take ks so that the airlight saturates at the sky's own airlight (the cloud
+//! base's horizon luminance, [`crate::sky::Sky`]): distant objects fade into the horizon sky
+//! as in real haze, and the σ → 0 limit is exact (no division by σ).
+//!
+//! A sky pixel (depth ∞) is seen through the rain and mist only up to the cloud base, a shell
+//! h above the eye on the Earth's sphere ([`path_to_ceiling_m`]): h / sin γ overhead, about
+//! √(2Rh) (138 km under a 1500 m base) along the horizon, so the sky fades continuously as σ
+//! grows, σ → 0 returns it unchanged, and heavy rain turns the horizon to the airlight. For a box scene the pixel holds the
+//! cloud base's luminance and this gives the sky's received luminance; for a photo it is the
+//! photo's own sky. With σ = 0 every pixel is returned unchanged.
 //!
 //! [`apply_row`] is the CPU reference of `skyfall-gpu`'s `haze.wgsl`; the CPU frame
 //! (`crate::frame`) calls it row by row.
 
-use crate::error::{Error, Param, Range, Result};
-use rayon::prelude::*;
+pub mod airlight;
 
-/// Airlight at saturation, relative to E/π: the overcast sky's horizon luminance, 3/7.
-pub const AIRLIGHT_RELATIVE: f32 = 3.0 / 7.0;
+use crate::error::{Error, Param, Range, Result};
+use crate::scene::camera::Camera;
+use rayon::prelude::*;
 
 /// Parameters of the haze pass.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,11 +29,15 @@ pub struct Haze {
     pub extinction_per_m: f32,
     /// Airlight radiance at saturation, linear RGB (relative units).
     pub airlight: [f32; 3],
+    /// Height of the cloud base above the eye, m: where a sky pixel's path ends (∞: sky
+    /// pixels are the airlight, as for a fog without a top).
+    pub sky_ceiling_m: f32,
 }
 
 impl Haze {
-    /// Validated haze parameters.
-    pub fn new(extinction_per_m: f32, airlight: [f32; 3]) -> Result<Self> {
+    /// Validated haze parameters, with sky pixels hazed up to a cloud base `sky_ceiling_m`
+    /// above the eye (≥ 0, ∞ allowed).
+    pub fn new(extinction_per_m: f32, airlight: [f32; 3], sky_ceiling_m: f32) -> Result<Self> {
         Range::closed(0.0, 1e3, "1/m").check(
             "extinction_per_m",
             None,
@@ -36,9 +46,15 @@ impl Haze {
         for (i, a) in airlight.iter().enumerate() {
             Range::closed(0.0, 1e6, "").check("airlight", Some(i), f64::from(*a))?;
         }
+        Range::closed(0.0, f64::INFINITY, "m").check(
+            "sky_ceiling_m",
+            None,
+            f64::from(sky_ceiling_m),
+        )?;
         Ok(Haze {
             extinction_per_m,
             airlight,
+            sky_ceiling_m,
         })
     }
 
@@ -50,6 +66,107 @@ impl Haze {
             1.0
         } else {
             exp_neg(-self.extinction_per_m * distance_m)
+        }
+    }
+
+    /// The path through the haze of a pixel at `depth_m` whose ray has length `len` per metre
+    /// of depth and world-y component `rise` (per metre of depth): depth·len, or for a sky
+    /// pixel the path to the cloud base ([`path_to_ceiling_m`] of sin γ = rise / len).
+    #[inline(always)]
+    pub fn path_m(&self, depth_m: f32, len: f32, rise: f32) -> f32 {
+        if depth_m == f32::INFINITY {
+            path_to_ceiling_m(rise / len, self.sky_ceiling_m)
+        } else {
+            depth_m * len
+        }
+    }
+
+    /// A row's transmittances into `t` (branch-free selects: the loop vectorises).
+    #[inline]
+    pub fn transmittance_row(&self, rays: &RowRays<'_>, depth: &[f32], t: &mut [f32]) {
+        for (((t, &d), &u2), &rise) in t.iter_mut().zip(depth).zip(rays.u2).zip(rays.rise) {
+            let len = (u2 + rays.v2 + 1.0).sqrt();
+            *t = self.transmittance(self.path_m(d, len, rise + rays.rise_row));
+        }
+    }
+}
+
+/// The Earth's mean radius, m: the cloud base is a shell above it.
+pub const EARTH_RADIUS_M: f32 = 6.371e6;
+
+/// The distance from the eye along a ray of elevation γ (`sin_elevation` = sin γ) to a cloud
+/// base `ceiling_m` above it, on the Earth's sphere of radius R:
+/// √((R + h)² − R² cos² γ) − R sin γ, which is h / sin γ for high rays and √(2Rh + h²) along
+/// the horizon (the curvature bounds the horizontal path a flat layer would make infinite).
+/// Written as (2Rh + h²) / (√(…) + R sin γ) for γ ≥ 0, where the subtraction would cancel.
+/// ∞ for an infinite ceiling.
+#[inline(always)]
+pub fn path_to_ceiling_m(sin_elevation: f32, ceiling_m: f32) -> f32 {
+    const R: f32 = EARTH_RADIUS_M;
+    let s = sin_elevation.clamp(-1.0, 1.0);
+    let k = ceiling_m * (2.0 * R + ceiling_m);
+    let root = (k + (R * s) * (R * s)).sqrt();
+    let path = if s >= 0.0 {
+        k / (root + R * s)
+    } else {
+        root - R * s
+    };
+    if ceiling_m == f32::INFINITY {
+        f32::INFINITY
+    } else {
+        path
+    }
+}
+
+/// The view rays of a camera as the haze reads them: per column the squared slope u² and the
+/// world-y rise of the column's offset, per row the rest (ray = R·(u, −v, −1)).
+#[derive(Debug, Clone)]
+pub struct ViewRays {
+    u2: Vec<f32>,
+    rise: Vec<f32>,
+    fy: f32,
+    cy: f32,
+    up_y: f32,
+    back_y: f32,
+}
+
+/// One row's (or a run of columns') view rays, from [`ViewRays::row`].
+#[derive(Debug, Clone, Copy)]
+pub struct RowRays<'a> {
+    /// Squared column slopes.
+    pub u2: &'a [f32],
+    /// The row's squared slope.
+    pub v2: f32,
+    /// The columns' share of the ray's world-y component.
+    pub rise: &'a [f32],
+    /// The row's share of it.
+    pub rise_row: f32,
+}
+
+impl ViewRays {
+    /// The rays of `cam`.
+    pub fn new(cam: &Camera) -> Self {
+        let right_y = cam.rotation.x_axis.y;
+        let u = |x: u32| (x as f32 + 0.5 - cam.cx) / cam.fx;
+        ViewRays {
+            u2: (0..cam.width).map(|x| u(x) * u(x)).collect(),
+            rise: (0..cam.width).map(|x| right_y * u(x)).collect(),
+            fy: cam.fy,
+            cy: cam.cy,
+            up_y: cam.rotation.y_axis.y,
+            back_y: cam.rotation.z_axis.y,
+        }
+    }
+
+    /// Row `y`'s rays over the columns `cols`.
+    #[inline]
+    pub fn row(&self, y: u32, cols: std::ops::Range<usize>) -> RowRays<'_> {
+        let v = (y as f32 + 0.5 - self.cy) / self.fy;
+        RowRays {
+            u2: &self.u2[cols.clone()],
+            v2: v * v,
+            rise: &self.rise[cols],
+            rise_row: -(self.up_y * v) - self.back_y,
         }
     }
 }
@@ -117,22 +234,19 @@ pub fn check_depth(depth_m: &[f32]) -> Result<()> {
 }
 
 /// Applies haze to one row: `rgb_row` (W·3, in place), `t_row` (W) written, from
-/// `depth_row` (W); `u2` are the camera's squared column slopes and `v2` the row's
-/// (see [`crate::scene::camera::Camera::column_slopes_sq`]), so the ray length per unit depth is √(u² + v² + 1).
+/// `depth_row` (W) seen along `rays` ([`ViewRays::row`]).
 #[inline]
 pub fn apply_row(
     haze: &Haze,
-    u2: &[f32],
-    v2: f32,
+    rays: &RowRays<'_>,
     rgb_row: &mut [f32],
     depth_row: &[f32],
     t_row: &mut [f32],
 ) {
-    for (x, (&d, t_out)) in depth_row.iter().zip(t_row.iter_mut()).enumerate() {
-        let t = haze.transmittance(d * (u2[x] + v2 + 1.0).sqrt());
-        *t_out = t;
-        for (c, v) in rgb_row[3 * x..3 * x + 3].iter_mut().enumerate() {
-            *v = *v * t + haze.airlight[c] * (1.0 - t);
+    haze.transmittance_row(rays, depth_row, t_row);
+    for (px, &t) in rgb_row.chunks_exact_mut(3).zip(t_row.iter()) {
+        for (v, a) in px.iter_mut().zip(haze.airlight) {
+            *v = *v * t + a * (1.0 - t);
         }
     }
 }
@@ -145,18 +259,13 @@ mod tests {
 
     #[test]
     fn haze_limits() {
-        let h = Haze::new(0.01, [0.4; 3]).unwrap_or(Haze {
-            extinction_per_m: 0.0,
-            airlight: [0.0; 3],
-        });
+        let h = Haze::new(0.01, [0.4; 3], f32::INFINITY).unwrap();
         assert_eq!(h.transmittance(f32::INFINITY), 0.0);
         assert!((h.transmittance(100.0) - (-1.0f32).exp()).abs() < 1e-7);
-        let clear = Haze {
-            extinction_per_m: 0.0,
-            airlight: [0.4; 3],
-        };
+        let clear = Haze::new(0.0, [0.4; 3], 900.0).unwrap();
         assert_eq!(clear.transmittance(f32::INFINITY), 1.0);
-        assert!(Haze::new(f32::NAN, [0.0; 3]).is_err());
+        assert!(Haze::new(f32::NAN, [0.0; 3], 1.0).is_err());
+        assert!(Haze::new(0.1, [0.0; 3], -1.0).is_err());
         assert!(
             check_depth(&[1.0, f32::INFINITY]).is_ok()
                 && check_depth(&[f32::NAN]).is_err()
@@ -192,34 +301,85 @@ mod tests {
 
     #[test]
     fn distance_uses_the_ray_not_the_depth() {
-        let cam = Camera::new(3, 1, [1.0, 1.0, 1.5, 0.5], Vec3::ZERO, Mat3::IDENTITY);
-        let cam = cam.unwrap_or(Camera {
-            width: 3,
-            height: 1,
-            fx: 1.0,
-            fy: 1.0,
-            cx: 1.5,
-            cy: 0.5,
-            position_m: glam::DVec3::ZERO,
-            rotation: Mat3::IDENTITY,
-        });
-        let h = Haze {
-            extinction_per_m: 0.1,
-            airlight: [1.0; 3],
-        };
+        let cam = Camera::new(3, 1, [1.0, 1.0, 1.5, 0.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let h = Haze::new(0.1, [1.0; 3], f32::INFINITY).unwrap();
         let mut rgb = vec![0.0; 9];
         let mut t = vec![0.0; 3];
-        apply_row(
-            &h,
-            &cam.column_slopes_sq(),
-            cam.row_slope_sq(0),
-            &mut rgb,
-            &[10.0; 3],
-            &mut t,
-        );
+        let rays = ViewRays::new(&cam);
+        apply_row(&h, &rays.row(0, 0..3), &mut rgb, &[10.0; 3], &mut t);
         // side pixels are 1 px off axis with f = 1: |ray| = sqrt(2).
         assert!((t[0] - (-0.1f32 * 10.0 * 2f32.sqrt()).exp()).abs() < 1e-6);
         assert!((t[1] - (-1.0f32).exp()).abs() < 1e-6);
         assert!((rgb[3] - (1.0 - (-1.0f32).exp())).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_sky_pixel_is_hazed_up_to_the_cloud_base_along_its_ray() {
+        // A camera pitched up 30° and turned: every pixel's path to a ceiling 800 m above the
+        // eye is the spherical shell's, from the ray itself (f64, direct form).
+        let rot = Mat3::from_rotation_y(0.7) * Mat3::from_rotation_x(30f32.to_radians());
+        let cam = Camera::new(9, 7, [6.0, 6.0, 4.5, 3.5], Vec3::new(0.0, 2.0, 0.0), rot).unwrap();
+        let h = Haze::new(1.5e-3, [0.5; 3], 800.0).unwrap();
+        let rays = ViewRays::new(&cam);
+        for y in 0..7 {
+            let mut t = vec![0.0; 9];
+            h.transmittance_row(&rays.row(y, 0..9), &[f32::INFINITY; 9], &mut t);
+            for (x, &tx) in t.iter().enumerate() {
+                let sin_el = f64::from(cam.ray_direction(x as u32, y).normalize().y);
+                let r = f64::from(EARTH_RADIUS_M);
+                let path =
+                    ((r + 800.0).powi(2) - (r * r) * (1.0 - sin_el * sin_el)).sqrt() - r * sin_el;
+                if sin_el > 0.5 {
+                    assert!((path - 800.0 / sin_el).abs() < 1e-3 * path); // high rays: h / sin γ
+                }
+                let want = (-1.5e-3 * path).exp();
+                assert!(
+                    (f64::from(tx) - want).abs() < 1e-5,
+                    "({x}, {y}): {tx} vs {want}"
+                );
+            }
+        }
+        // Along the horizon the path is √(2Rh + h²), 101 km: in this rain, the airlight.
+        assert!(
+            (path_to_ceiling_m(0.0, 800.0) - (2.0 * 6.371e6 * 800.0 + 640_000.0f32).sqrt()).abs()
+                < 1.0
+        );
+        let level = Camera::new(1, 3, [1.0, 1.0, 0.5, 1.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let mut t = vec![1.0; 1];
+        h.transmittance_row(
+            &ViewRays::new(&level).row(2, 0..1),
+            &[f32::INFINITY],
+            &mut t,
+        );
+        assert_eq!(t[0], 0.0);
+        // Below the horizon it is longer still, and an infinite ceiling never ends.
+        assert!(path_to_ceiling_m(-0.1, 800.0) > path_to_ceiling_m(0.0, 800.0));
+        assert_eq!(path_to_ceiling_m(0.5, f32::INFINITY), f32::INFINITY);
+        // Continuous in σ: a whisper of haze leaves even the horizon's sky nearly as it was.
+        let thin = Haze::new(1e-9, [0.5; 3], 800.0).unwrap();
+        let mut t = vec![0.0; 1];
+        thin.transmittance_row(
+            &ViewRays::new(&level).row(1, 0..1),
+            &[f32::INFINITY],
+            &mut t,
+        );
+        let want = (-1e-9 * (2.0 * 6.371e6 * 800.0 + 640_000.0f64).sqrt()).exp();
+        assert!(
+            (f64::from(t[0]) - want).abs() < 1e-6 && want > 0.9998,
+            "{}",
+            t[0]
+        );
+        // Clear air returns the sky unchanged.
+        let clear = Haze::new(0.0, [0.5; 3], 800.0).unwrap();
+        let mut rgb = vec![0.25; 27];
+        let mut t = vec![0.0; 9];
+        apply_row(
+            &clear,
+            &rays.row(0, 0..9),
+            &mut rgb,
+            &[f32::INFINITY; 9],
+            &mut t,
+        );
+        assert!(rgb.iter().all(|&v| v == 0.25) && t.iter().all(|&v| v == 1.0));
     }
 }

@@ -41,6 +41,10 @@ pub struct RainShading {
     pub cull_threshold: Option<f32>,
     /// Sky illuminance relative to E per position (its "up" channel); None: the open sky, 1.
     pub ambient: Option<Arc<AmbientMap>>,
+    /// The frame's units per relative unit, per channel (a photo's airlight over the sky's,
+    /// [`crate::frame::FrameSetup`]): multiplies the drops' light after culling, which
+    /// compares relative I_R. 1 for rendered scenes.
+    pub radiance_scale: Vec3,
 }
 
 impl RainShading {
@@ -54,6 +58,7 @@ impl RainShading {
             sky_illuminance_lux: 10_000.0,
             cull_threshold: None,
             ambient: None,
+            radiance_scale: Vec3::ONE,
         }
     }
 
@@ -106,6 +111,11 @@ pub fn prepare(
         let before = streaks.len();
         streaks.retain(|s| s.light.max_element() >= th);
         stats.culled = before - streaks.len();
+    }
+    if shading.radiance_scale != Vec3::ONE {
+        for s in &mut streaks {
+            s.light *= shading.radiance_scale;
+        }
     }
     // Far to near, ties in the drops' order: (key, index) pairs are a total order, so the
     // unstable sort of the small pairs gives the stable sort's order, the same in every

@@ -19,4 +19,4 @@ pub mod cie;
 pub mod illuminance;
 mod model;
 
-pub use model::{SKY_PIXEL_MAX, Sky, cloud_base_m, sun_direction};
+pub use model::{Sky, cloud_base_m, sun_direction};

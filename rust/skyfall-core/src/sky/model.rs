@@ -3,6 +3,7 @@
 
 use super::cie::SkyKind;
 use crate::error::{Range, Result};
+use crate::haze::path_to_ceiling_m;
 use crate::physics::quadrature::integrate;
 use glam::Vec3;
 use std::f64::consts::{PI, TAU};
@@ -32,22 +33,32 @@ pub fn sun_direction(elevation_deg: f64, azimuth_deg: f64) -> Vec3 {
 /// Elevation breaks of the normalisation quadrature in μ = sin γ: it resolves the steep
 /// gradation exp(b/μ) and exp(−σH/μ) near the horizon.
 const MU_BREAKS: [f64; 4] = [0.02, 0.08, 0.25, 0.5];
-/// Azimuth steps of the normalisation quadrature (periodic midpoint rule).
+/// Azimuth steps of the normalisation quadrature and of the horizon's mean (periodic midpoint
+/// rule).
 const AZIMUTHS: usize = 360;
 
-/// The largest optical depth σH below the cloud base that shapes the sky. Denser (under
-/// ~30 m visibility at a 1500 m base) the sky is shaped as at this depth: the quadratures of
-/// the normalisation and of the illuminance tables no longer resolve the narrower zenith peak
-/// (at σH = 600 they disagreed by 15 %, at 1200 by 2.5×), and light in such fog is scattered
-/// many times, which the single-scattering sky does not describe anyway.
-pub const MAX_SKY_OPTICAL_DEPTH: f64 = 200.0;
-
-/// The most a sky pixel shows, relative to E/π ([`Sky::sky_pixel`]): in dense fog the cloud base
-/// is e^(σH) times brighter than E, which overflows f32, and ∞·0 in the haze (t = 0 for the
-/// sky) would be NaN. A sky pixel that bright is always hazed to the airlight.
-pub const SKY_PIXEL_MAX: f64 = 1e30;
-
-/// A normalised sky with rain attenuation.
+/// A normalised sky seen through the rain and mist below its cloud base.
+///
+/// The cloud base emits L_c = s·ℓ(ω), ℓ the sky type's luminance relative to its zenith. Seen
+/// from the ground along ω (elevation γ, μ = sin γ) through the layer of depth H and
+/// extinction σ, the sky is
+///
+/// L(ω) = L_c(ω)·τ(μ) + A·(1 − τ(μ)),  τ(μ) = e^(−σ d(μ)),
+///
+/// d(μ) the path to the cloud base, H/μ overhead and √(2RH) along the horizon (the base is a
+/// shell over the Earth's sphere, [`path_to_ceiling_m`]),
+/// the cloud base attenuated plus the light the drops and the mist scatter into the path. The
+/// in-scattered radiance at saturation, the airlight A = s·ℓ̄_h, is the cloud base's own
+/// horizon luminance (ℓ̄_h: ℓ averaged over the horizon's azimuths): raindrops scatter visible
+/// light and hardly absorb it (single-scattering albedo ≈ 1), so the layer redistributes the
+/// cloud base's light rather than losing it, and it makes the horizon continuous (at γ → 0 the
+/// path is 138 km under a 1500 m base, and the sky there is A in any real rain). The scale s makes the open ground receive
+/// E, ∫ L cos θ dω = E (relative units: π), rain included, since E is what a lux meter there
+/// reads. As the rain thickens the sky tends to the uniform A = E/π: the low sky brightens
+/// towards the airlight, the zenith dims, and a street canyon's floor, which sees only the
+/// high sky, receives less. In clear air (σ = 0) L = L_c: the CIE shapes unchanged. The haze
+/// pass applies the same law to a sky pixel along its own ray ([`crate::haze::Haze`]), so the
+/// frames' sky, the haze's airlight and the ambient-light map come from this one radiance field.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sky {
     /// The luminance distribution.
@@ -56,13 +67,13 @@ pub struct Sky {
     pub extinction_per_m: f64,
     /// Cloud base height H, m.
     pub cloud_base_m: f64,
-    /// π / ∫ (L/Lz) τ cos θ dω: multiplies L/Lz into luminance relative to E/π. In dense fog
-    /// (σH of hundreds) the cloud base must be e^(σH) times brighter than E to light the ground
-    /// through it, so this may be huge or infinite; what reaches the ground is finite.
+    /// s = π / ∫ (ℓτ + ℓ̄_h(1 − τ)) cos θ dω: multiplies ℓ into the cloud base's luminance
+    /// relative to E/π. Bounded: between π/∫ℓ cos θ dω (clear) and 1/ℓ̄_h (dense fog).
     pub scale: f64,
-    /// `scale` · τ at the zenith (e^(−σH)), computed without forming either: multiplies
-    /// (L/Lz)·τ/τ_zenith into the luminance received at the ground.
-    pub received_scale: f64,
+    /// The airlight A = s·ℓ̄_h, relative to E/π.
+    pub airlight: f64,
+    /// ℓ̄_h, the horizon's mean of ℓ.
+    horizon: f64,
 }
 
 /// Skies [`Sky::cached`] keeps: a frame's sky is the same from frame to frame of a sequence or
@@ -90,77 +101,79 @@ impl Sky {
         Ok(sky)
     }
 
-    /// Normalised sky: ∫ L τ cos θ dω over the open hemisphere equals E (relative: π).
+    /// Normalised sky: ∫ L cos θ dω over the open hemisphere equals E (relative: π).
     pub fn new(kind: SkyKind, extinction_per_m: f64, cloud_base_m: f64) -> Result<Self> {
         Range::closed(0.0, 1e3, "1/m").check("extinction_per_m", None, extinction_per_m)?;
         crate::ranges::CLOUD_BASE_M.check(cloud_base_m)?;
+        let azimuth = |k: usize| (k as f64 + 0.5) * TAU / AZIMUTHS as f64;
+        let horizon = (0..AZIMUTHS)
+            .map(|k| {
+                let az = azimuth(k);
+                kind.relative_to_zenith(Vec3::new(az.sin() as f32, 0.0, -az.cos() as f32))
+            })
+            .sum::<f64>()
+            / AZIMUTHS as f64;
         let mut sky = Sky {
             kind,
             extinction_per_m,
             cloud_base_m,
             scale: 1.0,
-            received_scale: 1.0,
+            airlight: horizon,
+            horizon,
         };
         let ring = |mu: f64| {
             let (s, c) = (mu, (1.0 - mu * mu).max(0.0).sqrt());
             let mut sum = 0.0;
             for k in 0..AZIMUTHS {
-                let az = (k as f64 + 0.5) * TAU / AZIMUTHS as f64;
+                let az = azimuth(k);
                 let dir = Vec3::new((c * az.sin()) as f32, s as f32, (-c * az.cos()) as f32);
                 sum += kind.relative_to_zenith(dir);
             }
-            sum * TAU / AZIMUTHS as f64 * sky.relative_transmittance(mu) * mu
+            let tau = sky.transmittance(mu);
+            (sum / AZIMUTHS as f64 * tau + horizon * (1.0 - tau)) * TAU * mu
         };
         let mut breaks: Vec<f64> = MU_BREAKS.to_vec();
         if let SkyKind::General { sun, .. } = kind {
             breaks.push(f64::from(sun.y)); // the circumsolar cusp's ring
         }
-        // Normalised with τ relative to the zenith's, so that neither the integral nor the
-        // received luminance under- or overflows in dense fog.
         let total = integrate(ring, 0.0, 1.0, &breaks, 4);
-        sky.received_scale = PI / total;
-        sky.scale = sky.received_scale * sky.optical_depth().exp();
+        sky.scale = PI / total;
+        sky.airlight = sky.scale * horizon;
         Ok(sky)
     }
 
-    /// σH, capped at [`MAX_SKY_OPTICAL_DEPTH`].
+    /// τ(μ) = e^(−σ d(μ)), the cloud base's transmittance down to the ground along a direction
+    /// of sin(elevation) μ, d the path to the cloud base ([`path_to_ceiling_m`]: H/μ overhead,
+    /// √(2RH) along the horizon); 1 without extinction.
     #[inline]
-    fn optical_depth(&self) -> f64 {
-        (self.extinction_per_m * self.cloud_base_m).min(MAX_SKY_OPTICAL_DEPTH)
-    }
-
-    /// τ(μ) / τ(zenith) = exp(−σ·H·(1/μ − 1)): 0 at and below the horizon (when σ > 0), 1
-    /// without extinction.
-    #[inline]
-    fn relative_transmittance(&self, mu: f64) -> f64 {
+    pub fn transmittance(&self, mu: f64) -> f64 {
         if self.extinction_per_m <= 0.0 {
             1.0
-        } else if mu <= 0.0 {
-            0.0
         } else {
-            (-self.optical_depth() * (1.0 / mu - 1.0)).exp()
+            let d = path_to_ceiling_m(mu as f32, self.cloud_base_m as f32);
+            (-self.extinction_per_m * f64::from(d)).exp()
         }
     }
 
-    /// Luminance of the sky (the cloud base) along `dir`, relative to E/π, without the rain
-    /// in between: what a sky pixel shows when there is no haze.
+    /// Luminance of the cloud base along `dir`, relative to E/π, without the rain in between:
+    /// a box frame's sky pixel before the haze pass, which attenuates it along the pixel's ray
+    /// to the cloud base and adds the in-scattered light (giving [`Sky::received`]).
     #[inline]
     pub fn emitted(&self, dir: Vec3) -> f64 {
         self.scale * self.kind.relative_to_zenith(dir)
     }
 
-    /// [`Sky::emitted`] as a frame's sky pixel shows it: at most [`SKY_PIXEL_MAX`].
+    /// [`Sky::emitted`] in f32, as a frame's sky pixel holds it.
     #[inline]
     pub fn sky_pixel(&self, dir: Vec3) -> f32 {
-        self.emitted(dir).min(SKY_PIXEL_MAX) as f32
+        self.emitted(dir) as f32
     }
 
-    /// Luminance reaching the ground along `dir`, relative to E/π: [`Sky::emitted`] · τ.
+    /// Luminance reaching the ground along `dir`, relative to E/π: L_c·τ + A·(1 − τ).
     #[inline]
     pub fn received(&self, dir: Vec3) -> f64 {
-        self.received_scale
-            * self.kind.relative_to_zenith(dir)
-            * self.relative_transmittance(f64::from(dir.y))
+        let tau = self.transmittance(f64::from(dir.y));
+        self.scale * (self.kind.relative_to_zenith(dir) * tau + self.horizon * (1.0 - tau))
     }
 }
 
@@ -168,22 +181,77 @@ impl Sky {
 mod tests {
     use super::*;
 
+    /// ∫ L cos θ dω over the hemisphere by a midpoint rule in elevation and azimuth (independent
+    /// of the normalisation's Gauss quadrature), relative to E/π: π when E is kept.
+    fn hemisphere_integral(sky: &Sky) -> f64 {
+        let (n_el, n_az) = (3000, 180);
+        let mut sum = 0.0;
+        for i in 0..n_el {
+            let el = (i as f64 + 0.5) / n_el as f64 * FRAC_PI_2;
+            for k in 0..n_az {
+                let az = (k as f64 + 0.5) / n_az as f64 * TAU;
+                let dir = Vec3::new(
+                    (el.cos() * az.sin()) as f32,
+                    el.sin() as f32,
+                    (-el.cos() * az.cos()) as f32,
+                );
+                sum += sky.received(dir) * el.sin() * el.cos();
+            }
+        }
+        sum * (FRAC_PI_2 / n_el as f64) * (TAU / n_az as f64)
+    }
+
+    use std::f64::consts::FRAC_PI_2;
+
     #[test]
-    fn overcast_scale_is_nine_sevenths() {
+    fn clear_skies_keep_their_cie_shape_and_airlight() {
         let s = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
-        // L/(E/π) at the zenith is 9/7 for the overcast sky (Lz = 9E/7π).
+        // L/(E/π) at the zenith is 9/7 for the overcast sky (Lz = 9E/7π), 3/7 at the horizon.
         assert!((s.scale - 9.0 / 7.0).abs() < 1e-9, "{}", s.scale);
         assert!((s.emitted(Vec3::new(1.0, 0.0, 0.0)) - 3.0 / 7.0).abs() < 1e-9);
+        assert!((s.airlight - 3.0 / 7.0).abs() < 1e-9);
+        assert_eq!(s.received(Vec3::Y), s.emitted(Vec3::Y));
+        // The uniform sky (CIE type 5): E/π everywhere, its airlight too.
+        let u = Sky::new(SkyKind::general(5, None).unwrap(), 0.0, 1000.0).unwrap();
+        assert!((u.airlight - 1.0).abs() < 1e-6 && (u.scale - 1.0).abs() < 1e-6);
     }
 
     #[test]
-    fn rain_dims_the_low_sky_most_and_keeps_e() {
-        let s = Sky::new(SkyKind::Overcast, 1.5e-3, cloud_base_m(10.0)).unwrap();
-        let zen = s.received(Vec3::Y) / s.emitted(Vec3::Y);
-        let low = s.received(Vec3::new(0.0, 0.2, 0.98).normalize())
-            / s.emitted(Vec3::new(0.0, 0.2, 0.98).normalize());
-        assert!(low < zen && zen < 1.0);
-        assert!(s.scale > 9.0 / 7.0);
+    fn every_sky_gives_e_in_any_rain() {
+        let sun = Some(sun_direction(35.0, 120.0));
+        for kind in [
+            SkyKind::Overcast,
+            SkyKind::general(5, None).unwrap(),
+            SkyKind::general(12, sun).unwrap(),
+        ] {
+            for sigma in [0.0, 3e-4, 1.5e-3, 3.912e-3, 0.04, 1e3] {
+                let s = Sky::new(kind, sigma, 900.0).unwrap();
+                let e = hemisphere_integral(&s) / PI;
+                assert!((e - 1.0).abs() < 2e-3, "{kind:?} σ {sigma}: E {e}");
+                assert!(s.scale.is_finite() && s.airlight.is_finite());
+            }
+        }
+    }
+
+    #[test]
+    fn heavy_rain_turns_the_sky_to_its_airlight() {
+        let dir = |deg: f64| {
+            let r = deg.to_radians();
+            Vec3::new(0.0, r.sin() as f32, -r.cos() as f32)
+        };
+        let clear = Sky::new(SkyKind::Overcast, 0.0, 900.0).unwrap();
+        let rain = Sky::new(SkyKind::Overcast, 1.5e-3, 900.0).unwrap();
+        let fog = Sky::new(SkyKind::Overcast, 0.04, 900.0).unwrap();
+        // At the horizon the path is infinite: the sky is the airlight in any rain.
+        assert!((rain.received(dir(0.0)) - rain.airlight).abs() < 1e-12);
+        // Rain flattens the overcast sky: the low sky brightens, the zenith dims ...
+        assert!(rain.received(dir(10.0)) > clear.received(dir(10.0)));
+        assert!(rain.received(Vec3::Y) < clear.received(Vec3::Y));
+        // ... and in fog (σH = 36) it is the airlight everywhere, E/π.
+        for deg in [0.0, 10.0, 45.0, 90.0] {
+            assert!((fog.received(dir(deg)) - 1.0).abs() < 1e-9, "{deg}");
+        }
+        assert!((fog.airlight - 1.0).abs() < 1e-9);
         assert!(
             (cloud_base_m(0.0) - 1500.0).abs() < 1e-9 && (cloud_base_m(1e6) - 300.0).abs() < 1e-9
         );

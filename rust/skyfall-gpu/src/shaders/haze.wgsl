@@ -1,7 +1,7 @@
 // Rain haze along view rays. CPU reference: skyfall_core::haze. Prepended with common.wgsl.
 
 struct Haze {
-    params: vec4<f32>,   // extinction (1/m), unused x3
+    params: vec4<f32>,   // extinction (1/m), cloud base above the eye (m, may be inf), unused x2
     airlight: vec4<f32>, // linear RGB
 }
 
@@ -11,16 +11,35 @@ struct Haze {
 @group(0) @binding(3) var<storage, read> depth: array<f32>;
 @group(0) @binding(4) var<storage, read_write> transmittance: array<f32>;
 
-// Transmittance along the ray of a pixel at depth `depth_m` (inf: sky).
-fn haze_transmittance(depth_m: f32, per_depth: f32) -> f32 {
+// The path from the eye to a cloud base `ceiling` m above it, on the Earth's sphere, along a ray
+// of elevation sin `s` (skyfall_core::haze::path_to_ceiling_m).
+fn path_to_ceiling(s_in: f32, ceiling: f32) -> f32 {
+    let r = 6.371e6;
+    let s = clamp(s_in, -1.0, 1.0);
+    let k = ceiling * (2.0 * r + ceiling);
+    let root = sqrt(k + (r * s) * (r * s));
+    if s >= 0.0 {
+        return k / (root + r * s);
+    }
+    return root - r * s;
+}
+
+// Transmittance along the ray of a pixel at depth `depth_m`, whose ray has length `per_depth`
+// and world-y component `rise` per metre of depth. A sky pixel (depth inf) is hazed up to the
+// cloud base, `params.y` above the eye (skyfall_core::haze::Haze::path_m).
+fn haze_transmittance(depth_m: f32, per_depth: f32, rise: f32) -> f32 {
     let sigma = haze.params.x;
     if sigma <= 0.0 {
         return 1.0;
     }
+    var path = depth_m * per_depth;
     if depth_m > 3.0e38 {
-        return 0.0;
+        if haze.params.y > 3.0e38 {
+            return 0.0;
+        }
+        path = path_to_ceiling(rise / per_depth, haze.params.y);
     }
-    return exp(-sigma * (depth_m * per_depth));
+    return exp(-sigma * path);
 }
 
 @compute @workgroup_size(8, 8)
@@ -30,7 +49,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let i = gid.y * w + gid.x;
-    let t = haze_transmittance(depth[i], distance_per_depth(cam, gid.x, gid.y));
+    let rise = ray_direction(cam, gid.x, gid.y).y;
+    let t = haze_transmittance(depth[i], distance_per_depth(cam, gid.x, gid.y), rise);
     transmittance[i] = t;
     for (var k = 0u; k < 3u; k++) {
         rgb[3u * i + k] = rgb[3u * i + k] * t + haze.airlight[k] * (1.0 - t);

@@ -1,0 +1,195 @@
+"""What a photo says about its own light and geometry: its airlight, and a depth map when it
+comes without one.
+
+A :class:`skyfall.PhotoScene` uses both by default. The airlight is the radiance the rain and
+mist of a frame tend to with distance (and a sky pixel at the horizon); putting it in the
+photo's own units and colour keeps a dusk photo dusky and a bright one bright, and scales the
+rain's light with it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from skyfall import _core
+from skyfall._validate import in_range, integer
+from skyfall.camera import Camera
+from skyfall.io import decode_srgb8
+
+__all__ = ["HORIZON_FRACTION", "PATCH_PX", "TOP_FRACTION", "dark_channel", "estimate_airlight", "ground_plane_depth"]
+
+PATCH_PX: int = _core.AIRLIGHT_PATCH_PX
+"""He, Sun & Tang's patch side, px (15)."""
+TOP_FRACTION: float = _core.AIRLIGHT_TOP_FRACTION
+"""The brightest share of the dark channel taken as haze-opaque (0.001)."""
+HORIZON_FRACTION = 0.1
+"""The share of a photo's sky pixels, lowest first, whose median is its horizon sky."""
+
+
+def _image(image: Any) -> NDArray[Any]:
+    a = np.asarray(image)
+    if a.dtype != np.uint8:
+        a = a.astype(np.float32, copy=False)
+        if not np.all(np.isfinite(a)):
+            raise ValueError("image must hold finite values")
+    if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] == 0 or a.shape[1] == 0:
+        raise ValueError(f"image must have shape (H, W, 3), got {a.shape}")
+    return np.ascontiguousarray(a)
+
+
+def dark_channel(image: Any, *, patch_px: int = PATCH_PX) -> NDArray[np.float32]:
+    """The dark channel of He, Sun & Tang, "Single image haze removal using dark channel
+    prior" (CVPR 2009): each pixel's smallest channel over the square window around it.
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W, 3)
+        uint8 codes or float values (any monotonic encoding: the result is in its values).
+    patch_px : int
+        Window side, px, odd, in [1, 1001]; the window is cut at the image's borders.
+
+    Returns
+    -------
+    ndarray of float32, shape (H, W)
+    """
+    return _core.dark_channel(_image(image), integer("patch_px", patch_px, 1, 1001))
+
+
+def estimate_airlight(
+    image: Any,
+    *,
+    depth_m: Any = None,
+    camera: Camera | None = None,
+    patch_px: int = PATCH_PX,
+    top_fraction: float = TOP_FRACTION,
+) -> NDArray[np.float32]:
+    """A photo's airlight, linear RGB in its own units: its horizon sky, or He, Sun & Tang's
+    atmospheric light where it shows no sky.
+
+    With a depth map that marks sky (``inf``) and the camera: the per-channel median of the
+    sky pixels at the lowest :data:`HORIZON_FRACTION` of their elevations, the horizon sky the
+    haze of a rainy frame tends to (a median, so a lamp, a white tower or the sun there does
+    not set it). Without sky pixels: among the brightest ``top_fraction`` of the dark channel
+    (the haze-opaque parts of a hazy photo), the pixel whose channels sum highest (He, Sun &
+    Tang, "Single image haze removal using dark channel prior", CVPR 2009). That picks a large
+    white surface in a clear photo without sky: give the airlight yourself there
+    (``PhotoScene(airlight=...)``).
+
+    Parameters
+    ----------
+    image : array_like, shape (H, W, 3)
+        uint8 sRGB codes (decoded with the sRGB transfer function) or float32 linear light.
+    depth_m : array_like, shape (H, W), optional
+        The photo's depth, ``inf`` for sky.
+    camera : Camera, optional
+        The camera that took it, with its resolution (needed with ``depth_m``).
+    patch_px : int
+        Dark-channel window side, px, odd, in [1, 1001] (default 15, as He, Sun & Tang).
+    top_fraction : float
+        Share of the dark channel searched, in (0, 1] (default 0.001).
+
+    Returns
+    -------
+    ndarray of float32, shape (3,)
+        Linear RGB.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> img = np.zeros((40, 40, 3), np.float32)
+    >>> img[:10] = (0.5, 0.6, 0.7)  # a sky band over a black ground
+    >>> estimate_airlight(img).tolist()
+    [0.5, 0.6000000238418579, 0.699999988079071]
+    """
+    a = _image(image)
+    if depth_m is not None:
+        if camera is None:
+            raise ValueError("estimate_airlight needs the camera with depth_m: the horizon is found from the pixels' elevations")
+        d = np.asarray(depth_m)
+        if d.shape != a.shape[:2]:
+            raise ValueError(f"depth_m has shape {d.shape}, the image is {a.shape[:2]}")
+        sky = np.isinf(d)
+        if sky.any():
+            elevation = _sin_elevation(camera.with_resolution(a.shape[1], a.shape[0]))[sky]
+            low = elevation <= np.quantile(elevation, HORIZON_FRACTION)
+            px = np.median(a[sky][low], axis=0)
+            return decode_srgb8(np.round(px).astype(np.uint8)) if a.dtype == np.uint8 else px.astype(np.float32)
+    frac = float(top_fraction)
+    if not 0.0 < frac <= 1.0:
+        raise ValueError(f"top_fraction = {top_fraction} is outside the valid range (0, 1]")
+    row, col = _core.atmospheric_light_pixel(a, integer("patch_px", patch_px, 1, 1001), frac)
+    px = a[row, col]
+    return decode_srgb8(px) if a.dtype == np.uint8 else px.astype(np.float32)
+
+
+def _sin_elevation(camera: Camera) -> NDArray[np.float64]:
+    """Sine of each pixel's ray elevation, (height, width)."""
+    return _rise(camera) / _length(camera)
+
+
+def _rise(camera: Camera) -> NDArray[np.float64]:
+    """World y of each pixel's ray R (u, -v, -1), whose camera-space depth is 1."""
+    u, v = _slopes(camera)
+    r = camera.rotation
+    return r[1, 0] * u[None, :] - r[1, 1] * v[:, None] - r[1, 2]
+
+
+def _length(camera: Camera) -> NDArray[np.float64]:
+    u, v = _slopes(camera)
+    return np.sqrt(u[None, :] ** 2 + v[:, None] ** 2 + 1.0)
+
+
+def _slopes(camera: Camera) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    fx, fy, cx, cy = camera.intrinsics()
+    assert camera.width is not None and camera.height is not None  # intrinsics() checked
+    return (np.arange(camera.width) + 0.5 - cx) / fx, (np.arange(camera.height) + 0.5 - cy) / fy
+
+
+def ground_plane_depth(camera: Camera) -> NDArray[np.float32]:
+    """Depth of a flat ground y = 0 seen by ``camera``, inf above the horizon: the depth a
+    :class:`skyfall.PhotoScene` assumes when it is given none.
+
+    The assumption: everything below the horizon is a level ground at the camera's height
+    below it, and everything above is sky (far buildings and trees then fade like the sky, up
+    to the cloud base). It is right for a road or a field and places walls too far; give a
+    depth map (a sensor's, or an estimator's) where that matters.
+
+    Parameters
+    ----------
+    camera : Camera
+        With its resolution, above the ground (``position_m[1] > 0``).
+
+    Returns
+    -------
+    ndarray of float32, shape (height, width)
+        Depth along the optical axis, m.
+    """
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera must be a skyfall.Camera, got {type(camera).__name__}")
+    height_m = float(camera.position_m[1])
+    if not height_m > 0.0:
+        raise ValueError(f"the camera's position_m[1] = {height_m} must be > 0 m: the ground plane y = 0 lies below the camera")
+    rise = _rise(camera)
+    with np.errstate(divide="ignore"):
+        depth = np.where(rise < 0.0, height_m / -rise, np.inf)
+    return depth.astype(np.float32)
+
+
+def level_camera(width: int, height: int, *, camera_height_m: float, horizon_row: float | None, vertical_fov_deg: float) -> Camera:
+    """A camera ``camera_height_m`` above the ground, pitched so that its level horizon lies
+    on ``horizon_row`` (pixel rows from the top; None: the image's middle, a level camera)."""
+    h_m = in_range("camera_height_m", camera_height_m)
+    cam = Camera((0.0, h_m, 0.0), vertical_fov_deg=vertical_fov_deg, width=width, height=height)
+    if horizon_row is None:
+        return cam
+    row = in_range("horizon_row", horizon_row)
+    _, fy, _, cy = cam.intrinsics()
+    # A level ray has camera-space slope v = tan(pitch): it meets the image at cy + fy tan(pitch).
+    pitch = math.degrees(math.atan((row - cy) / fy))
+    if not -89.0 <= pitch <= 89.0:
+        raise ValueError(f"horizon_row = {row} puts the camera's pitch at {pitch:.2f} deg, outside [-89, 89]")
+    return Camera((0.0, h_m, 0.0), pitch_deg=pitch, vertical_fov_deg=vertical_fov_deg, width=width, height=height)
