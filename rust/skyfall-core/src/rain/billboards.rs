@@ -288,6 +288,16 @@ mod tests {
         let mut rng = Pcg64Mcg::seed_from_u64(3);
         let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
         assert!((a / b - 1.125).abs() < 0.02, "{}", a / b);
+        // Through a lens the probes blur as the drawn streaks do and keep their opacity-area,
+        // so the balance is Jensen's ratio still (f = 100 px · 400 mm / 400 px = 100 mm at f/1
+        // focused at infinity: blur circles of 5 to 10 px over the voxel's depths).
+        let lens = crate::scene::camera::ThinLens::new(1.0, f64::INFINITY, 400.0).unwrap();
+        let defocus = lens.defocus(&cam).unwrap();
+        assert!(defocus.blur_px(1.0 / 1.5) > 5.0);
+        let (area_at, len) = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO, Some(&defocus));
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
+        assert!((a / b - 1.125).abs() < 0.02, "through a lens: {}", a / b);
         // far away the spread of depths no longer matters
         let far = Camera::new(
             400,
