@@ -13,7 +13,9 @@
 //! partially); along, a one-pixel ramp at each end. α carries the particle's silhouette: a
 //! sphere's time-averaged shadow on its w-wide band is π/4 of the band ([`SILHOUETTE`]), so
 //! each streak adds α·w·L = (π/4)·w² of opacity-area, the drop's πD²/4 cross-section on
-//! screen (the same cross-section the haze's extinction counts). [`ScreenStreak::fragment`] is the per-pixel definition; the walks of
+//! screen (the same cross-section the haze's extinction counts). Through a thin lens
+//! ([`screen_streak_through`]) the streak is widened and lengthened by the drop's circle of
+//! confusion and α divided so that this opacity-area is unchanged. [`ScreenStreak::fragment`] is the per-pixel definition; the walks of
 //! [`super::walk`] and the GPU's `rain.wgsl` compute the same values, and
 //! [`ScreenStreak::packed`] is the GPU's packing contract.
 
