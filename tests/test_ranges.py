@@ -83,6 +83,10 @@ DOCUMENTED: list[tuple[Any, str]] = [
     (Camera, "cy"),
     (Camera, "exposure_s"),
     (Camera, "velocity_m_s"),
+    (Camera, "focal_length_mm"),
+    (Camera, "sensor_width_mm"),
+    (Camera, "f_number"),
+    (Camera, "focus_distance_m"),
     (PointLight, "position_m"),
     (PointLight, "intensity_cd"),
     (PointLight, "color"),
@@ -212,6 +216,10 @@ PUBLIC: dict[str, Callable[[Any], object]] = {
     "cy": lambda v: Camera(width=10, height=10, cy=v),
     "exposure_s": lambda v: Camera(exposure_s=v),
     "velocity_m_s": lambda v: Camera(velocity_m_s=(v, 0.0, 0.0)),
+    "focal_length_mm": lambda v: Camera(focal_length_mm=v),
+    "sensor_width_mm": lambda v: Camera(sensor_width_mm=v),
+    "f_number": lambda v: Camera(f_number=v),
+    "focus_distance_m": lambda v: Camera(f_number=2.0, focus_distance_m=v),
     "intensity_cd": lambda v: PointLight((0.0, 0.0, 0.0), v),
     "color": lambda v: SpotLight((0.0, 0.0, 0.0), (0.0, 0.0, -1.0), 1.0, color=(1.0, v, 1.0)),
     "cone_deg": lambda v: SpotLight((0.0, 0.0, 0.0), (0.0, 0.0, -1.0), 1.0, cone_deg=v),
@@ -309,6 +317,9 @@ def _render_core(**changes: Any) -> object:
         exposure_s=changes.get("exposure_s", cam.exposure_s),
         velocity_m_s=changes.get("camera_velocity_m_s", cam.velocity_m_s),
         intrinsics=cam.intrinsics,
+        f_number=cam.f_number,
+        focus_distance_m=cam.focus_distance_m,
+        sensor_width_mm=cam.sensor_width_mm,
     )
     weather = SimpleNamespace(**{f.name: getattr(w, f.name) for f in dataclasses.fields(w)})
     if "sky_illuminance_lux" in changes:

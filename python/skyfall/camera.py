@@ -1,4 +1,5 @@
-"""A pinhole camera: pose in a right-handed, +Y-up world (metres) and intrinsics in pixels.
+"""A camera: pose in a right-handed, +Y-up world (metres), intrinsics in pixels, and optionally
+a thin lens (focal length, f-number, focus distance) whose blur circles soften near streaks.
 
 The camera looks along its -Z axis with +X right and +Y up. Pixel (x, y) has its origin at
 the top-left corner of the image and its centre at (x + 0.5, y + 0.5). Depth is metres along
@@ -28,7 +29,7 @@ def _rotation_from_yaw_pitch(yaw_deg: float, pitch_deg: float) -> NDArray[np.flo
 
 
 class Camera:
-    """A pinhole camera.
+    """A pinhole camera, or a thin lens when ``f_number`` is given.
 
     Parameters
     ----------
@@ -42,8 +43,9 @@ class Camera:
         Elevation of the view direction, degrees in [-89, 89]; positive looks up.
     look_at_m : sequence of 3 float, optional
         A world point to look at; overrides yaw and pitch (the horizon stays level).
-    vertical_fov_deg : float
-        Vertical field of view, degrees in [0.001, 179), used when ``fy`` is not given.
+    vertical_fov_deg : float, optional
+        Vertical field of view, degrees in [0.001, 179), used when neither ``fy`` nor
+        ``focal_length_mm`` is given. Default 60.
     width, height : int, optional
         Resolution, px, in [1, 16384]. Left out, the renderer's resolution is used.
     fx, fy, cx, cy : float, optional
@@ -55,6 +57,23 @@ class Camera:
     velocity_m_s : sequence of 3 float
         The camera's own velocity, m/s, its speed in [0, 1000]: streaks follow the drops' motion
         relative to the camera, e.g. a car driving into the rain.
+    focal_length_mm : float, optional
+        Focal length f, mm, in [1, 5000]: sets the field of view with ``sensor_width_mm``
+        (fx = fy = f / sensor width · frame width, px), in place of ``vertical_fov_deg`` or
+        ``fx``/``fy`` (giving both is refused). Left out, the focal length in mm follows from
+        the field of view (f = fx · sensor width / frame width).
+    sensor_width_mm : float
+        Sensor width, mm, in [1, 500]; default 36 (full frame). Maps the focal length and the
+        blur circles between mm and px.
+    f_number : float, optional
+        f-number N, in [0.5, 256]: the lens's aperture is A = f / N. Left out: a pinhole,
+        everything in focus (the frames are bit for bit those without a lens). Given, each
+        streak is defocused by its blur circle (see ``focus_distance_m``).
+    focus_distance_m : float, optional
+        Distance in focus s, m along the optical axis, in (0, inf], beyond the focal length;
+        needs ``f_number``; default inf (focused at infinity). A drop at depth z is blurred
+        by the thin lens's circle of confusion c = A·f·|z − s| / (z·(s − f)) on the sensor
+        (capped on screen at 1/16 of the frame's larger side), keeping its opacity.
     """
 
     def __init__(
@@ -64,7 +83,7 @@ class Camera:
         yaw_deg: float = 0.0,
         pitch_deg: float = 0.0,
         look_at_m: Sequence[float] | None = None,
-        vertical_fov_deg: float = 60.0,
+        vertical_fov_deg: float | None = None,
         width: int | None = None,
         height: int | None = None,
         fx: float | None = None,
@@ -73,13 +92,35 @@ class Camera:
         cy: float | None = None,
         exposure_s: float = 1.0 / 30.0,
         velocity_m_s: Sequence[float] = (0.0, 0.0, 0.0),
+        focal_length_mm: float | None = None,
+        sensor_width_mm: float = 36.0,
+        f_number: float | None = None,
+        focus_distance_m: float | None = None,
     ) -> None:
         self.position_m = world_position(position_m)
         self.velocity_m_s = finite_vec3("velocity_m_s", velocity_m_s)
         speed = float(np.linalg.norm(self.velocity_m_s))
         if not inside("velocity_m_s", speed):
             refuse("velocity_m_s", speed)  # the speed |v| is what has a range
-        self.vertical_fov_deg = in_range("vertical_fov_deg", vertical_fov_deg)
+        self.sensor_width_mm = in_range("sensor_width_mm", sensor_width_mm)
+        self.focal_length_mm = None if focal_length_mm is None else in_range("focal_length_mm", focal_length_mm)
+        if self.focal_length_mm is not None and (vertical_fov_deg is not None or fx is not None or fy is not None):
+            raise ValueError("focal_length_mm sets the field of view: give it or vertical_fov_deg / fx / fy, not both")
+        # None when the focal length sets the view (its vertical field then depends on the aspect).
+        self.vertical_fov_deg: float | None = (
+            None if self.focal_length_mm is not None else in_range("vertical_fov_deg", 60.0 if vertical_fov_deg is None else vertical_fov_deg)
+        )
+        self.f_number = None if f_number is None else in_range("f_number", f_number)
+        if focus_distance_m is not None and self.f_number is None:
+            raise ValueError("focus_distance_m needs f_number (a pinhole is in focus at every distance)")
+        self.focus_distance_m: float | None = None
+        if self.f_number is not None:
+            s = math.inf if focus_distance_m is None else in_range("focus_distance_m", focus_distance_m)
+            if self.focal_length_mm is not None and s <= self.focal_length_mm * 1e-3:
+                raise ValueError(
+                    f"focus_distance_m = {s} is not beyond the focal length {self.focal_length_mm * 1e-3:g} m"
+                )
+            self.focus_distance_m = s
         self.exposure_s = in_range("exposure_s", exposure_s)
         if look_at_m is not None:
             target = finite_vec3("look_at_m", look_at_m)
@@ -104,7 +145,7 @@ class Camera:
         self._fx, self._fy, self._cx, self._cy = fx, fy, cx, cy
 
     def with_resolution(self, width: int, height: int) -> Camera:
-        """This camera at ``width`` x ``height`` (the field of view is kept)."""
+        """This camera at ``width`` x ``height`` (the field of view and the lens are kept)."""
         if self.width == width and self.height == height:
             return self
         if self._fx is not None or self._fy is not None:
@@ -120,13 +161,23 @@ class Camera:
             height=height,
             exposure_s=self.exposure_s,
             velocity_m_s=tuple(self.velocity_m_s),
+            focal_length_mm=self.focal_length_mm,
+            sensor_width_mm=self.sensor_width_mm,
+            f_number=self.f_number,
+            focus_distance_m=self.focus_distance_m,
         )
 
     def intrinsics(self) -> tuple[float, float, float, float]:
         """(fx, fy, cx, cy) in px; needs the resolution."""
         if self.width is None or self.height is None:
             raise ValueError("the camera has no resolution yet: give width/height or use with_resolution()")
-        fy = self._fy if self._fy is not None else 0.5 * self.height / math.tan(math.radians(self.vertical_fov_deg) / 2)
+        if self.focal_length_mm is not None:
+            fy = self.focal_length_mm / self.sensor_width_mm * self.width
+        elif self._fy is not None:
+            fy = self._fy
+        else:
+            fov = 60.0 if self.vertical_fov_deg is None else self.vertical_fov_deg
+            fy = 0.5 * self.height / math.tan(math.radians(fov) / 2)
         fx = self._fx if self._fx is not None else fy
         cx = self._cx if self._cx is not None else 0.5 * self.width
         cy = self._cy if self._cy is not None else 0.5 * self.height
@@ -167,4 +218,10 @@ class Camera:
     def __repr__(self) -> str:
         pos = ", ".join(f"{v:g}" for v in self.position_m)
         res = f", {self.width}x{self.height}" if self.width else ""
-        return f"Camera(position_m=({pos}), yaw_deg={self.yaw_deg:g}, pitch_deg={self.pitch_deg:g}, vertical_fov_deg={self.vertical_fov_deg:g}{res})"
+        view = (
+            f"focal_length_mm={self.focal_length_mm:g}, sensor_width_mm={self.sensor_width_mm:g}"
+            if self.focal_length_mm is not None
+            else f"vertical_fov_deg={self.vertical_fov_deg:g}"
+        )
+        lens = "" if self.f_number is None else f", f_number={self.f_number:g}, focus_distance_m={self.focus_distance_m:g}"
+        return f"Camera(position_m=({pos}), yaw_deg={self.yaw_deg:g}, pitch_deg={self.pitch_deg:g}, {view}{lens}{res})"

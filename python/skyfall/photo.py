@@ -134,8 +134,9 @@ def _sin_elevation(camera: Camera) -> NDArray[np.float64]:
 def _rise(camera: Camera) -> NDArray[np.float64]:
     """World y of each pixel's ray R (u, -v, -1), whose camera-space depth is 1."""
     u, v = _slopes(camera)
-    r = camera.rotation
-    return r[1, 0] * u[None, :] - r[1, 1] * v[:, None] - r[1, 2]
+    r = np.asarray(camera.rotation, dtype=np.float64)
+    rise: NDArray[np.float64] = r[1, 0] * u[None, :] - r[1, 1] * v[:, None] - r[1, 2]
+    return rise
 
 
 def _length(camera: Camera) -> NDArray[np.float64]:
@@ -146,7 +147,9 @@ def _length(camera: Camera) -> NDArray[np.float64]:
 def _slopes(camera: Camera) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     fx, fy, cx, cy = camera.intrinsics()
     assert camera.width is not None and camera.height is not None  # intrinsics() checked
-    return (np.arange(camera.width) + 0.5 - cx) / fx, (np.arange(camera.height) + 0.5 - cy) / fy
+    u = (np.arange(camera.width, dtype=np.float64) + 0.5 - cx) / fx
+    v = (np.arange(camera.height, dtype=np.float64) + 0.5 - cy) / fy
+    return u, v
 
 
 def ground_plane_depth(camera: Camera) -> NDArray[np.float32]:

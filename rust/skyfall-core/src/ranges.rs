@@ -194,6 +194,30 @@ pub const EXPOSURE_S: Limit = Limit::new(
     Range::closed(1e-6, 0.1, "s"),
     "shutter time T: a drop's streak is its path v T (a streak must fit in the 1 m texture)",
 );
+/// A lens's focal length.
+pub const FOCAL_LENGTH_MM: Limit = Limit::new(
+    "focal_length_mm",
+    Range::closed(1.0, 5000.0, "mm"),
+    "lens focal length f: with sensor_width_mm it sets the field of view (fx = f / sensor width · frame width)",
+);
+/// The sensor's width.
+pub const SENSOR_WIDTH_MM: Limit = Limit::new(
+    "sensor_width_mm",
+    Range::closed(1.0, 500.0, "mm"),
+    "sensor width (36: full frame), which maps focal lengths and blur circles to pixels",
+);
+/// A lens's f-number.
+pub const F_NUMBER: Limit = Limit::new(
+    "f_number",
+    Range::closed(0.5, 256.0, ""),
+    "f-number N = f / aperture diameter (thin lens; left out: a pinhole)",
+);
+/// A lens's focus distance.
+pub const FOCUS_DISTANCE_M: Limit = Limit::new(
+    "focus_distance_m",
+    Range::open_closed(0.0, INF, "m"),
+    "distance in focus along the optical axis (inf: focused at infinity); more than the focal length",
+);
 /// The camera's speed.
 pub const VELOCITY_M_S: Limit = Limit::new(
     "velocity_m_s",
@@ -348,6 +372,10 @@ pub const ALL: &[Limit] = &[
     CX,
     CY,
     EXPOSURE_S,
+    FOCAL_LENGTH_MM,
+    SENSOR_WIDTH_MM,
+    F_NUMBER,
+    FOCUS_DISTANCE_M,
     VELOCITY_M_S,
     INTENSITY_CD,
     COLOR,

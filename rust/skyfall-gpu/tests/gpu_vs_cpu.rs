@@ -10,7 +10,7 @@ use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
 use skyfall_core::rain::streaks::{RainFrame, RainShading};
 use skyfall_core::scene::boxes::{BoxScene, SceneBox};
-use skyfall_core::scene::camera::Camera;
+use skyfall_core::scene::camera::{Camera, ThinLens};
 use skyfall_core::scene::lights::Light;
 use skyfall_core::sky::ambient::{AmbientMap, scene_bounds};
 use skyfall_core::sky::cie::SkyKind;
@@ -131,6 +131,7 @@ fn gpu_rain_matches_cpu_rain() {
         region: &region,
         exposure_s: 1.0 / 30.0,
         camera_velocity_m_s: Vec3::new(0.0, 0.0, -8.0),
+        lens: None,
         ground: true,
         shelter: &scene.boxes,
         shading: &shading,
@@ -217,6 +218,70 @@ fn gpu_rain_matches_cpu_rain() {
 }
 
 #[test]
+fn gpu_rain_matches_cpu_rain_through_a_lens() {
+    // Defocus is made on the CPU (the streaks' widths, ends and α), so the GPU's compositor
+    // draws the blurred streaks as it draws any: the same frame as the CPU's, and not the
+    // pinhole's. f/0.7 on a 200 mm wide sensor (f = 70 px · 200 mm / 96 px = 146 mm) focused
+    // at 10 m: blur circles up to the cap, 6 px here.
+    let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let (scene, cam) = street();
+    let region = RainRegion::new(40.0, &[1.0, 1.4, 2.0], 4.0, [2.0, 0.0, 0.0], 0.7, 11).unwrap();
+    let shading = RainShading::open_sky();
+    let lens = ThinLens::new(0.7, 10.0, 200.0).unwrap();
+    let pinhole = RainFrame {
+        region: &region,
+        exposure_s: 1.0 / 60.0,
+        camera_velocity_m_s: Vec3::ZERO,
+        lens: None,
+        ground: true,
+        shelter: &[],
+        shading: &shading,
+    };
+    let rf = RainFrame {
+        lens: Some(lens.defocus(&cam).unwrap()),
+        ..pinhole
+    };
+    let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let light = SceneLight {
+        sky: &sky,
+        ambient: &amb,
+    };
+    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
+    let photo = SceneRef::Photo {
+        rgb: &bg.rgb,
+        depth_m: &bg.depth_m,
+    };
+    let c = render(photo, &cam, &light, None, Some(&rf)).unwrap();
+    let g = gpu.render(photo, &cam, &light, None, Some(&rf)).unwrap();
+    let p = render(photo, &cam, &light, None, Some(&pinhole)).unwrap();
+    assert_eq!(c.rain, g.rain);
+    assert!(c.rain.unwrap().0.streaks > 100);
+    let (ca, ga, pa) = (
+        c.layer(Layer::RainAlpha).unwrap(),
+        g.layer(Layer::RainAlpha).unwrap(),
+        p.layer(Layer::RainAlpha).unwrap(),
+    );
+    let (worst_a, _) = max_abs(ca, ga);
+    let (worst_rgb, _) = max_abs(&c.rgb, &g.rgb);
+    let (worst_z, _) = max_abs(
+        c.layer(Layer::RainDepth).unwrap(),
+        g.layer(Layer::RainDepth).unwrap(),
+    );
+    eprintln!(
+        "through a lens, GPU vs CPU: alpha {worst_a:.2e}, rgb {worst_rgb:.2e}, depth {worst_z:.2e}"
+    );
+    assert!(worst_a < 1e-4, "rain alpha max abs diff {worst_a}");
+    assert!(worst_rgb < 1e-4, "rgb max abs diff {worst_rgb}");
+    assert!(worst_z < 1e-3, "rain depth max abs diff {worst_z}");
+    let (_, changed) = max_abs(ca, pa);
+    assert!(
+        changed * 10 > ca.len(),
+        "{changed} pixels differ from the pinhole's"
+    );
+}
+
+#[test]
 fn gpu_matches_cpu_under_a_cie_sky_with_sky_visibility() {
     let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
     let (scene, cam) = street();
@@ -276,6 +341,7 @@ fn pooled_buffers_give_the_same_frames_and_do_not_grow() {
         region: &region,
         exposure_s: 1.0 / 30.0,
         camera_velocity_m_s: Vec3::ZERO,
+        lens: None,
         ground: true,
         shelter: &[],
         shading: &shading,

@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use skyfall_core::frame::request::{FrameRequest, SceneData};
 use skyfall_core::rain::drops::RainMethod;
 use skyfall_core::scene::boxes::{BoxScene, SceneBox};
-use skyfall_core::scene::camera::Camera;
+use skyfall_core::scene::camera::{Camera, ThinLens};
 use skyfall_core::scene::lights::Light;
 use skyfall_core::weather::{SkySpec, Weather};
 use std::sync::Arc;
@@ -90,12 +90,21 @@ struct CameraAttrs<'py> {
     velocity_m_s: [f64; 3],
 }
 
-/// A camera with its exposure (s) and velocity (m/s).
+/// `skyfall.Camera`'s thin lens (`f_number` None: a pinhole).
+#[derive(FromPyObject)]
+struct LensAttrs {
+    f_number: Option<f64>,
+    focus_distance_m: Option<f64>,
+    sensor_width_mm: f64,
+}
+
+/// A camera with its exposure (s), velocity (m/s) and lens.
 pub struct CameraSpec {
     /// The core's camera.
     pub camera: Camera,
     exposure_s: f64,
     velocity_m_s: [f64; 3],
+    lens: Option<ThinLens>,
 }
 
 impl<'a, 'py> FromPyObject<'a, 'py> for CameraSpec {
@@ -130,10 +139,23 @@ impl<'a, 'py> FromPyObject<'a, 'py> for CameraSpec {
             rot,
         )
         .map_err(CoreError)?;
+        let l: LensAttrs = ob.extract()?;
+        let lens = match l.f_number {
+            Some(n) => Some(
+                ThinLens::new(
+                    n,
+                    l.focus_distance_m.unwrap_or(f64::INFINITY),
+                    l.sensor_width_mm,
+                )
+                .map_err(CoreError)?,
+            ),
+            None => None,
+        };
         Ok(CameraSpec {
             camera,
             exposure_s: a.exposure_s,
             velocity_m_s: a.velocity_m_s,
+            lens,
         })
     }
 }
@@ -326,6 +348,7 @@ impl<'py> ParsedRequest<'py> {
             camera: self.camera.camera,
             exposure_s: self.camera.exposure_s,
             camera_velocity_m_s: self.camera.velocity_m_s,
+            lens: self.camera.lens,
             scene,
             lights: &self.lights,
             weather: &self.weather,

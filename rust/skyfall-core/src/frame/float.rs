@@ -238,6 +238,7 @@ mod tests {
             region: &region,
             exposure_s: 1.0 / 30.0,
             camera_velocity_m_s: Vec3::ZERO,
+            lens: None,
             ground: true,
             shelter: &[],
             shading: &shading,

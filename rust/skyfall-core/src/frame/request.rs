@@ -10,7 +10,7 @@ use crate::rain::drops::RainRegion;
 use crate::rain::streaks::{RainFrame, RainShading};
 use crate::ranges;
 use crate::scene::boxes::{BoxScene, SceneBox};
-use crate::scene::camera::Camera;
+use crate::scene::camera::{Camera, Defocus, ThinLens};
 use crate::scene::lights::Light;
 use crate::sky::Sky;
 use crate::sky::ambient::AmbientMap;
@@ -58,6 +58,8 @@ pub struct FrameRequest<'a> {
     pub exposure_s: f64,
     /// Its velocity, m/s: streaks follow the drops' motion relative to it.
     pub camera_velocity_m_s: [f64; 3],
+    /// Its thin lens, which defocuses the streaks; None: a pinhole.
+    pub lens: Option<ThinLens>,
     /// What it looks at.
     pub scene: SceneData<'a>,
     /// The scene's lamps and headlights.
@@ -87,12 +89,13 @@ pub struct FrameSetup {
     shelter: Vec<SceneBox>,
     exposure_s: f32,
     camera_velocity_m_s: Vec3,
+    lens: Option<Defocus>,
     ground: bool,
 }
 
 impl FrameRequest<'_> {
     /// Checks the request's own values against their ranges (the weather, the exposure, the
-    /// camera's speed, the time, the cull threshold).
+    /// camera's speed, the time, the cull threshold; the lens checks itself when it is made).
     pub fn validate(&self) -> Result<()> {
         self.weather.validate()?;
         ranges::EXPOSURE_S.check(self.exposure_s)?;
@@ -173,6 +176,11 @@ impl FrameSetup {
             Vec::new()
         };
         let v = req.camera_velocity_m_s;
+        let lens = req
+            .lens
+            .as_ref()
+            .map(|l| l.defocus(&req.camera))
+            .transpose()?;
         Ok(FrameSetup {
             sky,
             haze,
@@ -181,6 +189,7 @@ impl FrameSetup {
             shelter,
             exposure_s: req.exposure_s as f32,
             camera_velocity_m_s: Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32),
+            lens,
             ground,
         })
     }
@@ -199,6 +208,7 @@ impl FrameSetup {
             region,
             exposure_s: self.exposure_s,
             camera_velocity_m_s: self.camera_velocity_m_s,
+            lens: self.lens,
             ground: self.ground,
             shelter: &self.shelter,
             shading,

@@ -524,8 +524,11 @@ mod tests {
     }
 
     /// The fused frame against the float frame encoded: bytes within 1 code and nearly all
-    /// equal, the same counts and the same coverage layer.
-    fn check_against_the_float_frame(shading: &RainShading) {
+    /// equal, the same counts and the same coverage layer (returned), through `lens`.
+    fn check_against_the_float_frame(
+        shading: &RainShading,
+        lens: Option<crate::scene::camera::ThinLens>,
+    ) -> Vec<f32> {
         let (w, h) = (300usize, 61usize);
         let cam = Camera::new(
             w as u32,
@@ -545,6 +548,7 @@ mod tests {
             region: &region,
             exposure_s: 1.0 / 30.0,
             camera_velocity_m_s: Vec3::ZERO,
+            lens: lens.map(|l| l.defocus(&cam).unwrap()),
             ground: false,
             shelter: &[],
             shading,
@@ -613,12 +617,13 @@ mod tests {
             alpha_err < 1e-6 && ref_alpha.iter().any(|&a| a > 0.01),
             "{alpha_err}"
         );
+        ref_alpha.to_vec()
     }
 
     #[test]
     fn the_fused_8_bit_path_is_the_float_frame_encoded() {
         // Grey light (Q one value per pixel) and a warm lamp by the camera (Q per channel).
-        check_against_the_float_frame(&RainShading::open_sky());
+        check_against_the_float_frame(&RainShading::open_sky(), None);
         let lamp = Light {
             position_m: Vec3::new(0.5, 1.8, -1.5),
             intensity_cd: 3e4,
@@ -633,7 +638,26 @@ mod tests {
             lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).x
                 > 2.0 * lit.drop_light(Vec3::new(0.5, 1.5, -1.5)).z
         );
-        check_against_the_float_frame(&lit);
+        check_against_the_float_frame(&lit, None);
+    }
+
+    #[test]
+    fn the_8_bit_path_is_the_float_frame_through_a_lens_too() {
+        // A wide aperture focused at 8 m (f = 60 px · 300 mm / 300 px = 60 mm at f/0.7): the
+        // near drops' blur circles are several pixels wide, and the frame changes.
+        let lens = crate::scene::camera::ThinLens::new(0.7, 8.0, 300.0).unwrap();
+        let pinhole = check_against_the_float_frame(&RainShading::open_sky(), None);
+        let blurred = check_against_the_float_frame(&RainShading::open_sky(), Some(lens));
+        let changed = pinhole
+            .iter()
+            .zip(&blurred)
+            .filter(|(a, b)| (*a - *b).abs() > 1e-3)
+            .count();
+        assert!(changed * 10 > pinhole.len(), "{changed} pixels changed");
+        // the blur spreads the drops' opacity: more pixels covered, the densest less dense
+        let covered = |a: &[f32]| a.iter().filter(|&&v| v > 1e-4).count();
+        let densest = |a: &[f32]| a.iter().fold(0.0f32, |m, &v| m.max(v));
+        assert!(covered(&blurred) > covered(&pinhole) && densest(&blurred) < densest(&pinhole));
     }
 
     #[test]

@@ -27,10 +27,10 @@
 
 use super::drops::{Drop, RainRegion, voxel_in_view};
 use super::texture::{Streak, draw_streaks};
-use crate::particles::streak::{ScreenStreak, screen_streak};
+use crate::particles::streak::{ScreenStreak, screen_streak_through};
 use crate::particles::voxels::{map_voxel_columns, voxel_seed, wrap};
 use crate::physics::fall_speed::FallSpeed;
-use crate::scene::camera::Camera;
+use crate::scene::camera::{Camera, Defocus};
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -96,6 +96,7 @@ fn probe_area(
     cam: &Camera,
     exposure_s: f64,
     camera_velocity_m_s: Vec3,
+    lens: Option<&Defocus>,
 ) -> (impl Fn(Vec3) -> f32 + Sync, f32) {
     let law = *FallSpeed::beard_standard();
     let d_mid = region
@@ -109,7 +110,7 @@ fn probe_area(
         region.wind_m_s.z as f32,
     );
     let (near, frame) = (region.near_m as f32, (cam.width as f32, cam.height as f32));
-    let cam = *cam;
+    let (cam, lens) = (*cam, lens.copied());
     let area_at = move |end: Vec3| -> f32 {
         if end.length() > near {
             return 0.0;
@@ -120,8 +121,14 @@ fn probe_area(
             diameter_m: (d_mid * 1e-3) as f32,
             id: [0; 5],
         };
-        screen_streak(&cam, &probe, exposure_s as f32, camera_velocity_m_s)
-            .map_or(0.0, |s: ScreenStreak| s.opacity_area_in(frame.0, frame.1))
+        screen_streak_through(
+            &cam,
+            lens.as_ref(),
+            &probe,
+            exposure_s as f32,
+            camera_velocity_m_s,
+        )
+        .map_or(0.0, |s: ScreenStreak| s.opacity_area_in(frame.0, frame.1))
     };
     (area_at, (law.m_s(d_mid) * exposure_s) as f32)
 }
@@ -143,12 +150,13 @@ impl AsMut<Vec<Drop>> for Column {
 
 /// The billboards' streaks as drops, for the voxels that can draw into `cam`'s frame, widened
 /// to carry the drops' opacity (see the module docs; `camera_velocity_m_s` as in the drawn
-/// streaks).
+/// streaks, and `lens` too: the balance's probes are defocused as the drawn streaks are).
 pub fn billboards_in_view(
     region: &RainRegion,
     cam: &Camera,
     exposure_s: f64,
     camera_velocity_m_s: Vec3,
+    lens: Option<&Defocus>,
     ground: bool,
 ) -> Vec<Drop> {
     let camera_speed_m_s = f64::from(camera_velocity_m_s.length());
@@ -167,7 +175,7 @@ pub fn billboards_in_view(
     let voxel_rel = |voxel: [i64; 3], offset: f64| {
         (DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64) + offset - eye).as_vec3()
     };
-    let (area_at, probe_len) = probe_area(region, cam, exposure_s, camera_velocity_m_s);
+    let (area_at, probe_len) = probe_area(region, cam, exposure_s, camera_velocity_m_s, lens);
     // A billboard's streak can end up to its own length below the voxel (the texture wraps).
     let longest = region.bins.last().map_or(0.0, |b| law.m_s(b.1)) * exposure_s;
     let per_voxel: usize = textures.iter().map(Vec::len).sum();
@@ -273,13 +281,23 @@ mod tests {
             Mat3::IDENTITY,
         )
         .unwrap();
-        let (area_at, len) = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO);
+        let (area_at, len) = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO, None);
         // (positions relative to the camera, as billboards_in_view makes them)
         let (corner_m, centre_m) = (Vec3::new(0.0, 1.0, -1.0), Vec3::new(0.5, 1.5, -0.5));
         let (corner, centre) = (corner_m - cam.eye(), centre_m - cam.eye());
         let mut rng = Pcg64Mcg::seed_from_u64(3);
         let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
         assert!((a / b - 1.125).abs() < 0.02, "{}", a / b);
+        // Through a lens the probes blur as the drawn streaks do and keep their opacity-area,
+        // so the balance is Jensen's ratio still (f = 100 px · 400 mm / 400 px = 100 mm at f/1
+        // focused at infinity: blur circles of 5 to 10 px over the voxel's depths).
+        let lens = crate::scene::camera::ThinLens::new(1.0, f64::INFINITY, 400.0).unwrap();
+        let defocus = lens.defocus(&cam).unwrap();
+        assert!(defocus.blur_px(1.0 / 1.5) > 5.0);
+        let (area_at, len) = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO, Some(&defocus));
+        let mut rng = Pcg64Mcg::seed_from_u64(3);
+        let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
+        assert!((a / b - 1.125).abs() < 0.02, "through a lens: {}", a / b);
         // far away the spread of depths no longer matters
         let far = Camera::new(
             400,
@@ -290,7 +308,7 @@ mod tests {
         )
         .unwrap();
         let r = RainRegion::new(10.0, &[1.0, 2.0], 30.0, [0.0; 3], 0.0, 1).unwrap();
-        let (area_at, len) = probe_area(&r, &far, 1.0 / 30.0, Vec3::ZERO);
+        let (area_at, len) = probe_area(&r, &far, 1.0 / 30.0, Vec3::ZERO, None);
         let (corner, centre) = (corner_m - far.eye(), centre_m - far.eye());
         let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
         assert!((a / b - 1.0).abs() < 0.003, "{}", a / b);
@@ -307,7 +325,7 @@ mod tests {
             Mat3::IDENTITY,
         )
         .unwrap();
-        let b = billboards_in_view(&r, &cam, 1.0 / 30.0, Vec3::ZERO, true);
+        let b = billboards_in_view(&r, &cam, 1.0 / 30.0, Vec3::ZERO, None, true);
         let d = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true);
         // Over the voxels both draw (billboards keep a few more at the frustum's edge: their
         // streaks reach below the voxel).

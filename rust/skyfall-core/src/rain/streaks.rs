@@ -17,8 +17,8 @@ use crate::error::Result;
 #[cfg(test)]
 use crate::particles::composite::{RainTargets, composite_streaks};
 use crate::particles::order::permute_in_place;
-use crate::particles::streak::{ScreenStreak, screen_streak};
-use crate::scene::camera::Camera;
+use crate::particles::streak::{ScreenStreak, screen_streak_through};
+use crate::scene::camera::{Camera, Defocus};
 use crate::scene::lights::Light;
 use crate::sky::ambient::AmbientMap;
 use glam::Vec3;
@@ -87,6 +87,7 @@ pub struct RainStats {
 /// deterministic order). The GPU backend draws the same list.
 pub fn prepare(
     cam: &Camera,
+    lens: Option<&Defocus>,
     drops: &[Drop],
     exposure_s: f32,
     camera_velocity_m_s: Vec3,
@@ -99,7 +100,7 @@ pub fn prepare(
         .par_iter()
         .with_min_len(1024)
         .filter_map(|d| {
-            screen_streak(cam, d, exposure_s, camera_velocity_m_s).map(|mut s| {
+            screen_streak_through(cam, lens, d, exposure_s, camera_velocity_m_s).map(|mut s| {
                 s.light = shading.drop_light(eye + d.position_m);
                 s.reflectance = shading.reflectance;
                 s
@@ -140,6 +141,8 @@ pub struct RainFrame<'a> {
     pub exposure_s: f32,
     /// The camera's velocity, m/s: streaks follow the drops' motion relative to it.
     pub camera_velocity_m_s: Vec3,
+    /// The camera's thin lens at the frame's resolution; None: a pinhole.
+    pub lens: Option<Defocus>,
     /// Whether the ground bounds the rain.
     pub ground: bool,
     /// Boxes that shelter the rain (see [`super::shelter`]); empty: none.
@@ -167,6 +170,7 @@ impl RainFrame<'_> {
                 cam,
                 t,
                 self.camera_velocity_m_s,
+                self.lens.as_ref(),
                 self.ground,
             ),
         };
@@ -178,6 +182,7 @@ impl RainFrame<'_> {
         );
         let (streaks, stats) = prepare(
             cam,
+            self.lens.as_ref(),
             &drops,
             self.exposure_s,
             self.camera_velocity_m_s,
@@ -197,7 +202,7 @@ pub fn composite(
     shading: &RainShading,
     t: RainTargets<'_>,
 ) -> Result<RainStats> {
-    let (streaks, stats) = prepare(cam, drops, exposure_s, Vec3::ZERO, shading);
+    let (streaks, stats) = prepare(cam, None, drops, exposure_s, Vec3::ZERO, shading);
     composite_streaks(cam, &streaks, t)?;
     Ok(stats)
 }
@@ -205,6 +210,7 @@ pub fn composite(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::particles::streak::screen_streak;
     use glam::Vec2;
     use glam::{Mat3, Vec3};
 
@@ -247,7 +253,7 @@ mod tests {
             .collect();
         let mut shading = RainShading::open_sky();
         shading.drop_radiance = 1.3;
-        let (mut streaks, _) = prepare(&cam, &drops, 1.0 / 30.0, Vec3::ZERO, &shading);
+        let (mut streaks, _) = prepare(&cam, None, &drops, 1.0 / 30.0, Vec3::ZERO, &shading);
         // Each particle carries its own r (particles of several effects share one list).
         assert!(streaks.iter().all(|s| s.reflectance == shading.reflectance));
         for s in &mut streaks {
