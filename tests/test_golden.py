@@ -41,12 +41,15 @@ from skimage.metrics import structural_similarity
 
 from skyfall import PhotoScene, Renderer, Weather, io, scenes
 from skyfall.demo import DEMO_FRAMES, STREET_RAIN_DAY, rain_alpha_png
+from skyfall.demo_photo import PHOTO_FRAMES
 
 GOLDEN = Path(__file__).parent / "data" / "golden"
 UPDATE = os.environ.get("SKYFALL_UPDATE_GOLDEN") == "1"
 W, H = 320, 180
 PHOTO_RAIN = Weather(rain_rate_mm_h=10.0)
 NAMES = [*(d.name for d in DEMO_FRAMES), "street_rain_day_alpha", "street_photo8_rain"]
+PHOTO_W = 160
+"""The demo's photos (skyfall.demo_photo) are guarded at 160 px wide (their own aspect)."""
 # (min SSIM, max mean |difference| in codes, max fraction of values > 1 code off)
 BOUNDS = {"cpu": (0.995, 0.25, 0.001), "gpu": (0.99, 0.25, 0.005)}
 
@@ -114,13 +117,26 @@ def test_frames_match_their_goldens(rendered, goldens, name):
 
 
 def test_the_goldens_are_the_demo_frames_and_show_rain(goldens):
-    assert sorted(p.name for p in GOLDEN.glob("*.png")) == sorted(f"{n}_{W}x{H}.png" for n in NAMES)
+    photos = [f"{f.name}_{PHOTO_W}w.png" for f in PHOTO_FRAMES]
+    assert sorted(p.name for p in GOLDEN.glob("*.png")) == sorted([f"{n}_{W}x{H}.png" for n in NAMES] + photos)
     for name in NAMES:
         assert goldens[name].shape == ((H, W) if name.endswith("alpha") else (H, W, 3)), name
     alpha = goldens["street_rain_day_alpha"]
     assert alpha.max() == 255 and np.mean(alpha > 0) > 0.9  # stretched to its maximum; at 50 mm/h streaks everywhere
     # the dusk frame is dark but for its lamps and headlights; the day frames are not
     assert goldens["street_rain"].mean() < 0.5 * goldens["street_rain_day"].mean()
+
+
+@pytest.mark.parametrize("frame", PHOTO_FRAMES, ids=[f.name for f in PHOTO_FRAMES])
+def test_the_demo_photos_match_their_goldens(frame):
+    # The 8-bit path on the CPU (render_srgb8's fused path), as the demo writes it.
+    path = GOLDEN / f"{frame.name}_{PHOTO_W}w.png"
+    before, after = frame.render(PHOTO_W)
+    if UPDATE:
+        io.write_image(path, after)
+    stats = compare(after, io.to_srgb8(io.read_image(path)))
+    assert within(stats, "cpu"), f"{frame.name}: SSIM {stats[0]:.5f}, mean {stats[1]:.4f} codes, {stats[2]:.3%} > 1 code"
+    assert np.abs(after.astype(int) - before).max() > 20  # the rain did something
 
 
 def test_the_bounds_reject_other_rain():
