@@ -40,35 +40,19 @@ where
                 .collect();
             window_min(&m, r, out);
         });
-    // Vertical pass, a column band at a time (each band's columns are read row by row).
+    // Vertical pass, row-wise: each output row is the element-wise minimum of the 2r + 1
+    // filtered rows around it (cut at the ends), so the inner loop runs along a row and
+    // vectorises.
     let mut dark = vec![0.0f32; width * height];
-    let band = 64;
-    let bands: Vec<(usize, Vec<f32>)> = (0..width.div_ceil(band))
-        .into_par_iter()
-        .map(|b| {
-            let (x0, x1) = (b * band, ((b + 1) * band).min(width));
-            let n = x1 - x0;
-            let mut col = vec![0.0f32; height];
-            let mut out = vec![0.0f32; height];
-            let mut block = vec![0.0f32; n * height];
-            for x in x0..x1 {
-                for (y, c) in col.iter_mut().enumerate() {
-                    *c = rows[y * width + x];
-                }
-                window_min(&col, r, &mut out);
-                for (y, &v) in out.iter().enumerate() {
-                    block[y * n + (x - x0)] = v;
-                }
+    dark.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
+        let (lo, hi) = (y.saturating_sub(r), (y + r).min(height - 1));
+        out.copy_from_slice(&rows[lo * width..(lo + 1) * width]);
+        for src in rows[(lo + 1) * width..(hi + 1) * width].chunks_exact(width) {
+            for (o, &v) in out.iter_mut().zip(src) {
+                *o = o.min(v);
             }
-            (x0, block)
-        })
-        .collect();
-    for (x0, block) in bands {
-        let n = block.len() / height.max(1);
-        for (y, chunk) in block.chunks_exact(n.max(1)).enumerate() {
-            dark[y * width + x0..y * width + x0 + n].copy_from_slice(chunk);
         }
-    }
+    });
     Ok(dark)
 }
 

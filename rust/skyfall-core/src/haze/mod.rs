@@ -81,12 +81,22 @@ impl Haze {
         }
     }
 
-    /// A row's transmittances into `t` (branch-free selects: the loop vectorises).
+    /// A row's transmittances into `t`: every pixel along depth·|ray| first (branch-free: the
+    /// loop vectorises; a sky pixel's ∞ gives 0), then the sky pixels again along their path to
+    /// the cloud base, when the ceiling is finite.
     #[inline]
     pub fn transmittance_row(&self, rays: &RowRays<'_>, depth: &[f32], t: &mut [f32]) {
-        for (((t, &d), &u2), &rise) in t.iter_mut().zip(depth).zip(rays.u2).zip(rays.rise) {
-            let len = (u2 + rays.v2 + 1.0).sqrt();
-            *t = self.transmittance(self.path_m(d, len, rise + rays.rise_row));
+        for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
+            *t = self.transmittance(d * (u2 + rays.v2 + 1.0).sqrt());
+        }
+        if self.sky_ceiling_m == f32::INFINITY || self.extinction_per_m <= 0.0 {
+            return;
+        }
+        for (x, (t, &d)) in t.iter_mut().zip(depth).enumerate() {
+            if d == f32::INFINITY {
+                let len = (rays.u2[x] + rays.v2 + 1.0).sqrt();
+                *t = self.transmittance(self.path_m(d, len, rays.rise[x] + rays.rise_row));
+            }
         }
     }
 }
