@@ -43,3 +43,16 @@ pub fn occluded(boxes: &[SceneBox], p: Vec3, dir: Vec3) -> bool {
         t_far > T_MIN && t_near <= t_far
     })
 }
+
+/// Whether a box meets the segment from `p` along unit-free `dir` up to `t_max` (in units of
+/// `dir`): the shadow ray of a surface point towards a light at `p + t_max·dir`.
+#[inline]
+pub fn occluded_within(boxes: &[SceneBox], p: Vec3, dir: Vec3, t_max: f32) -> bool {
+    let inv = inverse_direction(dir);
+    boxes.iter().any(|b| {
+        let (lo, hi) = slabs(b, p, inv);
+        let t_near = lo.max_element().max(T_MIN);
+        let t_far = hi.min_element().min(t_max);
+        t_near <= t_far
+    })
+}
