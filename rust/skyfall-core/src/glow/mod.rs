@@ -40,7 +40,7 @@ use glam::Vec3;
 pub const ORDERS: usize = 6;
 /// The Henyey–Greenstein asymmetry q of one scattering by the rain and mist: strongly forward
 /// (water drops far larger than the wavelength).
-pub const FORWARD_SCATTERING_Q: f32 = 0.9;
+pub const FORWARD_SCATTERING_Q: f32 = 0.95;
 /// The radius of a lamp's or headlight's emitting disc, m.
 pub const SOURCE_RADIUS_M: f32 = 0.15;
 /// Relative radiance (1.0 = white under the open sky) below which a glow is not drawn.
