@@ -203,8 +203,14 @@ fn surface_lit(l: LightElement, p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> Lit
 // skyfall_core::scene::raycast::occluded_within.
 fn occluded_within(p: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
     let inv = vec3<f32>(1.0 / safe(dir.x), 1.0 / safe(dir.y), 1.0 / safe(dir.z));
+    let q = p + dir * t_max;
+    let lo_seg = min(p, q);
+    let hi_seg = max(p, q);
     for (var i = 0u; i < scene.counts.x; i++) {
         let b = boxes[i];
+        if any(b.min_m.xyz > hi_seg) || any(b.max_m.xyz < lo_seg) {
+            continue;
+        }
         let t1 = (b.min_m.xyz - p) * inv;
         let t2 = (b.max_m.xyz - p) * inv;
         let lo = min(t1, t2);
