@@ -196,8 +196,8 @@ def street(
     """The bundled default scene: a street canyon seen from eye height.
 
     Buildings of 9-24 m line both sides of a ``width_m`` street running along -Z for
-    ``length_m``, with a tall block closing the view; lamps stand every 15 m on both kerbs at
-    5 m. The camera stands at (1.5, 1.6, 0) on the street, looking down it. An awning over
+    ``length_m``, with a tall block closing the view; lamps stand every 15 m on both sides,
+    2.5 m in from the building fronts, 5 m up. The camera stands at (1.5, 1.6, 0) on the street, looking down it. An awning over
     the right-hand pavement shades the rain beneath it from the sky.
 
     Parameters
@@ -256,7 +256,7 @@ def street(
     box_list.append({"min": (-half - 12, 0, -length_m - 20), "max": (half + 12, 30, -length_m), "albedo": (0.55, 0.55, 0.58)})
     if awning:
         box_list.append({"min": (half - 3.5, 3.0, -min(40.0, length_m)), "max": (half, 3.25, -1.0), "albedo": (0.45, 0.12, 0.1)})
-    lamp_positions = [(s * (half - 1.0), 5.0, -float(z)) for z in np.arange(8.0, length_m, 15.0) for s in (-1, 1)]
+    lamp_positions = [(s * (half - 2.5), 5.0, -float(z)) for z in np.arange(8.0, length_m, 15.0) for s in (-1, 1)]
     cam = Camera((1.5, 1.6, 0.0), yaw_deg=0.0, pitch_deg=2.0, vertical_fov_deg=55.0)
     lights: list[PointLight | SpotLight] = []
     if lamps:
