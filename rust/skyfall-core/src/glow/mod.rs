@@ -8,7 +8,7 @@
 //! times arrives with the Poisson weight p_n = e^(−T) Tⁿ/n! (the direct part is n = 0):
 //!
 //! - the **direct** part, e^(−T)·E_c, is the emitter: a disc of angular radius
-//!   α = max([`SOURCE_RADIUS_M`]/d, one pixel δ) of radiance e^(−T)·E_c/(π(α² + δ²/12)), its
+//!   α = max([`SOURCE_RADIUS_M`]/d, one pixel δ) (at most [`MAX_DISC_RAD`]) of radiance e^(−T)·E_c/(π(α² + δ²/12)), its
 //!   edge a ramp one pixel wide (the area of the ramped disc is that denominator; a disc
 //!   smaller than a pixel keeps its flux: it is widened and dimmed);
 //! - the **scattered** part is spread around the source's direction by the phase function of
@@ -43,6 +43,8 @@ pub const ORDERS: usize = 6;
 pub const FORWARD_SCATTERING_Q: f32 = 0.95;
 /// The radius of a lamp's or headlight's emitting disc, m.
 pub const SOURCE_RADIUS_M: f32 = 0.15;
+/// The largest angular radius of an emitter disc, rad.
+pub const MAX_DISC_RAD: f32 = 0.5;
 /// Relative radiance (1.0 = white under the open sky) below which a glow is not drawn.
 pub const GLOW_FLOOR: f32 = 1e-3;
 
@@ -150,7 +152,10 @@ impl Glow {
                     return None;
                 }
                 let t = extinction_per_m * d;
-                let disc_radius = (SOURCE_RADIUS_M / d).max(pixel_rad);
+                // (at most MAX_DISC_RAD: a camera all but inside a lamp sees a wide disc, not
+                // a sphere's worth of one)
+                let disc_radius =
+                    (SOURCE_RADIUS_M / d).clamp(pixel_rad, MAX_DISC_RAD.max(pixel_rad));
                 // The antialiased disc's integral is π(α² + δ²/12) (a ramp of width δ): its
                 // radiance carries the direct part exactly.
                 let area = std::f32::consts::PI
