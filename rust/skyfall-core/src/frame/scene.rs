@@ -78,26 +78,27 @@ impl<'a> SceneLight<'a> {
             let (e, dir, r) = l.surface_illuminance_lux(p, n);
             (e, dir, r, (a * e).max_element() * inv_e)
         };
-        // The shares once, kept for up to KEPT lights (the rest recomputed: the same values).
-        let mut kept = [0.0f32; KEPT];
-        let share_of = |i: usize, l: &Light, kept: &[f32; KEPT]| {
-            if i < KEPT { kept[i] } else { share(l).3 }
+        // Each light's illuminance, direction, distance and share once, kept for up to KEPT
+        // lights (the rest computed again: the same values).
+        let mut kept = [(Vec3::ZERO, Vec3::ZERO, 0.0f32, 0.0f32); KEPT];
+        let lit = |i: usize, l: &Light, kept: &[(Vec3, Vec3, f32, f32); KEPT]| {
+            if i < KEPT { kept[i] } else { share(l) }
         };
         // The unshadowed total S first, then the skip level τ: the largest of
         // ε·S, ε·S/2, …, ε·S/2⁷ with (lights at or below it) · τ ≤ ε·S, so the lights skipped
         // add at most ε·S together.
         let mut total = ambient.max_element();
         for (i, l) in self.lights.iter().enumerate() {
-            let c = share(l).3;
+            let s = share(l);
             if i < KEPT {
-                kept[i] = c;
+                kept[i] = s;
             }
-            total += c;
+            total += s.3;
         }
         let budget = SHADOW_SKIP_RELATIVE * total;
         let mut below = [0u32; SKIP_LEVELS];
         for (i, l) in self.lights.iter().enumerate() {
-            let c = share_of(i, l, &kept);
+            let c = lit(i, l, &kept).3;
             if c > 0.0 {
                 for (j, k) in below.iter_mut().enumerate() {
                     if c <= skip_level(budget, j) {
@@ -117,10 +118,10 @@ impl<'a> SceneLight<'a> {
         let lifted = p + n * SHADOW_OFFSET_M;
         let mut sum = Vec3::ZERO;
         for (i, l) in self.lights.iter().enumerate() {
-            if share_of(i, l, &kept) <= 0.0 {
+            let (e, dir, r, c) = lit(i, l, &kept);
+            if c <= 0.0 {
                 continue;
             }
-            let (e, dir, r, c) = share(l);
             if c <= skip || !occluded_within(boxes, lifted, dir, r - SHADOW_OFFSET_M) {
                 sum += e;
             }
@@ -129,8 +130,8 @@ impl<'a> SceneLight<'a> {
     }
 }
 
-/// Lights whose shares [`SceneLight::lamp_light`] keeps between its passes (the rest it
-/// computes again).
+/// Lights whose illuminance and share [`SceneLight::lamp_light`] keeps between its passes
+/// (the rest it computes again).
 const KEPT: usize = 32;
 
 /// Levels of the skip rule: ε·S/2ʲ for j < this.
