@@ -34,6 +34,10 @@ impl FramePass for GlowPass {
         glow: &Glow,
     ) -> Result<(), GpuError> {
         const _: () = assert!(ORDERS == 6, "GlowElement packs six orders");
+        f.ctx.check_buffer(
+            "the lights in view",
+            (glow.sources.len() * size_of::<GlowElement>()) as u64,
+        )?;
         let sources: Vec<GlowElement> = glow
             .sources
             .iter()

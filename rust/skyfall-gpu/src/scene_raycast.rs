@@ -89,6 +89,10 @@ impl FramePass for SceneRaycastPass {
             ],
             counts: [light.lights.len() as u32, 0, 0, 0],
         };
+        f.ctx.check_buffer(
+            "the lights",
+            (light.lights.len() * size_of::<LightElement>()) as u64,
+        )?;
         let mut lights: Vec<LightElement> = light.lights.iter().map(LightElement::new).collect();
         if lights.is_empty() {
             lights.push(LightElement::default()); // counts.x = 0 keeps it unread

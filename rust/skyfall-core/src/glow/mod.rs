@@ -8,8 +8,8 @@
 //! times arrives with the Poisson weight p_n = e^(−T) Tⁿ/n! (the direct part is n = 0):
 //!
 //! - the **direct** part, e^(−T)·E_c, is the emitter: a disc of angular radius
-//!   α = max([`SOURCE_RADIUS_M`]/d, one pixel δ) (at most [`MAX_DISC_RAD`]) of radiance e^(−T)·E_c/(π(α² + δ²/12)), its
-//!   edge a ramp one pixel wide (the area of the ramped disc is that denominator; a disc
+//!   α = max([`SOURCE_RADIUS_M`]/d, one pixel δ) (at most [`MAX_DISC_RAD`]) of radiance
+//!   e^(−T)·E_c/(π(α² + δ²/12)), its edge a ramp one pixel wide (the area of the ramped disc is that denominator; a disc
 //!   smaller than a pixel keeps its flux: it is widened and dimmed);
 //! - the **scattered** part is spread around the source's direction by the phase function of
 //!   the drops. With a Henyey–Greenstein lobe of asymmetry q for one scattering, n scatterings
