@@ -21,7 +21,10 @@ ambient_light.png
     section across the street 20 m ahead showing the awning's shade.
 street_rain.exr, street_rain.png
     The rainy street at dusk (30 lx of sky) in 20 mm/h rain with its lamps lit and an oncoming
-    car's headlights: lit drops shine (the PNG saved at exposure 0.25).
+    car's headlights: the lamps light pools on the street and the walls (the awning shades the
+    pavement beneath it), the car's beams light the road and the drops, and every lamp and
+    headlight in view shows as a small emitter with its glow through the rain (the PNG saved at
+    exposure 0.1).
 photo_rain.png, photo_rain_portrait.png
     Real photos through the 8-bit path, before and after (:mod:`skyfall.demo_photo`):
     scikit-image's rocket at dusk in 15 mm/h rain with a made depth map (the sky keeps its
@@ -76,7 +79,7 @@ STREET_RAIN_DUSK = DemoFrame(
     "street_rain",
     partial(scenes.street, lamps=True, headlights=True),
     Weather(rain_rate_mm_h=20.0, sky_illuminance_lux=30.0),
-    exposure=0.25,
+    exposure=0.1,
 )
 """The street at dusk (30 lx of sky) in 20 mm/h rain, lamps lit and a car's headlights on."""
 DEMO_FRAMES = (STREET, STREET_RAIN_DAY, STREET_RAIN_DUSK)

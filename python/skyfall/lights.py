@@ -1,9 +1,22 @@
-"""Point and spot lights: street lamps and headlights that light rain streaks.
+"""Point and spot lights: street lamps and headlights.
 
-A light at distance d gives a drop the illuminance I * cone / d^2 (lux, per colour channel);
-the drop's light I_R grows by that over the sky's illuminance (see :class:`skyfall.Weather`),
-so at dusk (low ``sky_illuminance_lux``) drops near lamps shine. Lights light streaks only;
-lit surfaces come later. The core reads a light's fields directly (one frame request).
+A light of intensity I (cd) at distance r gives the illuminance I * cone / r^2 (lux, per colour
+channel) on a surface facing it. In a box scene a light
+
+- lights the rain drops: a drop's light I_R grows by that illuminance over the sky's
+  (see :class:`skyfall.Weather`), so at dusk (low ``sky_illuminance_lux``) drops near lamps
+  shine;
+- lights the surfaces that face it: a Lambertian face of albedo a gains a * I * cone * cos(theta)
+  / r^2 / E in the frame's relative units (1.0 = white under the open sky of horizontal
+  illuminance E), shadowed by the scene's boxes;
+- shows as an emitter (a disc 0.15 m across) with a glow: the light scattered by the rain and
+  mist on its way to the camera, spread wider as the optical depth to it grows (an atmospheric
+  point-spread function after Narasimhan & Nayar, "Shedding light on the weather", 2003),
+  unless a box hides it.
+
+A :class:`skyfall.PhotoScene`'s lights are lights in the photo's world: they light its drops
+only (a photo has no normals to light, and no glows are drawn over photos). The core reads a
+light's fields directly (one frame request).
 """
 
 from __future__ import annotations

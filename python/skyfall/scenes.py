@@ -39,8 +39,9 @@ class BoxScene:
     CIE standard overcast sky: zenith 9/7, horizon 3/7). Surfaces are lit by the sky they see:
     albedo times the illuminance on their normal over E, read from the ambient-light map
     (:func:`skyfall.sky.ambient_light_map`; open ground 1, an open wall 0.396 under the
-    overcast sky, less in a street canyon or under an awning, faces looking down 0). Walls
-    carry a 3 m grid of dark windows.
+    overcast sky, less in a street canyon or under an awning, faces looking down 0), plus the
+    scene's lights: albedo times I * cone * cos(theta) / r^2 / E per light that reaches the face
+    (shadowed by the boxes; see :mod:`skyfall.lights`). Walls carry a 3 m grid of dark windows.
 
     Attributes
     ----------
@@ -55,7 +56,7 @@ class BoxScene:
     lamps_m : ndarray, shape (L, 3)
         Street-lamp positions (m).
     lights : tuple of PointLight or SpotLight
-        Lights that light the rain.
+        Lights that light the rain and the surfaces facing them, seen as emitters with glows.
     """
 
     boxes: NDArray[np.float32]
@@ -196,8 +197,8 @@ def street(
     """The bundled default scene: a street canyon seen from eye height.
 
     Buildings of 9-24 m line both sides of a ``width_m`` street running along -Z for
-    ``length_m``, with a tall block closing the view; lamps stand every 15 m on both kerbs at
-    5 m. The camera stands at (1.5, 1.6, 0) on the street, looking down it. An awning over
+    ``length_m``, with a tall block closing the view; lamps stand every 15 m on both sides,
+    2.5 m in from the building fronts, 5 m up. The camera stands at (1.5, 1.6, 0) on the street, looking down it. An awning over
     the right-hand pavement shades the rain beneath it from the sky.
 
     Parameters
@@ -209,10 +210,14 @@ def street(
     seed : int
         Seeds the building heights and shades (deterministic), in [0, 2^64).
     lamps : bool
-        Light the lamps: warm 2000 cd point lights at the lamp heads.
+        Light the lamps: warm 2000 cd point lights at the lamp heads. They light the drops,
+        the street and the walls they face (with the boxes' shadows) and show as small
+        emitters with a glow through the rain (see :mod:`skyfall.lights`).
     headlights : bool
         An oncoming car 12 m ahead in the other lane: two 15000 cd spots, 1.5 m apart at
-        0.7 m, aimed along +Z (towards the camera) and slightly down.
+        0.7 m, aimed along +Z (towards the camera) and slightly down, with 30 degree cones (the
+        camera sees them at 21 and 27 degrees off their axes: one at full intensity, one
+        dimmer).
     awning : bool
         A 0.25 m thick awning 3.5 m deep over the right-hand pavement, 3 m up, from 1 m to
         40 m ahead: drops beneath it see less sky (:mod:`skyfall.sky`).
@@ -252,13 +257,13 @@ def street(
     box_list.append({"min": (-half - 12, 0, -length_m - 20), "max": (half + 12, 30, -length_m), "albedo": (0.55, 0.55, 0.58)})
     if awning:
         box_list.append({"min": (half - 3.5, 3.0, -min(40.0, length_m)), "max": (half, 3.25, -1.0), "albedo": (0.45, 0.12, 0.1)})
-    lamp_positions = [(s * (half - 1.0), 5.0, -float(z)) for z in np.arange(8.0, length_m, 15.0) for s in (-1, 1)]
+    lamp_positions = [(s * (half - 2.5), 5.0, -float(z)) for z in np.arange(8.0, length_m, 15.0) for s in (-1, 1)]
     cam = Camera((1.5, 1.6, 0.0), yaw_deg=0.0, pitch_deg=2.0, vertical_fov_deg=55.0)
     lights: list[PointLight | SpotLight] = []
     if lamps:
         lights += [PointLight(p, 2000.0, color=(1.0, 0.8, 0.55)) for p in lamp_positions]
     if headlights:
-        lights += [SpotLight((x, 0.7, -12.0), (0.0, -0.05, 1.0), 15000.0, cone_deg=25.0) for x in (-4.25, -2.75)]
+        lights += [SpotLight((x, 0.7, -12.0), (0.0, -0.05, 1.0), 15000.0, cone_deg=30.0) for x in (-4.25, -2.75)]
     return boxes(box_list, ground=True, camera=cam, lamps_m=lamp_positions, lights=tuple(lights))
 
 

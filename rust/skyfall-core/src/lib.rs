@@ -18,6 +18,7 @@
 pub mod color;
 pub mod error;
 pub mod frame;
+pub mod glow;
 pub mod haze;
 pub mod particles;
 pub mod physics;

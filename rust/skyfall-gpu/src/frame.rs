@@ -1,6 +1,7 @@
 //! The GPU frame: passes chained on the device, one readback per output.
 
 use crate::context::{AdapterChoice, GpuContext, GpuError};
+use crate::glow::GlowPass;
 use crate::haze::HazePass;
 use crate::pass::{FrameEncoder, FramePass, FrameTargets};
 use crate::pool::BufferPool;
@@ -24,6 +25,7 @@ pub struct GpuRenderer {
     pub ctx: GpuContext,
     raycast: SceneRaycastPass,
     haze: HazePass,
+    glow: GlowPass,
     rain: RainPass,
     pool: BufferPool,
 }
@@ -32,10 +34,11 @@ impl GpuRenderer {
     /// Creates the device and compiles the passes.
     pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
         let ctx = GpuContext::new(choice)?;
-        let (raycast, haze, rain) = ctx.scoped(|| {
+        let (raycast, haze, glow, rain) = ctx.scoped(|| {
             Ok((
                 SceneRaycastPass::new(&ctx),
                 HazePass::new(&ctx),
+                GlowPass::new(&ctx),
                 RainPass::new(&ctx),
             ))
         })?;
@@ -43,13 +46,14 @@ impl GpuRenderer {
             ctx,
             raycast,
             haze,
+            glow,
             rain,
             pool: BufferPool::default(),
         })
     }
 
-    /// Renders a frame: the scene (ray cast under `light`, or the photo uploaded), haze, rain,
-    /// then readback.
+    /// Renders a frame: the scene (ray cast under `light`, or the photo uploaded), haze, the
+    /// lights' glows (box scenes), rain, then readback.
     pub fn render(
         &self,
         scene: SceneRef<'_>,
@@ -84,7 +88,11 @@ impl GpuRenderer {
         let ctx = &self.ctx;
         ctx.scoped(|| {
             // The particles first (on the CPU: they do not depend on the scene).
-            let passes = Passes::prepare(cam, haze, rain)?;
+            let lit = match scene {
+                SceneRef::Boxes(b) => Some((b, light)),
+                SceneRef::Photo { .. } => None,
+            };
+            let passes = Passes::prepare(cam, lit, haze, rain)?;
             let mut f = FrameEncoder::new(ctx, &self.pool, cam);
             let (rgb, depth) = match scene {
                 SceneRef::Boxes(_) => (f.target("rgb", 3 * n), f.target("depth", n)),
@@ -106,12 +114,15 @@ impl GpuRenderer {
                 depth: &depth,
                 layers: &layers,
             };
-            // The passes in physical order: the scene, haze, rain.
+            // The passes in physical order: the scene, haze, the lights' glows, rain.
             if let SceneRef::Boxes(b) = scene {
                 self.raycast.encode(&mut f, &targets, (b, light))?;
             }
             if let Some(h) = passes.haze {
                 self.haze.encode(&mut f, &targets, h)?;
+            }
+            if let Some(g) = &passes.glow {
+                self.glow.encode(&mut f, &targets, g)?;
             }
             if let Some(p) = &passes.particles {
                 self.rain.encode(&mut f, &targets, &p.streaks)?;

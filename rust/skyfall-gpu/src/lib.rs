@@ -5,7 +5,8 @@
 //! - [`pass`]: the [`pass::FramePass`] trait every pass implements and the
 //!   [`pass::FrameEncoder`] a frame records into; [`uniforms`]: the passes' uniform blocks as
 //!   Pod structs; [`pool`]: buffers pooled across frames; [`readback`]: one mapped copy back.
-//! - One pass per file, its WGSL in `shaders/`: [`scene_raycast`], [`haze`], [`rain`].
+//! - One pass per file, its WGSL in `shaders/`: [`scene_raycast`], [`haze`], [`glow`],
+//!   [`rain`].
 //! - [`frame`]: the passes in physical order on one encoder, one submission, one readback.
 //!
 //! Passes read and write storage buffers (one f32 per channel), so readback is a plain
@@ -14,6 +15,7 @@
 
 pub mod context;
 pub mod frame;
+pub mod glow;
 pub mod haze;
 pub mod pass;
 pub mod pool;

@@ -2,7 +2,9 @@
 
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
-use crate::uniforms::{AmbientUniform, BoxElement, CameraUniform, SceneUniform, SkyUniform};
+use crate::uniforms::{
+    AmbientUniform, BoxElement, CameraUniform, LampUniform, LightElement, SceneUniform, SkyUniform,
+};
 use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::cie::SkyKind;
@@ -14,7 +16,7 @@ const SOURCE: &str = include_str!("shaders/scene_raycast.wgsl");
 pub struct SceneRaycastPass(ComputePass);
 
 impl FramePass for SceneRaycastPass {
-    /// The box scene and its light (sky and ambient-light map).
+    /// The box scene and its light (sky, ambient-light map, lights).
     type Input<'i> = (&'i BoxScene, &'i SceneLight<'i>);
 
     fn new(ctx: &GpuContext) -> Self {
@@ -25,7 +27,7 @@ impl FramePass for SceneRaycastPass {
             SOURCE,
             &[
                 Uniform, Uniform, ReadOnly, ReadWrite, ReadWrite, Uniform, Uniform, ReadOnly,
-                ReadOnly,
+                ReadOnly, Uniform, ReadOnly,
             ],
         ))
     }
@@ -78,6 +80,23 @@ impl FramePass for SceneRaycastPass {
             origin_spacing: [o.x, o.y, o.z, m.spacing_m],
             dims: [m.dims[0] as u32, m.dims[1] as u32, m.dims[2] as u32, 0],
         };
+        let lamps = LampUniform {
+            params: [
+                1.0 / light.sky_illuminance_lux,
+                skyfall_core::frame::scene::SHADOW_SKIP_RELATIVE,
+                0.0,
+                0.0,
+            ],
+            counts: [light.lights.len() as u32, 0, 0, 0],
+        };
+        f.ctx.check_buffer(
+            "the lights",
+            (light.lights.len() * size_of::<LightElement>()) as u64,
+        )?;
+        let mut lights: Vec<LightElement> = light.lights.iter().map(LightElement::new).collect();
+        if lights.is_empty() {
+            lights.push(LightElement::default()); // counts.x = 0 keeps it unread
+        }
         let buffers = [
             f.uniform("camera", &CameraUniform::new(f.cam)),
             f.uniform("scene", &info),
@@ -86,11 +105,15 @@ impl FramePass for SceneRaycastPass {
             f.uniform("ambient", &amb),
             f.upload("ambient_values", &m.values),
             f.upload("ambient_solid", &m.solid),
+            f.uniform("lamps", &lamps),
+            f.upload("lights", &lights),
         ];
-        let [cam, info, boxes, sky, amb, values, solid] = &buffers;
+        let [cam, info, boxes, sky, amb, values, solid, lamps, lights] = &buffers;
         f.dispatch(
             &self.0,
-            &[cam, info, boxes, t.rgb, t.depth, sky, amb, values, solid],
+            &[
+                cam, info, boxes, t.rgb, t.depth, sky, amb, values, solid, lamps, lights,
+            ],
         );
         f.hold(buffers);
         Ok(())

@@ -106,6 +106,78 @@ pub struct AmbientUniform {
     pub dims: [u32; 4],
 }
 
+/// `LampInfo` in `shaders/scene_raycast.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct LampUniform {
+    /// 1/E (1/lux), the shadow-skip bound.
+    pub params: [f32; 4],
+    /// Number of lights.
+    pub counts: [u32; 4],
+}
+
+/// `LightElement` in `shaders/scene_raycast.wgsl` (a storage array's element).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct LightElement {
+    /// Position, m; intensity, cd.
+    pub pos_cd: [f32; 4],
+    /// Linear RGB; 1 for a spot.
+    pub color_spot: [f32; 4],
+    /// The spot's unit axis; cos of its outer half-angle.
+    pub axis_outer: [f32; 4],
+    /// cos of its inner half-angle.
+    pub inner: [f32; 4],
+}
+
+impl LightElement {
+    /// The element of `l`.
+    pub fn new(l: &skyfall_core::scene::lights::Light) -> Self {
+        let p = l.position_m;
+        let c = l.color;
+        let (axis, outer, inner, spot) = match l.spot {
+            Some((a, o, i)) => (a, o, i, 1.0),
+            None => (glam::Vec3::ZERO, 0.0, 0.0, 0.0),
+        };
+        LightElement {
+            pos_cd: [p.x, p.y, p.z, l.intensity_cd],
+            color_spot: [c.x, c.y, c.z, spot],
+            axis_outer: [axis.x, axis.y, axis.z, outer],
+            inner: [inner, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// `GlowInfo` in `shaders/glow.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct GlowUniform {
+    /// The angular size of a pixel, rad.
+    pub params: [f32; 4],
+    /// Number of sources.
+    pub counts: [u32; 4],
+}
+
+/// `GlowSource` in `shaders/glow.wgsl` (a storage array's element).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct GlowElement {
+    /// Unit direction from the eye; the cut chord.
+    pub dir_cut: [f32; 4],
+    /// The light at the camera, relative × sr; the disc's angular radius, rad.
+    pub flux_radius: [f32; 4],
+    /// The disc's radiance, relative.
+    pub disc: [f32; 4],
+    /// The orders' weights (first four).
+    pub weights_a: [f32; 4],
+    /// The orders' weights (last two).
+    pub weights_b: [f32; 4],
+    /// The orders' asymmetries (first four).
+    pub asym_a: [f32; 4],
+    /// The orders' asymmetries (last two).
+    pub asym_b: [f32; 4],
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -121,6 +193,10 @@ mod tests {
             size_of::<BoxElement>(),
             size_of::<SkyUniform>(),
             size_of::<AmbientUniform>(),
+            size_of::<LampUniform>(),
+            size_of::<LightElement>(),
+            size_of::<GlowUniform>(),
+            size_of::<GlowElement>(),
         ] {
             assert_eq!(size % 16, 0, "{size}");
         }

@@ -30,3 +30,8 @@ fn haze_wgsl_is_valid() {
 fn rain_wgsl_is_valid() {
     validate("rain", include_str!("../src/shaders/rain.wgsl"));
 }
+
+#[test]
+fn glow_wgsl_is_valid() {
+    validate("glow", include_str!("../src/shaders/glow.wgsl"));
+}

@@ -52,7 +52,12 @@ pub fn render_into(
         .zip(layers.take(Layer::RainDepth));
     // The passes first (the particles do not depend on the scene), the particles binned to
     // the bands.
-    let passes = Passes::prepare(cam, haze, rain)?;
+    let lit = match scene {
+        SceneRef::Boxes(b) => Some((b, light)),
+        SceneRef::Photo { .. } => None,
+    };
+    let passes = Passes::prepare(cam, lit, haze, rain)?;
+    let glow = passes.glow.as_ref();
     let binned = passes
         .particles
         .as_ref()
@@ -75,7 +80,7 @@ pub fn render_into(
     let rays = ViewRays::new(cam);
     let particles = binned.as_ref().map(|(streaks, bins)| (*streaks, bins));
     // The pipeline, band by band while the band is in cache: the scene stage, then the effect
-    // passes in physical order (haze, rain).
+    // passes in physical order (haze, the lights' glows, rain).
     rgb.par_chunks_mut(3 * band)
         .zip(depth.par_chunks_mut(band))
         .zip(t_bands.par_iter_mut())
@@ -93,6 +98,9 @@ pub fn render_into(
                 if let (Some(h), Some(t_band)) = (haze, t_band.as_deref_mut()) {
                     let t_row = &mut t_band[k * w..(k + 1) * w];
                     apply_row(h, &rays.row(y as u32, 0..w), rgb_row, depth_row, t_row);
+                }
+                if let Some(g) = glow {
+                    g.apply_row(cam, y as u32, rgb_row);
                 }
             }
             if let (Some((streaks, (offsets, indices))), Some((alpha, rain_depth))) =
@@ -161,10 +169,7 @@ mod tests {
         let h = Haze::new(0.02, [0.43; 3], 700.0).unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
-        let light = SceneLight {
-            sky: &sky,
-            ambient: &amb,
-        };
+        let light = SceneLight::new(&sky, &amb);
         let fused = render(SceneRef::Boxes(&scene), &cam, &light, Some(&h), None).unwrap();
         let t_layer = fused.layer(Layer::Transmittance).unwrap().to_vec();
         for y in 0..30u32 {
@@ -221,10 +226,7 @@ mod tests {
         .unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
-        let light = SceneLight {
-            sky: &sky,
-            ambient: &amb,
-        };
+        let light = SceneLight::new(&sky, &amb);
         let n = cam.pixels();
         let (photo, depth) = (vec![0.2f32; 3 * n], vec![3.0f32; n]);
         let scene = SceneRef::Photo {
@@ -322,10 +324,7 @@ mod tests {
         .unwrap();
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0; 5]);
-        let light = SceneLight {
-            sky: &sky,
-            ambient: &amb,
-        };
+        let light = SceneLight::new(&sky, &amb);
         assert!(matches!(
             render(
                 SceneRef::Photo {

@@ -1,9 +1,12 @@
 //! A frame's effect passes, prepared once for whichever output stage draws them.
 
+use super::scene::SceneLight;
 use crate::error::Result;
+use crate::glow::Glow;
 use crate::haze::Haze;
 use crate::particles::streak::ScreenStreak;
 use crate::rain::streaks::{RainFrame, RainStats};
+use crate::scene::boxes::BoxScene;
 use crate::scene::camera::Camera;
 
 /// The particles of a frame: every effect's, lit, projected and sorted far to near in one list
@@ -24,15 +27,20 @@ pub struct Particles {
 pub struct Passes<'a> {
     /// Haze along the view rays.
     pub haze: Option<&'a Haze>,
+    /// The lights seen by the camera, their discs and glows (after the haze, before the
+    /// particles), when a box scene has lights in view.
+    pub glow: Option<Glow>,
     /// The particles (rain), when any effect makes them.
     pub particles: Option<Particles>,
 }
 
 impl<'a> Passes<'a> {
-    /// The passes of a `cam` frame with `haze` and `rain`: the rain's drops made and drawn into
-    /// streaks here, once, for any output stage.
+    /// The passes of a `cam` frame with `haze` and `rain` and, for a box scene, its lights
+    /// (`lit`: the scene and how it is lit): the rain's drops made and drawn into streaks and
+    /// the glows' sources found here, once, for any output stage.
     pub fn prepare(
         cam: &Camera,
+        lit: Option<(&BoxScene, &SceneLight<'_>)>,
         haze: Option<&'a Haze>,
         rain: Option<&RainFrame<'_>>,
     ) -> Result<Self> {
@@ -47,7 +55,18 @@ impl<'a> Passes<'a> {
             }
             None => None,
         };
-        Ok(Passes { haze, particles })
+        let glow = lit.and_then(|(scene, light)| {
+            if light.lights.is_empty() {
+                return None;
+            }
+            let sigma = haze.map_or(0.0, |h| h.extinction_per_m);
+            Glow::prepare(cam, scene, light.lights, sigma, light.sky_illuminance_lux)
+        });
+        Ok(Passes {
+            haze,
+            glow,
+            particles,
+        })
     }
 
     /// What the rain reports: streaks drawn and culled, drops generated.

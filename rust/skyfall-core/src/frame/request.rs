@@ -85,6 +85,8 @@ pub struct FrameSetup {
     /// The haze, when the weather has any.
     pub haze: Option<Haze>,
     ambient: Arc<AmbientMap>,
+    lights: Vec<Light>,
+    sky_illuminance_lux: f32,
     rain: Option<(RainRegion, RainShading)>,
     shelter: Vec<SceneBox>,
     exposure_s: f32,
@@ -185,6 +187,8 @@ impl FrameSetup {
             sky,
             haze,
             ambient: Arc::clone(&req.ambient),
+            lights: req.lights.to_vec(),
+            sky_illuminance_lux: w.sky_illuminance_lux as f32,
             rain,
             shelter,
             exposure_s: req.exposure_s as f32,
@@ -194,12 +198,10 @@ impl FrameSetup {
         })
     }
 
-    /// How the scene is lit: the sky and the ambient-light map.
+    /// How the scene is lit: the sky, the ambient-light map and the lights.
     pub fn light(&self) -> SceneLight<'_> {
-        SceneLight {
-            sky: &self.sky,
-            ambient: &self.ambient,
-        }
+        SceneLight::new(&self.sky, &self.ambient)
+            .with_lights(&self.lights, self.sky_illuminance_lux)
     }
 
     /// The rain the frame draws, when it draws streaks.

@@ -1,19 +1,146 @@
 //! The scene stage of the box scene: each pixel's ray cast against the boxes and the ground,
-//! its surface lit by the ambient-light map (the sky light it sees), sky pixels the sky itself.
+//! its surface lit by the ambient-light map (the sky light it sees) and by the scene's point
+//! and spot lights (I·cone·cos θ / r², shadowed by the boxes), sky pixels the sky itself.
+//!
+//! Lights in relative units: a light adds albedo · E_l / E to the radiance (E_l its
+//! illuminance on the face, lux, [`Light::surface_illuminance_lux`]; E the sky's horizontal
+//! illuminance), the unit in which 1.0 is a white surface under the open sky. Each light that
+//! reaches the face gets a shadow ray through the boxes
+//! ([`crate::scene::raycast::occluded_within`]), except the faintest: the lights whose
+//! unshadowed shares of the pixel sum to at most [`SHADOW_SKIP_RELATIVE`] of the pixel's
+//! unshadowed radiance (sky + every light; found among eight levels, see
+//! [`SceneLight::lamp_light`]) are added unshadowed, so the skipped rays change a pixel by at
+//! most [`SHADOW_SKIP_RELATIVE`] of its radiance (and only where a skipped light is hidden).
 
 use crate::scene::boxes::{BoxScene, surface_albedo, trace};
 use crate::scene::camera::Camera;
+use crate::scene::lights::Light;
+use crate::scene::raycast::occluded_within;
 use crate::sky::Sky;
 use crate::sky::ambient::AmbientMap;
 use glam::Vec3;
 
-/// How a frame's scene is lit: the sky seen by sky pixels and the map surfaces read.
+/// Bound on the relative change of a pixel's radiance by the shadow rays skipped (see the
+/// module docs): 1 %.
+pub const SHADOW_SKIP_RELATIVE: f32 = 0.01;
+
+/// Surfaces are lifted off their face by this before a shadow ray, m.
+const SHADOW_OFFSET_M: f32 = 1e-3;
+
+/// How a frame's scene is lit: the sky seen by sky pixels and the map surfaces read, and the
+/// scene's lights.
 #[derive(Debug, Clone, Copy)]
 pub struct SceneLight<'a> {
     /// The sky.
     pub sky: &'a Sky,
     /// Illuminance relative to E on the five normals.
     pub ambient: &'a AmbientMap,
+    /// Point and spot lights that light the surfaces (none: the sky alone).
+    pub lights: &'a [Light],
+    /// The sky's horizontal illuminance E, lux: the unit a light's illuminance is divided by.
+    pub sky_illuminance_lux: f32,
+}
+
+impl<'a> SceneLight<'a> {
+    /// The sky and its map, no lights.
+    pub fn new(sky: &'a Sky, ambient: &'a AmbientMap) -> Self {
+        SceneLight {
+            sky,
+            ambient,
+            lights: &[],
+            sky_illuminance_lux: 1.0,
+        }
+    }
+
+    /// The same with `lights`, under a sky of horizontal illuminance `sky_illuminance_lux`.
+    pub fn with_lights(self, lights: &'a [Light], sky_illuminance_lux: f32) -> Self {
+        SceneLight {
+            lights,
+            sky_illuminance_lux,
+            ..self
+        }
+    }
+
+    /// Illuminance relative to E on the face of normal `n` at `p` from the lights, with the
+    /// shadows of `boxes` (see the module docs); `a` the face's albedo and `ambient` its
+    /// radiance from the sky, which the skip rule weighs the lights against.
+    #[inline]
+    pub fn lamp_light(
+        &self,
+        boxes: &[crate::scene::boxes::SceneBox],
+        p: Vec3,
+        n: Vec3,
+        a: Vec3,
+        ambient: Vec3,
+    ) -> Vec3 {
+        let inv_e = 1.0 / self.sky_illuminance_lux;
+        let share = |l: &Light| {
+            let (e, dir, r) = l.surface_illuminance_lux(p, n);
+            (e, dir, r, (a * e).max_element() * inv_e)
+        };
+        // Each light's illuminance, direction, distance and share once, kept for up to KEPT
+        // lights (the rest computed again: the same values).
+        let mut kept = [(Vec3::ZERO, Vec3::ZERO, 0.0f32, 0.0f32); KEPT];
+        let lit = |i: usize, l: &Light, kept: &[(Vec3, Vec3, f32, f32); KEPT]| {
+            if i < KEPT { kept[i] } else { share(l) }
+        };
+        // The unshadowed total S first, then the skip level τ: the largest of
+        // ε·S, ε·S/2, …, ε·S/2⁷ with (lights at or below it) · τ ≤ ε·S, so the lights skipped
+        // add at most ε·S together.
+        let mut total = ambient.max_element();
+        for (i, l) in self.lights.iter().enumerate() {
+            let s = share(l);
+            if i < KEPT {
+                kept[i] = s;
+            }
+            total += s.3;
+        }
+        let budget = SHADOW_SKIP_RELATIVE * total;
+        let mut below = [0u32; SKIP_LEVELS];
+        for (i, l) in self.lights.iter().enumerate() {
+            let c = lit(i, l, &kept).3;
+            if c > 0.0 {
+                for (j, k) in below.iter_mut().enumerate() {
+                    if c <= skip_level(budget, j) {
+                        *k += 1;
+                    }
+                }
+            }
+        }
+        let mut skip = 0.0;
+        for (j, &k) in below.iter().enumerate() {
+            let tau = skip_level(budget, j);
+            if k as f32 * tau <= budget {
+                skip = tau;
+                break;
+            }
+        }
+        let lifted = p + n * SHADOW_OFFSET_M;
+        let mut sum = Vec3::ZERO;
+        for (i, l) in self.lights.iter().enumerate() {
+            let (e, dir, r, c) = lit(i, l, &kept);
+            if c <= 0.0 {
+                continue;
+            }
+            if c <= skip || !occluded_within(boxes, lifted, dir, r - SHADOW_OFFSET_M) {
+                sum += e;
+            }
+        }
+        sum * inv_e
+    }
+}
+
+/// Lights whose illuminance and share [`SceneLight::lamp_light`] keeps between its passes
+/// (the rest it computes again).
+const KEPT: usize = 32;
+
+/// Levels of the skip rule: ε·S/2ʲ for j < this.
+const SKIP_LEVELS: usize = 8;
+
+/// ε·S/2ʲ.
+#[inline]
+fn skip_level(budget: f32, j: usize) -> f32 {
+    budget / (1u32 << j) as f32
 }
 
 /// Radiance (relative) and depth (m along the optical axis, inf for sky) of one pixel.
@@ -31,7 +158,14 @@ pub fn shade_pixel(
             let p = cam.eye() + dir * t;
             let a = surface_albedo(albedo, n, p);
             let e = AmbientMap::channel(n).map_or(0.0, |c| light.ambient.sample(p)[c]);
-            (a * e, t)
+            let sky_lit = a * e;
+            if light.lights.is_empty() {
+                return (sky_lit, t);
+            }
+            (
+                sky_lit + a * light.lamp_light(&scene.boxes, p, n, a, sky_lit),
+                t,
+            )
         }
         None => (
             Vec3::splat(light.sky.sky_pixel(dir.normalize())),
@@ -44,6 +178,7 @@ pub fn shade_pixel(
 mod tests {
     use super::*;
     use crate::scene::boxes::{SceneBox, WINDOW_ALBEDO_FACTOR};
+    use crate::scene::lights::Light;
     use crate::sky::cie::SkyKind;
     use crate::sky::illuminance::{SkyTable, irradiance};
     use glam::Mat3;
@@ -103,10 +238,7 @@ mod tests {
         });
         let c = cam();
         let (sky, amb) = open();
-        let light = SceneLight {
-            sky: &sky,
-            ambient: &amb,
-        };
+        let light = SceneLight::new(&sky, &amb);
         // bottom row centre: ray dir y = -(47.5 - 24)/40, so t = 1.5 / ((47.5 - 24) / 40)
         let (rad, t) = shade_pixel(&scene, &c, &light, 32, 47);
         assert!((t - 1.5 * 40.0 / 23.5).abs() < 1e-4, "{t}");
@@ -129,10 +261,7 @@ mod tests {
         });
         let c = cam();
         let (sky, amb) = open();
-        let light = SceneLight {
-            sky: &sky,
-            ambient: &amb,
-        };
+        let light = SceneLight::new(&sky, &amb);
         let wall_e = amb.sample(Vec3::ZERO)[3];
         assert!(
             (f64::from(wall_e) - (3.0 / 14.0 + 4.0 / (7.0 * std::f64::consts::PI))).abs() < 2e-3
@@ -158,6 +287,151 @@ mod tests {
                 Vec3::ZERO
             )
             .is_err()
+        );
+    }
+
+    fn lamp(pos: Vec3, cd: f32) -> Light {
+        Light {
+            position_m: pos,
+            intensity_cd: cd,
+            color: Vec3::new(1.0, 0.8, 0.5),
+            spot: None,
+        }
+    }
+
+    #[test]
+    fn a_lamp_over_open_ground_gives_the_analytic_illuminance() {
+        // Ground of albedo 0.2 under a 2000 cd lamp 5 m up, 30 lx of sky: at each ground pixel
+        // the radiance is 0.2 · (1 + I·h/r³ / E) per channel (cos θ = h/r).
+        let scene = BoxScene::new(vec![], true, Vec3::splat(0.2)).unwrap();
+        let c = cam();
+        let (sky, amb) = open();
+        let l = lamp(Vec3::new(1.0, 5.0, -12.0), 2000.0);
+        let lights = [l];
+        let light = SceneLight::new(&sky, &amb).with_lights(&lights, 30.0);
+        let mut worst = 0.0f32;
+        for (x, y) in [(32, 47), (32, 30), (10, 40), (60, 28), (50, 26), (0, 47)] {
+            let (rad, t) = shade_pixel(&scene, &c, &light, x, y);
+            let p = c.eye() + c.ray_direction(x, y) * t;
+            let r = (l.position_m - p).length();
+            let e = l.intensity_cd * l.position_m.y / (r * r * r);
+            let want = Vec3::splat(0.2) * (Vec3::ONE + l.color * (e / 30.0));
+            worst = worst.max(((rad - want) / want).abs().max_element());
+        }
+        assert!(worst < 1e-5, "{worst}");
+        // A spot aimed down the street: full intensity inside its inner cone, none outside.
+        let spot = Light {
+            position_m: Vec3::new(0.0, 0.7, -30.0),
+            intensity_cd: 15000.0,
+            color: Vec3::ONE,
+            spot: Some((Vec3::new(0.0, -0.05, 1.0).normalize(), 0.9, 0.95)),
+        };
+        let spots = [spot];
+        let light = SceneLight::new(&sky, &amb).with_lights(&spots, 30.0);
+        let (rad, t) = shade_pixel(&scene, &c, &light, 32, 30); // ahead, inside the beam
+        let p = c.eye() + c.ray_direction(32, 30) * t;
+        let d = spot.position_m - p;
+        let (axis, _, cos_inner) = spot.spot.unwrap();
+        assert!(axis.dot(-d.normalize()) > cos_inner);
+        let e = 15000.0 * d.y / d.length().powi(3);
+        assert!(
+            (rad.x / (0.2 * (1.0 + e / 30.0)) - 1.0).abs() < 1e-5,
+            "{rad}"
+        );
+        // Turned to +X, the same spot leaves that point (90° off its axis) unlit.
+        let away = [Light {
+            spot: Some((Vec3::X, 0.9, 0.95)),
+            ..spot
+        }];
+        let light = SceneLight::new(&sky, &amb).with_lights(&away, 30.0);
+        let (rad, _) = shade_pixel(&scene, &c, &light, 32, 30);
+        assert!((rad - Vec3::splat(0.2)).length() < 1e-6, "{rad}");
+    }
+
+    #[test]
+    fn a_box_shadows_what_is_behind_it_from_the_lamp() {
+        // A slab hung 2 m up under a lamp shadows the ground beneath it: there only the sky's
+        // light; further on the lamp's, analytic.
+        let slab = SceneBox {
+            min_m: Vec3::new(-1.5, 2.0, -11.5),
+            max_m: Vec3::new(1.5, 2.5, -8.5),
+            albedo: Vec3::splat(0.5),
+        };
+        let scene = BoxScene::new(vec![slab], true, Vec3::splat(0.2)).unwrap();
+        let c = cam();
+        let (sky, amb) = open();
+        let l = lamp(Vec3::new(0.0, 5.0, -10.0), 2000.0);
+        let lights = [l];
+        let light = SceneLight::new(&sky, &amb).with_lights(&lights, 30.0);
+        let (shadowed, t) = shade_pixel(&scene, &c, &light, 32, 29);
+        assert!((t - 1.5 / 0.1375).abs() < 1e-3, "{t}");
+        assert!((shadowed - Vec3::splat(0.2)).length() < 1e-6, "{shadowed}");
+        let (lit, t) = shade_pixel(&scene, &c, &light, 32, 26);
+        let p = c.eye() + c.ray_direction(32, 26) * t;
+        let r = (l.position_m - p).length();
+        let want = Vec3::splat(0.2) * (Vec3::ONE + l.color * (2000.0 * 5.0 / (r * r * r) / 30.0));
+        assert!(
+            ((lit - want) / want).abs().max_element() < 1e-5,
+            "{lit} {want}"
+        );
+        // Without the slab the shadowed point is lit: the shadow is the box's.
+        let open_scene = BoxScene::new(vec![], true, Vec3::splat(0.2)).unwrap();
+        let (bare, _) = shade_pixel(&open_scene, &c, &light, 32, 29);
+        assert!(bare.x > 1.5 * 0.2, "{bare}");
+        // The slab's own top faces the lamp (lit), its underside does not (sky only: none).
+        assert!(
+            light
+                .lamp_light(
+                    &scene.boxes,
+                    Vec3::new(0.0, 2.5, -10.0),
+                    Vec3::Y,
+                    Vec3::ONE,
+                    Vec3::ZERO
+                )
+                .x
+                > 0.0
+        );
+        assert_eq!(
+            light.lamp_light(
+                &scene.boxes,
+                Vec3::new(0.0, 2.0, -10.0),
+                -Vec3::Y,
+                Vec3::ONE,
+                Vec3::ZERO
+            ),
+            Vec3::ZERO
+        );
+    }
+
+    #[test]
+    fn shadow_rays_skipped_change_a_pixel_by_at_most_the_bound() {
+        // Many faint far lamps behind a wall and one near lamp: the skipped rays' error is
+        // within SHADOW_SKIP_RELATIVE of the pixel's radiance, against every ray cast.
+        let wall = SceneBox {
+            min_m: Vec3::new(-50.0, 0.0, -31.0),
+            max_m: Vec3::new(50.0, 20.0, -30.0),
+            albedo: Vec3::splat(0.5),
+        };
+        let boxes = [wall];
+        let (sky, amb) = open();
+        let mut lights = vec![lamp(Vec3::new(0.0, 5.0, -5.0), 2000.0)];
+        for k in 0..10 {
+            lights.push(lamp(
+                Vec3::new(k as f32 * 3.0 - 15.0, 5.0, -60.0 - k as f32),
+                300.0,
+            ));
+        }
+        let light = SceneLight::new(&sky, &amb).with_lights(&lights, 30.0);
+        let p = Vec3::new(0.0, 0.0, -4.0);
+        let a = Vec3::splat(0.2);
+        let fast = light.lamp_light(&boxes, p, Vec3::Y, a, a);
+        // every shadow ray: the far lamps are all behind the wall
+        let exact = lights[0].surface_illuminance_lux(p, Vec3::Y).0 / 30.0;
+        let total = a + a * fast;
+        assert!(((fast - exact) * a).max_element() <= SHADOW_SKIP_RELATIVE * total.max_element());
+        assert!(
+            fast.x > exact.x,
+            "the far lamps were skipped, so added unshadowed"
         );
     }
 }

@@ -114,7 +114,7 @@ pub fn render_photo8(
     }
     crate::haze::check_depth(photo.depth_m)?;
 
-    let passes = Passes::prepare(cam, haze, rain)?;
+    let passes = Passes::prepare(cam, None, haze, rain)?;
     let stats = passes
         .rain_report()
         .map(|(rain, drops)| Photo8Stats { rain, drops });
@@ -555,10 +555,7 @@ mod tests {
         };
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
-        let light = SceneLight {
-            sky: &sky,
-            ambient: &amb,
-        };
+        let light = SceneLight::new(&sky, &amb);
         let reference = render(
             SceneRef::Photo {
                 rgb: &linear,

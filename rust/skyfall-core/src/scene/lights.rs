@@ -1,5 +1,6 @@
-//! Point and spot lights (street lamps, headlights): they light rain drops with
-//! inverse-square falloff and, for spots, a smooth cone.
+//! Point and spot lights (street lamps, headlights): they light rain drops and the surfaces
+//! that face them with inverse-square falloff and, for spots, a smooth cone
+//! ([`Light::illuminance_lux`], shared by the drops, the surfaces and the glows).
 
 use crate::error::{Error, Param, Range, Result};
 use glam::Vec3;
@@ -101,6 +102,21 @@ impl Light {
             }
         };
         self.color * (self.intensity_cd * cone / r2)
+    }
+
+    /// Illuminance at `p` on a surface of unit normal `n`, lux per channel: I·cone·cos θ / r²
+    /// (Lambert's cosine law; zero for a face turned away), and the unit vector from `p` to
+    /// the light with its distance, m (for the shadow ray).
+    #[inline]
+    pub fn surface_illuminance_lux(&self, p: Vec3, n: Vec3) -> (Vec3, Vec3, f32) {
+        let to = self.position_m - p;
+        let r = to.length().max(1e-2);
+        let l = to / r;
+        let cos = n.dot(l);
+        if cos <= 0.0 {
+            return (Vec3::ZERO, l, r);
+        }
+        (self.illuminance_lux(p) * cos, l, r)
     }
 }
 

@@ -43,3 +43,22 @@ pub fn occluded(boxes: &[SceneBox], p: Vec3, dir: Vec3) -> bool {
         t_far > T_MIN && t_near <= t_far
     })
 }
+
+/// Whether a box meets the segment from `p` along unit-free `dir` up to `t_max` (in units of
+/// `dir`): the shadow ray of a surface point towards a light at `p + t_max·dir`. Boxes apart
+/// from the segment's bounding box are passed over before the slab test (the same answer).
+#[inline]
+pub fn occluded_within(boxes: &[SceneBox], p: Vec3, dir: Vec3, t_max: f32) -> bool {
+    let inv = inverse_direction(dir);
+    let q = p + dir * t_max;
+    let (lo_seg, hi_seg) = (p.min(q), p.max(q));
+    boxes.iter().any(|b| {
+        if b.min_m.cmpgt(hi_seg).any() || b.max_m.cmplt(lo_seg).any() {
+            return false;
+        }
+        let (lo, hi) = slabs(b, p, inv);
+        let t_near = lo.max_element().max(T_MIN);
+        let t_far = hi.min_element().min(t_max);
+        t_near <= t_far
+    })
+}

@@ -1,5 +1,7 @@
-// Procedural box scene, ray cast per pixel, lit by the sky through the ambient-light map.
-// CPU references: skyfall_core::scene::boxes (shade_pixel), skyfall_core::sky::cie
+// Procedural box scene, ray cast per pixel, lit by the sky through the ambient-light map and
+// by the scene's point and spot lights with their shadows.
+// CPU references: skyfall_core::frame::scene (shade_pixel, SceneLight::lamp_light),
+// skyfall_core::scene::lights (Light), skyfall_core::scene::raycast, skyfall_core::sky::cie
 // (relative_to_zenith) and skyfall_core::sky::ambient (AmbientMap::sample), kept
 // line-for-line comparable. Prepended with common.wgsl.
 
@@ -23,6 +25,20 @@ struct SceneBox {
 @group(0) @binding(6) var<uniform> amb: AmbientInfo;
 @group(0) @binding(7) var<storage, read> amb_values: array<f32>;
 @group(0) @binding(8) var<storage, read> amb_solid: array<u32>;
+@group(0) @binding(9) var<uniform> lamps: LampInfo;
+@group(0) @binding(10) var<storage, read> lights: array<LightElement>;
+
+struct LampInfo {
+    params: vec4<f32>,   // 1/E (1/lux), SHADOW_SKIP_RELATIVE, unused x2
+    counts: vec4<u32>,   // number of lights
+}
+
+struct LightElement {
+    pos_cd: vec4<f32>,      // position (m), intensity (cd)
+    color_spot: vec4<f32>,  // linear RGB, 1 for a spot
+    axis_outer: vec4<f32>,  // the spot's unit axis, cos of its outer half-angle
+    inner: vec4<f32>,       // cos of its inner half-angle
+}
 
 struct SkyInfo {
     abcd: vec4<f32>,      // CIE a, b, c, d
@@ -141,6 +157,118 @@ fn safe(d: f32) -> f32 {
     return d;
 }
 
+// skyfall_core::scene::lights::Light::illuminance_lux.
+fn light_illuminance(l: LightElement, p: vec3<f32>) -> vec3<f32> {
+    let d = p - l.pos_cd.xyz;
+    let r2 = max(dot(d, d), 1e-4);
+    var cone = 1.0;
+    if l.color_spot.w != 0.0 {
+        let c = dot(l.axis_outer.xyz, d) / sqrt(r2);
+        let co = l.axis_outer.w;
+        let ci = l.inner.x;
+        if c <= co {
+            cone = 0.0;
+        } else if c >= ci {
+            cone = 1.0;
+        } else {
+            let t = (c - co) / max(ci - co, 1e-6);
+            cone = t * t * (3.0 - 2.0 * t);
+        }
+    }
+    return l.color_spot.xyz * (l.pos_cd.w * cone / r2);
+}
+
+// Light::surface_illuminance_lux: (E·cos θ, its channel max share with albedo a) and the unit
+// vector to the light with its distance.
+struct Lit {
+    e: vec3<f32>,
+    dir: vec3<f32>,
+    r: f32,
+    share: f32,
+}
+
+fn surface_lit(l: LightElement, p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> Lit {
+    let to = l.pos_cd.xyz - p;
+    let r = max(sqrt(dot(to, to)), 1e-2);
+    let dir = to / r;
+    let cos = dot(n, dir);
+    var e = vec3<f32>(0.0);
+    if cos > 0.0 {
+        e = light_illuminance(l, p) * cos;
+    }
+    let ae = a * e;
+    return Lit(e, dir, r, max(max(ae.x, ae.y), ae.z) * lamps.params.x);
+}
+
+// skyfall_core::scene::raycast::occluded_within.
+fn occluded_within(p: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
+    let inv = vec3<f32>(1.0 / safe(dir.x), 1.0 / safe(dir.y), 1.0 / safe(dir.z));
+    let q = p + dir * t_max;
+    let lo_seg = min(p, q);
+    let hi_seg = max(p, q);
+    for (var i = 0u; i < scene.counts.x; i++) {
+        let b = boxes[i];
+        if any(b.min_m.xyz > hi_seg) || any(b.max_m.xyz < lo_seg) {
+            continue;
+        }
+        let t1 = (b.min_m.xyz - p) * inv;
+        let t2 = (b.max_m.xyz - p) * inv;
+        let lo = min(t1, t2);
+        let hi = max(t1, t2);
+        let t_near = max(max(max(lo.x, lo.y), lo.z), T_MIN);
+        let t_far = min(min(min(hi.x, hi.y), hi.z), t_max);
+        if t_near <= t_far {
+            return true;
+        }
+    }
+    return false;
+}
+
+const SKIP_LEVELS: u32 = 8u;
+const SHADOW_OFFSET_M: f32 = 1e-3;
+
+// SceneLight::lamp_light: the lights' illuminance relative to E on the face, shadowed, the
+// faintest (together at most SHADOW_SKIP_RELATIVE of the pixel) without a shadow ray.
+fn lamp_light(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>, ambient: vec3<f32>) -> vec3<f32> {
+    let count = lamps.counts.x;
+    var total = max(max(ambient.x, ambient.y), ambient.z);
+    for (var i = 0u; i < count; i++) {
+        total += surface_lit(lights[i], p, n, a).share;
+    }
+    let budget = lamps.params.y * total;
+    var below = array<u32, 8>(0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u);
+    for (var i = 0u; i < count; i++) {
+        let c = surface_lit(lights[i], p, n, a).share;
+        if c > 0.0 {
+            for (var j = 0u; j < SKIP_LEVELS; j++) {
+                if c <= budget / f32(1u << j) {
+                    below[j] += 1u;
+                }
+            }
+        }
+    }
+    var skip = 0.0;
+    for (var j = 0u; j < SKIP_LEVELS; j++) {
+        let tau = budget / f32(1u << j);
+        if f32(below[j]) * tau <= budget {
+            skip = tau;
+            break;
+        }
+    }
+    let lifted = p + n * SHADOW_OFFSET_M;
+    var sum = vec3<f32>(0.0);
+    for (var i = 0u; i < count; i++) {
+        let s = surface_lit(lights[i], p, n, a);
+        if s.share <= 0.0 {
+            continue;
+        }
+        if s.share <= skip || !occluded_within(lifted, s.dir, s.r - SHADOW_OFFSET_M) {
+            sum += s.e;
+        }
+    }
+    return sum * lamps.params.x;
+}
+
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let w = cam.size.x;
@@ -193,6 +321,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             e = ambient_sample(p, ch);
         }
         c = a * e;
+        if lamps.counts.x != 0u {
+            c = c + a * lamp_light(p, best_n, a, c);
+        }
         d = best_t;
     } else {
         c = vec3<f32>(sky.e_scale.y * relative_to_zenith(normalize(dir)));
