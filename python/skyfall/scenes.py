@@ -35,11 +35,12 @@ class BoxScene:
     """Axis-aligned boxes on an optional ground plane (y = 0), ray cast by the renderer.
 
     Radiance is relative: 1.0 is a white Lambertian surface lit by the whole unobstructed sky
-    (E/pi for horizontal sky illuminance E). Sky pixels show the weather's sky (by default the
-    CIE standard overcast sky: zenith 9/7, horizon 3/7). Surfaces are lit by the sky they see:
+    (E/pi for horizontal sky illuminance E). Sky pixels show the weather's sky seen through its
+    rain (by default the CIE standard overcast sky: zenith 9/7, horizon 3/7 in clear air,
+    flatter in rain; :mod:`skyfall.sky`). Surfaces are lit by the sky they see:
     albedo times the illuminance on their normal over E, read from the ambient-light map
-    (:func:`skyfall.sky.ambient_light_map`; open ground 1, an open wall 0.396 under the
-    overcast sky, less in a street canyon or under an awning, faces looking down 0), plus the
+    (:func:`skyfall.sky.ambient_light_map`; open ground 1, an open wall 0.396 under the clear
+    overcast sky, up to 0.5 in heavy rain, less in a street canyon or under an awning, faces looking down 0), plus the
     scene's lights: albedo times I * cone * cos(theta) / r^2 / E per light that reaches the face
     (shadowed by the boxes; see :mod:`skyfall.lights`). Walls carry a 3 m grid of dark windows.
 

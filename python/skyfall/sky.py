@@ -2,10 +2,14 @@
 
 Coordinates: world metres, +Y up; azimuth is measured from -Z (north, where a default camera
 looks) towards +X (east). Every sky is normalised so that the open, unobstructed ground
-receives ``horizontal_illuminance_lux`` (what a lux meter reads, rain included): rain
-attenuates each direction by tau = exp(-sigma H / sin(elevation)) on the way down from the
-cloud base H, so heavier rain makes the low sky relatively darker and a point that sees only
-the low sky (a street canyon, under an awning) darker still.
+receives ``horizontal_illuminance_lux`` (what a lux meter reads, rain included). Seen through
+the rain the sky is the cloud base attenuated plus the light the drops scatter into the path,
+L = L_c tau + A (1 - tau), tau = exp(-sigma d), d the path down from the cloud base H (H /
+sin(elevation) overhead, sqrt(2 R H) along the horizon over the Earth's curve); the
+in-scattered light saturates at the airlight A, the cloud base's horizon luminance
+(``Weather.airlight_relative``). Rain so flattens the sky towards the uniform A = E/pi: the
+low sky brightens, the high sky dims, and a street canyon's floor, which sees mostly the high
+sky, gets a smaller share of E (under an awning, which hides the high sky, a larger one).
 
 Illuminance is the integral of L tau H cos(theta) over the hemisphere, H = 1 where the sky is
 visible. ``samples`` azimuths are sampled (midpoint rule); along each, the boxes' hidden
@@ -152,7 +156,7 @@ def luminance(
     sun_elevation_deg, sun_azimuth_deg : float, optional
         The sun, required by the CIE types that depend on it (2, 4, 6-15).
     weather : Weather, optional
-        Take the sky, E, sun and the rain's attenuation (tau = exp(-sigma H / sin(elevation)))
+        Take the sky, E, sun and the rain (the sky seen through it, see the module docstring)
         from a weather instead of the keywords. Without it there is no rain: tau = 1.
 
     Returns
