@@ -10,6 +10,7 @@ import dataclasses
 import io as pyio
 import math
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -103,6 +104,14 @@ def test_repr_html_shows_the_image_and_each_drawn_layer(renderer):
     d = frame.layers["rain_depth_m"]
     assert (depth[np.isinf(d)] == 0).all() and (depth[d < 1.0] >= 128).all()
     assert all(n in page for n in names)
+
+
+def test_without_openimageio_a_frame_falls_back_to_its_text(renderer, monkeypatch):
+    frame = renderer.render(scenes.street())
+    monkeypatch.setitem(sys.modules, "OpenImageIO", None)  # `import OpenImageIO` now fails
+    with pytest.raises(ImportError):
+        display.png_bytes(io.to_srgb8(frame.rgb))
+    assert frame._repr_png_() is None and frame._repr_html_() is None  # IPython's "none here"
 
 
 def test_a_large_frame_is_shown_small():

@@ -174,14 +174,22 @@ class Frame:
             raise ValueError(f"name = {name!r} is not a layer: the layers are {', '.join(map(repr, _core.LAYERS))}")
         return np.broadcast_to(np.float32(_core.LAYER_NEUTRAL[name]), self.depth_m.shape)
 
-    def _repr_png_(self) -> bytes:
+    def _repr_png_(self) -> bytes | None:
         """The frame as Jupyter shows it: ``io.to_srgb8(self.rgb)`` as PNG bytes
-        (:func:`skyfall.display.png_bytes`; needs OpenImageIO, the ``io`` extra)."""
-        return display.png_bytes(io.to_srgb8(self.rgb))
+        (:func:`skyfall.display.png_bytes`). None without OpenImageIO (the ``io`` extra): the
+        notebook then shows the text repr."""
+        try:
+            return display.png_bytes(io.to_srgb8(self.rgb))
+        except ImportError:
+            return None
 
-    def _repr_html_(self) -> str:
-        """The frame and its drawn layers side by side, small (:func:`skyfall.display.frame_html`)."""
-        return display.frame_html(self)
+    def _repr_html_(self) -> str | None:
+        """The frame and its drawn layers side by side, small (:func:`skyfall.display.frame_html`);
+        None without OpenImageIO, as for :meth:`_repr_png_`."""
+        try:
+            return display.frame_html(self)
+        except ImportError:
+            return None
 
 
 class Renderer:
