@@ -27,6 +27,7 @@ __all__ = [
     "render_photo8",
     "weather_optics",
     "LAYERS",
+    "LAYER_NEUTRAL",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
     "RANGES",
@@ -85,6 +86,8 @@ class _Request(TypedDict):
 
 LAYERS: dict[str, str]
 """The layers a frame can carry, name -> meaning, in the order frames list them."""
+LAYER_NEUTRAL: dict[str, float]
+"""Each layer's value where its pass drew nothing, name -> value (rain_alpha 0, transmittance 1)."""
 
 def render_frame(
     request: _Request, *, device: GpuDevice | None = None, out: dict[str, NDArray[np.float32] | None] | None = None

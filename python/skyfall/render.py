@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from skyfall import _core, io, sky
+from skyfall import _core, display, io, sky
 from skyfall._validate import choice, flag, in_range, integer, real
 from skyfall.camera import Camera
 from skyfall.scenes import BoxScene, PhotoScene
@@ -92,8 +92,9 @@ class Frame:
     layers : dict of str to ndarray of float32, shape (H, W)
         Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d)); rain adds
         ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
-        nearest visible streak, inf where none). The clean frame is the same render without
-        rain.
+        nearest visible streak, inf where none): only the layers this frame's passes drew.
+        :meth:`layer` gives any layer, with its neutral value where it was not drawn. The
+        clean frame is the same render without rain.
     backend : str
         ``"cpu"`` or ``"gpu"``.
     adapter_info : dict or None
@@ -105,6 +106,9 @@ class Frame:
         drops, or with billboards the textures' streaks, in the voxels whose streaks can reach
         the view; the others are never generated), ``rain_streaks``
         (streaks drawn), ``rain_culled`` (drops on screen skipped by ``cull_threshold``).
+
+    In Jupyter a frame shows itself: its sRGB image and drawn layers (``_repr_html_``), or the
+    image alone as PNG (``_repr_png_``).
     """
 
     rgb: NDArray[np.float32]
@@ -129,6 +133,63 @@ class Frame:
             io.write_image(p, stack, channel_names=names)
         else:
             io.write_image(p, self.rgb * np.float32(real("exposure", exposure)))
+
+    def layer(self, name: str) -> NDArray[np.float32]:
+        """One ground-truth layer, whether or not this frame's passes drew it.
+
+        A drawn layer is ``self.layers[name]`` itself. A layer of :data:`skyfall._core.LAYERS`
+        that no pass drew (no rain at 0 mm/h, no haze in clear air) comes back as its neutral
+        value everywhere, the value the pass would have left (``_core.LAYER_NEUTRAL``, declared
+        with the layers in the core: ``rain_alpha`` 0, ``rain_depth_m`` inf, ``transmittance``
+        1), as a read-only float32 array of shape (H, W) that costs no memory (one value,
+        broadcast).
+
+        Parameters
+        ----------
+        name : str
+            A layer's name, one of ``skyfall._core.LAYERS``.
+
+        Returns
+        -------
+        ndarray of float32, shape (H, W)
+
+        Raises
+        ------
+        ValueError
+            When ``name`` is not a layer; the message lists the layers.
+
+        Examples
+        --------
+        >>> from skyfall import Weather, scenes
+        >>> frame = Renderer(16, 9, backend="cpu").render(scenes.street(), Weather())
+        >>> frame.layers
+        {}
+        >>> float(frame.layer("rain_alpha").max()), frame.layer("rain_depth_m").shape
+        (0.0, (9, 16))
+        """
+        drawn = self.layers.get(name)
+        if drawn is not None:
+            return drawn
+        if name not in _core.LAYERS:
+            raise ValueError(f"name = {name!r} is not a layer: the layers are {', '.join(map(repr, _core.LAYERS))}")
+        return np.broadcast_to(np.float32(_core.LAYER_NEUTRAL[name]), self.depth_m.shape)
+
+    def _repr_png_(self) -> bytes | None:
+        """The frame as Jupyter shows it: ``io.to_srgb8(self.rgb)`` as PNG bytes
+        (:func:`skyfall.display.png_bytes`). None without OpenImageIO (the ``io`` extra): the
+        notebook then shows the text repr."""
+        try:
+            return display.png_bytes(io.to_srgb8(self.rgb))
+        except ImportError:
+            return None
+
+    def _repr_html_(self) -> str | None:
+        """The frame and its drawn layers side by side, small (:func:`skyfall.display.frame_html`);
+        None without OpenImageIO, as for :meth:`_repr_png_`."""
+        try:
+            return display.frame_html(self)
+        except ImportError:
+            return None
 
 
 class Renderer:

@@ -56,6 +56,12 @@ mod _core {
             layers.set_item(l.name(), l.meaning())?;
         }
         m.add("LAYERS", layers)?;
+        // Each layer's value where its pass drew nothing (a frame without rain: rain_alpha 0).
+        let neutral = pyo3::types::PyDict::new(m.py());
+        for l in skyfall_core::frame::layers::Layer::ALL {
+            neutral.set_item(l.name(), l.neutral())?;
+        }
+        m.add("LAYER_NEUTRAL", neutral)?;
         m.add("RANGE_MEANINGS", super::ranges::meanings(m.py())?)?;
         m.add(
             "TEXTURE_BUDGET_BYTES",

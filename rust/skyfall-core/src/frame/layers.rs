@@ -39,6 +39,16 @@ impl Layer {
         }
     }
 
+    /// The layer's value where nothing was drawn: a frame without the layer's pass holds it
+    /// everywhere (no haze: transmittance 1; no rain: coverage 0, no streak at depth inf).
+    pub const fn neutral(self) -> f32 {
+        match self {
+            Layer::Transmittance => 1.0,
+            Layer::RainAlpha => 0.0,
+            Layer::RainDepth => f32::INFINITY,
+        }
+    }
+
     /// Whether a frame with these passes draws the layer.
     pub const fn drawn(self, haze: bool, rain: bool) -> bool {
         match self {
@@ -93,5 +103,16 @@ mod tests {
         names.dedup();
         assert_eq!(names.len(), LAYER_COUNT);
         assert!(Layer::Transmittance.drawn(true, false) && !Layer::RainAlpha.drawn(true, false));
+    }
+
+    #[test]
+    fn neutral_values_are_what_an_empty_pass_leaves() {
+        // no haze: e^(-0 d) = 1; no streak: 1 - (empty product) = 0, nearest streak at inf
+        assert_eq!(Layer::Transmittance.neutral(), (-0.0f32).exp());
+        assert_eq!(
+            Layer::RainAlpha.neutral(),
+            1.0 - std::iter::empty::<f32>().product::<f32>()
+        );
+        assert!(Layer::RainDepth.neutral().is_infinite() && Layer::RainDepth.neutral() > 0.0);
     }
 }

@@ -123,7 +123,7 @@ pub fn render_photo8(
         // Nothing to draw: encode(decode(b)) = b for every byte (tested), so the bytes as they are.
         out.srgb.copy_from_slice(photo.srgb);
         if let Some(a) = out.rain_alpha {
-            a.fill(0.0);
+            a.fill(crate::frame::layers::Layer::RainAlpha.neutral());
         }
         return Ok(stats);
     }
