@@ -33,6 +33,19 @@ pub enum Binding {
 impl ComputePass {
     /// Compiles `COMMON_WGSL + source` with entry point `main`.
     pub fn new(ctx: &GpuContext, label: &'static str, source: &str, bindings: &[Binding]) -> Self {
+        Self::with_constants(ctx, label, source, bindings, &[])
+    }
+
+    /// [`ComputePass::new`] with values for the shader's pipeline-overridable constants
+    /// (`override NAME: T`), by name: a specialised pipeline, whose branches on them the shader
+    /// compiler removes.
+    pub fn with_constants(
+        ctx: &GpuContext,
+        label: &'static str,
+        source: &str,
+        bindings: &[Binding],
+        constants: &[(&str, f64)],
+    ) -> Self {
         let code = format!("{COMMON_WGSL}\n{source}");
         let module = ctx
             .device
@@ -83,7 +96,10 @@ impl ComputePass {
                 layout: Some(&pipeline_layout),
                 module: &module,
                 entry_point: Some("main"),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
                 cache: None,
             });
         ComputePass {
