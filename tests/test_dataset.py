@@ -276,9 +276,13 @@ def test_the_console_script_is_installed():
 
 def test_ctrl_c_stops_the_workers_cleanly_and_resume_finishes(tmp_path):
     run = tmp_path / "run"
-    args = ["--scene", "street", "--width", "96", "--height", "64", "--variants", "40", "--ambient-spacing-m", "8",
-            "--workers", "2", "--no-progress", "--out", str(run)]
-    proc = subprocess.Popen(_cli(*args), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    args = ["--scene", "street", "--width", "160", "--height", "90", "--variants", "60", "--ambient-spacing-m", "8",
+            "--png-compression", "9", "--workers", "2", "--no-progress", "--out", str(run)]
+    # a child of a background job inherits SIGINT ignored; Python then keeps ignoring it
+    proc = subprocess.Popen(
+        _cli(*args), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and _rows(run / "items") < 4 and proc.poll() is None:
         time.sleep(0.005)
@@ -288,8 +292,8 @@ def test_ctrl_c_stops_the_workers_cleanly_and_resume_finishes(tmp_path):
     assert "interrupted" in stdout and "Traceback" not in stderr
     assert not any(p.name.startswith(".") for p in (run / "items").iterdir())  # the items in flight finished
     assert not (run / "manifest.jsonl").exists()
-    s = dataset.generate(out=run, scene="street", width=96, height=64, variants=40, ambient_spacing_m=8.0, resume=True, progress=False)
-    assert s.skipped >= 4 and s.generated + s.skipped == 40 and s.errors == 0
+    s = dataset.generate(out=run, scene="street", width=160, height=90, variants=60, ambient_spacing_m=8.0, png_compression=9, resume=True, progress=False)
+    assert s.skipped >= 4 and s.generated + s.skipped == 60 and s.errors == 0
     rows = dataset.read_manifest(run)
-    assert [r["status"] for r in rows] == ["ok"] * 40
+    assert [r["status"] for r in rows] == ["ok"] * 60
     check_checksums(run, rows)

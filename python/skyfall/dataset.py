@@ -160,11 +160,12 @@ def generate(
         ``variants=``, ``seed=``, ranges such as ``rain_rate_mm_h="1:50"``: every field of
         :class:`~skyfall.dataset_sample.DatasetConfig`).
     workers : int
-        Worker processes, in [1, 256], each holding its own renderer made once. 1 renders in
-        this process. The bytes written do not depend on it.
+        Worker processes, in [1, 256], each holding its own renderer made once. 1 (without
+        ``threads_per_worker``) renders in this process. The bytes written do not depend on it.
     threads_per_worker : int, optional
         The CPU renderer's threads in each worker process; default: the cores shared out
-        (os.cpu_count() // workers, at least 1) when workers > 1, all of them for 1.
+        (os.cpu_count() // workers, at least 1) when workers > 1, all of them for 1. Given, the
+        items are rendered in worker processes even for ``workers=1``.
     resume : bool
         Keep the items already complete (their row and every file's sha256 intact, for the
         same options) and generate the rest. False regenerates every item.
@@ -248,7 +249,7 @@ def _run_local(
 ) -> Iterator[tuple[dict[str, Any], dict[str, float]]]:
     """The items' rows and costs as they finish, in this process or in ``workers`` processes
     (at most 2 items in flight per worker, so memory stays bounded)."""
-    if workers == 1:
+    if workers == 1 and threads is None:
         worker = Worker(config)
         for src in todo:
             times: dict[str, float] = {}
