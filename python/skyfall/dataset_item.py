@@ -79,6 +79,7 @@ class Worker:
         self._renderers: dict[tuple[int, int], Renderer] = {}
         self._photo: tuple[Path, NDArray[Any], str | None] | None = None
         self._street: BoxScene | None = None
+        self._clean: tuple[Path, bytes] | None = None  # a photo's clean PNG, the same for each variant
 
     def renderer(self, width: int, height: int) -> Renderer:
         """This worker's renderer of the size (the last four sizes are kept)."""
@@ -95,6 +96,20 @@ class Worker:
             image, encoding = read_photo(path)
             self._photo = (path, image, encoding)
         return self._photo[1], self._photo[2]
+
+    def clean_png(self, final: Path, photo: Path, image: NDArray[Any]) -> str:
+        """Write ``image`` (the photo ``photo`` itself) as ``final``; a photo's variants reuse
+        the bytes encoded for the first (OpenImageIO's PNG bytes are a function of the pixels)."""
+        if self._clean is not None and self._clean[0] == photo:
+            data = self._clean[1]
+
+            def copy(p: Path) -> None:
+                p.write_bytes(data)
+
+            return atomic_write(final, copy)
+        digest = write_png(final, image, self.config.png_compression)
+        self._clean = (photo, final.read_bytes())
+        return digest
 
     def street(self) -> BoxScene:
         """The bundled street, made once."""
@@ -260,7 +275,12 @@ def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None 
         files: dict[str, str] = {}
         names = item_files(cfg, src.index)
         files[names[0]] = _timed_png(folder / names[0], rainy, cfg.png_compression, t)
-        files[names[1]] = _timed_png(folder / names[1], clean, cfg.png_compression, t)
+        if src.image is not None:
+            t5 = time.perf_counter()
+            files[names[1]] = worker.clean_png(folder / names[1], src.image, clean)
+            t["encode"] += time.perf_counter() - t5
+        else:
+            files[names[1]] = _timed_png(folder / names[1], clean, cfg.png_compression, t)
         if cfg.exr:
             assert frame is not None
             exr = folder / f"{stem}.rain.exr"
