@@ -132,9 +132,11 @@ class DatasetConfig:
     exr : bool
         Also write the weather frame as EXR (float RGB and the layers).
     png_compression : int
-        zlib level of the PNGs, in [0, 9] (OpenImageIO's ``png:compressionLevel``). Default 1:
-        at 1080p a PNG at OpenImageIO's default level 6 takes 300-500 ms to write against
-        16-49 ms to render, at 1 about 130 ms; 0 stores them uncompressed (6 MB at 1080p).
+        zlib level of the PNGs, in [0, 9] (OpenImageIO's ``png:compressionLevel``; the filter is
+        libpng's SUB). Default 1, for speed: a 1080p photo takes 27 ms to write at 1 and 89 ms
+        at 6 (137 ms at 6 with libpng's default filters, OpenImageIO's default; noisier rainy
+        photos about twice as long), against 24-46 ms to render; 0 stores them uncompressed
+        (6.2 MB at 1080p, 14 ms). See benches/results/dataset.md.
     ambient_spacing_m : float
         Ambient-light map spacing of ``scene`` items, m (each item's rain changes the sky, so
         its map is built again: about 0.3 s at 1 m for the street).
