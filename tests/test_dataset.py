@@ -288,7 +288,7 @@ def test_ctrl_c_stops_the_workers_cleanly_and_resume_finishes(tmp_path):
         time.sleep(0.005)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=60)
-    assert proc.returncode == 130, stderr
+    assert proc.returncode == 130, f"exit {proc.returncode}, {_rows(run / 'items')} rows\nstdout: {stdout}\nstderr: {stderr}"
     assert "interrupted" in stdout and "Traceback" not in stderr
     assert not any(p.name.startswith(".") for p in (run / "items").iterdir())  # the items in flight finished
     assert not (run / "manifest.jsonl").exists()
