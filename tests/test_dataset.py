@@ -297,3 +297,20 @@ def test_ctrl_c_stops_the_workers_cleanly_and_resume_finishes(tmp_path):
     rows = dataset.read_manifest(run)
     assert [r["status"] for r in rows] == ["ok"] * 60
     check_checksums(run, rows)
+
+
+def test_a_dask_local_cluster_writes_the_bytes_of_a_local_run(photos, tmp_path):
+    from dask.distributed import Client, LocalCluster
+
+    img, dep = photos
+    opts = dict(input=img, depth=dep, depth_scale_m=0.001, variants=2, seed=11, rain_rate_mm_h="5:60", visibility_m="300:3000",
+                layers=("rain_alpha", "transmittance"), progress=False)
+    local = dataset.generate(out=tmp_path / "local", **opts)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster, Client(cluster) as client:
+        s = dataset.generate(out=tmp_path / "dask", scheduler=client, **opts)
+        assert (s.generated, s.errors) == (local.generated, local.errors) == (12, 6)
+        assert tree(tmp_path / "dask") == tree(tmp_path / "local")
+        # by address, and resumed: nothing left to do
+        s = dataset.generate(out=tmp_path / "dask", scheduler=cluster.scheduler_address, resume=True, **opts)
+        assert (s.generated, s.skipped) == (6, 6)  # the error items are tried again
+    assert tree(tmp_path / "dask") == tree(tmp_path / "local")

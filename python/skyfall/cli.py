@@ -51,6 +51,7 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
 ]
 _RUN_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("workers", ("--workers",), {"type": int, "metavar": "K", "help": "worker processes, each with one renderer; default 1 (in this process)"}),
+    ("scheduler", ("--scheduler",), {"metavar": "tcp://HOST:PORT", "help": "render on a Dask distributed cluster instead (pip install 'skyfall[dask]'); --out and the inputs must be on a file system every worker sees"}),
     ("threads_per_worker", ("--threads-per-worker",), {"type": int, "metavar": "T", "help": "renderer threads per worker; default the cores shared out"}),
     ("resume", ("--resume",), {"action": "store_const", "const": True, "help": "keep the items already complete (files present, checksums intact) and generate the rest"}),
     ("items", ("--items",), {"metavar": "I,J,...", "help": "only these item indices (e.g. one regenerated alone); the manifest is left as it is"}),
@@ -159,7 +160,7 @@ def _dataset(args: argparse.Namespace) -> int:
     from skyfall import dataset
 
     opts = _merge(args, _DATASET_OPTIONS + _RUN_OPTIONS, "dataset")
-    run = {k: opts.pop(k) for k in ("workers", "threads_per_worker", "resume", "items", "progress") if k in opts}
+    run = {k: opts.pop(k) for k in ("workers", "threads_per_worker", "resume", "items", "progress", "scheduler") if k in opts}
     if isinstance(opts.get("layers"), str):
         text = opts["layers"].strip()
         opts["layers"] = () if text in ("", "none") else tuple(s.strip() for s in text.split(","))

@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import threading
 import time
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -149,6 +150,7 @@ def generate(
     resume: bool = False,
     indices: Iterable[int] | None = None,
     progress: bool = True,
+    scheduler: Any = None,
     **options: Any,
 ) -> Summary:
     """Generate a dataset (see the module docstring for what it writes).
@@ -173,6 +175,12 @@ def generate(
         Only these items (e.g. one regenerated alone); the manifest is then left as it is.
     progress : bool
         Show a tqdm progress bar (items/s and the time left).
+    scheduler : str or dask.distributed.Client, optional
+        Render through Dask distributed instead of local processes: a scheduler's address
+        (``"tcp://host:8786"``) or a connected ``Client``. Each Dask worker thread keeps its
+        own renderer; the workers write the files themselves, so ``out`` (and the inputs) must be
+        on a file system they all see, at the same path. The bytes are those of a local run.
+        ``workers`` and ``threads_per_worker`` are then unused (the cluster's own).
 
     Returns
     -------
@@ -224,7 +232,7 @@ def generate(
     summary.skipped = len(chosen) - len(todo)
     bar = tqdm(total=len(todo), unit="item", disable=not progress, dynamic_ncols=True)
     try:
-        results = _run_local(config, todo, workers, threads_per_worker)
+        results = _run_dask(config, todo, scheduler) if scheduler is not None else _run_local(config, todo, workers, threads_per_worker)
         for row, times in results:
             summary.generated += 1
             for k in COSTS:
@@ -278,6 +286,51 @@ def _run_local(
         for f in pending:
             f.cancel()
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+# Per Dask worker thread: its Worker for the run's options (Dask runs tasks in threads).
+_DASK_WORKERS = threading.local()
+
+
+def _dask_item(config: DatasetConfig, src: ItemSource) -> tuple[dict[str, Any], dict[str, float]]:
+    """One item on a Dask worker, with that thread's Worker for these options (made once)."""
+    key = (config.sha256(), str(config.out))
+    worker: Worker | None = getattr(_DASK_WORKERS, "worker", None)
+    if worker is None or getattr(_DASK_WORKERS, "key", None) != key:
+        worker = Worker(config)
+        _DASK_WORKERS.worker, _DASK_WORKERS.key = worker, key
+    times: dict[str, float] = {}
+    return render_item(worker, src, times), times
+
+
+def _run_dask(config: DatasetConfig, todo: list[ItemSource], scheduler: Any) -> Iterator[tuple[dict[str, Any], dict[str, float]]]:
+    """The items' rows and costs as they finish on a Dask cluster (at most two items in flight
+    per worker thread)."""
+    import dask.distributed
+
+    dd: Any = dask.distributed  # untyped: its calls are typed Any here
+    client: Any = scheduler if isinstance(scheduler, dd.Client) else dd.Client(scheduler)
+    own = client is not scheduler
+    pending: set[Any] = set()
+    try:
+        threads = max(1, sum(client.nthreads().values()))
+        queue = iter(todo)
+        pending = {client.submit(_dask_item, config, src, pure=False) for _, src in zip(range(2 * threads), queue)}
+        done_iter = dd.as_completed(list(pending))
+        for f in done_iter:
+            pending.discard(f)
+            yield f.result()
+            nxt = next(queue, None)
+            if nxt is not None:
+                g = client.submit(_dask_item, config, nxt, pure=False)
+                pending.add(g)
+                done_iter.add(g)
+    finally:
+        # Ctrl-C or an error: drop what is left (each item is written atomically either way)
+        if pending:
+            client.cancel(list(pending))
+        if own:
+            client.close()
 
 
 def write_manifest(config: DatasetConfig, indices: list[int]) -> Path:
