@@ -232,7 +232,7 @@ def test_kill_9_then_resume_gives_the_bytes_of_an_uninterrupted_run(tmp_path):
     assert not any(Path(k).name.startswith(".") for k in final)
 
 
-def test_the_command_line_and_its_config_file(tmp_path, capsys):
+def test_the_command_line_and_its_config_file(photos, tmp_path, capsys):
     from skyfall import cli
 
     for argv in ([], ["dataset"], ["render"]):
@@ -254,6 +254,14 @@ def test_the_command_line_and_its_config_file(tmp_path, capsys):
     toml.write_text("rain_rat = 3\n")
     assert cli.main(["dataset", "--config", str(toml)]) == 2
     assert "unknown option 'rain_rat'" in capsys.readouterr().err
+    img, dep = photos
+    exr = tmp_path / "photo.exr"
+    assert cli.main(["render", "--input", str(img / "a.png"), "--depth", str(dep / "a.exr"), "--rain-rate", "40", "--visibility-m", "500", "--out", str(exr)]) == 0
+    channels = io.read_channels(exr)
+    assert channels["rain_alpha"].max() > 0 and channels["transmittance"].max() < 1
+    np.testing.assert_array_equal(channels["depth_m"], io.read_channels(dep / "a.exr")["depth_m"])
+    assert cli.main(["render", "--input", str(tmp_path / "missing.png"), "--out", str(tmp_path / "x.png")]) == 1
+    assert "missing.png" in capsys.readouterr().err
     png, alpha = tmp_path / "one.png", tmp_path / "alpha.npy"
     assert cli.main(["render", "--width", str(W), "--height", str(H), "--rain-rate", "30", "--exposure-s", "0.002",
                      "--seed", "3", "--out", str(png), "--alpha-out", str(alpha)]) == 0

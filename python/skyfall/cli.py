@@ -18,7 +18,7 @@ from typing import Any
 
 __all__ = ["main"]
 
-EXIT_OK, EXIT_USAGE, EXIT_ITEM_ERRORS, EXIT_INTERRUPTED = 0, 2, 3, 130
+EXIT_OK, EXIT_IO, EXIT_USAGE, EXIT_ITEM_ERRORS, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 
 # option (dest) -> (flags, help). Each dest is a DatasetConfig field or a generate() keyword.
 _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
@@ -105,7 +105,8 @@ def _parser() -> argparse.ArgumentParser:
             "items/NNNNNN.json (every sampled parameter, the seed, the version, each file's sha256), gathered into "
             "manifest.jsonl at the end. Ranges LO:HI are sampled per item from (seed, item index) alone: the bytes do "
             "not depend on --workers, and --resume after an interruption (Ctrl-C, kill -9) gives the bytes of an "
-            "uninterrupted run. Exit status: 0, 3 when some items failed (listed in the manifest), 130 when interrupted."
+            "uninterrupted run. Exit status: 0; 1 for a file that cannot be read or written; 2 for invalid options; 3 when "
+            "some items failed (each recorded in its manifest row); 130 when interrupted."
         ),
         epilog="Example: skyfall dataset --input photos --out wet --variants 10 --rain-rate 1:50 --visibility-m 300:5000 --workers 2",
     )
@@ -115,7 +116,10 @@ def _parser() -> argparse.ArgumentParser:
     rd = sub.add_parser(
         "render",
         help="render one frame of the street or of a photo",
-        description="Render one frame: --scene street (default) or a photo (--input, optional --depth), written to --out.",
+        description=(
+            "Render one frame: --scene street (default) or a photo (--input, optional --depth), written to --out. "
+            "Exit status: 0; 1 for a file that cannot be read or written; 2 for invalid options."
+        ),
         epilog="Example: skyfall render --scene street --rain-rate 25 --wind-m-s 3 --out street.png",
     )
     rd.add_argument("--config", type=Path, metavar="TOML", help="read options from a TOML file (command-line options win)")
@@ -265,6 +269,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, TypeError, FileNotFoundError) as e:
         print(f"skyfall {args.command}: error: {e}", file=sys.stderr)
         return EXIT_USAGE
+    except OSError as e:  # an input that cannot be read, an output that cannot be written
+        print(f"skyfall {args.command}: error: {e}", file=sys.stderr)
+        return EXIT_IO
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
