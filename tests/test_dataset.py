@@ -322,3 +322,34 @@ def test_a_dask_local_cluster_writes_the_bytes_of_a_local_run(photos, tmp_path):
         s = dataset.generate(out=tmp_path / "dask", scheduler=cluster.scheduler_address, resume=True, **opts)
         assert (s.generated, s.skipped) == (6, 6)  # the error items are tried again
     assert tree(tmp_path / "dask") == tree(tmp_path / "local")
+
+
+def _worker_pids(parent: int) -> list[int]:
+    """The parent's multiprocessing workers (not its resource tracker), from /proc."""
+    pids = []
+    for task in Path(f"/proc/{parent}/task").iterdir():
+        children = task / "children"
+        if children.exists():
+            pids += [int(p) for p in children.read_text().split()]
+    return [p for p in pids if b"resource_tracker" not in Path(f"/proc/{p}/cmdline").read_bytes()]
+
+
+def test_a_worker_killed_with_kill_9_stops_the_run_and_resume_finishes(tmp_path):
+    run = tmp_path / "run"
+    args = ["--scene", "street", "--width", "160", "--height", "90", "--variants", "60", "--ambient-spacing-m", "8",
+            "--png-compression", "9", "--workers", "2", "--no-progress", "--out", str(run)]
+    proc = subprocess.Popen(_cli(*args), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and _rows(run / "items") < 4 and proc.poll() is None:
+        time.sleep(0.005)
+    workers = _worker_pids(proc.pid)
+    assert len(workers) == 2, workers
+    os.kill(workers[0], signal.SIGKILL)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 1, f"exit {proc.returncode}\nstdout: {stdout}\nstderr: {stderr}"
+    assert "a worker process died" in stderr and "--resume" in stderr and "Traceback" not in stderr
+    s = dataset.generate(out=run, scene="street", width=160, height=90, variants=60, ambient_spacing_m=8.0, png_compression=9, resume=True, progress=False)
+    assert s.skipped >= 4 and s.generated + s.skipped == 60 and s.errors == 0
+    rows = dataset.read_manifest(run)
+    assert [r["status"] for r in rows] == ["ok"] * 60
+    check_checksums(run, rows)

@@ -105,7 +105,7 @@ def _parser() -> argparse.ArgumentParser:
             "items/NNNNNN.json (every sampled parameter, the seed, the version, each file's sha256), gathered into "
             "manifest.jsonl at the end. Ranges LO:HI are sampled per item from (seed, item index) alone: the bytes do "
             "not depend on --workers, and --resume after an interruption (Ctrl-C, kill -9) gives the bytes of an "
-            "uninterrupted run. Exit status: 0; 1 for a file that cannot be read or written; 2 for invalid options; 3 when "
+            "uninterrupted run. Exit status: 0; 1 for a file that cannot be read or written or a worker process killed; 2 for invalid options; 3 when "
             "some items failed (each recorded in its manifest row); 130 when interrupted."
         ),
         epilog="Example: skyfall dataset --input photos --out wet --variants 10 --rain-rate 1:50 --visibility-m 300:5000 --workers 2",
@@ -269,7 +269,7 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, TypeError, FileNotFoundError) as e:
         print(f"skyfall {args.command}: error: {e}", file=sys.stderr)
         return EXIT_USAGE
-    except OSError as e:  # an input that cannot be read, an output that cannot be written
+    except (OSError, RuntimeError) as e:  # a file that cannot be read or written, a worker killed
         print(f"skyfall {args.command}: error: {e}", file=sys.stderr)
         return EXIT_IO
     except KeyboardInterrupt:

@@ -29,6 +29,7 @@ import threading
 import time
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
@@ -194,6 +195,9 @@ def generate(
         index outside the run.
     FileNotFoundError
         When ``input`` or ``depth`` is not a folder.
+    RuntimeError
+        When a worker process dies (killed, out of memory): the items written are complete, and
+        ``resume=True`` finishes the run.
 
     Examples
     --------
@@ -244,6 +248,10 @@ def generate(
             bar.update(1)
     except KeyboardInterrupt:
         summary.interrupted = True
+    except BrokenProcessPool as e:  # a worker killed (kill -9, out of memory): what is done stays
+        raise RuntimeError(
+            f"a worker process died ({e}); the items written so far are complete: run again with resume=True (--resume)"
+        ) from e
     finally:
         bar.close()
     if not summary.interrupted and indices is None:
