@@ -109,6 +109,7 @@ CONFIGS = (
 
 
 def main() -> None:
+    load_before = os.getloadavg()[0]
     root = Path(tempfile.mkdtemp(prefix="bench_dataset_"))
     try:
         img, dep = make_inputs(root)
@@ -143,12 +144,19 @@ def main() -> None:
     speedup = sorted(speedups)[ROUNDS // 2]
     dask_overhead = sorted(overheads)[ROUNDS // 2]
     RESULTS.mkdir(exist_ok=True)
-    meta = {"machine": platform.platform(), "cpus": os.cpu_count(), "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
+    meta = {
+        "machine": platform.platform(),
+        "cpus": os.cpu_count(),
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "load_before": load_before,
+        "load_after": os.getloadavg()[0],
+    }
     (RESULTS / "dataset.json").write_text(json.dumps({"meta": meta, "rows": rows, "runs": runs, "speedups": speedups, "dask_overheads": overheads, "png_levels": levels, "peak_worker_mb": peak_mb, "bytes_identical_1_vs_2_workers": same}, indent=1) + "\n")
     lines = [
         "# Datasets at 1080p",
         "",
-        f"{meta['date']}, {meta['machine']}, {meta['cpus']} CPUs (shared with other builds: the figures move from minute to minute).",
+        f"{meta['date']}, {meta['machine']}, {meta['cpus']} CPUs shared with other builds (1-minute load average {load_before:.1f}",
+        f"before the run, {meta['load_after']:.1f} after: the figures move from minute to minute, and two workers only scale on idle cores).",
         f"{PHOTOS} photos 1920x1080 (scikit-image's coffee, chelsea, astronaut, rocket tiled) with the street's depth as .npy,",
         f"{VARIANTS} variants each: rain 1-50 mm/h, visibility 300-3000 m,",
         "exposure 1/250-1/30 s, PNG level 1 with the SUB filter; rain_alpha as .npy (the fused 8-bit path) unless said. Costs are per item,",

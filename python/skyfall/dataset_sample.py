@@ -11,7 +11,7 @@ import hashlib
 import json
 import math
 import numbers
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -170,7 +170,6 @@ class DatasetConfig:
     png_compression: int = 1
     ambient_spacing_m: float = 1.0
     backend: str = "cpu"
-    extra: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -223,7 +222,6 @@ class DatasetConfig:
     def to_json(self) -> dict[str, Any]:
         """The options as JSON values (paths as text, ranges as pairs, inf as the string "inf")."""
         d = asdict(self)
-        d.pop("extra")
         return {k: _jsonable(v) for k, v in d.items()}
 
     def sha256(self) -> str:
@@ -236,7 +234,7 @@ class DatasetConfig:
     @classmethod
     def option_names(cls) -> list[str]:
         """The names of the options, as ``generate`` and a config file take them."""
-        return [f.name for f in fields(cls) if f.name != "extra"]
+        return [f.name for f in fields(cls)]
 
 
 def _jsonable(v: Any) -> Any:
