@@ -165,7 +165,9 @@ def test_bytes_do_not_depend_on_workers_and_an_item_regenerates_alone(photos, tm
 
 def test_resume_regenerates_only_what_is_missing_or_corrupt(tmp_path):
     opts = dict(out=tmp_path / "ds", scene="street", variants=5, width=W, height=H, ambient_spacing_m=8.0, progress=False)
-    dataset.generate(**opts)
+    s = dataset.generate(**opts)
+    assert 0.0 < s.first_to_last_s < s.seconds and s.steady_items_per_s == pytest.approx(4 / s.first_to_last_s)
+    assert s.items_per_s == pytest.approx(5 / s.seconds)
     before = tree(tmp_path / "ds")
     items = tmp_path / "ds" / "items"
     data = bytearray((items / "000001.rain.png").read_bytes())

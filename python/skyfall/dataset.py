@@ -59,6 +59,8 @@ class Summary:
         Stopped by Ctrl-C (the items done are complete; resume to finish).
     seconds : float
         Wall time, s.
+    first_to_last_s : float
+        Time from the first item's completion to the last's, s (see ``steady_items_per_s``).
     cost_s : dict of str to float
         Summed per-item cost of the generated items, s, by part (see
         :data:`skyfall.dataset_item.COSTS`): read, render, encode, write.
@@ -75,11 +77,18 @@ class Summary:
     cost_s: dict[str, float] = field(default_factory=lambda: dict.fromkeys(COSTS, 0.0))
     workers: int = 1
     error_messages: list[str] = field(default_factory=list)
+    first_to_last_s: float = 0.0
 
     @property
     def items_per_s(self) -> float:
-        """Items generated per second of wall time."""
+        """Items generated per second of wall time (the workers' start included)."""
         return self.generated / self.seconds if self.seconds > 0 else 0.0
+
+    @property
+    def steady_items_per_s(self) -> float:
+        """Items per second between the first item's completion and the last's: the rate once
+        the workers are up (their start, about a second per process, left out)."""
+        return (self.generated - 1) / self.first_to_last_s if self.first_to_last_s > 0 else 0.0
 
     def __str__(self) -> str:
         cost = ", ".join(f"{k} {1e3 * v / max(self.generated, 1):.1f}" for k, v in self.cost_s.items())
@@ -237,7 +246,11 @@ def generate(
     bar = tqdm(total=len(todo), unit="item", disable=not progress, dynamic_ncols=True)
     try:
         results = _run_dask(config, todo, scheduler) if scheduler is not None else _run_local(config, todo, workers, threads_per_worker)
+        first: float | None = None
         for row, times in results:
+            now = time.perf_counter()
+            first = now if first is None else first
+            summary.first_to_last_s = now - first
             summary.generated += 1
             for k in COSTS:
                 summary.cost_s[k] += times.get(k, 0.0)
