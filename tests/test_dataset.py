@@ -267,6 +267,11 @@ def test_the_command_line_and_its_config_file(photos, tmp_path, capsys):
     png, alpha = tmp_path / "one.png", tmp_path / "alpha.npy"
     assert cli.main(["render", "--width", str(W), "--height", str(H), "--rain-rate", "30", "--exposure-s", "0.002",
                      "--seed", "3", "--out", str(png), "--alpha-out", str(alpha)]) == 0
+    # the same frame from a TOML file's [render] table
+    toml.write_text(f'[render]\nwidth = {W}\nheight = {H}\nrain-rate = 30.0\nexposure_s = 0.002\nseed = 3\nout = "{tmp_path / "two.png"}"\n'
+                    '[dataset]\nvariants = 9\n')
+    assert cli.main(["render", "--config", str(toml)]) == 0
+    assert (tmp_path / "two.png").read_bytes() == png.read_bytes()
     # the same frame through the API
     from skyfall import Camera, Weather
 
