@@ -148,12 +148,24 @@ def test_bad_options_name_the_parameter_and_its_range(options, words):
 
 def test_bytes_do_not_depend_on_workers_and_an_item_regenerates_alone(photos, tmp_path):
     img, dep = photos
-    opts = dict(input=img, depth=dep, depth_scale_m=0.001, variants=3, seed=2, rain_rate_mm_h="5:80", wind_m_s="-4:4", f_number="2:11", progress=False)
+    opts = dict(input=img, depth=dep, depth_scale_m=0.001, variants=3, seed=2, rain_rate_mm_h="5:80", wind_m_s="-4:4", f_number="2:11", parquet=True, progress=False)
     one = dataset.generate(out=tmp_path / "one", **opts)
     two = dataset.generate(out=tmp_path / "two", workers=2, **opts)
     assert one.generated == two.generated == 18 and one.errors == two.errors == 9
     a = tree(tmp_path / "one")
     assert a == tree(tmp_path / "two")
+    # the parquet manifest holds the JSON rows' values
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(tmp_path / "one" / "manifest.parquet").to_pylist()
+    rows = dataset.read_manifest(tmp_path / "one")
+    assert [t["index"] for t in table] == [r["index"] for r in rows] == list(range(18))
+    for t, r in zip(table, rows):
+        assert t["status"] == r["status"] and t.get("error") == r.get("error")
+        if r["status"] == "ok":
+            assert dict(t["files"]) == r["files"]
+            assert t["params.rain_rate_mm_h"] == r["params"]["rain_rate_mm_h"] and t["params.f_number"] == r["params"]["f_number"]
+            assert t["params.visibility_m"] == math.inf
     alone = dataset.generate(out=tmp_path / "alone", indices=[7], **opts)
     assert alone.generated == 1
     b = tree(tmp_path / "alone")

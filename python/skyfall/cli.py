@@ -48,6 +48,7 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("png_compression", ("--png-compression",), {"type": int, "metavar": "0-9", "help": "PNG zlib level (png:compressionLevel); default 1, fast: at 1080p level 6 takes 300-500 ms a PNG"}),
     ("ambient_spacing_m", ("--ambient-spacing-m",), {"type": float, "metavar": "M", "help": "--scene: ambient-light map spacing, m; default 1 (coarser is faster)"}),
     ("backend", ("--backend",), {"choices": ["cpu", "gpu", "auto"], "help": "renderer backend; default cpu (the same bytes on every machine)"}),
+    ("parquet", ("--parquet",), {"action": "store_const", "const": True, "help": "also write manifest.parquet (pip install 'skyfall[parquet]')"}),
 ]
 _RUN_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("workers", ("--workers",), {"type": int, "metavar": "K", "help": "worker processes, each with one renderer; default 1 (in this process)"}),

@@ -11,7 +11,8 @@
   version, the depth source (file, ground plane or scene) and the sha256 of each file; for an
   item whose input is missing, unreadable or mismatched, ``status`` "error" and the error,
 
-and, once every item is done, ``out/manifest.jsonl`` (the rows in index order) and
+and, once every item is done, ``out/manifest.jsonl`` (the rows in index order; also
+``out/manifest.parquet`` with ``parquet=True``, through pyarrow) and
 ``out/config.json`` (the options). Item ``i``'s parameters come from
 ``SeedSequence([seed, i])`` alone (:mod:`skyfall.dataset_sample`), so any item can be
 regenerated alone (``indices=[i]``) and the bytes do not depend on ``workers``. Files are
@@ -38,7 +39,7 @@ from typing import Any
 from tqdm import tqdm  # type: ignore[import-untyped]
 
 import skyfall
-from skyfall.dataset_io import list_images, find_depth, remove_temporaries, write_json
+from skyfall.dataset_io import atomic_write, find_depth, list_images, remove_temporaries, write_json
 from skyfall.dataset_item import COSTS, ItemSource, Worker, item_name, render_item, verify_item
 from skyfall.dataset_sample import DatasetConfig, sample_item
 
@@ -371,7 +372,53 @@ def write_manifest(config: DatasetConfig, indices: list[int]) -> Path:
             rows.append({"index": i, "status": "error", "error": f"no manifest row {path.name}"})
     final = config.out / "manifest.jsonl"
     write_json(final, rows)
+    if config.parquet:
+        write_parquet(config.out / "manifest.parquet", rows)
     return final
+
+
+def _flat(row: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """A row with nested dicts as dotted columns (``params.rain_rate_mm_h``), "inf" as inf, and
+    ``files`` as a list of (name, sha256)."""
+    out: dict[str, Any] = {}
+    for key, value in row.items():
+        if key == "files" and not prefix:
+            out[key] = sorted(value.items())
+        elif isinstance(value, dict):
+            out.update(_flat(value, f"{prefix}{key}."))
+        elif value in ("inf", "-inf"):
+            out[prefix + key] = float(value)
+        else:
+            out[prefix + key] = value
+    return out
+
+
+def write_parquet(final: Path, rows: list[dict[str, Any]]) -> str:
+    """The manifest's rows as a parquet table (pyarrow; ``pip install "skyfall[parquet]"``),
+    atomically; its sha256. Columns: the rows' keys, nested parameters dotted, ``files`` a map
+    of name to sha256; a key an item lacks (an error row's ``files``) is null."""
+    import pyarrow as pa  # type: ignore[import-untyped]
+    import pyarrow.parquet as pq  # type: ignore[import-untyped]
+
+    flat = [_flat(r) for r in rows]
+    names = sorted({k for r in flat for k in r})
+    columns: dict[str, Any] = {}
+    for name in names:
+        values = [r.get(name) for r in flat]
+        if name == "files":
+            columns[name] = pa.array(values, type=pa.map_(pa.string(), pa.string()))
+        elif name in ("camera_position_m",):
+            columns[name] = pa.array(values, type=pa.list_(pa.float64()))
+        elif any(isinstance(v, float) for v in values) and all(v is None or isinstance(v, (int, float)) for v in values):
+            columns[name] = pa.array([None if v is None else float(v) for v in values], type=pa.float64())
+        else:
+            columns[name] = pa.array(values)
+    table = pa.table(columns)
+
+    def save(p: Path) -> None:
+        pq.write_table(table, p, compression="zstd")
+
+    return atomic_write(final, save)
 
 
 def read_manifest(out: str | Path) -> list[dict[str, Any]]:

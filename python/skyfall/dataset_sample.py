@@ -142,6 +142,9 @@ class DatasetConfig:
         its map is built again: about 0.3 s at 1 m for the street).
     backend : {"cpu", "gpu", "auto"}
         The renderer's backend. "cpu" (default) gives the same bytes on every machine.
+    parquet : bool
+        Also write the manifest as ``manifest.parquet`` (pyarrow: ``pip install
+        "skyfall[parquet]"``), nested parameters as dotted columns.
     """
 
     out: Path
@@ -170,6 +173,7 @@ class DatasetConfig:
     png_compression: int = 1
     ambient_spacing_m: float = 1.0
     backend: str = "cpu"
+    parquet: bool = False
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -212,8 +216,9 @@ class DatasetConfig:
             if name not in LAYER_NAMES:
                 raise ValueError(f"layers: {name!r} is not one of {', '.join(LAYER_NAMES)}")
         set_(self, "layers", tuple(n for n in LAYER_NAMES if n in layers))
-        if not isinstance(self.exr, bool):
-            raise TypeError(f"exr must be True or False, got {self.exr!r}")
+        for name in ("exr", "parquet"):
+            if not isinstance(getattr(self, name), bool):
+                raise TypeError(f"{name} must be True or False, got {getattr(self, name)!r}")
         set_(self, "png_compression", integer("png_compression", self.png_compression, 0, 9))
         set_(self, "ambient_spacing_m", in_range("ambient_spacing_m", self.ambient_spacing_m))
         if self.backend not in ("cpu", "gpu", "auto"):
