@@ -1,0 +1,337 @@
+"""One dataset item: its scene, its weather, its frame and its files.
+
+An item is a function of the run's options and its index alone (:func:`render_item`), so a
+worker process, the main process or a later resumed run all write the same bytes for it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+import skyfall
+from skyfall import io, scenes
+from skyfall.camera import Camera
+from skyfall.dataset_io import atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
+from skyfall.dataset_sample import DatasetConfig, ItemParams, sample_item
+from skyfall.photo import level_camera
+from skyfall.render import Frame, Renderer
+from skyfall.scenes import BoxScene, PhotoScene
+from skyfall.weather import Weather
+
+__all__ = ["COSTS", "ItemSource", "Worker", "item_files", "prepare", "render_item", "verify_item"]
+
+COSTS = ("read", "render", "encode", "write")
+"""The parts of an item's cost, s: ``read`` (input files, the scene and its airlight),
+``render`` (the weather frame and the clean one), ``encode`` (sRGB encoding and OpenImageIO's
+PNG/EXR writing, its zlib compression, into the page cache) and ``write`` (the layers' .npy
+files, the checksums, the renames and the item's manifest row)."""
+
+# layers a frame may not carry (no rain, clear air): what they hold then
+_ABSENT = {"rain_alpha": 0.0, "rain_depth_m": np.inf, "transmittance": 1.0}
+
+
+@dataclass(frozen=True)
+class ItemSource:
+    """Where item ``index`` comes from: a photo (and its depth map) or the bundled scene.
+
+    Attributes
+    ----------
+    index : int
+        The item's index in the run (photo k's variant v is k * variants + v).
+    image, depth : Path or None
+        The photo and its depth map (None: a scene item, or no depth folder).
+    depth_missing : bool
+        A depth folder was given and holds no map for this photo: an error for the item.
+    """
+
+    index: int
+    image: Path | None = None
+    depth: Path | None = None
+    depth_missing: bool = False
+
+
+def item_name(index: int) -> str:
+    """The file stem of item ``index``: its index, zero-padded to 6 digits."""
+    return f"{index:06d}"
+
+
+def item_files(config: DatasetConfig, index: int) -> list[str]:
+    """The names of item ``index``'s image files in ``out/items`` (its row ``NNNNNN.json`` aside)."""
+    stem = item_name(index)
+    names = [f"{stem}.rain.png", f"{stem}.clean.png", *(f"{stem}.{layer}.npy" for layer in config.layers)]
+    if config.exr:
+        names.append(f"{stem}.rain.exr")
+    return names
+
+
+class Worker:
+    """What one worker keeps between items: its renderers (one per frame size, made once),
+    the last photo it read and the bundled scene."""
+
+    def __init__(self, config: DatasetConfig) -> None:
+        self.config = config
+        self._renderers: dict[tuple[int, int], Renderer] = {}
+        self._photo: tuple[Path, NDArray[Any], str | None] | None = None
+        self._street: BoxScene | None = None
+        self._clean: tuple[Path, bytes] | None = None  # a photo's clean PNG, the same for each variant
+
+    def renderer(self, width: int, height: int) -> Renderer:
+        """This worker's renderer of the size (the last four sizes are kept)."""
+        key = (width, height)
+        if key not in self._renderers:
+            if len(self._renderers) >= 4:
+                self._renderers.pop(next(iter(self._renderers)))
+            self._renderers[key] = Renderer(width, height, backend=self.config.backend)
+        return self._renderers[key]
+
+    def photo(self, path: Path) -> tuple[NDArray[Any], str | None]:
+        """The photo at ``path`` (kept while the next items are its variants)."""
+        if self._photo is None or self._photo[0] != path:
+            image, encoding = read_photo(path)
+            self._photo = (path, image, encoding)
+        return self._photo[1], self._photo[2]
+
+    def clean_png(self, final: Path, photo: Path, image: NDArray[Any]) -> str:
+        """Write ``image`` (the photo ``photo`` itself) as ``final``; a photo's variants reuse
+        the bytes encoded for the first (OpenImageIO's PNG bytes are a function of the pixels)."""
+        if self._clean is not None and self._clean[0] == photo:
+            data = self._clean[1]
+
+            def copy(p: Path) -> None:
+                p.write_bytes(data)
+
+            return atomic_write(final, copy)
+        digest = write_png(final, image, self.config.png_compression)
+        self._clean = (photo, final.read_bytes())
+        return digest
+
+    def street(self) -> BoxScene:
+        """The bundled street, made once."""
+        if self._street is None:
+            self._street = scenes.street()
+        return self._street
+
+
+def _weather(config: DatasetConfig, p: ItemParams) -> Weather:
+    return Weather(
+        rain_rate_mm_h=p.rain_rate_mm_h,
+        visibility_m=p.visibility_m,
+        wind_m_s=(p.wind_m_s, 0.0, 0.0),
+        rain_near_m=config.rain_near_m,
+    )
+
+
+def _lens(p: ItemParams) -> dict[str, Any]:
+    return {"exposure_s": p.exposure_s, "f_number": p.f_number, "focus_distance_m": p.focus_distance_m}
+
+
+def _street_camera(base: Camera, p: ItemParams) -> Camera:
+    x, y, z = (float(v) for v in base.position_m)
+    return Camera(
+        (x + p.camera_dx_m, y, z + p.camera_dz_m),
+        yaw_deg=base.yaw_deg + p.camera_dyaw_deg,
+        pitch_deg=base.pitch_deg + p.camera_dpitch_deg,
+        vertical_fov_deg=base.vertical_fov_deg,
+        **_lens(p),
+    )
+
+
+def _photo_scene(worker: Worker, src: ItemSource, p: ItemParams, row: dict[str, Any]) -> PhotoScene:
+    cfg = worker.config
+    assert src.image is not None
+    if src.depth_missing:
+        raise FileNotFoundError(f"no depth map for {src.image.name} in depth = {str(cfg.depth)!r} (looked for {src.image.stem}.exr/.npy/.png/.tif)")
+    image, encoding = worker.photo(src.image)
+    h, w = image.shape[:2]
+    if src.depth is not None:
+        depth, scale = read_depth(src.depth, cfg.depth_scale_m)
+        cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=cfg.vertical_fov_deg, **_lens(p))
+        row["depth_source"] = "file"
+        return PhotoScene(image, depth, camera=cam, encoding=encoding, depth_scale_m=scale)
+    level = level_camera(w, h, camera_height_m=cfg.camera_height_m, horizon_row=cfg.horizon_row, vertical_fov_deg=cfg.vertical_fov_deg)
+    cam = Camera(tuple(level.position_m), pitch_deg=level.pitch_deg, vertical_fov_deg=cfg.vertical_fov_deg, width=w, height=h, **_lens(p))
+    row["depth_source"] = "ground_plane"
+    row["camera_height_m"] = cfg.camera_height_m
+    row["horizon_row"] = cfg.horizon_row if cfg.horizon_row is not None else h / 2.0
+    return PhotoScene(image, camera=cam, encoding=encoding)
+
+
+def prepare(
+    worker: Worker, src: ItemSource, p: ItemParams, row: dict[str, Any]
+) -> tuple[BoxScene | PhotoScene, Camera | None, Weather]:
+    """An item's scene, camera (None: the photo's own) and weather; ``row`` gets the depth
+    source, the camera and the frame size.
+
+    Raises
+    ------
+    FileNotFoundError, OSError, ValueError, TypeError
+        For a missing, unreadable or mismatched input, or parameters the renderer refuses.
+    """
+    cfg = worker.config
+    weather = _weather(cfg, p)
+    if src.image is None:
+        street = worker.street()
+        assert street.camera is not None
+        camera = _street_camera(street.camera, p)
+        row["depth_source"] = "scene"
+        row["camera_position_m"] = [float(v) for v in camera.position_m]
+        row["camera_yaw_deg"], row["camera_pitch_deg"] = camera.yaw_deg, camera.pitch_deg
+        row["width"], row["height"] = cfg.width, cfg.height
+        return street, camera, weather
+    scene = _photo_scene(worker, src, p, row)
+    row["height"], row["width"] = scene.shape
+    _ = scene.airlight_linear  # estimated here, counted as reading
+    return scene, None, weather
+
+
+def _layer(frame: Frame, name: str) -> NDArray[np.float32]:
+    if name in frame.layers:
+        return frame.layers[name]
+    return np.full(frame.depth_m.shape, _ABSENT[name], np.float32)
+
+
+def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None = None) -> dict[str, Any]:
+    """Render item ``src.index`` and write its files into ``config.out / "items"``.
+
+    Parameters
+    ----------
+    worker : Worker
+        The process's renderers and caches.
+    src : ItemSource
+        The item's input.
+    times : dict, optional
+        Accumulates the item's cost in s under :data:`COSTS`.
+
+    Returns
+    -------
+    dict
+        The item's manifest row (also written as ``items/NNNNNN.json``, last, once its files
+        are in place): ``status`` "ok" with ``files`` (name: sha256), or "error" with ``error``
+        (the exception's type and message; the run goes on).
+    """
+    cfg = worker.config
+    t = times if times is not None else {}
+    for k in COSTS:
+        t.setdefault(k, 0.0)
+    folder = cfg.out / "items"
+    stem = item_name(src.index)
+    p = sample_item(cfg, src.index)
+    row: dict[str, Any] = {
+        "index": src.index,
+        "seed": cfg.seed,
+        "skyfall_version": skyfall.__version__,
+        "config_sha256": cfg.sha256(),
+        "params": p.to_json(),
+        "rain_near_m": cfg.rain_near_m,
+    }
+    if src.image is not None:
+        row["image"] = src.image.name
+        row["depth"] = None if src.depth is None else src.depth.name
+    else:
+        row["scene"] = cfg.scene
+    try:
+        t0 = time.perf_counter()
+        scene, camera, weather = prepare(worker, src, p, row)
+        h, w = int(row["height"]), int(row["width"])
+        renderer = worker.renderer(w, h)
+        t1 = time.perf_counter()
+        t["read"] += t1 - t0
+        fast = (
+            isinstance(scene, PhotoScene)
+            and scene.srgb8 is not None
+            and renderer.backend == "cpu"
+            and set(cfg.layers) <= {"rain_alpha"}
+            and not cfg.exr
+        )
+        row["path"] = "srgb8" if fast else "float"
+        kw: dict[str, Any] = {"seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
+        layers: dict[str, NDArray[np.float32]] = {}
+        frame: Frame | None = None
+        if fast:
+            alpha = np.empty((h, w), np.float32)
+            rainy = renderer.render_srgb8(scene, weather, rain_alpha_out=alpha if cfg.layers else None, **kw)
+            if cfg.layers:
+                layers["rain_alpha"] = alpha
+        else:
+            frame = renderer.render(scene, weather, camera=camera, **kw)
+            layers = {name: _layer(frame, name) for name in cfg.layers}
+        if isinstance(scene, PhotoScene):
+            clean_src: NDArray[Any] | None = scene.srgb8
+            clean_linear = None if clean_src is not None else scene.image
+        else:
+            clean_src = None
+            clean_linear = renderer.render(scene, Weather(), camera=camera, ambient_spacing_m=cfg.ambient_spacing_m).rgb
+        t2 = time.perf_counter()
+        t["render"] += t2 - t1
+        if frame is not None:
+            rainy = io.to_srgb8(frame.rgb)
+        clean = clean_src if clean_src is not None else io.to_srgb8(clean_linear)
+        files: dict[str, str] = {}
+        names = item_files(cfg, src.index)
+        files[names[0]] = _timed_png(folder / names[0], rainy, cfg.png_compression, t)
+        if src.image is not None:
+            t5 = time.perf_counter()
+            files[names[1]] = worker.clean_png(folder / names[1], src.image, clean)
+            t["encode"] += time.perf_counter() - t5
+        else:
+            files[names[1]] = _timed_png(folder / names[1], clean, cfg.png_compression, t)
+        if cfg.exr:
+            assert frame is not None
+            exr = folder / f"{stem}.rain.exr"
+            t3 = time.perf_counter()
+            files[exr.name] = atomic_write(exr, frame.save)
+            t["encode"] += time.perf_counter() - t3
+        t4 = time.perf_counter()
+        for name in cfg.layers:
+            files[f"{stem}.{name}.npy"] = write_npy(folder / f"{stem}.{name}.npy", layers[name])
+        row["files"] = dict(sorted(files.items()))
+        row["status"] = "ok"
+        row["mean_rain_alpha"] = float(np.mean(layers["rain_alpha"], dtype=np.float64)) if "rain_alpha" in layers else None
+        write_json(folder / f"{stem}.json", row)
+        t["write"] += time.perf_counter() - t4
+    except Exception as e:  # an error of this item: recorded, the run goes on
+        for name in item_files(cfg, src.index):
+            (folder / name).unlink(missing_ok=True)
+        row.pop("files", None)
+        row["status"] = "error"
+        row["error"] = f"{type(e).__name__}: {e}"
+        write_json(folder / f"{stem}.json", row)
+    return row
+
+
+def _timed_png(path: Path, image: NDArray[Any], level: int, t: dict[str, float]) -> str:
+    t0 = time.perf_counter()
+    digest = write_png(path, image, level)
+    t["encode"] += time.perf_counter() - t0
+    return digest
+
+
+def verify_item(config: DatasetConfig, index: int) -> bool:
+    """Whether item ``index`` is complete: its row says "ok" for these options and every file
+    it lists is there with its checksum (what ``resume`` keeps)."""
+    import json
+
+    folder = config.out / "items"
+    path = folder / f"{item_name(index)}.json"
+    try:
+        row = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return False
+    if not isinstance(row, dict) or row.get("status") != "ok" or row.get("config_sha256") != config.sha256():
+        return False
+    files = row.get("files", {})
+    if set(files) != set(item_files(config, index)):
+        return False
+    for name, digest in files.items():
+        try:
+            if sha256_file(folder / name) != digest:
+                return False
+        except OSError:
+            return False
+    return True

@@ -1,0 +1,328 @@
+"""A dataset run's options and the per-item sampling of its parameter ranges.
+
+Every item's parameters come from ``numpy.random.SeedSequence([seed, index])`` alone, drawn in
+a fixed order, so any item can be regenerated on its own and a run's results do not depend on
+the number of workers or the order in which items finish.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import numbers
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skyfall._validate import in_range, integer
+
+__all__ = ["DatasetConfig", "ItemParams", "parse_range", "sample_item", "LAYER_NAMES", "RANGE_OPTIONS"]
+
+LAYER_NAMES = ("rain_alpha", "rain_depth_m", "transmittance")
+"""The ground-truth layers an item can write (``layers=``)."""
+
+# option -> (the parameter whose valid range its ends must lie in, how it is sampled)
+RANGE_OPTIONS: dict[str, tuple[str, str]] = {
+    "rain_rate_mm_h": ("rain_rate_mm_h", "uniform"),
+    "visibility_m": ("visibility_m", "log"),
+    "exposure_s": ("exposure_s", "log"),
+    "f_number": ("f_number", "log"),
+    "focus_distance_m": ("focus_distance_m", "log"),
+    "wind_m_s": ("wind_m_s", "uniform"),
+}
+
+Range = tuple[float, float]
+
+
+def parse_range(name: str, value: Any) -> Range:
+    """A parameter range ``(lo, hi)`` from ``"1:50"``, ``"10"``, a number or a pair.
+
+    Parameters
+    ----------
+    name : str
+        The option's name (``rain_rate_mm_h``, ...), whose valid range both ends must lie in.
+    value : str, float or sequence of 2 float
+        ``"lo:hi"`` or ``[lo, hi]`` samples in [lo, hi]; one number is a fixed value.
+
+    Raises
+    ------
+    ValueError
+        When the text is not a number or ``lo:hi``, ``lo > hi``, or an end is outside the
+        parameter's valid range (the message names the parameter and its range).
+    TypeError
+        For a value that is neither text, a number nor a pair.
+    """
+    ends: list[Any]
+    if isinstance(value, str):
+        parts = value.split(":")
+        if len(parts) not in (1, 2):
+            raise ValueError(f"{name} = {value!r} must be a number or a range lo:hi")
+        try:
+            ends = [float(p) for p in parts]
+        except ValueError:
+            raise ValueError(f"{name} = {value!r} must be a number or a range lo:hi of numbers") from None
+    elif isinstance(value, numbers.Real) and not isinstance(value, bool):
+        ends = [float(value)]
+    elif isinstance(value, (list, tuple)) and len(value) in (1, 2):
+        ends = list(value)
+    else:
+        raise TypeError(f"{name} must be a number, a range 'lo:hi' or a pair [lo, hi], got {value!r}")
+    param = RANGE_OPTIONS[name][0] if name in RANGE_OPTIONS else name
+    checked = [in_range(param, e) for e in ends]
+    lo, hi = checked[0], checked[-1]
+    if lo > hi:
+        raise ValueError(f"{name} = {lo:g}:{hi:g} is empty: lo must be at most hi")
+    if RANGE_OPTIONS.get(name, ("", "uniform"))[1] == "log" and math.isinf(lo) != math.isinf(hi):
+        raise ValueError(f"{name} = {lo:g}:{hi:g}: a log-uniform range must be finite at both ends, or a fixed inf")
+    return (lo, hi)
+
+
+def _optional_range(name: str, value: Any) -> Range | None:
+    return None if value is None else parse_range(name, value)
+
+
+@dataclass(frozen=True)
+class DatasetConfig:
+    """The options of a dataset run (:func:`skyfall.dataset.generate` and ``skyfall dataset``).
+
+    Parameters
+    ----------
+    out : Path
+        Output folder (created).
+    input : Path, optional
+        Folder of photos (any format OpenImageIO reads: PNG, JPEG, TIFF, EXR, ...), taken in
+        name order. Exactly one of ``input`` and ``scene`` is given.
+    depth : Path, optional
+        Folder of depth maps matched to the photos by file stem: ``.exr`` (the ``depth_m``, ``Z``
+        or only channel, metres, inf = sky), ``.npy`` (float metres, or integers with
+        ``depth_scale_m``) or 16-bit ``.png`` (with ``depth_scale_m``). A photo without its
+        depth map is an error for that item. Without ``depth``: the ground-plane fallback
+        (:func:`skyfall.photo.ground_plane_depth`) with ``camera_height_m`` and ``horizon_row``.
+    scene : {"street"}, optional
+        The bundled street (:func:`skyfall.scenes.street`) with its camera jittered per item.
+    variants : int
+        Items per photo (per scene for ``scene``), in [1, 10^7].
+    seed : int
+        The master seed, in [0, 2^63).
+    width, height : int
+        Frame size of ``scene`` items, px (photos keep their own size).
+    rain_rate_mm_h, visibility_m, exposure_s, f_number, focus_distance_m, wind_m_s : (lo, hi)
+        Ranges sampled per item (see :func:`parse_range`); rain rate and wind (the x
+        component, m/s, across the view) uniform, visibility, exposure, f-number and focus
+        distance log-uniform. ``f_number`` None: a pinhole; ``focus_distance_m`` None: focused at
+        infinity.
+    rain_near_m : float
+        Radius of the streak region, m (:class:`skyfall.Weather`).
+    depth_scale_m : float, optional
+        Metres per unit of integer depth maps (16-bit PNG, integer NPY).
+    camera_height_m, horizon_row, vertical_fov_deg : float
+        The photos' camera: its height and horizon row for the ground-plane fallback, and its
+        vertical field of view, degrees.
+    camera_jitter_m, camera_jitter_deg : float
+        ``scene`` items: the camera moves uniformly within +-jitter_m in x and z and turns
+        within +-jitter_deg in yaw (+-jitter_deg / 2 in pitch).
+    layers : tuple of str
+        Ground-truth layers to write, each of :data:`LAYER_NAMES`, as float32 ``.npy``.
+        ``("rain_alpha",)`` on an 8-bit photo keeps the fast fused 8-bit path
+        (:meth:`skyfall.Renderer.render_srgb8`); any other layer, ``exr`` or a ``scene`` item
+        renders the float frame (:meth:`skyfall.Renderer.render`) and encodes it.
+    exr : bool
+        Also write the weather frame as EXR (float RGB and the layers).
+    png_compression : int
+        zlib level of the PNGs, in [0, 9] (OpenImageIO's ``png:compressionLevel``; the filter is
+        libpng's SUB). Default 1, for speed: a 1080p photo takes 27 ms to write at 1 and 89 ms
+        at 6 (137 ms at 6 with libpng's default filters, OpenImageIO's default; noisier rainy
+        photos about twice as long), against 24-46 ms to render; 0 stores them uncompressed
+        (6.2 MB at 1080p, 14 ms). See benches/results/dataset.md.
+    ambient_spacing_m : float
+        Ambient-light map spacing of ``scene`` items, m (each item's rain changes the sky, so
+        its map is built again: about 0.3 s at 1 m for the street).
+    backend : {"cpu", "gpu", "auto"}
+        The renderer's backend. "cpu" (default) gives the same bytes on every machine.
+    parquet : bool
+        Also write the manifest as ``manifest.parquet`` (pyarrow: ``pip install
+        "skyfall[parquet]"``), nested parameters as dotted columns.
+    """
+
+    out: Path
+    input: Path | None = None
+    depth: Path | None = None
+    scene: str | None = None
+    variants: int = 1
+    seed: int = 0
+    width: int = 640
+    height: int = 360
+    rain_rate_mm_h: Range = (1.0, 50.0)
+    visibility_m: Range = (math.inf, math.inf)
+    exposure_s: Range = (1.0 / 250.0, 1.0 / 30.0)
+    f_number: Range | None = None
+    focus_distance_m: Range | None = None
+    wind_m_s: Range = (0.0, 0.0)
+    rain_near_m: float = 5.0
+    depth_scale_m: float | None = None
+    camera_height_m: float = 1.6
+    horizon_row: float | None = None
+    vertical_fov_deg: float = 60.0
+    camera_jitter_m: float = 0.5
+    camera_jitter_deg: float = 5.0
+    layers: tuple[str, ...] = ("rain_alpha",)
+    exr: bool = False
+    png_compression: int = 1
+    ambient_spacing_m: float = 1.0
+    backend: str = "cpu"
+    parquet: bool = False
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "out", Path(self.out))
+        if (self.input is None) == (self.scene is None):
+            raise ValueError("give exactly one of input (a folder of photos) and scene ('street')")
+        if self.scene is not None and self.scene != "street":
+            raise ValueError(f"scene = {self.scene!r} must be 'street'")
+        if self.depth is not None and self.input is None:
+            raise ValueError("depth needs input: depth maps are matched to the input photos by stem")
+        set_(self, "input", None if self.input is None else Path(self.input))
+        set_(self, "depth", None if self.depth is None else Path(self.depth))
+        set_(self, "variants", integer("variants", self.variants, 1, 10**7))
+        set_(self, "seed", integer("seed", self.seed, 0, 2**63 - 1))
+        set_(self, "width", integer("width", self.width, 1, 16384))
+        set_(self, "height", integer("height", self.height, 1, 16384))
+        for name in ("rain_rate_mm_h", "visibility_m", "exposure_s", "wind_m_s"):
+            set_(self, name, parse_range(name, getattr(self, name)))
+        set_(self, "f_number", _optional_range("f_number", self.f_number))
+        set_(self, "focus_distance_m", _optional_range("focus_distance_m", self.focus_distance_m))
+        if self.focus_distance_m is not None and self.f_number is None:
+            raise ValueError("focus_distance_m needs f_number (a pinhole is in focus at every distance)")
+        set_(self, "rain_near_m", in_range("rain_near_m", self.rain_near_m))
+        if self.depth_scale_m is not None:
+            s = float(self.depth_scale_m)
+            if not (math.isfinite(s) and s > 0.0):
+                raise ValueError(f"depth_scale_m = {self.depth_scale_m} must be a positive finite number of metres per unit")
+            set_(self, "depth_scale_m", s)
+        set_(self, "camera_height_m", in_range("camera_height_m", self.camera_height_m))
+        if self.horizon_row is not None:
+            set_(self, "horizon_row", in_range("horizon_row", self.horizon_row))
+        set_(self, "vertical_fov_deg", in_range("vertical_fov_deg", self.vertical_fov_deg))
+        for name, hi in (("camera_jitter_m", 100.0), ("camera_jitter_deg", 45.0)):
+            v = float(getattr(self, name))
+            if not 0.0 <= v <= hi:
+                raise ValueError(f"{name} = {v:g} is outside the valid range [0, {hi:g}]")
+            set_(self, name, v)
+        layers = (self.layers,) if isinstance(self.layers, str) else tuple(self.layers)
+        for name in layers:
+            if name not in LAYER_NAMES:
+                raise ValueError(f"layers: {name!r} is not one of {', '.join(LAYER_NAMES)}")
+        set_(self, "layers", tuple(n for n in LAYER_NAMES if n in layers))
+        for name in ("exr", "parquet"):
+            if not isinstance(getattr(self, name), bool):
+                raise TypeError(f"{name} must be True or False, got {getattr(self, name)!r}")
+        set_(self, "png_compression", integer("png_compression", self.png_compression, 0, 9))
+        set_(self, "ambient_spacing_m", in_range("ambient_spacing_m", self.ambient_spacing_m))
+        if self.backend not in ("cpu", "gpu", "auto"):
+            raise ValueError(f"backend = {self.backend!r} must be 'cpu', 'gpu' or 'auto'")
+
+    def to_json(self) -> dict[str, Any]:
+        """The options as JSON values (paths as text, ranges as pairs, inf as the string "inf")."""
+        d = asdict(self)
+        return {k: _jsonable(v) for k, v in d.items()}
+
+    def sha256(self) -> str:
+        """A checksum of the options that shape the items (not ``out``): a resumed run
+        regenerates every item when they changed."""
+        d = self.to_json()
+        d.pop("out")
+        return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()
+
+    @classmethod
+    def option_names(cls) -> list[str]:
+        """The names of the options, as ``generate`` and a config file take them."""
+        return [f.name for f in fields(cls)]
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, Path):
+        return str(v)
+    if isinstance(v, float) and not math.isfinite(v):
+        return "inf" if v > 0 else "-inf"
+    if isinstance(v, (tuple, list)):
+        return [_jsonable(x) for x in v]
+    return v
+
+
+@dataclass(frozen=True)
+class ItemParams:
+    """One item's sampled parameters (units in the names; None: not used)."""
+
+    index: int
+    render_seed: int
+    rain_rate_mm_h: float
+    visibility_m: float
+    exposure_s: float
+    f_number: float | None
+    focus_distance_m: float | None
+    wind_m_s: float
+    camera_dx_m: float
+    camera_dz_m: float
+    camera_dyaw_deg: float
+    camera_dpitch_deg: float
+
+    def to_json(self) -> dict[str, Any]:
+        """The parameters as JSON values (inf as the string "inf")."""
+        return {k: _jsonable(v) for k, v in asdict(self).items()}
+
+
+def _draw(rng: np.random.Generator, r: Range | None, how: str) -> float | None:
+    """One value of ``r``; a uniform number is drawn whatever ``r`` is, so that every item
+    draws the same sequence and adding a range does not move the others."""
+    u = float(rng.random())
+    if r is None:
+        return None
+    lo, hi = r
+    if lo == hi:
+        return lo
+    if how == "log":
+        return math.exp(math.log(lo) + u * (math.log(hi) - math.log(lo)))
+    return lo + u * (hi - lo)
+
+
+def sample_item(config: DatasetConfig, index: int) -> ItemParams:
+    """The parameters of item ``index``, from ``SeedSequence([config.seed, index])`` only.
+
+    Examples
+    --------
+    >>> cfg = DatasetConfig(out="ds", scene="street", variants=4, seed=3, rain_rate_mm_h="1:50")
+    >>> sample_item(cfg, 2) == sample_item(cfg, 2)
+    True
+    >>> 1.0 <= sample_item(cfg, 2).rain_rate_mm_h <= 50.0
+    True
+    """
+    rng = np.random.default_rng(np.random.SeedSequence([config.seed, integer("index", index, 0, 2**63 - 1)]))
+    render_seed = int(rng.integers(0, 2**63 - 1))
+    rate = _draw(rng, config.rain_rate_mm_h, "uniform")
+    vis = _draw(rng, config.visibility_m, "log")
+    exposure = _draw(rng, config.exposure_s, "log")
+    f_number = _draw(rng, config.f_number, "log")
+    focus = _draw(rng, config.focus_distance_m, "log")
+    wind = _draw(rng, config.wind_m_s, "uniform")
+    j, jd = config.camera_jitter_m, config.camera_jitter_deg
+    dx, dz, dyaw, dpitch = (float(v) for v in rng.uniform(-1.0, 1.0, 4))
+    assert rate is not None and vis is not None and exposure is not None and wind is not None
+    if f_number is not None and focus is None:
+        focus = math.inf
+    return ItemParams(
+        index=index,
+        render_seed=render_seed,
+        rain_rate_mm_h=rate,
+        visibility_m=vis,
+        exposure_s=exposure,
+        f_number=f_number,
+        focus_distance_m=focus,
+        wind_m_s=wind,
+        camera_dx_m=dx * j,
+        camera_dz_m=dz * j,
+        camera_dyaw_deg=dyaw * jd,
+        camera_dpitch_deg=dpitch * jd / 2.0,
+    )
