@@ -377,7 +377,7 @@ class Renderer:
         )
         out[...] = io.to_srgb8(frame.rgb)
         if rain_alpha_out is not None:
-            rain_alpha_out[...] = frame.layers.get("rain_alpha", 0.0)
+            rain_alpha_out[...] = frame.layer("rain_alpha")
         return out
 
     def _out_arrays(self, out: Frame) -> dict[str, NDArray[np.float32] | None]:

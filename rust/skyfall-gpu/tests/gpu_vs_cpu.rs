@@ -69,6 +69,15 @@ fn max_abs(a: &[f32], b: &[f32]) -> (f32, usize) {
     (worst, big)
 }
 
+/// How many of `gpu`'s values differ from the CPU's `cpu` by more than `tol` relative (to the
+/// CPU's value, or absolute below 1).
+fn differing(cpu: &[f32], gpu: &[f32], tol: f32) -> usize {
+    cpu.iter()
+        .zip(gpu)
+        .filter(|(x, y)| (*x - *y).abs() > tol * x.abs().max(1.0))
+        .count()
+}
+
 #[test]
 fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     let gpu = GpuRenderer::new(AdapterChoice::Any)
@@ -286,13 +295,7 @@ fn gpu_matches_cpu_under_a_cie_sky_with_sky_visibility() {
         .render(SceneRef::Boxes(&scene), &cam, &light, None, None)
         .unwrap();
     // Relative: the clear sky reaches 12 E/π and the WGSL evaluates it in f32 (the CPU in f64).
-    let rel = |tol: f32| {
-        c.rgb
-            .iter()
-            .zip(&g.rgb)
-            .filter(|(x, y)| (*x - *y).abs() > tol * x.abs().max(1.0))
-            .count()
-    };
+    let rel = |tol: f32| differing(&c.rgb, &g.rgb, tol);
     assert!(
         rel(1e-3) * 200 <= c.rgb.len(),
         "{} rgb values differ by > 0.1 %",
@@ -396,13 +399,7 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
     let g = gpu
         .render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None)
         .unwrap();
-    let rel = |tol: f32| {
-        c.rgb
-            .iter()
-            .zip(&g.rgb)
-            .filter(|(x, y)| (*x - *y).abs() > tol * x.abs().max(1.0))
-            .count()
-    };
+    let rel = |tol: f32| differing(&c.rgb, &g.rgb, tol);
     // As the box scene without lights: silhouettes (and a light at a skip level's edge) may
     // differ where f32 rounding differs; everywhere else f32 rounding.
     assert!(
