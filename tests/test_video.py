@@ -61,3 +61,23 @@ def test_bad_frames_are_named(tmp_path):
     mask = (np.arange(16 * 16).reshape(16, 16) % 256).astype(np.uint8)
     write_video(tmp_path / "m.mp4", [mask], lossless=True)
     np.testing.assert_array_equal(next(read_video(tmp_path / "m.mp4")), np.repeat(mask[..., None], 3, axis=2))
+
+
+def test_lossy_video_is_the_same_bytes_every_time_and_its_yuv_is_bt709(clip, tmp_path):
+    import colour
+
+    from skyfall.video import _yuv420
+
+    a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
+    write_video(a, clip, fps=30.0)
+    write_video(b, clip, fps=30.0)
+    assert a.read_bytes() == b.read_bytes()
+    # The RGB to YUV conversion against colour-science's BT.709, limited range, 8 bits (luma
+    # per pixel; chroma per 2 x 2 block from the block's mean Cb, Cr).
+    frame = clip[0]
+    # (colour's float output is the code over 255)
+    ycbcr = 255 * colour.RGB_to_YCbCr(frame / 255.0, K=colour.WEIGHTS_YCBCR["ITU-R BT.709"], out_bits=8, out_legal=True, out_int=False)
+    yuv = _yuv420(frame).astype(float)
+    np.testing.assert_allclose(yuv[:H], ycbcr[..., 0], atol=0.51)
+    cb = ycbcr[..., 1].reshape(H // 2, 2, W // 2, 2).mean(axis=(1, 3))
+    np.testing.assert_allclose(yuv[H : H + H // 4].reshape(H // 2, W // 2), cb, atol=0.51)

@@ -6,12 +6,16 @@ falling; a clip's frames go to the encoder one at a time as they are rendered (o
 memory however long the clip). ``lossless=True`` keeps every RGB byte (x264's RGB mode at
 constant quality 0: decode it back with :func:`read_video` and the frames are the ones
 rendered); the default is x264 in 4:2:0 YUV at ``crf`` 18, visually transparent and about
-ten times smaller. The encoder runs on one thread, so the same frames give the same bytes.
+ten times smaller. The RGB to YUV conversion (BT.709, limited range, each 2 x 2 block's chroma
+averaged) is skyfall's own, in numpy, and the encoder runs on one thread, so the same frames
+give the same bytes (FFmpeg's converter, swscale, gave a few codes' difference between runs on
+a loaded machine).
 Needs PyAV (``pip install skyfall[video]``).
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Iterator
 from fractions import Fraction
 from os import PathLike
@@ -43,6 +47,33 @@ def _frame(i: int, frame: Any) -> NDArray[np.uint8]:
     if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] == 0 or a.shape[1] == 0:
         raise ValueError(f"frames[{i}] must have shape (H, W, 3) or (H, W), got {a.shape}")
     return np.ascontiguousarray(a)
+
+
+# BT.709 luma weights; FFmpeg's codes for BT.709 (colorspace, primaries, transfer) and for the
+# limited ("MPEG") range, written into the stream so decoders convert back with the same matrix.
+_KR, _KB = 0.2126, 0.0722
+_BT709, _LIMITED = 1, 1
+
+
+def _yuv420(rgb: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """An even-sized sRGB frame as one yuv420p array (Y, then U, then V: (1.5 H, W)), BT.709
+    limited range, the chroma of each 2 x 2 block averaged (deterministic, unlike a threaded
+    converter)."""
+    c = rgb.astype(np.float32) * np.float32(1.0 / 255.0)
+    r, g, b = c[..., 0], c[..., 1], c[..., 2]
+    y = _KR * r + (1.0 - _KR - _KB) * g + _KB * b
+    cb = (b - y) / (2.0 * (1.0 - _KB))
+    cr = (r - y) / (2.0 * (1.0 - _KR))
+    h, w = y.shape
+
+    def half(p: NDArray[np.float32]) -> NDArray[np.float32]:
+        return np.asarray(p.reshape(h // 2, 2, w // 2, 2).mean(axis=(1, 3)), dtype=np.float32)
+
+    def code(v: NDArray[np.float32], scale: float, offset: float) -> NDArray[np.uint8]:
+        return np.asarray(np.clip(np.rint(offset + scale * v), 0, 255), dtype=np.uint8)
+
+    u, v = code(half(cb), 224.0, 128.0), code(half(cr), 224.0, 128.0)
+    return np.concatenate([code(y, 219.0, 16.0), u.reshape(h // 4, w), v.reshape(h // 4, w)], axis=0)
 
 
 def write_video(
@@ -93,7 +124,7 @@ def write_video(
     exact = flag("lossless", lossless)
     quality = integer("crf", crf, 0, 51)
     target = Path(path)
-    tmp = target.with_name(f".{target.name}.part{target.suffix}")
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.part{target.suffix}")
     count = 0
     shape: tuple[int, ...] | None = None
     try:
@@ -111,9 +142,18 @@ def write_video(
                     stream.pix_fmt = "rgb24" if exact else "yuv420p"
                     stream.thread_count = 1  # the same frames give the same bytes
                     stream.options = {"crf": str(0 if exact else quality), "preset": "medium"}
+                    if not exact:
+                        ctx = stream.codec_context
+                        ctx.colorspace, ctx.color_range = _BT709, _LIMITED
+                        ctx.color_primaries, ctx.color_trc = _BT709, _BT709
                 elif frame.shape != shape:
                     raise ValueError(f"frames[{i}] has shape {frame.shape}, the first frame {shape}: a video's frames share one size")
-                for packet in stream.encode(av.VideoFrame.from_ndarray(frame, format="rgb24")):
+                if exact:
+                    picture = av.VideoFrame.from_ndarray(frame, format="rgb24")
+                else:
+                    picture = av.VideoFrame.from_ndarray(_yuv420(frame), format="yuv420p")
+                    picture.colorspace, picture.color_range = _BT709, _LIMITED
+                for packet in stream.encode(picture):
                     container.mux(packet)
                 count += 1
             if stream is None:
