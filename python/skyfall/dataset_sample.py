@@ -156,7 +156,11 @@ class DatasetConfig:
     video_lossless : bool
         Write the clips losslessly (x264 RGB, quality 0: every decoded byte is the frame
         rendered, about ten times larger); default lossy 4:2:0 at crf 18, which needs an even
-        width and height. Only with ``sequence``.
+        width and height. Only with ``sequence``. Lossless clips, the layer stacks and the
+        rows are the same bytes on any number of workers and after a resume; lossy clips hold
+        the same frames but their bytes can differ by a few codes between runs on a loaded
+        machine (seen on this build: x264 runs on one thread, so the RGB to YUV conversion
+        before it is the suspect); each row's sha256 is of the file it wrote.
     """
 
     out: Path
