@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 import skyfall
 from skyfall import io, scenes
 from skyfall.camera import Camera
-from skyfall.dataset_io import atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
+from skyfall.dataset_io import NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
 from skyfall.dataset_sample import DatasetConfig, ItemParams, sample_item
 from skyfall.photo import level_camera
 from skyfall.render import Frame, Renderer
@@ -315,9 +315,39 @@ def _render_clip(
 ) -> None:
     """Write an item's clip: frame k at ``time_s = k / fps`` streamed to the encoder as it is
     rendered (one frame in memory, never N), the clean clip (the photo, or the street rendered
-    once without weather, repeated) and each layer as one preallocated (N, H, W) float32 stack.
-    ``row`` gets the files' sha256, the clip's frames and fps; ``t`` the cost (``render``: the
-    frames, ``encode``: the video encoder, ``write``: the stacks)."""
+    once without weather, repeated) and each layer as one preallocated (N, H, W) float32 stack,
+    a memory map of its temporary ``.npy`` file (:class:`~skyfall.dataset_io.NpyStack`), so an
+    item's memory is one frame's however long the clip. ``row`` gets the files' sha256, the
+    clip's frames and fps; ``t`` the cost (``render``: the frames, ``encode``: the video encoder,
+    ``write``: the stacks' checksums and renames)."""
+    cfg = worker.config
+    assert cfg.sequence is not None
+    h, w = int(row["height"]), int(row["width"])
+    folder = cfg.out / "items"
+    stem = item_name(p.index)
+    row["sequence"], row["fps"], row["video_lossless"] = cfg.sequence, cfg.fps, cfg.video_lossless
+    # each layer's (N, H, W) stack mapped from its temporary file, filled frame by frame
+    files_out = {name: NpyStack(folder / f"{stem}.{name}.npy", (cfg.sequence, h, w)) for name in cfg.layers}
+    try:
+        _write_clip(worker, renderer, scene, camera, weather, p, row, t, files_out)
+    except BaseException:
+        for f in files_out.values():
+            f.discard()
+        raise
+
+
+def _write_clip(
+    worker: Worker,
+    renderer: Renderer,
+    scene: BoxScene | PhotoScene,
+    camera: Camera | None,
+    weather: Weather,
+    p: ItemParams,
+    row: dict[str, Any],
+    t: dict[str, float],
+    files_out: dict[str, NpyStack],
+) -> None:
+    """:func:`_render_clip`'s work, the layer stacks given."""
     from skyfall import video
 
     cfg = worker.config
@@ -325,9 +355,7 @@ def _render_clip(
     n, fps = cfg.sequence, cfg.fps
     h, w = int(row["height"]), int(row["width"])
     folder = cfg.out / "items"
-    stem = item_name(p.index)
-    row["sequence"], row["fps"], row["video_lossless"] = n, fps, cfg.video_lossless
-    stacks = {name: np.empty((n, h, w), np.float32) for name in cfg.layers}
+    stacks = {name: f.array for name, f in files_out.items()}
     fast = isinstance(scene, PhotoScene) and scene.srgb8 is not None and renderer.backend == "cpu" and set(cfg.layers) <= {"rain_alpha"}
     row["path"] = "srgb8" if fast else "float"
     kw: dict[str, Any] = {"n_frames": n, "fps": fps, "seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
@@ -374,11 +402,12 @@ def _render_clip(
     files[names[1]] = atomic_write(folder / names[1], lambda tmp: _clip(video, tmp, (clean for _ in range(n)), fps, cfg.video_lossless, n))
     t3 = time.perf_counter()
     t["encode"] += t3 - t2
-    for name, stack in stacks.items():
-        files[f"{stem}.{name}.npy"] = write_npy(folder / f"{stem}.{name}.npy", stack)
+    row["mean_rain_alpha"] = float(np.mean(stacks["rain_alpha"], dtype=np.float64)) if "rain_alpha" in stacks else None
+    del stacks
+    for name, f in files_out.items():
+        files[f.final.name] = f.commit()
     row["files"] = dict(sorted(files.items()))
     row["status"] = "ok"
-    row["mean_rain_alpha"] = float(np.mean(stacks["rain_alpha"], dtype=np.float64)) if "rain_alpha" in stacks else None
     t["write"] += time.perf_counter() - t3
 
 
