@@ -49,6 +49,9 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("ambient_spacing_m", ("--ambient-spacing-m",), {"type": float, "metavar": "M", "help": "--scene: ambient-light map spacing, m; default 1 (coarser is faster)"}),
     ("backend", ("--backend",), {"choices": ["cpu", "gpu", "auto"], "help": "renderer backend; default cpu (the same bytes on every machine)"}),
     ("parquet", ("--parquet",), {"action": "store_const", "const": True, "help": "also write manifest.parquet (pip install 'skyfall[parquet]')"}),
+    ("sequence", ("--sequence",), {"type": int, "metavar": "N", "help": "each item a clip of N frames, in [1, 10000] (rain falling at time k/fps): NNNNNN.rain.mp4, .clean.mp4 and each layer as an (N, H, W) .npy stack (pip install 'skyfall[video]')"}),
+    ("fps", ("--fps",), {"type": float, "metavar": "F", "help": "--sequence: frames per second, in (0, 1000]; default 30"}),
+    ("video_lossless", ("--video-lossless",), {"action": "store_const", "const": True, "help": "--sequence: lossless clips (x264 RGB: every byte of the frames); default lossy crf 18, even sizes only"}),
 ]
 _RUN_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("workers", ("--workers",), {"type": int, "metavar": "K", "help": "worker processes, each with one renderer; default 1 (in this process)"}),
@@ -102,7 +105,8 @@ def _parser() -> argparse.ArgumentParser:
         help="turn a folder of photos (or the street) into weather variants with ground truth",
         description=(
             "Render VARIANTS weather variants of every photo in --input (or of --scene street) into --out: per item "
-            "items/NNNNNN.rain.png (the weather image), .clean.png, one float32 .npy per --layers, and a manifest row "
+            "items/NNNNNN.rain.png (the weather image), .clean.png, one float32 .npy per --layers (with --sequence N: "
+            "clips .rain.mp4 and .clean.mp4 of N frames and (N, H, W) .npy stacks), and a manifest row "
             "items/NNNNNN.json (every sampled parameter, the seed, the version, each file's sha256), gathered into "
             "manifest.jsonl at the end. Ranges LO:HI are sampled per item from (seed, item index) alone: the bytes do "
             "not depend on --workers, and --resume after an interruption (Ctrl-C, kill -9) gives the bytes of an "

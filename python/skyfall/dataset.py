@@ -11,6 +11,13 @@
   version, the depth source (file, ground plane or scene) and the sha256 of each file; for an
   item whose input is missing, unreadable or mismatched, ``status`` "error" and the error,
 
+or, with ``sequence=N`` (``--sequence N --fps F``), a clip per item: ``NNNNNN.rain.mp4`` and
+``NNNNNN.clean.mp4`` (:func:`skyfall.video.write_video`; ``video_lossless`` keeps every byte)
+of N frames rendered at ``time_s = k / fps`` (world-anchored rain falling over the static photo
+or street), each layer as one float32 (N, H, W) ``.npy`` stack, and the row's ``sequence`` and
+``fps``. Frames are streamed to the encoder one at a time (the layer stacks aside, an item holds
+one frame, however long the clip),
+
 and, once every item is done, ``out/manifest.jsonl`` (the rows in index order; also
 ``out/manifest.parquet`` with ``parquet=True``, through pyarrow) and
 ``out/config.json`` (the options). Item ``i``'s parameters come from

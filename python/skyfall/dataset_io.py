@@ -23,6 +23,7 @@ from skyfall import io
 __all__ = [
     "IMAGE_EXTENSIONS",
     "DEPTH_EXTENSIONS",
+    "NpyStack",
     "atomic_write",
     "find_depth",
     "list_images",
@@ -205,6 +206,41 @@ def write_npy(final: Path, array: NDArray[Any]) -> str:
             np.save(f, np.ascontiguousarray(array), allow_pickle=False)
 
     return atomic_write(final, save)
+
+
+class NpyStack:
+    """A float32 ``.npy`` file of ``shape`` filled in place (a memory map of its temporary file,
+    so a clip's (N, H, W) layer stack is not held in memory), then renamed onto ``final``.
+
+    The bytes are those :func:`write_npy` writes for the same array (``np.save``'s header).
+
+    Parameters
+    ----------
+    final : Path
+        The file's final name.
+    shape : tuple of int
+        The array's shape, e.g. (frames, height px, width px).
+    """
+
+    def __init__(self, final: Path, shape: tuple[int, ...]) -> None:
+        self.final = final
+        self.tmp = _tmp_name(final)
+        self.array: NDArray[np.float32] = np.lib.format.open_memmap(self.tmp, mode="w+", dtype=np.float32, shape=shape)
+
+    def commit(self) -> str:
+        """Flush the array, rename the file onto its final name; its sha256."""
+        mm: Any = self.array
+        mm.flush()
+        del mm
+        self.array = np.empty((0,), np.float32)  # the map released before the rename
+        digest = sha256_file(self.tmp)
+        os.replace(self.tmp, self.final)
+        return digest
+
+    def discard(self) -> None:
+        """Remove the temporary file (an item that failed)."""
+        self.array = np.empty((0,), np.float32)
+        self.tmp.unlink(missing_ok=True)
 
 
 def write_json(final: Path, obj: Any) -> str:

@@ -7,6 +7,7 @@ worker process, the main process or a later resumed run all write the same bytes
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,7 @@ from numpy.typing import NDArray
 import skyfall
 from skyfall import io, scenes
 from skyfall.camera import Camera
-from skyfall.dataset_io import atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
+from skyfall.dataset_io import NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
 from skyfall.dataset_sample import DatasetConfig, ItemParams, sample_item
 from skyfall.photo import level_camera
 from skyfall.render import Frame, Renderer
@@ -31,10 +32,6 @@ COSTS = ("read", "render", "encode", "write")
 ``render`` (the weather frame and the clean one), ``encode`` (sRGB encoding and OpenImageIO's
 PNG/EXR writing, its zlib compression, into the page cache) and ``write`` (the layers' .npy
 files, the checksums, the renames and the item's manifest row)."""
-
-# layers a frame may not carry (no rain, clear air): what they hold then
-_ABSENT = {"rain_alpha": 0.0, "rain_depth_m": np.inf, "transmittance": 1.0}
-
 
 @dataclass(frozen=True)
 class ItemSource:
@@ -62,8 +59,11 @@ def item_name(index: int) -> str:
 
 
 def item_files(config: DatasetConfig, index: int) -> list[str]:
-    """The names of item ``index``'s image files in ``out/items`` (its row ``NNNNNN.json`` aside)."""
+    """The names of item ``index``'s image files in ``out/items`` (its row ``NNNNNN.json`` aside):
+    the clips (``.rain.mp4``, ``.clean.mp4``) instead of the PNGs with ``config.sequence``."""
     stem = item_name(index)
+    if config.sequence is not None:
+        return [f"{stem}.rain.mp4", f"{stem}.clean.mp4", *(f"{stem}.{layer}.npy" for layer in config.layers)]
     names = [f"{stem}.rain.png", f"{stem}.clean.png", *(f"{stem}.{layer}.npy" for layer in config.layers)]
     if config.exr:
         names.append(f"{stem}.rain.exr")
@@ -190,12 +190,6 @@ def prepare(
     return scene, None, weather
 
 
-def _layer(frame: Frame, name: str) -> NDArray[np.float32]:
-    if name in frame.layers:
-        return frame.layers[name]
-    return np.full(frame.depth_m.shape, _ABSENT[name], np.float32)
-
-
 def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None = None) -> dict[str, Any]:
     """Render item ``src.index`` and write its files into ``config.out / "items"``.
 
@@ -242,6 +236,10 @@ def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None 
         renderer = worker.renderer(w, h)
         t1 = time.perf_counter()
         t["read"] += t1 - t0
+        if cfg.sequence is not None:
+            _render_clip(worker, renderer, scene, camera, weather, p, row, t)
+            write_json(folder / f"{stem}.json", row)
+            return row
         fast = (
             isinstance(scene, PhotoScene)
             and scene.srgb8 is not None
@@ -260,7 +258,7 @@ def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None 
                 layers["rain_alpha"] = alpha
         else:
             frame = renderer.render(scene, weather, camera=camera, **kw)
-            layers = {name: _layer(frame, name) for name in cfg.layers}
+            layers = {name: frame.layer(name) for name in cfg.layers}
         if isinstance(scene, PhotoScene):
             clean_src: NDArray[Any] | None = scene.srgb8
             clean_linear = None if clean_src is not None else scene.image
@@ -303,6 +301,121 @@ def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None 
         row["error"] = f"{type(e).__name__}: {e}"
         write_json(folder / f"{stem}.json", row)
     return row
+
+
+def _render_clip(
+    worker: Worker,
+    renderer: Renderer,
+    scene: BoxScene | PhotoScene,
+    camera: Camera | None,
+    weather: Weather,
+    p: ItemParams,
+    row: dict[str, Any],
+    t: dict[str, float],
+) -> None:
+    """Write an item's clip: frame k at ``time_s = k / fps`` streamed to the encoder as it is
+    rendered (one frame in memory, never N), the clean clip (the photo, or the street rendered
+    once without weather, repeated) and each layer as one preallocated (N, H, W) float32 stack,
+    a memory map of its temporary ``.npy`` file (:class:`~skyfall.dataset_io.NpyStack`), so an
+    item's memory is one frame's however long the clip. ``row`` gets the files' sha256, the
+    clip's frames and fps; ``t`` the cost (``render``: the frames, ``encode``: the video encoder,
+    ``write``: the stacks' checksums and renames)."""
+    cfg = worker.config
+    assert cfg.sequence is not None
+    h, w = int(row["height"]), int(row["width"])
+    folder = cfg.out / "items"
+    stem = item_name(p.index)
+    row["sequence"], row["fps"], row["video_lossless"] = cfg.sequence, cfg.fps, cfg.video_lossless
+    # each layer's (N, H, W) stack mapped from its temporary file, filled frame by frame
+    files_out = {name: NpyStack(folder / f"{stem}.{name}.npy", (cfg.sequence, h, w)) for name in cfg.layers}
+    try:
+        _write_clip(worker, renderer, scene, camera, weather, p, row, t, files_out)
+    except BaseException:
+        for f in files_out.values():
+            f.discard()
+        raise
+
+
+def _write_clip(
+    worker: Worker,
+    renderer: Renderer,
+    scene: BoxScene | PhotoScene,
+    camera: Camera | None,
+    weather: Weather,
+    p: ItemParams,
+    row: dict[str, Any],
+    t: dict[str, float],
+    files_out: dict[str, NpyStack],
+) -> None:
+    """:func:`_render_clip`'s work, the layer stacks given."""
+    from skyfall import video
+
+    cfg = worker.config
+    assert cfg.sequence is not None
+    n, fps = cfg.sequence, cfg.fps
+    h, w = int(row["height"]), int(row["width"])
+    folder = cfg.out / "items"
+    stacks = {name: f.array for name, f in files_out.items()}
+    fast = isinstance(scene, PhotoScene) and scene.srgb8 is not None and renderer.backend == "cpu" and set(cfg.layers) <= {"rain_alpha"}
+    row["path"] = "srgb8" if fast else "float"
+    kw: dict[str, Any] = {"n_frames": n, "fps": fps, "seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
+    render_s = [0.0]
+
+    def rainy() -> Iterator[NDArray[np.uint8]]:
+        """The rainy frames in order, each filling its slice of the layer stacks."""
+        t0 = time.perf_counter()
+        if fast:
+            alpha = stacks.get("rain_alpha")
+            buf = np.empty((h, w), np.float32) if alpha is not None else None
+            images = renderer.render_sequence_srgb8(scene, weather, out=np.empty((h, w, 3), np.uint8), rain_alpha_out=buf, **kw)
+            for k, image in enumerate(images):
+                if alpha is not None:
+                    alpha[k] = buf
+                render_s[0] += time.perf_counter() - t0
+                yield image
+                t0 = time.perf_counter()
+            return
+        for k, frame in enumerate(renderer.render_sequence(scene, weather, camera=camera, **kw)):
+            for name, stack in stacks.items():
+                stack[k] = frame.layer(name)
+            image = io.to_srgb8(frame.rgb)
+            del frame  # the float frame goes before the next is rendered
+            render_s[0] += time.perf_counter() - t0
+            yield image
+            t0 = time.perf_counter()
+
+    files: dict[str, str] = {}
+    names = item_files(cfg, p.index)
+    t0 = time.perf_counter()
+    files[names[0]] = atomic_write(folder / names[0], lambda tmp: _clip(video, tmp, rainy(), fps, cfg.video_lossless, n))
+    t1 = time.perf_counter()
+    t["render"] += render_s[0]
+    t["encode"] += t1 - t0 - render_s[0]
+    if isinstance(scene, PhotoScene) and scene.srgb8 is not None:
+        clean: NDArray[np.uint8] = scene.srgb8
+    elif isinstance(scene, PhotoScene):
+        clean = io.to_srgb8(scene.image)
+    else:
+        clean = io.to_srgb8(renderer.render(scene, Weather(), camera=camera, ambient_spacing_m=cfg.ambient_spacing_m).rgb)
+    t2 = time.perf_counter()
+    t["render"] += t2 - t1
+    files[names[1]] = atomic_write(folder / names[1], lambda tmp: _clip(video, tmp, (clean for _ in range(n)), fps, cfg.video_lossless, n))
+    t3 = time.perf_counter()
+    t["encode"] += t3 - t2
+    row["mean_rain_alpha"] = float(np.mean(stacks["rain_alpha"], dtype=np.float64)) if "rain_alpha" in stacks else None
+    del stacks
+    for name, f in files_out.items():
+        files[f.final.name] = f.commit()
+    row["files"] = dict(sorted(files.items()))
+    row["status"] = "ok"
+    t["write"] += time.perf_counter() - t3
+
+
+def _clip(video: Any, path: Path, frames: Iterator[NDArray[np.uint8]], fps: float, lossless: bool, n: int) -> None:
+    """``frames`` encoded into ``path`` (an ``.mp4`` name) by :func:`skyfall.video.write_video`."""
+    written = video.write_video(path, frames, fps=fps, lossless=lossless)
+    if written != n:  # pragma: no cover - the renderer yields n frames
+        raise RuntimeError(f"{path.name}: {written} frames written, {n} expected")
 
 
 def _timed_png(path: Path, image: NDArray[Any], level: int, t: dict[str, float]) -> str:

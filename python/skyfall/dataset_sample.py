@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from skyfall._validate import in_range, integer
+from skyfall._validate import in_range, integer, real
 
 __all__ = ["DatasetConfig", "ItemParams", "parse_range", "sample_item", "LAYER_NAMES", "RANGE_OPTIONS"]
 
@@ -145,6 +145,20 @@ class DatasetConfig:
     parquet : bool
         Also write the manifest as ``manifest.parquet`` (pyarrow: ``pip install
         "skyfall[parquet]"``), nested parameters as dotted columns.
+    sequence : int, optional
+        Frames per item, in [1, 10^4]: each item becomes a clip (``NNNNNN.rain.mp4`` and
+        ``NNNNNN.clean.mp4`` through :func:`skyfall.video.write_video`, and each layer as one
+        float32 ``.npy`` stack of shape (N, H, W)); frame k is rendered at ``time_s = k / fps``
+        with the item's seed, so its world-anchored rain falls over the static photo or street.
+        None (default): one still per item (PNG). Needs PyAV (``pip install "skyfall[video]"``).
+    fps : float
+        Frames per second of a clip, in (0, 1000]; default 30. Only with ``sequence``.
+    video_lossless : bool
+        Write the clips losslessly (x264 RGB, quality 0: every decoded byte is the frame
+        rendered, about ten times larger); default lossy 4:2:0 at crf 18, which needs an even
+        width and height. Only with ``sequence``. Clips (lossy or lossless), the layer stacks
+        and the rows are the same bytes on any number of workers and after a resume
+        (:mod:`skyfall.video` converts RGB to YUV itself and encodes on one thread).
     """
 
     out: Path
@@ -174,6 +188,9 @@ class DatasetConfig:
     ambient_spacing_m: float = 1.0
     backend: str = "cpu"
     parquet: bool = False
+    sequence: int | None = None
+    fps: float = 30.0
+    video_lossless: bool = False
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -216,13 +233,23 @@ class DatasetConfig:
             if name not in LAYER_NAMES:
                 raise ValueError(f"layers: {name!r} is not one of {', '.join(LAYER_NAMES)}")
         set_(self, "layers", tuple(n for n in LAYER_NAMES if n in layers))
-        for name in ("exr", "parquet"):
+        for name in ("exr", "parquet", "video_lossless"):
             if not isinstance(getattr(self, name), bool):
                 raise TypeError(f"{name} must be True or False, got {getattr(self, name)!r}")
         set_(self, "png_compression", integer("png_compression", self.png_compression, 0, 9))
         set_(self, "ambient_spacing_m", in_range("ambient_spacing_m", self.ambient_spacing_m))
         if self.backend not in ("cpu", "gpu", "auto"):
             raise ValueError(f"backend = {self.backend!r} must be 'cpu', 'gpu' or 'auto'")
+        if self.sequence is not None:
+            set_(self, "sequence", integer("sequence", self.sequence, 1, 10**4))
+            if self.exr:
+                raise ValueError("exr is for stills: with sequence the clips are MP4 and the layers .npy stacks")
+        fps = real("fps", self.fps)
+        if not 0.0 < fps <= 1000.0:
+            raise ValueError(f"fps = {fps:g} is outside the valid range (0, 1000]")
+        set_(self, "fps", fps)
+        if self.sequence is None and (self.fps != 30.0 or self.video_lossless):
+            raise ValueError("fps and video_lossless need sequence (the frames per clip)")
 
     def to_json(self) -> dict[str, Any]:
         """The options as JSON values (paths as text, ranges as pairs, inf as the string "inf")."""
@@ -234,6 +261,9 @@ class DatasetConfig:
         regenerates every item when they changed."""
         d = self.to_json()
         d.pop("out")
+        if self.sequence is None:  # stills: the checksum of the options before clips existed
+            for name in ("sequence", "fps", "video_lossless"):
+                d.pop(name)
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()
 
     @classmethod
