@@ -72,7 +72,7 @@ def estimate_airlight(
 
     With a depth map that marks sky (``inf``) and the camera: the per-channel median of the
     sky pixels at the lowest :data:`HORIZON_FRACTION` of their elevations (on every k-th row
-    and column, at most about 2^18 pixels: k = 3 at 1920 x 1080), the horizon sky the
+    and column, at most about 2^16 pixels: k = 6 at 1920 x 1080), the horizon sky the
     haze of a rainy frame tends to (a median, so a lamp, a white tower or the sun there does
     not set it). Without sky pixels: among the brightest ``top_fraction`` of the dark channel
     (the haze-opaque parts of a hazy photo), the pixel whose channels sum highest (He, Sun &
@@ -113,9 +113,9 @@ def estimate_airlight(
         d = np.asarray(depth_m)
         if d.shape != a.shape[:2]:
             raise ValueError(f"depth_m has shape {d.shape}, the image is {a.shape[:2]}")
-        # Every k-th row and column, at most ~2^18 pixels (k = 3 at 1920 x 1080): the horizon's
+        # Every k-th row and column, at most ~2^16 pixels (k = 6 at 1920 x 1080): the horizon's
         # median does not need them all, and a dataset pays this once per photo.
-        k = max(1, math.ceil(math.sqrt(d.size / 2**18)))
+        k = max(1, math.ceil(math.sqrt(d.size / 2**16)))
         sky = np.isinf(d[::k, ::k])
         if sky.any():
             ys, xs = np.nonzero(sky)

@@ -89,7 +89,10 @@ impl Haze {
         for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
             *t = self.transmittance(d * (u2 + rays.v2 + 1.0).sqrt());
         }
-        if self.sky_ceiling_m == f32::INFINITY || self.extinction_per_m <= 0.0 {
+        // Rows without sky (most of them in most frames) skip the second pass after one
+        // branch-free scan.
+        let has_sky = depth.iter().fold(false, |any, &d| any | (d == f32::INFINITY));
+        if !has_sky || self.sky_ceiling_m == f32::INFINITY || self.extinction_per_m <= 0.0 {
             return;
         }
         for (x, (t, &d)) in t.iter_mut().zip(depth).enumerate() {
