@@ -91,7 +91,9 @@ impl Haze {
         }
         // Rows without sky (most of them in most frames) skip the second pass after one
         // branch-free scan.
-        let has_sky = depth.iter().fold(false, |any, &d| any | (d == f32::INFINITY));
+        let has_sky = depth
+            .iter()
+            .fold(false, |any, &d| any | (d == f32::INFINITY));
         if !has_sky || self.sky_ceiling_m == f32::INFINITY || self.extinction_per_m <= 0.0 {
             return;
         }
