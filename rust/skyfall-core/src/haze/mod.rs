@@ -69,18 +69,6 @@ impl Haze {
         }
     }
 
-    /// The path through the haze of a pixel at `depth_m` whose ray has length `len` per metre
-    /// of depth and world-y component `rise` (per metre of depth): depth·len, or for a sky
-    /// pixel the path to the cloud base ([`path_to_ceiling_m`] of sin γ = rise / len).
-    #[inline(always)]
-    pub fn path_m(&self, depth_m: f32, len: f32, rise: f32) -> f32 {
-        if depth_m == f32::INFINITY {
-            path_to_ceiling_m(rise / len, self.sky_ceiling_m)
-        } else {
-            depth_m * len
-        }
-    }
-
     /// A row's transmittances into `t`: every pixel along depth·|ray| first (branch-free: the
     /// loop vectorises; a sky pixel's ∞ gives 0), then the sky pixels again along their path to
     /// the cloud base, when the ceiling is finite.
@@ -100,7 +88,8 @@ impl Haze {
         for (x, (t, &d)) in t.iter_mut().zip(depth).enumerate() {
             if d == f32::INFINITY {
                 let len = (rays.u2[x] + rays.v2 + 1.0).sqrt();
-                *t = self.transmittance(self.path_m(d, len, rays.rise[x] + rays.rise_row));
+                let sin_elevation = (rays.rise[x] + rays.rise_row) / len;
+                *t = self.transmittance(path_to_ceiling_m(sin_elevation, self.sky_ceiling_m));
             }
         }
     }

@@ -106,24 +106,6 @@ impl Camera {
         (u * u + v * v + 1.0).sqrt()
     }
 
-    /// Squared horizontal ray slopes ((x + 0.5 − cx) / fx)² of every column, so a frame can
-    /// compute [`Camera::distance_per_depth`] as `√(u²[x] + v² + 1)` without divisions.
-    pub fn column_slopes_sq(&self) -> Vec<f32> {
-        (0..self.width)
-            .map(|x| {
-                let u = (x as f32 + 0.5 - self.cx) / self.fx;
-                u * u
-            })
-            .collect()
-    }
-
-    /// Squared vertical ray slope of row `y`.
-    #[inline]
-    pub fn row_slope_sq(&self, y: u32) -> f32 {
-        let v = (y as f32 + 0.5 - self.cy) / self.fy;
-        v * v
-    }
-
     /// Solid angle of a view pyramid that holds the frame, sr: 4·asin(sin α·sin β) with α, β
     /// the half-angles to the frame's farther side and edge (≥ the frame's own, when the
     /// principal point is off centre).

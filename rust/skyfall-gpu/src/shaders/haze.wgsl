@@ -26,7 +26,7 @@ fn path_to_ceiling(s_in: f32, ceiling: f32) -> f32 {
 
 // Transmittance along the ray of a pixel at depth `depth_m`, whose ray has length `per_depth`
 // and world-y component `rise` per metre of depth. A sky pixel (depth inf) is hazed up to the
-// cloud base, `params.y` above the eye (skyfall_core::haze::Haze::path_m).
+// cloud base, `params.y` above the eye (skyfall_core::haze::Haze::transmittance_row).
 fn haze_transmittance(depth_m: f32, per_depth: f32, rise: f32) -> f32 {
     let sigma = haze.params.x;
     if sigma <= 0.0 {
