@@ -10,6 +10,7 @@ from skimage.metrics import structural_similarity
 
 import skyfall
 from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
+from skyfall.reference import path_to_cloud_base_m
 
 W, H = 160, 96
 
@@ -49,10 +50,9 @@ def numpy_haze(img, depth, cam, sigma, air, ceiling_m=np.inf):
     per_depth = np.sqrt(u**2 + v**2 + 1.0)
     ray = np.stack([u, -v, -np.ones_like(u)], axis=-1) @ cam.rotation.T
     sin_el = ray[..., 1] / per_depth
-    r = 6.371e6  # the cloud base is a shell over the Earth's sphere
     with np.errstate(invalid="ignore", over="ignore"):
         t = np.exp(-sigma * depth.astype(np.float64) * per_depth)
-        t_sky = np.exp(-sigma * (np.sqrt((r + ceiling_m) ** 2 - r**2 * (1 - sin_el**2)) - r * sin_el))
+        t_sky = np.exp(-sigma * path_to_cloud_base_m(sin_el, ceiling_m))
     t = np.where(np.isinf(depth), t_sky, t)
     return img * t[..., None] + air * (1 - t[..., None]), t
 

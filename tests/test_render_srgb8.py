@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
+from skyfall.reference import path_to_cloud_base_m
 
 W, H = 160, 101  # 101 rows: the last band of rows is short
 
@@ -63,10 +64,10 @@ def test_haze_matches_numpy_and_colour_science(cpu):
     dist = scene.depth_m.astype(np.float64) * per_depth
     # a sky pixel is hazed up to the cloud base above the eye, a shell over the Earth's sphere
     # (a level camera: sin el = -v / |ray|)
-    sin_el, r = -v / per_depth, 6.371e6
+    sin_el = -v / per_depth
     ceiling = weather.cloud_base_height_m - 1.6
     with np.errstate(invalid="ignore", over="ignore"):
-        t_sky = np.exp(-sigma * (np.sqrt((r + ceiling) ** 2 - r**2 * (1 - sin_el**2)) - r * sin_el))
+        t_sky = np.exp(-sigma * path_to_cloud_base_m(sin_el, ceiling))
         t = np.where(np.isinf(dist), t_sky, np.exp(-sigma * dist))[..., None]
     # the airlight is the photo's own, estimated from it (He, Sun & Tang)
     air = np.array(scene.airlight_linear)

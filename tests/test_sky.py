@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, rain, scenes, sky
-from skyfall.reference import canyon_illuminance
+from skyfall.reference import canyon_illuminance, path_to_cloud_base_m
 from conftest import DATA
 
 E = 10000.0
@@ -118,9 +118,8 @@ def test_rain_flattens_the_sky_towards_its_airlight_but_keeps_e():
     # l = (1 + 2 sin el) / 3 attenuated along the path d to a base H up on the Earth's sphere,
     # plus the in-scattered light saturating at its horizon luminance l_h = 1/3, as
     # documented; s keeps E.
-    sigma, h, r = wet.extinction_per_m, wet.cloud_base_height_m, 6.371e6
-    g = np.radians(el)
-    tau = np.exp(-sigma * (np.sqrt((r + h) ** 2 - (r * np.cos(g)) ** 2) - r * np.sin(g)))
+    sigma, h = wet.extinction_per_m, wet.cloud_base_height_m
+    tau = np.exp(-sigma * path_to_cloud_base_m(np.sin(np.radians(el)), h))
     shape = (1 + 2 * np.sin(np.radians(el))) / 3
     model = shape * tau + (1 - tau) / 3
     np.testing.assert_allclose(seen / seen[-1], model / model[-1], rtol=1e-5)

@@ -13,6 +13,7 @@ streaks show. Both need scikit-image and scipy (``make demo`` installs them).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -67,11 +68,13 @@ class PhotoFrame:
     """A photo of the demo in the rain: ``{name}.png`` shows it before and after, side by side."""
 
     name: str
+    photo: Callable[[int | None], PhotoScene]
+    """The scene at a width (None: the photo's own)."""
     weather: Weather
     seed: int = 1
 
     def scene(self, width: int | None = None) -> PhotoScene:
-        return rocket(width) if self.name == "photo_rain" else astronaut(width)
+        return self.photo(width)
 
     def render(self, width: int | None = None) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
         """(the photo, the photo in the rain), 8-bit sRGB."""
@@ -82,8 +85,8 @@ class PhotoFrame:
 
 
 PHOTO_FRAMES = (
-    PhotoFrame("photo_rain", Weather(rain_rate_mm_h=15.0)),
-    PhotoFrame("photo_rain_portrait", Weather(rain_rate_mm_h=25.0)),
+    PhotoFrame("photo_rain", rocket, Weather(rain_rate_mm_h=15.0)),
+    PhotoFrame("photo_rain_portrait", astronaut, Weather(rain_rate_mm_h=25.0)),
 )
 """The rocket at dusk in 15 mm/h rain, the astronaut in 25 mm/h."""
 

@@ -121,9 +121,8 @@ def estimate_airlight(
             ys, xs = np.nonzero(sky)
             ys, xs = ys * k, xs * k
             u, v = _slopes(camera.with_resolution(a.shape[1], a.shape[0]))
-            r = np.asarray(camera.rotation, dtype=np.float64)
             us, vs = u[xs], v[ys]
-            elevation = (r[1, 0] * us - r[1, 1] * vs - r[1, 2]) / np.sqrt(us**2 + vs**2 + 1.0)
+            elevation = _rise(camera, us, vs) / np.sqrt(us**2 + vs**2 + 1.0)
             low = elevation <= np.quantile(elevation, HORIZON_FRACTION)
             px = np.median(a[ys[low], xs[low]], axis=0)
             return decode_srgb8(np.round(px).astype(np.uint8)) if a.dtype == np.uint8 else px.astype(np.float32)
@@ -135,11 +134,11 @@ def estimate_airlight(
     return decode_srgb8(px) if a.dtype == np.uint8 else px.astype(np.float32)
 
 
-def _rise(camera: Camera) -> NDArray[np.float64]:
-    """World y of each pixel's ray R (u, -v, -1), whose camera-space depth is 1."""
-    u, v = _slopes(camera)
+def _rise(camera: Camera, u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """World y of the rays R (u, -v, -1) of slopes ``u``, ``v`` (broadcast), whose
+    camera-space depth is 1."""
     r = np.asarray(camera.rotation, dtype=np.float64)
-    rise: NDArray[np.float64] = r[1, 0] * u[None, :] - r[1, 1] * v[:, None] - r[1, 2]
+    rise: NDArray[np.float64] = r[1, 0] * u - r[1, 1] * v - r[1, 2]
     return rise
 
 
@@ -175,7 +174,8 @@ def ground_plane_depth(camera: Camera) -> NDArray[np.float32]:
     height_m = float(camera.position_m[1])
     if not height_m > 0.0:
         raise ValueError(f"the camera's position_m[1] = {height_m} must be > 0 m: the ground plane y = 0 lies below the camera")
-    rise = _rise(camera)
+    u, v = _slopes(camera)
+    rise = _rise(camera, u[None, :], v[:, None])
     with np.errstate(divide="ignore"):
         depth = np.where(rise < 0.0, height_m / -rise, np.inf)
     return depth.astype(np.float32)

@@ -7,7 +7,10 @@ from importlib import resources
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["canyon_illuminance", "gunn_kinzer_1949"]
+__all__ = ["EARTH_RADIUS_M", "canyon_illuminance", "gunn_kinzer_1949", "path_to_cloud_base_m"]
+
+EARTH_RADIUS_M = 6.371e6
+"""The Earth's mean radius, m."""
 
 
 def gunn_kinzer_1949() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -27,6 +30,23 @@ def gunn_kinzer_1949() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     text = resources.files("skyfall").joinpath("data/gunn_kinzer_1949.csv").read_text()
     rows = [line.split(",") for line in text.splitlines() if line and not line.startswith("#")][1:]
     return np.array([float(r[0]) for r in rows]), np.array([float(r[1]) for r in rows])
+
+
+def path_to_cloud_base_m(sin_elevation: NDArray[np.float64] | float, ceiling_m: float) -> NDArray[np.float64]:
+    """The path from an eye to a cloud base ``ceiling_m`` above it along a ray of elevation
+    sin ``sin_elevation``, the base a shell over the Earth's sphere:
+    sqrt((R + h)^2 - R^2 cos^2 g) - R sin g, in float64, written directly (an independent
+    reference for the core's ``haze::path_to_ceiling_m``, which is f32 and rearranged).
+
+    Examples
+    --------
+    >>> round(float(path_to_cloud_base_m(1.0, 800.0)), 6), round(float(path_to_cloud_base_m(0.0, 800.0)))
+    (800.0, 100967)
+    """
+    s = np.asarray(sin_elevation, dtype=np.float64)
+    r = EARTH_RADIUS_M
+    path: NDArray[np.float64] = np.sqrt((r + ceiling_m) ** 2 - r**2 * (1.0 - s**2)) - r * s
+    return path
 
 
 def canyon_illuminance(
@@ -50,9 +70,7 @@ def canyon_illuminance(
         raise ImportError("skyfall.reference.canyon_illuminance needs scipy: pip install scipy") from exc
 
     def radiance(g: float) -> float:
-        r = 6.371e6
-        path = np.sqrt((r + cloud_base_m) ** 2 - (r * np.cos(g)) ** 2) - r * np.sin(g)
-        tau = float(np.exp(-extinction_per_m * path)) if extinction_per_m > 0 else 1.0
+        tau = float(np.exp(-extinction_per_m * path_to_cloud_base_m(np.sin(g), cloud_base_m))) if extinction_per_m > 0 else 1.0
         return float(((1 + 2 * np.sin(g)) / 3 * tau + (1 - tau) / 3) * np.sin(g) * np.cos(g))
 
     def over_elevation(phi: float, h: float) -> float:
