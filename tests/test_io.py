@@ -75,3 +75,23 @@ def test_errors_are_clear(tmp_path):
     io.write_image(tmp_path / "plain.exr", np.zeros((2, 2), np.float32))
     with pytest.raises(ValueError, match="not a skyfall rain atlas"):
         rain.read_atlas(tmp_path / "plain.exr")
+
+
+def test_16_bit_files_keep_their_16_bits(tmp_path):
+    # read_stored gives a file's own codes; read_image decodes 16-bit codes from all 16 bits
+    # (it used to read them as 8-bit), against colour-science's sRGB decoding.
+    import colour
+
+    from skyfall import io as sio
+
+    codes = (np.arange(4 * 6 * 3, dtype=np.uint32).reshape(4, 6, 3) * 911 % 65536).astype(np.uint16)
+    path = tmp_path / "d.png"
+    sio.write_image(path, codes)
+    stored, meta = sio.read_stored(path)
+    assert stored.dtype == np.uint16 and meta["alpha_channel"] == -1
+    np.testing.assert_array_equal(stored, codes)
+    want = colour.cctf_decoding(codes / 65535.0, function="sRGB")
+    np.testing.assert_allclose(sio.read_image(path), want, atol=2e-6)
+    eight = (codes >> 8).astype(np.uint8)
+    sio.write_image(tmp_path / "e.png", eight)
+    assert sio.read_stored(tmp_path / "e.png")[0].dtype == np.uint8

@@ -66,25 +66,11 @@ def find_depth(folder: Path, stem: str) -> Path | None:
 
 
 def _read_raw(path: Path) -> tuple[NDArray[Any], str, list[str]]:
-    """A file's pixels as stored, (H, W, C), its base type ("uint8", "uint16" or "float") and
-    its channel names."""
-    import OpenImageIO as oiio
-
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        raise OSError(f"cannot read {path}: {oiio.geterror()}")
-    try:
-        spec = inp.spec()
-        base = spec.format.basetype
-        kind = "uint8" if base == oiio.UINT8 else "uint16" if base == oiio.UINT16 else "float"
-        raw = inp.read_image(kind)
-        if raw is None:
-            raise OSError(f"cannot read {path}: {inp.geterror()}")
-        names = list(spec.channelnames)
-    finally:
-        inp.close()
-    arr = np.asarray(raw).reshape(spec.height, spec.width, spec.nchannels)
-    return arr, kind, names
+    """A file's pixels as stored, (H, W, C) (:func:`skyfall.io.read_stored`), its base type
+    ("uint8", "uint16" or "float") and its channel names."""
+    arr, meta = io.read_stored(path)
+    kind = "float" if arr.dtype == np.float32 else str(arr.dtype)
+    return arr, kind, list(meta["channel_names"])
 
 
 def read_photo(path: Path) -> tuple[NDArray[Any], str | None]:

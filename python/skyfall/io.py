@@ -26,6 +26,7 @@ __all__ = [
     "read_channels",
     "read_image",
     "read_image_with_metadata",
+    "read_stored",
     "srgb8_table",
     "to_srgb8",
     "write_image",
@@ -228,11 +229,15 @@ def write_image(
         out.close()
 
 
-def read_image_with_metadata(path: str | Path) -> tuple[NDArray[np.float32], dict[str, Any]]:
-    """Read an image as linear float32 (H, W, C) with its header attributes.
+def read_stored(path: str | Path) -> tuple[NDArray[Any], dict[str, Any]]:
+    """Read an image's pixels as the file stores them, (H, W, C): uint8 or uint16 codes, or
+    float32 for float files (half and double converted), with its header attributes
+    (``channel_names`` and ``alpha_channel``, -1 for none, among them).
 
-    8-bit files are decoded from sRGB (alpha excepted); float files are returned as stored.
-    The attributes include ``channel_names``.
+    Raises
+    ------
+    OSError
+        When OpenImageIO cannot read the file.
     """
     import OpenImageIO as oiio
 
@@ -244,8 +249,9 @@ def read_image_with_metadata(path: str | Path) -> tuple[NDArray[np.float32], dic
         raise OSError(f"cannot read {p}: {oiio.geterror()}")
     try:
         spec = inp.spec()
-        is_float = spec.format.basetype in (oiio.FLOAT, oiio.HALF, oiio.DOUBLE)
-        raw = inp.read_image("float" if is_float else "uint8")
+        base = spec.format.basetype
+        kind = "uint8" if base == oiio.UINT8 else "uint16" if base == oiio.UINT16 else "float"
+        raw = inp.read_image(kind)
         if raw is None:
             raise OSError(f"cannot read {p}: {inp.geterror()}")
     finally:
@@ -253,11 +259,25 @@ def read_image_with_metadata(path: str | Path) -> tuple[NDArray[np.float32], dic
     arr = np.asarray(raw).reshape(spec.height, spec.width, spec.nchannels)
     meta: dict[str, Any] = {a.name: a.value for a in spec.extra_attribs}
     meta["channel_names"] = list(spec.channelnames)
-    if is_float:
-        return np.ascontiguousarray(arr, dtype=np.float32), meta
-    lin = decode_srgb8(arr)
-    if spec.alpha_channel >= 0:
-        lin[..., spec.alpha_channel] = arr[..., spec.alpha_channel].astype(np.float32) / 255.0
+    meta["alpha_channel"] = int(spec.alpha_channel)
+    return (np.ascontiguousarray(arr, dtype=np.float32) if kind == "float" else arr), meta
+
+
+def read_image_with_metadata(path: str | Path) -> tuple[NDArray[np.float32], dict[str, Any]]:
+    """Read an image as linear float32 (H, W, C) with its header attributes.
+
+    8-bit and 16-bit files are decoded from sRGB (alpha excepted, scaled to [0, 1]); float
+    files are returned as stored. The attributes include ``channel_names``
+    (:func:`read_stored`).
+    """
+    arr, meta = read_stored(path)
+    if arr.dtype == np.float32:
+        return arr, meta
+    full = 255.0 if arr.dtype == np.uint8 else 65535.0
+    lin = decode_srgb8(arr) if arr.dtype == np.uint8 else decode_srgb(arr.astype(np.float32) / np.float32(full))
+    a = meta["alpha_channel"]
+    if a >= 0:
+        lin[..., a] = arr[..., a].astype(np.float32) / np.float32(full)
     return lin, meta
 
 
