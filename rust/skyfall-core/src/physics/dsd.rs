@@ -72,6 +72,25 @@ impl BinSampler {
         }
     }
 
+    /// The bin [`lo_mm`, `hi_mm`] of any exponential distribution N(D) = N0 e^(−Λ D)
+    /// (`n0_per_m3_mm`, `slope_per_mm`): the snowflakes' melted diameters draw with it.
+    pub fn exponential(n0_per_m3_mm: f64, slope_per_mm: f64, lo_mm: f64, hi_mm: f64) -> Self {
+        let lam = slope_per_mm;
+        let tail = -(-lam * (hi_mm - lo_mm)).exp_m1();
+        let expected = if n0_per_m3_mm > 0.0 && lam.is_finite() && hi_mm > lo_mm {
+            n0_per_m3_mm / lam * (-lam * lo_mm).exp() * tail
+        } else {
+            0.0
+        };
+        BinSampler {
+            lo_mm,
+            hi_mm,
+            lam,
+            tail,
+            expected,
+        }
+    }
+
     /// λ, the expected drops per m³ (0: none to draw).
     pub fn expected_per_m3(&self) -> f64 {
         self.expected

@@ -1,5 +1,5 @@
-//! Physics of falling rain: air and water properties, sphere drag, terminal velocity,
-//! the Marshall–Palmer drop-size distribution and rain extinction.
+//! Physics of falling rain and snow: air and water properties, sphere drag, terminal velocity,
+//! the Marshall–Palmer drop-size distribution, rain extinction, and snowflakes (`snow`).
 //!
 //! Units are in every name. Diameters are millimetres and rain rates mm/h at the API;
 //! everything inside is SI.
@@ -10,6 +10,7 @@ pub mod dsd;
 pub mod extinction;
 pub mod fall_speed;
 pub(crate) mod quadrature;
+pub mod snow;
 
 /// Standard gravity, m/s² (CGPM 1901).
 pub const GRAVITY_M_S2: f64 = 9.80665;
