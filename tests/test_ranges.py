@@ -65,6 +65,8 @@ def documented(obj: Any) -> dict[str, tuple[float, float, bool, bool]]:
 # and must equal the table's.
 DOCUMENTED: list[tuple[Any, str]] = [
     (Weather, "rain_rate_mm_h"),
+    (Weather, "snow_rate_mm_h"),
+    (Weather, "snow_density_kg_m3"),
     (Weather, "visibility_m"),
     (Weather, "sky_illuminance_lux"),
     (Weather, "sun_elevation_deg"),
@@ -191,6 +193,8 @@ INTEGERS = {"width", "height", "seed", "samples", "ambient_samples", "sky", "siz
 
 PUBLIC: dict[str, Callable[[Any], object]] = {
     "rain_rate_mm_h": lambda v: Weather(rain_rate_mm_h=v),
+    "snow_rate_mm_h": lambda v: Weather(snow_rate_mm_h=v),
+    "snow_density_kg_m3": lambda v: Weather(snow_density_kg_m3=v),
     "rain_rates_mm_h": lambda v: rain.textures([v], [1.0], size_px=16),
     "visibility_m": lambda v: Weather(visibility_m=v),
     "sky_illuminance_lux": lambda v: Weather(sky_illuminance_lux=v),

@@ -26,6 +26,12 @@ class Weather:
     ----------
     rain_rate_mm_h : float
         Rain rate, mm/h, in [0, 500].
+    snow_rate_mm_h : float
+        Snowfall rate as liquid-water equivalent (what gauges and forecasts give), mm/h, in
+        [0, 100]; 1 mm/h of water lays 1 cm/h of snow at 100 kg/m^3. Flakes: Gunn & Marshall's
+        sizes, Locatelli & Hobbs' masses and fall speeds (:mod:`skyfall.physics`).
+    snow_density_kg_m3 : float
+        Bulk density of the snow cover, kg/m^3, in [20, 917] (fresh snow 70-150; default 100).
     visibility_m : float
         Meteorological visibility of the air without rain, m, in [0.01, inf] (``inf``: perfectly clear).
         Enters as Koschmieder extinction 3.912 / visibility_m.
@@ -70,6 +76,8 @@ class Weather:
     """
 
     rain_rate_mm_h: float = 0.0
+    snow_rate_mm_h: float = 0.0
+    snow_density_kg_m3: float = 100.0
     visibility_m: float = math.inf
     sky_illuminance_lux: float = 10000.0
     wind_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -85,6 +93,8 @@ class Weather:
 
     def __post_init__(self) -> None:
         r = in_range("rain_rate_mm_h", self.rain_rate_mm_h)
+        object.__setattr__(self, "snow_rate_mm_h", in_range("snow_rate_mm_h", self.snow_rate_mm_h))
+        object.__setattr__(self, "snow_density_kg_m3", in_range("snow_density_kg_m3", self.snow_density_kg_m3))
         v = in_range("visibility_m", self.visibility_m)
         e = in_range("sky_illuminance_lux", self.sky_illuminance_lux)
         wind = float_array("wind_m_s", self.wind_m_s).reshape(-1)

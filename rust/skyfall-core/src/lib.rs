@@ -27,6 +27,7 @@ pub mod ranges;
 pub mod scene;
 mod seed;
 pub mod sky;
+pub mod snow;
 pub mod weather;
 
 pub use error::{Error, Result};

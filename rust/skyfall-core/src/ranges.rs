@@ -72,6 +72,18 @@ pub const RAIN_RATES_MM_H: Limit = Limit::new(
     RAIN_RATE_MM_H.range,
     "rain rates of a set of rain textures",
 );
+/// Snowfall rate as liquid-water equivalent.
+pub const SNOW_RATE_MM_H: Limit = Limit::new(
+    "snow_rate_mm_h",
+    Range::closed(0.0, 100.0, "mm/h"),
+    "snowfall rate as liquid-water equivalent (0: no flakes, no cover)",
+);
+/// Bulk density of the snow lying on the ground.
+pub const SNOW_DENSITY_KG_M3: Limit = Limit::new(
+    "snow_density_kg_m3",
+    Range::closed(20.0, 917.0, "kg/m^3"),
+    "bulk density of the snow cover (fresh snow 70-150; 917: solid ice)",
+);
 /// Meteorological visibility of the air without rain.
 pub const VISIBILITY_M: Limit = Limit::new(
     "visibility_m",
@@ -349,6 +361,8 @@ pub const SIZE_PX: Limit = Limit::new(
 pub const ALL: &[Limit] = &[
     RAIN_RATE_MM_H,
     RAIN_RATES_MM_H,
+    SNOW_RATE_MM_H,
+    SNOW_DENSITY_KG_M3,
     VISIBILITY_M,
     SKY_ILLUMINANCE_LUX,
     WIND_M_S,

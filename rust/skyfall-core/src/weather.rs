@@ -27,6 +27,10 @@ pub enum SkySpec {
 pub struct Weather {
     /// Rain rate R, mm/h.
     pub rain_rate_mm_h: f64,
+    /// Snowfall rate as liquid-water equivalent, mm/h.
+    pub snow_rate_mm_h: f64,
+    /// Bulk density of the snow cover, kg/m³.
+    pub snow_density_kg_m3: f64,
     /// Meteorological visibility of the air without rain, m (inf: perfectly clear).
     pub visibility_m: f64,
     /// Horizontal illuminance E of the open sky at the ground, lux.
@@ -55,6 +59,8 @@ impl Weather {
     /// Checks every field against its range ([`crate::ranges`]).
     pub fn validate(&self) -> Result<()> {
         ranges::RAIN_RATE_MM_H.check(self.rain_rate_mm_h)?;
+        ranges::SNOW_RATE_MM_H.check(self.snow_rate_mm_h)?;
+        ranges::SNOW_DENSITY_KG_M3.check(self.snow_density_kg_m3)?;
         ranges::VISIBILITY_M.check(self.visibility_m)?;
         ranges::SKY_ILLUMINANCE_LUX.check(self.sky_illuminance_lux)?;
         for (i, &w) in self.wind_m_s.iter().enumerate() {
@@ -193,6 +199,8 @@ mod tests {
     fn weather(rate: f64, visibility_m: f64) -> Weather {
         Weather {
             rain_rate_mm_h: rate,
+            snow_rate_mm_h: 0.0,
+            snow_density_kg_m3: 100.0,
             visibility_m,
             sky_illuminance_lux: 10_000.0,
             wind_m_s: [0.0; 3],

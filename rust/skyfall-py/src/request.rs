@@ -21,6 +21,8 @@ use std::sync::Arc;
 #[derive(FromPyObject)]
 pub struct WeatherSpec {
     rain_rate_mm_h: f64,
+    snow_rate_mm_h: f64,
+    snow_density_kg_m3: f64,
     visibility_m: f64,
     sky_illuminance_lux: f64,
     wind_m_s: [f64; 3],
@@ -62,6 +64,8 @@ impl WeatherSpec {
         };
         let w = Weather {
             rain_rate_mm_h: self.rain_rate_mm_h,
+            snow_rate_mm_h: self.snow_rate_mm_h,
+            snow_density_kg_m3: self.snow_density_kg_m3,
             visibility_m: self.visibility_m,
             sky_illuminance_lux: self.sky_illuminance_lux,
             wind_m_s: self.wind_m_s,
