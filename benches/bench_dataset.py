@@ -17,6 +17,7 @@ import shutil
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -54,20 +55,66 @@ def run_dask(img: Path, dep: Path, out: Path) -> dict[str, object]:
 
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None, env={"RAYON_NUM_THREADS": "1"}) as cluster, Client(cluster) as client:
         client.run(lambda: None)  # the workers are up before the clock starts
-        row = run(img, dep, out, 2, 1, scheduler=client)
+
+        def worker_cpu() -> float:
+            times = client.run(lambda: sum(resource.getrusage(resource.RUSAGE_SELF)[:2]))
+            return float(sum(times.values()))
+
+        row = run(img, dep, out, 2, 1, worker_cpu=worker_cpu, scheduler=client)
     row["via"] = "Dask LocalCluster"
     return row
 
 
-def run(img: Path, dep: Path, out: Path, workers: int, threads: int | None, **extra: object) -> dict[str, object]:
+def cpu_s() -> float:
+    """CPU time of this process and of its children that have ended (a run's worker processes
+    are joined when it returns), s."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def one_at_a_time(img: Path, dep: Path, out: Path) -> dict[str, object]:
+    """The items in this process without the pipeline: each rendered, then written
+    (``render_item`` in a loop: what ``generate`` did before), the same run's baseline."""
+    from skyfall.dataset_item import Worker, render_item
+
     shutil.rmtree(out, ignore_errors=True)
+    config = dataset.DatasetConfig(out=out, input=img, depth=dep, variants=VARIANTS, seed=1, rain_rate_mm_h="1:50", visibility_m="300:3000")
+    (out / "items").mkdir(parents=True)
+    worker = Worker(config)
+    c0, t0 = cpu_s(), time.perf_counter()
+    cost = {k: 0.0 for k in ("read", "render", "encode", "write")}
+    done: list[float] = []
+    for src in dataset.sources(config):
+        assert render_item(worker, src, cost)["status"] == "ok"
+        done.append(time.perf_counter())
+    wall = time.perf_counter() - t0
+    n = len(done)
+    return {
+        "via": "local, one item at a time",
+        "workers": 1,
+        "threads_per_worker": os.cpu_count(),
+        "items": n,
+        "seconds": wall,
+        "items_per_s": n / wall,
+        "steady_items_per_s": (n - 1) / (done[-1] - done[0]),
+        **{f"{k}_ms": 1e3 * v / n for k, v in cost.items()},
+        "bytes_per_item": sum(p.stat().st_size for p in (out / "items").iterdir()) / n,
+        "busy": (cpu_s() - c0) / (wall * (os.cpu_count() or 1)),
+    }
+
+
+def run(img: Path, dep: Path, out: Path, workers: int, threads: int | None, worker_cpu: Any = None, **extra: object) -> dict[str, object]:
+    shutil.rmtree(out, ignore_errors=True)
+    c0 = cpu_s() + (worker_cpu() if worker_cpu else 0.0)
     s = dataset.generate(
         out=out, input=img, depth=dep, variants=VARIANTS, seed=1, rain_rate_mm_h="1:50", visibility_m="300:3000",
         workers=workers, threads_per_worker=threads, progress=False, **extra,
     )
+    used = cpu_s() + (worker_cpu() if worker_cpu else 0.0) - c0
     assert s.errors == 0, s.error_messages
     n = max(s.generated, 1)
     return {
+        "busy": used / (s.seconds * (os.cpu_count() or 1)),
         "workers": workers,
         "threads_per_worker": threads if threads is not None else os.cpu_count(),
         "items": s.generated,
@@ -100,6 +147,7 @@ def png_levels(img: Path, root: Path) -> list[dict[str, float]]:
 
 ROUNDS = 3  # every configuration once per round, interleaved: a busy spell weighs on all alike
 CONFIGS = (
+    ("s", 1, None, {"sequential": True}),  # in this process, one item at a time (no pipeline)
     ("a", 1, None, {}),  # in this process, the renderer on every core
     ("b", 1, 1, {}),  # one single-threaded worker
     ("c", 2, 1, {}),  # two single-threaded workers
@@ -119,11 +167,13 @@ def main() -> None:
             for key, workers, threads, extra in CONFIGS:
                 if extra.get("dask"):
                     runs[key].append(run_dask(img, dep, root / key))
+                elif extra.get("sequential"):
+                    runs[key].append(one_at_a_time(img, dep, root / key))
                 else:
                     runs[key].append(run(img, dep, root / key, workers, threads, **extra))  # type: ignore[arg-type]
         same = all(
             (root / "b" / "items" / p.name).read_bytes() == p.read_bytes()
-            for run_dir in ("a", "c", "d", "f")
+            for run_dir in ("s", "a", "c", "d", "f")
             for p in (root / run_dir / "items").iterdir()
         )
         peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
@@ -142,6 +192,7 @@ def main() -> None:
         rows.append(median)
     speedups = [rate("c", k) / rate("b", k) for k in range(ROUNDS)]
     overheads = [rate("c", k) / rate("f", k) - 1.0 for k in range(ROUNDS)]
+    pipeline = [rate("a", k) / rate("s", k) for k in range(ROUNDS)]
     speedup = sorted(speedups)[ROUNDS // 2]
     dask_overhead = sorted(overheads)[ROUNDS // 2]
     RESULTS.mkdir(exist_ok=True)
@@ -152,7 +203,7 @@ def main() -> None:
         "load_before": load_before,
         "load_after": os.getloadavg()[0],
     }
-    (RESULTS / "dataset.json").write_text(json.dumps({"meta": meta, "rows": rows, "runs": runs, "speedups": speedups, "dask_overheads": overheads, "png_levels": levels, "peak_worker_mb": peak_mb, "bytes_identical_1_vs_2_workers": same}, indent=1) + "\n")
+    (RESULTS / "dataset.json").write_text(json.dumps({"meta": meta, "rows": rows, "runs": runs, "speedups": speedups, "dask_overheads": overheads, "png_levels": levels, "pipeline_gains": pipeline, "peak_worker_mb": peak_mb, "bytes_identical_1_vs_2_workers": same}, indent=1) + "\n")
     lines = [
         "# Datasets at 1080p",
         "",
@@ -167,17 +218,20 @@ def main() -> None:
         "to its last (the range over the runs in brackets), and with the workers' start (spawned processes importing numpy and",
         "skyfall, about a second each; the Dask cluster's start is not timed). The costs are the median run's.",
         "",
-        "| via | workers | threads each | layers | items/s | with start | read ms | render ms | encode ms | write ms | MB per item |",
-        "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| via | workers | threads each | layers | items/s | with start | cores busy | read ms | render ms | encode ms | write ms | MB per item |",
+        "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    for i, r in enumerate(rows):
-        layers = "all three (float path)" if i == 4 else "rain_alpha"
+    for (key, *_), r in zip(CONFIGS, rows):
+        layers = "all three (float path)" if key == "e" else "rain_alpha"
         lines.append(
-            f"| {r.get('via', 'local')} | {r['workers']} | {r['threads_per_worker']} | {layers} | {r['steady_items_per_s']:.2f} ({r['range'][0]:.2f}-{r['range'][1]:.2f}) | {r['items_per_s']:.2f} | {r['read_ms']:.0f} | {r['render_ms']:.0f} | "
+            f"| {r.get('via', 'local')} | {r['workers']} | {r['threads_per_worker']} | {layers} | {r['steady_items_per_s']:.2f} ({r['range'][0]:.2f}-{r['range'][1]:.2f}) | {r['items_per_s']:.2f} | {100 * float(r['busy']):.0f} % | {r['read_ms']:.0f} | {r['render_ms']:.0f} | "  # type: ignore[arg-type]
             f"{r['encode_ms']:.0f} | {r['write_ms']:.0f} | {float(r['bytes_per_item']) / 1e6:.1f} |"  # type: ignore[arg-type]
         )
     lines += [
         "",
+        f"The pipeline (an item encoded and written while the next renders) against one item at a time, in this process",
+        f"(steady rates): {sorted(pipeline)[ROUNDS // 2]:.2f}x, median of the rounds' ({', '.join(f'{x:.2f}' for x in pipeline)}).",
+        "cores busy: CPU time of the run's processes (this one, its workers) over wall time x cores, start included.",
         f"Two single-threaded workers against one (steady rates): {speedup:.2f}x, median of the rounds' ratios ({', '.join(f'{x:.2f}' for x in speedups)}; goal 1.8x).",
         f"Dask's two single-threaded workers against the local two (steady rates): {100 * dask_overhead:+.0f} % wall time per item, median of",
         f"the rounds' ({', '.join(f'{100 * x:+.0f}' for x in overheads)} %; goal <= 10 %; the cluster's start is not timed).",

@@ -1,9 +1,9 @@
 """The ``skyfall`` command: ``skyfall dataset``, ``skyfall render`` and ``skyfall demo``.
 
 Every option of ``dataset`` and ``render`` can also come from a TOML file (``--config
-run.toml``): its keys are the options' long names, with ``-`` or ``_`` (``rain-rate = "1:50"``,
+run.toml``) or a YAML one (``run.yaml``, ``.yml``, through PyYAML's safe loader): its keys are the options' long names, with ``-`` or ``_`` (``rain-rate = "1:50"``,
 ``variants = 100``, ``layers = ["rain_alpha", "transmittance"]``), at the top level or in a
-``[dataset]`` / ``[render]`` table; options given on the command line win over the file's.
+``[dataset]`` / ``[render]`` table (a ``dataset:`` / ``render:`` mapping in YAML); options given on the command line win over the file's.
 Relative paths in the file are taken from the current folder, as on the command line.
 """
 
@@ -45,6 +45,7 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("camera_jitter_deg", ("--camera-jitter-deg",), {"type": float, "metavar": "DEG", "help": "--scene: camera turns within +-DEG in yaw (half in pitch); default 5"}),
     ("layers", ("--layers",), {"metavar": "NAMES", "help": "ground-truth layers to write as float32 .npy, comma separated, of rain_alpha, rain_depth_m, transmittance (or 'none'); default rain_alpha (the fast 8-bit path; other layers render float frames)"}),
     ("exr", ("--exr",), {"action": "store_const", "const": True, "help": "also write each weather frame as EXR (float RGB, depth and layers)"}),
+    ("exr_compression", ("--exr-compression",), {"choices": ["zip", "zips", "piz", "rle", "none"], "help": "--exr: the EXR's lossless compression; default zip (none: fastest, largest)"}),
     ("png_compression", ("--png-compression",), {"type": int, "metavar": "0-9", "help": "PNG zlib level (png:compressionLevel); default 1, fast: at 1080p level 6 takes 300-500 ms a PNG"}),
     ("ambient_spacing_m", ("--ambient-spacing-m",), {"type": float, "metavar": "M", "help": "--scene: ambient-light map spacing, m; default 1 (coarser is faster)"}),
     ("backend", ("--backend",), {"choices": ["cpu", "gpu", "auto"], "help": "renderer backend; default cpu (the same bytes on every machine)"}),
@@ -115,7 +116,7 @@ def _parser() -> argparse.ArgumentParser:
         ),
         epilog="Example: skyfall dataset --input photos --out wet --variants 10 --rain-rate 1:50 --visibility-m 300:5000 --workers 2",
     )
-    ds.add_argument("--config", type=Path, metavar="TOML", help="read options from a TOML file (command-line options win)")
+    ds.add_argument("--config", type=Path, metavar="FILE", help="read options from a TOML file, or YAML (.yaml, .yml) (command-line options win)")
     _add(ds, _DATASET_OPTIONS)
     _add(ds, _RUN_OPTIONS)
     rd = sub.add_parser(
@@ -127,7 +128,7 @@ def _parser() -> argparse.ArgumentParser:
         ),
         epilog="Example: skyfall render --scene street --rain-rate 25 --wind-m-s 3 --out street.png",
     )
-    rd.add_argument("--config", type=Path, metavar="TOML", help="read options from a TOML file (command-line options win)")
+    rd.add_argument("--config", type=Path, metavar="FILE", help="read options from a TOML file, or YAML (.yaml, .yml) (command-line options win)")
     rd.add_argument("--alpha-out", type=Path, metavar="FILE", default=None, help="also write the rain_alpha layer (.npy float32, or .png 8-bit)")
     _add(rd, _RENDER_OPTIONS)
     dm = sub.add_parser("demo", help="render the demo outputs (what make demo runs)", description="Render the demo outputs into --out (python -m skyfall.demo).")
@@ -135,13 +136,34 @@ def _parser() -> argparse.ArgumentParser:
     return top
 
 
-def _load_config(path: Path, table: str, allowed: set[str]) -> dict[str, Any]:
+def _read_config(path: Path) -> dict[str, Any]:
+    """The file's mapping: YAML for ``.yaml``/``.yml`` (PyYAML's safe loader), else TOML."""
     try:
-        data = tomllib.loads(path.read_text())
+        text = path.read_text()
     except OSError as e:
         raise ValueError(f"--config {path}: {e.strerror or e}") from None
+    if path.suffix.lower() in (".yaml", ".yml"):
+        try:
+            import yaml
+        except ImportError:
+            raise ValueError(f"--config {path}: YAML needs PyYAML (pip install 'skyfall[dataset]'), or use TOML") from None
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as e:
+            raise ValueError(f"--config {path}: not valid YAML ({e})") from None
+        if data is None:
+            return {}
+        if not isinstance(data, dict):
+            raise ValueError(f"--config {path}: a YAML config is a mapping of option: value, got a {type(data).__name__}")
+        return data
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ValueError(f"--config {path}: not valid TOML ({e})") from None
+
+
+def _load_config(path: Path, table: str, allowed: set[str]) -> dict[str, Any]:
+    data = _read_config(path)
     if isinstance(data.get(table), dict):
         data = {**{k: v for k, v in data.items() if not isinstance(v, dict)}, **data[table]}
     out: dict[str, Any] = {}

@@ -47,7 +47,7 @@ from tqdm import tqdm  # type: ignore[import-untyped]
 
 import skyfall
 from skyfall.dataset_io import atomic_write, find_depth, list_images, remove_temporaries, write_json
-from skyfall.dataset_item import COSTS, ItemSource, Worker, item_name, render_item, verify_item
+from skyfall.dataset_item import COSTS, ItemSource, Worker, item_name, render_items, verify_item
 from skyfall.dataset_sample import DatasetConfig, sample_item
 
 __all__ = ["DatasetConfig", "Summary", "generate", "sample_item", "sources"]
@@ -153,11 +153,22 @@ def _init_worker(config: DatasetConfig, threads: int | None) -> None:
     _WORKER = Worker(config)
 
 
-def _work(src: ItemSource) -> tuple[dict[str, Any], dict[str, float]]:
+def _work(chunk: list[ItemSource]) -> list[tuple[dict[str, Any], dict[str, float]]]:
+    """A chunk of items in a worker process: each written while the next renders."""
     assert _WORKER is not None
-    times: dict[str, float] = {}
-    row = render_item(_WORKER, src, times)
-    return row, times
+    return list(render_items(_WORKER, chunk))
+
+
+CHUNK_ITEMS = 4
+"""Items per task of a worker process, at most: within a chunk each item's encoding and writing
+overlap the next one's rendering (:func:`skyfall.dataset_item.render_items`), so 3 of 4 do."""
+
+
+def _chunks(todo: list[ItemSource], workers: int) -> list[list[ItemSource]]:
+    """``todo`` in chunks of at most :data:`CHUNK_ITEMS`, small enough that each worker gets
+    two at least (the last items do not wait on one busy worker)."""
+    size = max(1, min(CHUNK_ITEMS, len(todo) // (2 * workers)))
+    return [todo[i : i + size] for i in range(0, len(todo), size)]
 
 
 def generate(
@@ -252,6 +263,7 @@ def generate(
     todo = [s for s in chosen if not (resume and verify_item(config, s.index))]
     summary.skipped = len(chosen) - len(todo)
     bar = tqdm(total=len(todo), unit="item", disable=not progress, dynamic_ncols=True)
+    results: Iterator[tuple[dict[str, Any], dict[str, float]]] | None = None
     try:
         results = _run_dask(config, todo, scheduler) if scheduler is not None else _run_local(config, todo, workers, threads_per_worker)
         first: float | None = None
@@ -274,6 +286,9 @@ def generate(
             f"a worker process died ({e}); the items written so far are complete: run again with resume=True (--resume)"
         ) from e
     finally:
+        close = getattr(results, "close", None)
+        if close is not None:  # the generators' own finally: the item being written is finished
+            close()
         bar.close()
     if not summary.interrupted and indices is None:
         write_manifest(config, [s.index for s in all_sources])
@@ -284,28 +299,26 @@ def generate(
 def _run_local(
     config: DatasetConfig, todo: list[ItemSource], workers: int, threads: int | None
 ) -> Iterator[tuple[dict[str, Any], dict[str, float]]]:
-    """The items' rows and costs as they finish, in this process or in ``workers`` processes
-    (at most 2 items in flight per worker, so memory stays bounded)."""
+    """The items' rows and costs as they finish, in this process (each item written while the
+    next renders) or in ``workers`` processes (chunks of :data:`CHUNK_ITEMS`, at most 2 in
+    flight per worker, so memory stays bounded)."""
     if workers == 1 and threads is None:
-        worker = Worker(config)
-        for src in todo:
-            times: dict[str, float] = {}
-            yield render_item(worker, src, times), times
+        yield from render_items(Worker(config), todo)
         return
     if threads is None:
         threads = max(1, (os.cpu_count() or 1) // workers)
     pool = ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=_init_worker, initargs=(config, threads))
-    pending: set[Future[tuple[dict[str, Any], dict[str, float]]]] = set()
-    queue = iter(todo)
+    pending: set[Future[list[tuple[dict[str, Any], dict[str, float]]]]] = set()
+    queue = iter(_chunks(todo, workers))
     try:
-        for src in queue:
-            pending.add(pool.submit(_work, src))
+        for chunk in queue:
+            pending.add(pool.submit(_work, chunk))
             if len(pending) >= 2 * workers:
                 break
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
             for f in done:
-                yield f.result()
+                yield from f.result()
                 nxt = next(queue, None)
                 if nxt is not None:
                     pending.add(pool.submit(_work, nxt))
@@ -321,20 +334,20 @@ def _run_local(
 _DASK_WORKERS = threading.local()
 
 
-def _dask_item(config: DatasetConfig, src: ItemSource) -> tuple[dict[str, Any], dict[str, float]]:
-    """One item on a Dask worker, with that thread's Worker for these options (made once)."""
+def _dask_chunk(config: DatasetConfig, chunk: list[ItemSource]) -> list[tuple[dict[str, Any], dict[str, float]]]:
+    """A chunk of items on a Dask worker, with that thread's Worker for these options (made
+    once), each written while the next renders, as in a local worker."""
     key = (config.sha256(), str(config.out))
     worker: Worker | None = getattr(_DASK_WORKERS, "worker", None)
     if worker is None or getattr(_DASK_WORKERS, "key", None) != key:
         worker = Worker(config)
         _DASK_WORKERS.worker, _DASK_WORKERS.key = worker, key
-    times: dict[str, float] = {}
-    return render_item(worker, src, times), times
+    return list(render_items(worker, chunk))
 
 
 def _run_dask(config: DatasetConfig, todo: list[ItemSource], scheduler: Any) -> Iterator[tuple[dict[str, Any], dict[str, float]]]:
-    """The items' rows and costs as they finish on a Dask cluster (at most two items in flight
-    per worker thread)."""
+    """The items' rows and costs as they finish on a Dask cluster (chunks of
+    :data:`CHUNK_ITEMS`, at most two in flight per worker thread)."""
     import dask.distributed
 
     dd: Any = dask.distributed  # untyped: its calls are typed Any here
@@ -343,15 +356,15 @@ def _run_dask(config: DatasetConfig, todo: list[ItemSource], scheduler: Any) -> 
     pending: set[Any] = set()
     try:
         threads = max(1, sum(client.nthreads().values()))
-        queue = iter(todo)
-        pending = {client.submit(_dask_item, config, src, pure=False) for _, src in zip(range(2 * threads), queue)}
+        queue = iter(_chunks(todo, threads))
+        pending = {client.submit(_dask_chunk, config, chunk, pure=False) for _, chunk in zip(range(2 * threads), queue)}
         done_iter = dd.as_completed(list(pending))
         for f in done_iter:
             pending.discard(f)
-            yield f.result()
+            yield from f.result()
             nxt = next(queue, None)
             if nxt is not None:
-                g = client.submit(_dask_item, config, nxt, pure=False)
+                g = client.submit(_dask_chunk, config, nxt, pure=False)
                 pending.add(g)
                 done_iter.add(g)
     finally:

@@ -7,8 +7,9 @@ worker process, the main process or a later resumed run all write the same bytes
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Iterable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +26,7 @@ from skyfall.render import Frame, Renderer
 from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.weather import Weather
 
-__all__ = ["COSTS", "ItemSource", "Worker", "item_files", "prepare", "render_item", "verify_item"]
+__all__ = ["COSTS", "ItemSource", "Staged", "Worker", "item_files", "prepare", "render_item", "render_items", "render_stage", "verify_item", "write_stage"]
 
 COSTS = ("read", "render", "encode", "write")
 """The parts of an item's cost, s: ``read`` (input files, the scene and its airlight),
@@ -190,8 +191,40 @@ def prepare(
     return scene, None, weather
 
 
+@dataclass
+class Staged:
+    """An item rendered and not yet written: what :func:`write_stage` encodes and writes.
+
+    Attributes
+    ----------
+    src : ItemSource
+        The item.
+    row : dict
+        Its manifest row so far (``status`` "error" and ``error`` when rendering failed: then
+        nothing is left to write but the row).
+    times : dict of str to float
+        Its cost so far, s, under :data:`COSTS`.
+    rainy, clean : ndarray or None
+        The weather and clean images, uint8 (H, W, 3) (None for a clip, written already).
+    layers : dict of str to ndarray
+        The ground-truth layers asked for, float32 (H, W).
+    frame : Frame or None
+        The float frame, for its EXR.
+    """
+
+    src: ItemSource
+    row: dict[str, Any]
+    times: dict[str, float]
+    rainy: NDArray[np.uint8] | None = None
+    clean: NDArray[np.uint8] | None = None
+    layers: dict[str, NDArray[np.float32]] = field(default_factory=dict)
+    frame: Frame | None = None
+
+
 def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None = None) -> dict[str, Any]:
-    """Render item ``src.index`` and write its files into ``config.out / "items"``.
+    """Render item ``src.index`` and write its files into ``config.out / "items"``:
+    :func:`render_stage`, then :func:`write_stage` (:func:`render_items` overlaps the two
+    across items).
 
     Parameters
     ----------
@@ -209,12 +242,57 @@ def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None 
         are in place): ``status`` "ok" with ``files`` (name: sha256), or "error" with ``error``
         (the exception's type and message; the run goes on).
     """
+    return write_stage(worker, render_stage(worker, src, times))
+
+
+def render_items(worker: Worker, srcs: Iterable[ItemSource]) -> Iterator[tuple[dict[str, Any], dict[str, float]]]:
+    """The items' (row, cost) in order, each item's encoding and writing (one thread) running
+    while the next one renders: OpenImageIO's zlib and the renderer both release the GIL, so
+    the two share the cores, and with one worker its items/s is set by the larger of the two
+    stages instead of their sum. At most one item waits to be written.
+
+    On an exception (Ctrl-C in the rendering thread) the item being written is finished before
+    it propagates, so every item whose row exists is complete."""
+    with ThreadPoolExecutor(1, thread_name_prefix="skyfall-write") as writer:
+        waiting: Future[dict[str, Any]] | None = None
+        waiting_times: dict[str, float] = {}
+        try:
+            for src in srcs:
+                staged = render_stage(worker, src)
+                if waiting is not None:
+                    yield waiting.result(), waiting_times
+                waiting, waiting_times = writer.submit(write_stage, worker, staged), staged.times
+            if waiting is not None:
+                row, waiting = waiting.result(), None
+                yield row, waiting_times
+        finally:
+            if waiting is not None:
+                waiting.result()
+
+
+def _error_row(cfg: DatasetConfig, src: ItemSource, row: dict[str, Any], e: BaseException) -> dict[str, Any]:
+    """Record ``e`` as the item's error: its files removed, its row written."""
+    folder = cfg.out / "items"
+    left = []
+    for name in item_files(cfg, src.index):
+        try:
+            (folder / name).unlink(missing_ok=True)
+        except OSError:  # not a file we can remove (a folder in its place): say so in the row
+            left.append(name)
+    row.pop("files", None)
+    row["status"] = "error"
+    row["error"] = f"{type(e).__name__}: {e}" + (f" (could not remove {', '.join(left)})" if left else "")
+    write_json(folder / f"{item_name(src.index)}.json", row)
+    return row
+
+
+def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None = None) -> Staged:
+    """Read, sample and render item ``src.index`` (a clip is rendered and written here, its
+    frames streamed to the encoder). An error is recorded in the returned row."""
     cfg = worker.config
     t = times if times is not None else {}
     for k in COSTS:
         t.setdefault(k, 0.0)
-    folder = cfg.out / "items"
-    stem = item_name(src.index)
     p = sample_item(cfg, src.index)
     row: dict[str, Any] = {
         "index": src.index,
@@ -229,6 +307,7 @@ def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None 
         row["depth"] = None if src.depth is None else src.depth.name
     else:
         row["scene"] = cfg.scene
+    staged = Staged(src, row, t)
     try:
         t0 = time.perf_counter()
         scene, camera, weather = prepare(worker, src, p, row)
@@ -238,8 +317,7 @@ def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None 
         t["read"] += t1 - t0
         if cfg.sequence is not None:
             _render_clip(worker, renderer, scene, camera, weather, p, row, t)
-            write_json(folder / f"{stem}.json", row)
-            return row
+            return staged
         fast = (
             isinstance(scene, PhotoScene)
             and scene.srgb8 is not None
@@ -249,57 +327,67 @@ def render_item(worker: Worker, src: ItemSource, times: dict[str, float] | None 
         )
         row["path"] = "srgb8" if fast else "float"
         kw: dict[str, Any] = {"seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
-        layers: dict[str, NDArray[np.float32]] = {}
-        frame: Frame | None = None
         if fast:
             alpha = np.empty((h, w), np.float32)
-            rainy = renderer.render_srgb8(scene, weather, rain_alpha_out=alpha if cfg.layers else None, **kw)
+            staged.rainy = renderer.render_srgb8(scene, weather, rain_alpha_out=alpha if cfg.layers else None, **kw)
             if cfg.layers:
-                layers["rain_alpha"] = alpha
+                staged.layers["rain_alpha"] = alpha
         else:
             frame = renderer.render(scene, weather, camera=camera, **kw)
-            layers = {name: frame.layer(name) for name in cfg.layers}
+            staged.layers = {name: frame.layer(name) for name in cfg.layers}
+            staged.frame = frame
         if isinstance(scene, PhotoScene):
-            clean_src: NDArray[Any] | None = scene.srgb8
-            clean_linear = None if clean_src is not None else scene.image
+            staged.clean = scene.srgb8 if scene.srgb8 is not None else io.to_srgb8(scene.image)
         else:
-            clean_src = None
             clean_linear = renderer.render(scene, Weather(), camera=camera, ambient_spacing_m=cfg.ambient_spacing_m).rgb
-        t2 = time.perf_counter()
-        t["render"] += t2 - t1
-        if frame is not None:
-            rainy = io.to_srgb8(frame.rgb)
-        clean = clean_src if clean_src is not None else io.to_srgb8(clean_linear)
+            staged.clean = io.to_srgb8(clean_linear)
+        if staged.frame is not None:
+            staged.rainy = io.to_srgb8(staged.frame.rgb)
+        t["render"] += time.perf_counter() - t1
+    except Exception as e:  # an error of this item: recorded, the run goes on
+        staged.row = _error_row(cfg, src, row, e)
+    return staged
+
+
+def write_stage(worker: Worker, staged: Staged) -> dict[str, Any]:
+    """Encode and write a :func:`render_stage` item's files, then its row (last); its row."""
+    cfg = worker.config
+    src, row, t = staged.src, staged.row, staged.times
+    folder = cfg.out / "items"
+    stem = item_name(src.index)
+    if row.get("status") == "error":
+        return row
+    if staged.rainy is None:  # a clip: its files are written
+        write_json(folder / f"{stem}.json", row)
+        return row
+    try:
         files: dict[str, str] = {}
         names = item_files(cfg, src.index)
-        files[names[0]] = _timed_png(folder / names[0], rainy, cfg.png_compression, t)
+        files[names[0]] = _timed_png(folder / names[0], staged.rainy, cfg.png_compression, t)
+        assert staged.clean is not None
         if src.image is not None:
             t5 = time.perf_counter()
-            files[names[1]] = worker.clean_png(folder / names[1], src.image, clean)
+            files[names[1]] = worker.clean_png(folder / names[1], src.image, staged.clean)
             t["encode"] += time.perf_counter() - t5
         else:
-            files[names[1]] = _timed_png(folder / names[1], clean, cfg.png_compression, t)
+            files[names[1]] = _timed_png(folder / names[1], staged.clean, cfg.png_compression, t)
         if cfg.exr:
+            frame = staged.frame
             assert frame is not None
             exr = folder / f"{stem}.rain.exr"
             t3 = time.perf_counter()
-            files[exr.name] = atomic_write(exr, frame.save)
+            files[exr.name] = atomic_write(exr, lambda path: frame.save(path, compression=cfg.exr_compression))
             t["encode"] += time.perf_counter() - t3
         t4 = time.perf_counter()
         for name in cfg.layers:
-            files[f"{stem}.{name}.npy"] = write_npy(folder / f"{stem}.{name}.npy", layers[name])
+            files[f"{stem}.{name}.npy"] = write_npy(folder / f"{stem}.{name}.npy", staged.layers[name])
         row["files"] = dict(sorted(files.items()))
         row["status"] = "ok"
-        row["mean_rain_alpha"] = float(np.mean(layers["rain_alpha"], dtype=np.float64)) if "rain_alpha" in layers else None
+        row["mean_rain_alpha"] = float(np.mean(staged.layers["rain_alpha"], dtype=np.float64)) if "rain_alpha" in staged.layers else None
         write_json(folder / f"{stem}.json", row)
         t["write"] += time.perf_counter() - t4
     except Exception as e:  # an error of this item: recorded, the run goes on
-        for name in item_files(cfg, src.index):
-            (folder / name).unlink(missing_ok=True)
-        row.pop("files", None)
-        row["status"] = "error"
-        row["error"] = f"{type(e).__name__}: {e}"
-        write_json(folder / f"{stem}.json", row)
+        row = _error_row(cfg, src, row, e)
     return row
 
 

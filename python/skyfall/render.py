@@ -119,18 +119,29 @@ class Frame:
     luminance_scale_cd_m2: float = 10000.0 / np.pi
     stats: dict[str, int] = field(default_factory=dict)
 
-    def save(self, path: str | Path, *, exposure: float = 1.0) -> None:
+    def save(self, path: str | Path, *, exposure: float = 1.0, compression: str | None = None) -> None:
         """Write the frame; the format follows the extension.
 
         EXR keeps float32 ``R, G, B``, ``depth_m`` and every layer as named channels (read them
         back by name with :func:`skyfall.io.read_channels`; OpenEXR sorts them). 8-bit formats
         (PNG, JPEG) hold ``rgb * exposure`` sRGB-encoded (clipped at 1).
+
+        Parameters
+        ----------
+        path : str or Path
+            The file; ``.exr``, ``.png``, ``.jpg``, ... (what OpenImageIO writes).
+        exposure : float
+            Scale of the 8-bit formats' linear values before encoding (EXR keeps them as they are).
+        compression : str, optional
+            EXR only: OpenEXR's compression (``"zip"``, OpenImageIO's default, ``"zips"``,
+            ``"piz"``, ``"rle"``, ``"none"``, or a lossy one such as ``"dwaa"``).
         """
         p = Path(path)
         if p.suffix.lower() == ".exr":
             names = ["R", "G", "B", "depth_m", *self.layers]
             stack = np.concatenate([self.rgb, self.depth_m[..., None], *(v[..., None] for v in self.layers.values())], axis=2)
-            io.write_image(p, stack, channel_names=names)
+            meta = None if compression is None else {"compression": str(compression)}
+            io.write_image(p, stack, channel_names=names, metadata=meta)
         else:
             io.write_image(p, self.rgb * np.float32(real("exposure", exposure)))
 

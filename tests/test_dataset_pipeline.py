@@ -1,0 +1,124 @@
+"""The dataset's pipeline inside a worker (an item encoded and written while the next renders)
+and its encoding options: the same bytes as items made one at a time, errors of the writing
+stage recorded per item, an interrupt that leaves every written item complete."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skyfall import io
+from skyfall.dataset import _chunks, generate
+from skyfall.dataset_item import ItemSource, Worker, render_item, render_items, verify_item
+from skyfall.dataset_sample import DatasetConfig
+
+from test_dataset import tree
+
+SMALL = {"scene": "street", "width": 48, "height": 32, "ambient_spacing_m": 8.0}
+
+
+def config(out: Path, **kw: object) -> DatasetConfig:
+    return DatasetConfig(out=out, **{"variants": 4, "seed": 3, **SMALL, **kw})  # type: ignore[arg-type]
+
+
+def test_pipelined_items_are_the_bytes_of_items_made_one_at_a_time(tmp_path):
+    a, b = config(tmp_path / "a"), config(tmp_path / "b")
+    for c in (a, b):
+        (c.out / "items").mkdir(parents=True)
+    srcs = [ItemSource(i) for i in range(4)]
+    rows = [row for row, _ in render_items(Worker(a), srcs)]
+    assert [r["index"] for r in rows] == [0, 1, 2, 3] and all(r["status"] == "ok" for r in rows)
+    wb = Worker(b)
+    for s in srcs:
+        render_item(wb, s)
+    assert tree(a.out) == tree(b.out)
+
+
+def test_an_error_while_writing_is_the_items_and_the_run_goes_on(tmp_path):
+    cfg = config(tmp_path / "run")
+    (cfg.out / "items").mkdir(parents=True)
+    (cfg.out / "items" / "000001.rain.png").mkdir()  # the rename onto it fails
+    s = generate(cfg, progress=False)
+    assert (s.generated, s.errors) == (4, 1)
+    assert "item 1:" in s.error_messages[0]
+    assert [verify_item(cfg, i) for i in range(4)] == [True, False, True, True]
+
+
+def test_an_interrupt_while_rendering_finishes_the_item_being_written(tmp_path):
+    cfg = config(tmp_path / "run")
+    (cfg.out / "items").mkdir(parents=True)
+
+    def sources() -> Iterator[ItemSource]:
+        yield ItemSource(0)
+        yield ItemSource(1)
+        raise KeyboardInterrupt  # as Ctrl-C would, while item 1 is being written
+
+    got = []
+    with pytest.raises(KeyboardInterrupt):
+        for row, _ in render_items(Worker(cfg), sources()):
+            got.append(row["index"])
+    assert got == [0]  # item 1's row was not handed out, but its files and row are complete
+    assert verify_item(cfg, 0) and verify_item(cfg, 1)
+    assert not any(p.name.startswith(".") for p in (cfg.out / "items").iterdir())
+
+
+def test_chunks_cover_every_item_once_and_feed_every_worker():
+    todo = [ItemSource(i) for i in range(10)]
+    for workers in (1, 2, 3, 8):
+        chunks = _chunks(todo, workers)
+        assert [s.index for c in chunks for s in c] == list(range(10))
+        assert max(len(c) for c in chunks) <= 4
+        assert len(chunks) >= min(10, 2 * workers) or max(len(c) for c in chunks) == 1
+
+
+@pytest.mark.parametrize("compression", ["none", "piz", "zips"])
+def test_exr_compressions_are_lossless_and_zip_is_the_default(tmp_path, compression):
+    runs = {}
+    for name in ("zip", compression):
+        cfg = config(tmp_path / name, variants=1, exr=True, exr_compression=name)
+        assert generate(cfg, progress=False).errors == 0
+        runs[name] = cfg.out / "items" / "000000.rain.exr"
+    a, b = (io.read_channels(runs[n]) for n in ("zip", compression))
+    assert a.keys() == b.keys()
+    for k in a:
+        np.testing.assert_array_equal(a[k], b[k])
+    if compression == "none":
+        assert runs["none"].stat().st_size > runs["zip"].stat().st_size
+    # "zip" is what the frame writes without being told (and the config checksum of before)
+    plain = tmp_path / "plain.exr"
+    from skyfall import Renderer, scenes
+
+    Renderer(48, 32).render(scenes.street(), ambient_spacing_m=8.0).save(plain)
+    import OpenImageIO as oiio
+
+    spec = oiio.ImageInput.open(str(plain)).spec()
+    assert spec.get_string_attribute("compression") == "zip"
+    assert config(tmp_path, exr_compression="zip").sha256() == config(tmp_path).sha256()
+    assert config(tmp_path, exr_compression=compression).sha256() != config(tmp_path).sha256()
+
+
+def test_a_bad_exr_compression_names_the_choices(tmp_path):
+    with pytest.raises(ValueError, match="exr_compression = 'lzw' must be one of zip, zips, piz, rle, none"):
+        config(tmp_path, exr_compression="lzw")
+
+
+def test_a_yaml_config_is_the_toml_one(tmp_path, capsys):
+    from skyfall import cli
+
+    body = {"scene": "street", "width": 48, "height": 32, "variants": 2, "ambient-spacing-m": 8.0, "rain_rate": "3:30", "seed": 8, "progress": False}
+    toml = tmp_path / "run.toml"
+    toml.write_text("[dataset]\n" + "".join(f"{k} = {v!r}\n".replace("'", '"').replace("False", "false") for k, v in body.items()) + f'out = "{tmp_path / "t"}"\n')
+    yml = tmp_path / "run.yaml"
+    yml.write_text("dataset:\n" + "".join(f"  {k}: {v!r}\n".replace("False", "false") for k, v in body.items()) + f"  out: {tmp_path / 'y'}\n")
+    assert cli.main(["dataset", "--config", str(toml)]) == 0
+    assert cli.main(["dataset", "--config", str(yml)]) == 0
+    assert tree(tmp_path / "t") == tree(tmp_path / "y")
+    yml.write_text("- a list\n- not options\n")
+    assert cli.main(["dataset", "--config", str(yml)]) == 2
+    assert "a YAML config is a mapping" in capsys.readouterr().err
+    yml.write_text("rain_rate: [unclosed\n")
+    assert cli.main(["dataset", "--config", str(yml)]) == 2
+    assert "not valid YAML" in capsys.readouterr().err
