@@ -122,3 +122,19 @@ def test_a_yaml_config_is_the_toml_one(tmp_path, capsys):
     yml.write_text("rain_rate: [unclosed\n")
     assert cli.main(["dataset", "--config", str(yml)]) == 2
     assert "not valid YAML" in capsys.readouterr().err
+
+
+def test_png_strategies_keep_the_pixels(tmp_path):
+    made = {}
+    for strategy in ("huffman", "default", "rle"):
+        cfg = config(tmp_path / strategy, variants=1, png_strategy=strategy, rain_rate_mm_h="40:40")
+        assert generate(cfg, progress=False).errors == 0
+        made[strategy] = cfg.out / "items" / "000000.rain.png"
+    pixels = {k: io.read_stored(p)[0] for k, p in made.items()}
+    np.testing.assert_array_equal(pixels["huffman"], pixels["default"])
+    np.testing.assert_array_equal(pixels["rle"], pixels["default"])
+    assert made["huffman"].read_bytes() != made["default"].read_bytes()  # the strategy was applied
+    # the clean image is written with zlib's default strategy whatever the option
+    assert (tmp_path / "huffman/items/000000.clean.png").read_bytes() == (tmp_path / "default/items/000000.clean.png").read_bytes()
+    with pytest.raises(ValueError, match="png_strategy = 'fast' must be one of huffman, default, rle, filtered"):
+        config(tmp_path, png_strategy="fast")

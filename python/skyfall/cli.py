@@ -46,6 +46,7 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("layers", ("--layers",), {"metavar": "NAMES", "help": "ground-truth layers to write as float32 .npy, comma separated, of rain_alpha, rain_depth_m, transmittance (or 'none'); default rain_alpha (the fast 8-bit path; other layers render float frames)"}),
     ("exr", ("--exr",), {"action": "store_const", "const": True, "help": "also write each weather frame as EXR (float RGB, depth and layers)"}),
     ("exr_compression", ("--exr-compression",), {"choices": ["zip", "zips", "piz", "rle", "none"], "help": "--exr: the EXR's lossless compression; default zip (none: fastest, largest)"}),
+    ("png_strategy", ("--png-strategy",), {"choices": ["huffman", "default", "rle", "filtered"], "help": "zlib strategy of the weather PNGs; default huffman (on rainy photos faster than zlib's default and no larger)"}),
     ("png_compression", ("--png-compression",), {"type": int, "metavar": "0-9", "help": "PNG zlib level (png:compressionLevel); default 1, fast: at 1080p level 6 takes 300-500 ms a PNG"}),
     ("ambient_spacing_m", ("--ambient-spacing-m",), {"type": float, "metavar": "M", "help": "--scene: ambient-light map spacing, m; default 1 (coarser is faster)"}),
     ("backend", ("--backend",), {"choices": ["cpu", "gpu", "auto"], "help": "renderer backend; default cpu (the same bytes on every machine)"}),

@@ -363,7 +363,7 @@ def write_stage(worker: Worker, staged: Staged) -> dict[str, Any]:
     try:
         files: dict[str, str] = {}
         names = item_files(cfg, src.index)
-        files[names[0]] = _timed_png(folder / names[0], staged.rainy, cfg.png_compression, t)
+        files[names[0]] = _timed_png(folder / names[0], staged.rainy, cfg.png_compression, t, cfg.png_strategy)
         assert staged.clean is not None
         if src.image is not None:
             t5 = time.perf_counter()
@@ -506,9 +506,9 @@ def _clip(video: Any, path: Path, frames: Iterator[NDArray[np.uint8]], fps: floa
         raise RuntimeError(f"{path.name}: {written} frames written, {n} expected")
 
 
-def _timed_png(path: Path, image: NDArray[Any], level: int, t: dict[str, float]) -> str:
+def _timed_png(path: Path, image: NDArray[Any], level: int, t: dict[str, float], strategy: str = "default") -> str:
     t0 = time.perf_counter()
-    digest = write_png(path, image, level)
+    digest = write_png(path, image, level, strategy)
     t["encode"] += time.perf_counter() - t0
     return digest
 
