@@ -138,3 +138,20 @@ def test_png_strategies_keep_the_pixels(tmp_path):
     assert (tmp_path / "huffman/items/000000.clean.png").read_bytes() == (tmp_path / "default/items/000000.clean.png").read_bytes()
     with pytest.raises(ValueError, match="png_strategy = 'fast' must be one of huffman, default, rle, filtered"):
         config(tmp_path, png_strategy="fast")
+
+
+def test_a_snow_range_is_drawn_last_and_moves_no_other_parameter(tmp_path):
+    from dataclasses import replace
+
+    from skyfall.dataset_sample import sample_item
+
+    rain = config(tmp_path, rain_rate_mm_h="1:50", wind_m_s="-5:5")
+    both = config(tmp_path, rain_rate_mm_h="1:50", wind_m_s="-5:5", snow_rate_mm_h="0.5:4")
+    for i in range(6):
+        a, b = sample_item(rain, i), sample_item(both, i)
+        assert a.snow_rate_mm_h == 0.0 and 0.5 <= b.snow_rate_mm_h <= 4.0
+        assert replace(b, snow_rate_mm_h=0.0) == a
+    assert rain.sha256() == config(tmp_path, rain_rate_mm_h="1:50", wind_m_s="-5:5", snow_rate_mm_h=0).sha256()
+    assert both.sha256() != rain.sha256()
+    with pytest.raises(ValueError, match="snow_rate_mm_h"):
+        config(tmp_path, snow_rate_mm_h="1:500")

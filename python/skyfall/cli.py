@@ -37,6 +37,7 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("f_number", ("--f-number",), {"metavar": "LO:HI", "help": "f-number, in [0.5, 256], log-uniform; default none (a pinhole)"}),
     ("focus_distance_m", ("--focus-distance-m",), {"metavar": "LO:HI", "help": "focus distance, m, log-uniform (needs --f-number); default inf"}),
     ("wind_m_s", ("--wind-m-s",), {"metavar": "LO:HI", "help": "cross wind (x), m/s, in [-60, 60], uniform; default 0"}),
+    ("snow_rate_mm_h", ("--snow-rate", "--snow-rate-mm-h"), {"metavar": "LO:HI", "help": "snowfall rate as liquid-water equivalent, mm/h, in [0, 100], uniform; default 0 (no snow)"}),
     ("rain_near_m", ("--rain-near-m",), {"type": float, "metavar": "M", "help": "radius of the streak region, m, in (0, 50]; default 5"}),
     ("camera_height_m", ("--camera-height-m",), {"type": float, "metavar": "M", "help": "ground-plane fallback: camera height, m; default 1.6"}),
     ("horizon_row", ("--horizon-row",), {"type": float, "metavar": "ROW", "help": "ground-plane fallback: the horizon's row, px from the top; default the middle"}),
@@ -84,7 +85,7 @@ _RENDER_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("vertical_fov_deg", ("--vertical-fov-deg",), {"type": float, "metavar": "DEG", "help": "the photo's vertical field of view; default 60"}),
     ("backend", ("--backend",), {"choices": ["cpu", "gpu", "auto"], "help": "renderer backend; default cpu"}),
 ]
-_ALIASES = {"rain_rate": "rain_rate_mm_h"}
+_ALIASES = {"rain_rate": "rain_rate_mm_h", "snow_rate": "snow_rate_mm_h"}
 
 
 def _add(parser: argparse.ArgumentParser, options: list[tuple[str, tuple[str, ...], dict[str, Any]]]) -> None:

@@ -122,6 +122,7 @@ class Worker:
 def _weather(config: DatasetConfig, p: ItemParams) -> Weather:
     return Weather(
         rain_rate_mm_h=p.rain_rate_mm_h,
+        snow_rate_mm_h=p.snow_rate_mm_h,
         visibility_m=p.visibility_m,
         wind_m_s=(p.wind_m_s, 0.0, 0.0),
         rain_near_m=config.rain_near_m,

@@ -32,6 +32,7 @@ RANGE_OPTIONS: dict[str, tuple[str, str]] = {
     "f_number": ("f_number", "log"),
     "focus_distance_m": ("focus_distance_m", "log"),
     "wind_m_s": ("wind_m_s", "uniform"),
+    "snow_rate_mm_h": ("snow_rate_mm_h", "uniform"),
 }
 
 Range = tuple[float, float]
@@ -120,6 +121,9 @@ class DatasetConfig:
         component, m/s, across the view) uniform, visibility, exposure, f-number and focus
         distance log-uniform. ``f_number`` None: a pinhole; ``focus_distance_m`` None: focused at
         infinity.
+    snow_rate_mm_h : (lo, hi)
+        Snowfall rate as liquid-water equivalent, mm/h, in [0, 100], uniform (default 0: no
+        snow); rain and snow may fall together.
     rain_near_m : float
         Radius of the streak region, m (:class:`skyfall.Weather`).
     depth_scale_m : float, optional
@@ -193,6 +197,7 @@ class DatasetConfig:
     f_number: Range | None = None
     focus_distance_m: Range | None = None
     wind_m_s: Range = (0.0, 0.0)
+    snow_rate_mm_h: Range = (0.0, 0.0)
     rain_near_m: float = 5.0
     depth_scale_m: float | None = None
     camera_height_m: float = 1.6
@@ -227,7 +232,7 @@ class DatasetConfig:
         set_(self, "seed", integer("seed", self.seed, 0, 2**63 - 1))
         set_(self, "width", integer("width", self.width, 1, 16384))
         set_(self, "height", integer("height", self.height, 1, 16384))
-        for name in ("rain_rate_mm_h", "visibility_m", "exposure_s", "wind_m_s"):
+        for name in ("rain_rate_mm_h", "visibility_m", "exposure_s", "wind_m_s", "snow_rate_mm_h"):
             set_(self, name, parse_range(name, getattr(self, name)))
         set_(self, "f_number", _optional_range("f_number", self.f_number))
         set_(self, "focus_distance_m", _optional_range("focus_distance_m", self.focus_distance_m))
@@ -290,6 +295,8 @@ class DatasetConfig:
                 d.pop(name)
         if d["exr_compression"] == "zip":  # the checksum of the options before it was one
             d.pop("exr_compression")
+        if d["snow_rate_mm_h"] == [0.0, 0.0]:  # no snow: the checksum of before
+            d.pop("snow_rate_mm_h")
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()
 
     @classmethod
@@ -324,6 +331,7 @@ class ItemParams:
     camera_dz_m: float
     camera_dyaw_deg: float
     camera_dpitch_deg: float
+    snow_rate_mm_h: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
         """The parameters as JSON values (inf as the string "inf")."""
@@ -365,7 +373,8 @@ def sample_item(config: DatasetConfig, index: int) -> ItemParams:
     wind = _draw(rng, config.wind_m_s, "uniform")
     j, jd = config.camera_jitter_m, config.camera_jitter_deg
     dx, dz, dyaw, dpitch = (float(v) for v in rng.uniform(-1.0, 1.0, 4))
-    assert rate is not None and vis is not None and exposure is not None and wind is not None
+    snow = _draw(rng, config.snow_rate_mm_h, "uniform")  # drawn last: the draws before keep their values
+    assert rate is not None and vis is not None and exposure is not None and wind is not None and snow is not None
     if f_number is not None and focus is None:
         focus = math.inf
     return ItemParams(
@@ -381,4 +390,5 @@ def sample_item(config: DatasetConfig, index: int) -> ItemParams:
         camera_dz_m=dz * j,
         camera_dyaw_deg=dyaw * jd,
         camera_dpitch_deg=dpitch * jd / 2.0,
+        snow_rate_mm_h=snow,
     )
