@@ -224,5 +224,5 @@ def test_renderer_cache_makes_one_renderer_per_size():
 def test_weather_fields_pass_through_unchanged():
     # the helper's keyword arguments are Weather's own: a field it does not know is an error
     assert {f.name for f in dataclasses.fields(Weather)} >= {"visibility_m", "wind_m_s", "rain_near_m"}
-    with pytest.raises(TypeError, match="snow_rate"):
-        testing.with_weather(photo8(), snow_rate_mm_h=1.0)
+    with pytest.raises(TypeError, match="hail_rate"):
+        testing.with_weather(photo8(), hail_rate_mm_h=1.0)
