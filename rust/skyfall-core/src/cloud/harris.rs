@@ -3,13 +3,13 @@
 //! centre by those before it, I_k = (∏_{i<k} G_i(ρ_ik)) I₀, then adds its own log G to what
 //! the particles after it read, as Harris' light-space frame buffer does. A fair CPU port:
 //! one sort, then per particle one read and one insertion. The "buffer" is exact rather than
-//! rasterised: particles already passed are kept in a 2D grid of cells across the light (one
-//! cut-off diameter wide), and a read sums the footprints exp(−ρ²/r²) of those in the 3 × 3
+//! rasterised: particles already passed are kept in a 2D grid of cells across the light (half a
+//! cut-off radius wide), and a read sums the footprints exp(−ρ²/r²) of those in the 5 × 5
 //! cells around it, so the reference carries no pixel error. In sums of log G, so dense
 //! clouds stay finite.
 
 use super::light::{LightFrame, LightParticles};
-use super::{CUTOFF_RADII, Cloud, sun_direction};
+use super::{CUTOFF_RADII, Cloud, exp_fast, sun_direction};
 use crate::error::{Result, try_filled};
 use crate::ranges;
 
@@ -35,7 +35,7 @@ pub fn harris_illumination(cloud: &Cloud, sun: [f64; 3], sun_radiance: f64) -> R
     let lp = LightParticles::new(cloud, &frame);
     let cut_max = cloud.radii_m.iter().copied().fold(0.0, f64::max) * CUTOFF_RADII;
     let span = lp.hi - lp.lo;
-    let cell = cut_max.max(span.x.max(span.y) / MAX_GRID_CELLS as f64);
+    let cell = (0.5 * cut_max).max(span.x.max(span.y) / MAX_GRID_CELLS as f64);
     let nx = ((span.x / cell).ceil() as usize).clamp(1, MAX_GRID_CELLS);
     let ny = ((span.y / cell).ceil() as usize).clamp(1, MAX_GRID_CELLS);
     let mut grid: Vec<Vec<Passed>> = try_filled("Harris' grid of particles", nx * ny, Vec::new())?;
@@ -48,13 +48,13 @@ pub fn harris_illumination(cloud: &Cloud, sun: [f64; 3], sun_radiance: f64) -> R
         let c = lp.centres[k] - lp.lo;
         let (cx, cy) = (cell_of(c.x, nx), cell_of(c.y, ny));
         let mut log_light = 0.0;
-        for gy in cy.saturating_sub(1)..=(cy + 1).min(ny - 1) {
-            for gx in cx.saturating_sub(1)..=(cx + 1).min(nx - 1) {
+        for gy in cy.saturating_sub(2)..=(cy + 2).min(ny - 1) {
+            for gx in cx.saturating_sub(2)..=(cx + 2).min(nx - 1) {
                 for p in &grid[gy * nx + gx] {
                     let (du, dv) = (c.x - p.u, c.y - p.v);
                     let rho2 = du * du + dv * dv;
                     if rho2 <= p.cut2 {
-                        log_light += p.amp * (-rho2 * p.inv_r2).exp();
+                        log_light += p.amp * exp_fast(-rho2 * p.inv_r2);
                     }
                 }
             }

@@ -23,7 +23,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::light::{LightFrame, LightParticles};
-use super::{CUTOFF_RADII, Cloud, sun_direction};
+use super::{CUTOFF_RADII, Cloud, exp_fast, sun_direction};
 use crate::error::{Error, Param, Result, try_filled_par};
 use crate::ranges;
 
@@ -146,15 +146,6 @@ pub fn sample(gamma: &[f32], resolution: usize, grid: &VolumeBox, p: DVec3) -> f
 impl AttenuationVolume {
     /// Builds Γ for `cloud` lit from `sun` (towards the sun) at `resolution`³ voxels.
     pub fn build(cloud: &Cloud, sun: [f64; 3], resolution: usize) -> Result<Self> {
-        Self::build_with(cloud, sun, resolution, DEPTH_OFFSET_SLICES)
-    }
-
-    pub(crate) fn build_with(
-        cloud: &Cloud,
-        sun: [f64; 3],
-        resolution: usize,
-        offset: f64,
-    ) -> Result<Self> {
         let sun = sun_direction(sun)?;
         ranges::RESOLUTION.check(resolution as f64)?;
         let n = resolution;
@@ -166,19 +157,12 @@ impl AttenuationVolume {
             origin: frame.to_world(lp.lo),
             edges: [frame.u * size.x, frame.v * size.y, frame.w * size.z],
         };
+        let (preps, v_factors) = prepare(cloud, &lp, n, step);
 
         // Particles binned (in index order) to the u-rows their footprints reach.
-        let rows_of = |j: usize| {
-            let cut = CUTOFF_RADII * cloud.radii_m[j];
-            let c = lp.centres[j].x - lp.lo.x;
-            let lo = ((c - cut) / step.x - 0.5).ceil().max(0.0) as usize;
-            let hi = (((c + cut) / step.x - 0.5).floor().min((n - 1) as f64)).max(-1.0);
-            (lo, hi as i64)
-        };
         let mut counts = vec![0usize; n + 1];
-        for j in 0..cloud.len() {
-            let (lo, hi) = rows_of(j);
-            for r in lo as i64..=hi {
+        for p in &preps {
+            for r in p.u_lo..=p.u_hi {
                 counts[r as usize + 1] += 1;
             }
         }
@@ -187,9 +171,8 @@ impl AttenuationVolume {
         }
         let mut fill = counts.clone();
         let mut members = vec![0u32; counts[n]];
-        for j in 0..cloud.len() {
-            let (lo, hi) = rows_of(j);
-            for r in lo as i64..=hi {
+        for (j, p) in preps.iter().enumerate() {
+            for r in p.u_lo..=p.u_hi {
                 let r = r as usize;
                 members[fill[r]] = j as u32;
                 fill[r] += 1;
@@ -202,28 +185,25 @@ impl AttenuationVolume {
             |plane, (iu, out)| {
                 let uc = (iu as f64 + 0.5) * step.x;
                 for &j in &members[counts[iu]..counts[iu + 1]] {
+                    let p = &preps[j as usize];
                     deposit(
                         plane,
                         n,
-                        step,
+                        step.y,
                         uc,
-                        lp.centres[j as usize] - lp.lo,
-                        cloud,
-                        j as usize,
-                        offset,
+                        p,
+                        &v_factors[p.v_off..p.v_off + p.v_len],
                     );
                 }
-                for iv in 0..n {
-                    let col = &mut plane[iv * n..(iv + 1) * n];
-                    let dst = &mut out[iv * n..(iv + 1) * n];
-                    let (mut sum, mut g) = (0i64, 1.0f32);
+                for (col, dst) in plane.chunks_exact_mut(n).zip(out.chunks_exact_mut(n)) {
+                    let mut sum = 0i64;
+                    for d in col.iter_mut() {
+                        sum += *d;
+                        *d = sum;
+                    }
                     for (d, o) in col.iter_mut().zip(dst.iter_mut()) {
-                        if *d != 0 {
-                            sum += *d;
-                            *d = 0;
-                            g = ((sum as f64) * (1.0 / SCALE)).exp() as f32;
-                        }
-                        *o = g;
+                        *o = exp_fixed(*d);
+                        *d = 0;
                     }
                 }
             },
@@ -241,52 +221,120 @@ impl AttenuationVolume {
     }
 }
 
-/// Adds particle `j`'s footprint on the row at u = `uc` (box coordinates, m) to `plane`.
-#[allow(clippy::too_many_arguments)]
-fn deposit(
-    plane: &mut [i64],
-    n: usize,
-    step: DVec3,
-    uc: f64,
-    c: DVec3,
-    cloud: &Cloud,
-    j: usize,
-    offset: f64,
-) {
-    let r = cloud.radii_m[j];
-    let cut = CUTOFF_RADII * r;
-    let inv_r2 = 1.0 / (r * r);
-    let du = uc - c.x;
-    let rest2 = cut * cut - du * du;
-    if rest2 < 0.0 {
+/// A particle as the deposit needs it (box coordinates, m).
+struct Prep {
+    cu: f64,
+    cv: f64,
+    inv_r2: f64,
+    cut2: f64,
+    amp: f64,
+    k0: usize,
+    k1: usize,
+    w0: f64,
+    w1: f64,
+    u_lo: i64,
+    u_hi: i64,
+    v_lo: usize,
+    v_off: usize,
+    v_len: usize,
+}
+
+/// Each particle's placement, and its footprint's factors exp(−Δv²/r²) across v (one pool).
+fn prepare(cloud: &Cloud, lp: &LightParticles, n: usize, step: DVec3) -> (Vec<Prep>, Vec<f64>) {
+    let top = (n - 1) as f64;
+    let span = |c: f64, cut: f64, h: f64| {
+        let lo = ((c - cut) / h - 0.5).ceil().max(0.0);
+        let hi = ((c + cut) / h - 0.5).floor().min(top);
+        (lo as usize, hi as i64)
+    };
+    let mut pool = Vec::new();
+    let preps = (0..cloud.len())
+        .map(|j| {
+            let c = lp.centres[j] - lp.lo;
+            let r = cloud.radii_m[j];
+            let cut = CUTOFF_RADII * r;
+            let inv_r2 = 1.0 / (r * r);
+            // Depth: the two slices around DEPTH_OFFSET_SLICES behind the centre.
+            let q = (c.z / step.z - 0.5 + DEPTH_OFFSET_SLICES).clamp(0.0, top);
+            let k0 = (q.floor() as usize).min(n - 1);
+            let f = q - k0 as f64;
+            let (u_lo, u_hi) = span(c.x, cut, step.x);
+            let (v_lo, v_hi) = span(c.y, cut, step.y);
+            let v_off = pool.len();
+            for iv in v_lo as i64..=v_hi {
+                let dv = (iv as f64 + 0.5) * step.y - c.y;
+                pool.push((-dv * dv * inv_r2).exp());
+            }
+            Prep {
+                cu: c.x,
+                cv: c.y,
+                inv_r2,
+                cut2: cut * cut,
+                amp: -cloud.attenuation_per_depth(j) * cloud.optical_depths[j] * SCALE,
+                k0,
+                k1: (k0 + 1).min(n - 1),
+                w0: 1.0 - f,
+                w1: f,
+                u_lo: u_lo as i64,
+                u_hi,
+                v_lo,
+                v_off,
+                v_len: pool.len() - v_off,
+            }
+        })
+        .collect();
+    (preps, pool)
+}
+
+/// Adds a particle's footprint on the row at u = `uc` to `plane` (fixed point).
+#[inline]
+fn deposit(plane: &mut [i64], n: usize, hv: f64, uc: f64, p: &Prep, ev: &[f64]) {
+    let du = uc - p.cu;
+    let rest2 = p.cut2 - du * du;
+    if rest2 < 0.0 || ev.is_empty() {
         return;
     }
-    let amp = -cloud.attenuation_per_depth(j) * cloud.optical_depths[j] * (-du * du * inv_r2).exp();
-    // Depth: the two slices around DEPTH_OFFSET_SLICES behind the centre.
-    let q = c.z / step.z - 0.5 + offset;
-    let top = (n - 1) as f64;
-    let q = q.clamp(0.0, top);
-    let k0 = (q.floor() as usize).min(n - 1);
-    let f = q - k0 as f64;
-    let k1 = (k0 + 1).min(n - 1);
+    let a = p.amp * (-du * du * p.inv_r2).exp();
+    let (a0, a1) = (a * p.w0, a * p.w1);
+    // The footprint's chord on this row.
     let half = rest2.sqrt();
-    let lo = ((c.y - half) / step.y - 0.5).ceil().max(0.0) as usize;
-    let hi = ((c.y + half) / step.y - 0.5).floor().min(top);
-    if hi < lo as f64 {
+    let lo = (((p.cv - half) / hv - 0.5).ceil().max(p.v_lo as f64)) as usize;
+    let hi = (((p.cv + half) / hv - 0.5).floor() as i64).min((p.v_lo + ev.len()) as i64 - 1);
+    if hi < lo as i64 {
         return;
     }
     for iv in lo..=hi as usize {
-        let dv = (iv as f64 + 0.5) * step.y - c.y;
-        let val = amp * (-dv * dv * inv_r2).exp();
+        let e = ev[iv - p.v_lo];
         let row = &mut plane[iv * n..(iv + 1) * n];
-        row[k0] += (val * (1.0 - f) * SCALE).round() as i64;
-        row[k1] += (val * f * SCALE).round() as i64;
+        row[p.k0] += (a0 * e) as i64;
+        row[p.k1] += (a1 * e) as i64;
     }
+}
+
+/// exp(s / SCALE) for a fixed-point log s ≤ 0, as f32 ([`exp_fast`]).
+#[inline]
+fn exp_fixed(s: i64) -> f32 {
+    exp_fast(s as f64 * (1.0 / SCALE)) as f32
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fixed_point_exp_is_exp() {
+        for x in [
+            0.0, -1e-6, -0.3, -1.0, -7.7, -40.0, -87.0, -103.0, -150.0, -1e4,
+        ] {
+            let s = (x * SCALE) as i64;
+            let want = (s as f64 / SCALE).exp() as f32;
+            let got = exp_fixed(s);
+            assert!(
+                (got - want).abs() <= want * 3e-7 + 1e-44,
+                "{x}: {got} vs {want}"
+            );
+        }
+    }
     use crate::cloud::generate::{Kind, particles};
     use crate::cloud::harris::harris_illumination;
 
