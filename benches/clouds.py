@@ -45,11 +45,11 @@ def main() -> None:
     for n in COUNTS:
         cloud = clouds.particles("cumulus", n_particles=n, seed=0)
         harris = clouds.harris_illumination(cloud, SUN)
-        harris_s = median_s(lambda c=cloud: clouds.harris_illumination(c, SUN), 3)
+        harris_s = median_s(lambda c=cloud: clouds.harris_illumination(c, SUN), 1)
         for r in RESOLUTIONS:
             vol = clouds.attenuation_volume(cloud, SUN, resolution=r)
             err = np.abs(vol.sample(cloud.positions_m).astype(np.float64) / harris - 1.0)
-            build = median_s(lambda c=cloud, r=r: clouds.attenuation_volume(c, SUN, resolution=r), 5 if r < 384 else 3)
+            build = median_s(lambda c=cloud, r=r: clouds.attenuation_volume(c, SUN, resolution=r), 3 if r < 384 else 1)
             rows.append(
                 {
                     "particles": n,

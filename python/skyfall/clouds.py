@@ -2,7 +2,7 @@
 dynamic clouds using GPU shaders", IPSJ 2008, improving Harris & Lastra 2001).
 
 A cloud is a set of Gaussian particles: particle i has its centre, its 1/e radius r_i
-(density proportional to exp(-d^2 / r_i^2), cut at three radii), its optical depth tau_i
+(density proportional to exp(-d^2 / r_i^2), cut at 2.5 radii), its optical depth tau_i
 through the centre and its single-scattering albedo a_i. Sunlight crossing particle i keeps
 the share G_i = exp(-(1 - a_i f) tau_i), f = g^2 the forward-peak share of the droplets'
 scattering (delta-M scaling): the paper's G = a tau p(l, l) / 4 pi + exp(-tau) to first order

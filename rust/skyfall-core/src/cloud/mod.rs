@@ -28,9 +28,10 @@ pub mod volume;
 use crate::error::{Error, Param, Result};
 use crate::ranges;
 
-/// A particle's support, in radii: exp(−9) ≈ 1.2e-4 of its centre's optical depth is left
-/// out beyond it.
-pub const CUTOFF_RADII: f64 = 3.0;
+/// A particle's support, in radii: exp(−6.25) ≈ 0.2 % of its centre's optical depth is left
+/// out beyond it (both illumination methods cut it alike; 3 radii cost the volume 44 % more
+/// footprint for 0.18 % more of each particle).
+pub const CUTOFF_RADII: f64 = 2.5;
 
 /// A cloud: Gaussian particles and their droplets' phase asymmetry.
 #[derive(Debug, Clone, PartialEq)]

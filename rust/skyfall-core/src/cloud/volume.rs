@@ -181,8 +181,9 @@ impl AttenuationVolume {
 
         let mut gamma = try_filled_par("the attenuation volume", n * n * n, 0.0f32)?;
         gamma.par_chunks_mut(n * n).enumerate().for_each_init(
-            || vec![0i64; n * n],
-            |plane, (iu, out)| {
+            || (vec![0i64; n * n], vec![0.0f32; n]),
+            |(plane, row), (iu, out)| {
+                // plane[k * n + iv]: depth-major, so a footprint's chord is contiguous.
                 let uc = (iu as f64 + 0.5) * step.x;
                 for &j in &members[counts[iu]..counts[iu + 1]] {
                     let p = &preps[j as usize];
@@ -195,17 +196,22 @@ impl AttenuationVolume {
                         &v_factors[p.v_off..p.v_off + p.v_len],
                     );
                 }
-                for (col, dst) in plane.chunks_exact_mut(n).zip(out.chunks_exact_mut(n)) {
-                    let mut sum = 0i64;
-                    for d in col.iter_mut() {
-                        sum += *d;
-                        *d = sum;
+                for k in 0..n {
+                    let (done, rest) = plane.split_at_mut(k * n);
+                    let cur = &mut rest[..n];
+                    if k > 0 {
+                        for (c, p) in cur.iter_mut().zip(&done[(k - 1) * n..]) {
+                            *c += *p;
+                        }
                     }
-                    for (d, o) in col.iter_mut().zip(dst.iter_mut()) {
-                        *o = exp_fixed(*d);
-                        *d = 0;
+                    for (o, &c) in row.iter_mut().zip(cur.iter()) {
+                        *o = exp_fixed(c);
+                    }
+                    for (iv, &g) in row.iter().enumerate() {
+                        out[iv * n + k] = g;
                     }
                 }
+                plane.fill(0);
             },
         );
         Ok(AttenuationVolume {
@@ -303,11 +309,14 @@ fn deposit(plane: &mut [i64], n: usize, hv: f64, uc: f64, p: &Prep, ev: &[f64]) 
     if hi < lo as i64 {
         return;
     }
-    for iv in lo..=hi as usize {
-        let e = ev[iv - p.v_lo];
-        let row = &mut plane[iv * n..(iv + 1) * n];
-        row[p.k0] += (a0 * e) as i64;
-        row[p.k1] += (a1 * e) as i64;
+    let hi = hi as usize;
+    let ev = &ev[lo - p.v_lo..=hi - p.v_lo];
+    let (r0, r1) = (p.k0 * n, p.k1 * n);
+    for (d, &e) in plane[r0 + lo..=r0 + hi].iter_mut().zip(ev) {
+        *d += (a0 * e) as i64;
+    }
+    for (d, &e) in plane[r1 + lo..=r1 + hi].iter_mut().zip(ev) {
+        *d += (a1 * e) as i64;
     }
 }
 
