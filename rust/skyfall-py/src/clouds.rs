@@ -119,13 +119,24 @@ pub fn attenuation_volume<'py>(
         &albedos,
         asymmetry_g,
     )?;
-    let v = py
-        .detach(|| AttenuationVolume::build(&c, sun_direction, resolution))
+    sun_direction_of(sun_direction).map_err(CoreError)?;
+    skyfall_core::ranges::RESOLUTION
+        .check(resolution as f64)
         .map_err(CoreError)?;
-    let n = v.resolution;
+    let n = resolution;
+    let mut grid = None;
+    // Built straight into numpy's array (zeroed pages, first touched by the build's threads).
+    let gamma = crate::alloc::filled::<f32, Ix3>(py, &[n, n, n], |out| {
+        let g = py
+            .detach(|| AttenuationVolume::build_into(&c, sun_direction, n, out))
+            .map_err(CoreError)?;
+        grid = Some(g);
+        Ok(())
+    })?;
+    let grid = grid.ok_or_else(|| invalid("gamma", None, "internal: the volume was not built"))?;
     Ok((
-        crate::alloc::from_slice::<f32, Ix3>(py, &[n, n, n], &v.gamma)?,
-        crate::alloc::from_slice::<f64, Ix2>(py, &[4, 4], &v.grid.matrix())?,
+        gamma,
+        crate::alloc::from_slice::<f64, Ix2>(py, &[4, 4], &grid.matrix())?,
     ))
 }
 

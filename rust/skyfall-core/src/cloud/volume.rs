@@ -27,6 +27,9 @@ use super::{CUTOFF_RADII, Cloud, exp_fast, sun_direction};
 use crate::error::{Error, Param, Result, try_filled_par};
 use crate::ranges;
 
+/// Slices exponentiated together before their transposed write.
+const TILE: usize = 16;
+
 /// Fixed-point steps per unit of log Γ.
 const SCALE: f64 = (1u64 << 28) as f64;
 
@@ -146,9 +149,37 @@ pub fn sample(gamma: &[f32], resolution: usize, grid: &VolumeBox, p: DVec3) -> f
 impl AttenuationVolume {
     /// Builds Γ for `cloud` lit from `sun` (towards the sun) at `resolution`³ voxels.
     pub fn build(cloud: &Cloud, sun: [f64; 3], resolution: usize) -> Result<Self> {
+        let n = ranges::RESOLUTION.check(resolution as f64)? as usize;
+        let mut gamma = try_filled_par("the attenuation volume", n * n * n, 0.0f32)?;
+        let grid = Self::build_into(cloud, sun, n, &mut gamma)?;
+        Ok(AttenuationVolume {
+            resolution: n,
+            gamma,
+            grid,
+        })
+    }
+
+    /// [`AttenuationVolume::build`] into the caller's `gamma` (`resolution`³ values, any
+    /// contents), returning the box: a binding writes straight into its own array.
+    pub fn build_into(
+        cloud: &Cloud,
+        sun: [f64; 3],
+        resolution: usize,
+        gamma: &mut [f32],
+    ) -> Result<VolumeBox> {
         let sun = sun_direction(sun)?;
         ranges::RESOLUTION.check(resolution as f64)?;
         let n = resolution;
+        if gamma.len() != n * n * n {
+            return Err(Error::Length {
+                param: Param {
+                    name: "gamma",
+                    index: None,
+                },
+                len: gamma.len(),
+                expected: n * n * n,
+            });
+        }
         let frame = LightFrame::new(sun);
         let lp = LightParticles::new(cloud, &frame);
         let size = lp.hi - lp.lo;
@@ -179,10 +210,9 @@ impl AttenuationVolume {
             }
         }
 
-        let mut gamma = try_filled_par("the attenuation volume", n * n * n, 0.0f32)?;
         gamma.par_chunks_mut(n * n).enumerate().for_each_init(
-            || (vec![0i64; n * n], vec![0.0f32; n]),
-            |(plane, row), (iu, out)| {
+            || (vec![0i64; n * n], vec![0.0f32; TILE * n]),
+            |(plane, tile), (iu, out)| {
                 // plane[k * n + iv]: depth-major, so a footprint's chord is contiguous.
                 let uc = (iu as f64 + 0.5) * step.x;
                 for &j in &members[counts[iu]..counts[iu + 1]] {
@@ -196,29 +226,33 @@ impl AttenuationVolume {
                         &v_factors[p.v_off..p.v_off + p.v_len],
                     );
                 }
-                for k in 0..n {
-                    let (done, rest) = plane.split_at_mut(k * n);
-                    let cur = &mut rest[..n];
-                    if k > 0 {
-                        for (c, p) in cur.iter_mut().zip(&done[(k - 1) * n..]) {
-                            *c += *p;
+                // The prefix sum along k, exponentiated TILE slices at a time and written
+                // out transposed (out[iv * n + k]) a cache line per column.
+                for k0 in (0..n).step_by(TILE) {
+                    let rows = TILE.min(n - k0);
+                    for t in 0..rows {
+                        let k = k0 + t;
+                        let (done, rest) = plane.split_at_mut(k * n);
+                        let cur = &mut rest[..n];
+                        if k > 0 {
+                            for (c, p) in cur.iter_mut().zip(&done[(k - 1) * n..]) {
+                                *c += *p;
+                            }
+                        }
+                        for (o, &c) in tile[t * n..(t + 1) * n].iter_mut().zip(cur.iter()) {
+                            *o = exp_fixed(c);
                         }
                     }
-                    for (o, &c) in row.iter_mut().zip(cur.iter()) {
-                        *o = exp_fixed(c);
-                    }
-                    for (iv, &g) in row.iter().enumerate() {
-                        out[iv * n + k] = g;
+                    for (iv, col) in out.chunks_exact_mut(n).enumerate() {
+                        for (t, o) in col[k0..k0 + rows].iter_mut().enumerate() {
+                            *o = tile[t * n + iv];
+                        }
                     }
                 }
                 plane.fill(0);
             },
         );
-        Ok(AttenuationVolume {
-            resolution: n,
-            gamma,
-            grid,
-        })
+        Ok(grid)
     }
 
     /// Trilinear Γ at a world point.
