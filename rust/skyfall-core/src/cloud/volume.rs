@@ -188,7 +188,11 @@ impl AttenuationVolume {
             origin: frame.to_world(lp.lo),
             edges: [frame.u * size.x, frame.v * size.y, frame.w * size.z],
         };
-        let (preps, v_factors) = prepare(cloud, &lp, n, step);
+        // Prepared in order across u, so a row's particles are one run of `preps` (its loop
+        // streams through memory); the sums are integers, so the order changes no bit.
+        let mut order: Vec<usize> = (0..cloud.len()).collect();
+        order.sort_by(|&a, &b| lp.centres[a].x.total_cmp(&lp.centres[b].x).then(a.cmp(&b)));
+        let (preps, v_factors) = prepare(cloud, &lp, n, step, &order);
 
         // Particles binned (in index order) to the u-rows their footprints reach.
         let mut counts = vec![0usize; n + 1];
@@ -280,7 +284,13 @@ struct Prep {
 }
 
 /// Each particle's placement, and its footprint's factors exp(−Δv²/r²) across v (one pool).
-fn prepare(cloud: &Cloud, lp: &LightParticles, n: usize, step: DVec3) -> (Vec<Prep>, Vec<f64>) {
+fn prepare(
+    cloud: &Cloud,
+    lp: &LightParticles,
+    n: usize,
+    step: DVec3,
+    order: &[usize],
+) -> (Vec<Prep>, Vec<f64>) {
     let top = (n - 1) as f64;
     let span = |c: f64, cut: f64, h: f64| {
         let lo = ((c - cut) / h - 0.5).ceil().max(0.0);
@@ -288,8 +298,9 @@ fn prepare(cloud: &Cloud, lp: &LightParticles, n: usize, step: DVec3) -> (Vec<Pr
         (lo as usize, hi as i64)
     };
     let mut pool = Vec::new();
-    let preps = (0..cloud.len())
-        .map(|j| {
+    let preps = order
+        .iter()
+        .map(|&j| {
             let c = lp.centres[j] - lp.lo;
             let r = cloud.radii_m[j];
             let cut = CUTOFF_RADII * r;
@@ -347,11 +358,20 @@ fn deposit(plane: &mut [i64], n: usize, hv: f64, uc: f64, p: &Prep, ev: &[f64]) 
     let ev = &ev[lo - p.v_lo..=hi - p.v_lo];
     let (r0, r1) = (p.k0 * n, p.k1 * n);
     for (d, &e) in plane[r0 + lo..=r0 + hi].iter_mut().zip(ev) {
-        *d += (a0 * e) as i64;
+        *d += to_fixed(a0 * e);
     }
     for (d, &e) in plane[r1 + lo..=r1 + hi].iter_mut().zip(ev) {
-        *d += (a1 * e) as i64;
+        *d += to_fixed(a1 * e);
     }
+}
+
+/// The nearest integer to `x` (|x| < 2⁵¹: a particle's log G in fixed point is at most
+/// 1e4 · 2²⁸ ≈ 2.7e12), by the 1.5 · 2⁵² shift: add, reinterpret, subtract. Plain arithmetic
+/// that vectorises, where `as i64` checks for NaN and saturates element by element.
+#[inline]
+fn to_fixed(x: f64) -> i64 {
+    const SHIFT: f64 = 6_755_399_441_055_744.0; // 1.5 · 2^52
+    (x + SHIFT).to_bits() as i64 - SHIFT.to_bits() as i64
 }
 
 /// exp(s / SCALE) for a fixed-point log s ≤ 0, as f32 ([`exp_fast`]).
@@ -392,6 +412,13 @@ mod tests {
             .collect();
         e.sort_by(f64::total_cmp);
         (e[e.len() / 2], e[e.len() * 95 / 100])
+    }
+
+    #[test]
+    fn to_fixed_rounds_to_the_nearest_integer() {
+        for x in [0.0, -0.4, -0.6, -1.5e9, -2.7e12, 3.2, -123_456.7] {
+            assert_eq!(to_fixed(x), x.round_ties_even() as i64, "{x}");
+        }
     }
 
     #[test]
