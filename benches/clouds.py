@@ -40,6 +40,7 @@ def floor_s(resolution: int) -> float:
 
 
 def main() -> None:
+    load_before = os.getloadavg()[0]
     rows = []
     floors = {r: floor_s(r) for r in RESOLUTIONS}
     for n in COUNTS:
@@ -64,12 +65,19 @@ def main() -> None:
             print(rows[-1], flush=True)
 
     RESULTS.mkdir(parents=True, exist_ok=True)
-    env = {"cpus": os.cpu_count(), "machine": platform.machine(), "date": time.strftime("%Y-%m-%d")}
+    env = {
+        "cpus": os.cpu_count(),
+        "machine": platform.machine(),
+        "date": time.strftime("%Y-%m-%d"),
+        "load_average": [load_before, os.getloadavg()[0]],
+    }
     (RESULTS / "clouds.json").write_text(json.dumps({"env": env, "rows": rows}, indent=2))
     lines = [
         "# Clouds benchmark (Shimada, Shinya, Shiraishi & Harada)",
         "",
-        f"{env['date']}, {env['cpus']} CPUs ({env['machine']}). Medians of repeated runs, one process.",
+        f"{env['date']}, {env['cpus']} CPUs ({env['machine']}). Medians of repeated runs, one process; the",
+        f"machine's 1-minute load average was {load_before:.1f} before and {os.getloadavg()[0]:.1f} after (other work",
+        "shares the cores: times are upper bounds).",
         "",
         "Generated cumuli (`clouds.particles('cumulus', n_particles=N, seed=0)`, 1500 m wide), sun",
         "(0.4, 0.8, -0.3). Harris: the sorted recurrence with exact footprints (one thread: it is",
@@ -93,7 +101,8 @@ def main() -> None:
         "The error is Harris' sharp step at each particle's depth (a particle reads none of its own",
         "G and all of a neighbour's just before it) against the volume's blur of that step over one",
         "slice, plus trilinear error across the light; it falls with R until the particles' own",
-        "overlap within a slice dominates.",
+        "overlap within a slice dominates. The floor reuses numpy's freed block from one call to the",
+        "next (pages already mapped); a first allocation costs the page faults on top.",
     ]
     (RESULTS / "clouds.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
