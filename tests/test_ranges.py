@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skyfall import Camera, PhotoScene, PointLight, Renderer, SpotLight, Weather, _core, physics, rain, scenes, sky
+from skyfall import Camera, PhotoScene, PointLight, Renderer, SpotLight, Weather, _core, clouds, physics, rain, scenes, sky
 
 RANGES = _core.RANGES
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -127,6 +127,17 @@ DOCUMENTED: list[tuple[Any, str]] = [
     (physics.drops_per_m3, "rain_rate_mm_h"),
     (physics.rain_rate_from_dsd, "rain_rate_mm_h"),
     (physics.rain_extinction_per_m, "rain_rate_mm_h"),
+    (clouds.particles, "n_particles"),
+    (clouds.particles, "extent_m"),
+    (clouds.particles, "altitude_m"),
+    (clouds.particles, "seed"),
+    (clouds.Cloud, "positions_m"),
+    (clouds.Cloud, "radii_m"),
+    (clouds.Cloud, "optical_depths"),
+    (clouds.Cloud, "albedos"),
+    (clouds.Cloud, "asymmetry_g"),
+    (clouds.harris_illumination, "sun_radiance"),
+    (clouds.attenuation_volume, "resolution"),
 ]
 
 
@@ -188,8 +199,9 @@ def test_table_shape() -> None:
 _tiny = Renderer(8, 6, backend="cpu")
 _street = scenes.street()
 _photo = np.full((6, 8, 3), 128, np.uint8)
+_one_cloud = clouds.Cloud([[0.0, 0.0, 0.0]], [1.0], [1.0], [1.0])
 
-INTEGERS = {"width", "height", "seed", "samples", "ambient_samples", "sky", "size_px"}
+INTEGERS = {"width", "height", "seed", "samples", "ambient_samples", "sky", "size_px", "n_particles", "resolution"}
 
 PUBLIC: dict[str, Callable[[Any], object]] = {
     "rain_rate_mm_h": lambda v: Weather(rain_rate_mm_h=v),
@@ -243,6 +255,16 @@ PUBLIC: dict[str, Callable[[Any], object]] = {
     "airlight": lambda v: PhotoScene(_photo, airlight=(0.5, v, 0.5)),
     "camera_height_m": lambda v: PhotoScene(_photo, camera_height_m=v),
     "horizon_row": lambda v: PhotoScene(_photo, horizon_row=v),
+    "n_particles": lambda v: clouds.particles(n_particles=v),
+    "extent_m": lambda v: clouds.particles(n_particles=10, extent_m=v),
+    "altitude_m": lambda v: clouds.particles(n_particles=10, altitude_m=v),
+    "positions_m": lambda v: clouds.Cloud([[0.0, v, 0.0]], [1.0], [1.0], [1.0]),
+    "radii_m": lambda v: clouds.Cloud([[0.0, 0.0, 0.0]], [v], [1.0], [1.0]),
+    "optical_depths": lambda v: clouds.Cloud([[0.0, 0.0, 0.0]], [1.0], [v], [1.0]),
+    "albedos": lambda v: clouds.Cloud([[0.0, 0.0, 0.0]], [1.0], [1.0], [v]),
+    "asymmetry_g": lambda v: clouds.Cloud([[0.0, 0.0, 0.0]], [1.0], [1.0], [1.0], v),
+    "sun_radiance": lambda v: clouds.harris_illumination(_one_cloud, [0.0, 1.0, 0.0], sun_radiance=v),
+    "resolution": lambda v: clouds.attenuation_volume(_one_cloud, [0.0, 1.0, 0.0], resolution=v),
 }
 
 

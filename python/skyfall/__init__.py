@@ -11,13 +11,16 @@ io
     Image files through OpenImageIO (EXR float, PNG sRGB 8-bit).
 scenes
     Photo scenes with depth and procedural box scenes (``scenes.street()``).
+clouds
+    Particle clouds, Harris' illumination and the attenuation volume (Shimada, Shinya,
+    Shiraishi & Harada).
 sky
     CIE skies, sky illuminance with occlusion and the ambient-light map (Yamamoto & Tadamura).
 
 Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`.
 """
 
-from skyfall import io, physics, rain, scenes, sky
+from skyfall import clouds, io, physics, rain, scenes, sky
 from skyfall._core import GpuUnavailableError, SkyfallError, __version__
 from skyfall.camera import Camera
 from skyfall.lights import PointLight, SpotLight
@@ -36,6 +39,7 @@ __all__ = [
     "SpotLight",
     "Weather",
     "__version__",
+    "clouds",
     "io",
     "physics",
     "rain",

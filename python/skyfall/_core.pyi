@@ -47,6 +47,11 @@ __all__ = [
     "rain_rate_from_dsd",
     "rain_textures",
     "terminal_velocity_m_s",
+    "attenuation_volume",
+    "check_sun_direction",
+    "cloud_particles",
+    "harris_illumination",
+    "sample_attenuation",
 ]
 
 __version__: str
@@ -190,3 +195,30 @@ def rain_drops(
 
 def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...
 def apply_lut8(encoded: NDArray[np.uint8], table: NDArray[np.float32]) -> NDArray[np.float32]: ...
+
+# Clouds (skyfall.clouds).
+def cloud_particles(
+    kind: str, n_particles: int, extent_m: float, altitude_m: float, seed: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]: ...
+def harris_illumination(
+    positions_m: NDArray[np.float64],
+    radii_m: NDArray[np.float64],
+    optical_depths: NDArray[np.float64],
+    albedos: NDArray[np.float64],
+    asymmetry_g: float,
+    sun_direction: tuple[float, float, float],
+    sun_radiance: float,
+) -> NDArray[np.float64]: ...
+def attenuation_volume(
+    positions_m: NDArray[np.float64],
+    radii_m: NDArray[np.float64],
+    optical_depths: NDArray[np.float64],
+    albedos: NDArray[np.float64],
+    asymmetry_g: float,
+    sun_direction: tuple[float, float, float],
+    resolution: int,
+) -> tuple[NDArray[np.float32], NDArray[np.float64]]: ...
+def sample_attenuation(
+    gamma: NDArray[np.float32], world_from_volume: NDArray[np.float64], points_m: NDArray[np.float64]
+) -> NDArray[np.float32]: ...
+def check_sun_direction(sun_direction: tuple[float, float, float]) -> list[float]: ...

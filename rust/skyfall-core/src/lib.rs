@@ -12,9 +12,12 @@
 //! - [`frame`]: the frame pipeline (scene stage, effect passes, output stage) and the CPU
 //!   backend's two output stages: float32 frames and 8-bit sRGB photos.
 //! - [`particles`]: the particle toolkit shared by rain and (next) snow.
+//! - [`cloud`]: particle clouds, Harris' illumination and the attenuation volume (Shimada,
+//!   Shinya, Shiraishi & Harada).
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod cloud;
 pub mod color;
 pub mod error;
 pub mod frame;

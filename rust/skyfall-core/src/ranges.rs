@@ -264,6 +264,67 @@ pub const TIME_S: Limit = Limit::new(
     Range::closed(-1e7, 1e7, "s"),
     "time of a frame: drops have fallen v time_s",
 );
+// Clouds (`cloud/`).
+/// Particles of a generated cloud.
+pub const N_PARTICLES: Limit = Limit::new(
+    "n_particles",
+    Range::closed(1.0, 1_000_000.0, ""),
+    "particles of a generated cloud",
+);
+/// Horizontal extent of a generated cloud.
+pub const EXTENT_M: Limit = Limit::new(
+    "extent_m",
+    Range::closed(10.0, 100_000.0, "m"),
+    "horizontal extent of a generated cloud (a cell's diameter, a field's side)",
+);
+/// Altitude of a generated cloud's base.
+pub const ALTITUDE_M: Limit = Limit::new(
+    "altitude_m",
+    Range::closed(0.0, 20_000.0, "m"),
+    "altitude of a generated cloud's base above y = 0",
+);
+/// A cloud particle's position coordinate.
+pub const POSITIONS_M: Limit = Limit::new(
+    "positions_m",
+    Range::closed(-1e7, 1e7, "m"),
+    "a cloud particle's world coordinate",
+);
+/// A cloud particle's Gaussian radius.
+pub const RADII_M: Limit = Limit::new(
+    "radii_m",
+    Range::open_closed(0.0, 1e5, "m"),
+    "a cloud particle's Gaussian 1/e radius",
+);
+/// A cloud particle's optical depth through its centre.
+pub const OPTICAL_DEPTHS: Limit = Limit::new(
+    "optical_depths",
+    Range::closed(0.0, 1e4, ""),
+    "a cloud particle's extinction optical depth through its centre",
+);
+/// A cloud particle's single-scattering albedo.
+pub const ALBEDOS: Limit = Limit::new(
+    "albedos",
+    Range::closed(0.0, 1.0, ""),
+    "a cloud particle's single-scattering albedo",
+);
+/// Henyey–Greenstein asymmetry of a cloud's droplets.
+pub const ASYMMETRY_G: Limit = Limit::new(
+    "asymmetry_g",
+    Range::closed(0.0, 0.99, ""),
+    "Henyey-Greenstein asymmetry parameter g of a cloud's droplets",
+);
+/// Sun radiance entering a cloud.
+pub const SUN_RADIANCE: Limit = Limit::new(
+    "sun_radiance",
+    Range::closed(0.0, 1e12, ""),
+    "radiance of the sun entering a cloud (any unit; the illumination has the same)",
+);
+/// Voxels per side of a cloud's attenuation volume.
+pub const RESOLUTION: Limit = Limit::new(
+    "resolution",
+    Range::closed(2.0, 512.0, ""),
+    "voxels per side of a cloud's attenuation volume",
+);
 /// Rain seed.
 pub const SEED: Limit = Limit::new(
     "seed",
@@ -410,6 +471,16 @@ pub const ALL: &[Limit] = &[
     RELATIVE_HUMIDITY,
     D_MIN_MM,
     SIZE_PX,
+    N_PARTICLES,
+    EXTENT_M,
+    ALTITUDE_M,
+    POSITIONS_M,
+    RADII_M,
+    OPTICAL_DEPTHS,
+    ALBEDOS,
+    ASYMMETRY_G,
+    SUN_RADIANCE,
+    RESOLUTION,
 ];
 
 /// The limit of the parameter `name`.

@@ -3,6 +3,7 @@
 
 mod alloc;
 mod boxes;
+mod clouds;
 mod color;
 mod errors;
 mod interrupt;
@@ -20,6 +21,11 @@ use pyo3::prelude::*;
 
 #[pymodule]
 mod _core {
+    #[pymodule_export]
+    use super::clouds::{
+        attenuation_volume, check_sun_direction, cloud_particles, harris_illumination,
+        sample_attenuation,
+    };
     #[pymodule_export]
     use super::color::{apply_lut8, encode_srgb8};
     #[pymodule_export]

@@ -1,0 +1,282 @@
+"""Particle clouds lit by the sun (Shimada, Shinya, Shiraishi & Harada, "Fast rendering of
+dynamic clouds using GPU shaders", IPSJ 2008, improving Harris & Lastra 2001).
+
+A cloud is a set of Gaussian particles: particle i has its centre, its 1/e radius r_i
+(density proportional to exp(-d^2 / r_i^2), cut at 2.5 radii), its optical depth tau_i
+through the centre and its single-scattering albedo a_i. Sunlight crossing particle i keeps
+the share G_i = exp(-(1 - a_i f) tau_i), f = g^2 the forward-peak share of the droplets'
+scattering (delta-M scaling): the paper's G = a tau p(l, l) / 4 pi + exp(-tau) to first order
+in tau, but never above 1.
+
+- :func:`particles`: procedural, seeded clouds (cumulus, stratocumulus, a broken field).
+- :func:`harris_illumination`: the light reaching each particle by Harris' sorted recurrence,
+  the reference and the speed baseline.
+- :func:`attenuation_volume`: the multiplicative attenuation volume Gamma of a light-aligned
+  box, order-independent, with trilinear :meth:`AttenuationVolume.sample`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from skyfall import _core
+from skyfall._validate import all_in_range, choice, float_array, in_range, integer_in_range
+
+__all__ = [
+    "KINDS",
+    "AttenuationVolume",
+    "Cloud",
+    "attenuation_volume",
+    "harris_illumination",
+    "particles",
+]
+
+KINDS: Final = ("cumulus", "stratocumulus", "broken")
+"""The kinds :func:`particles` makes."""
+
+_DEFAULT_EXTENT_M: Final = {"cumulus": 1500.0, "stratocumulus": 4000.0, "broken": 4000.0}
+_DEFAULT_G: Final = 0.8641  # Mie, r_eff 10 um at 550 nm (the reference table)
+
+
+def _vector(name: str, value: Any) -> NDArray[np.float64]:
+    a = all_in_range(name, value)
+    if a.ndim != 1:
+        raise ValueError(f"{name} must be 1-D, got shape {a.shape}")
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Cloud:
+    """A particle cloud.
+
+    Parameters
+    ----------
+    positions_m : array_like, shape (N, 3)
+        Particle centres, world metres (+Y up), each coordinate in [-1e7, 1e7] m.
+    radii_m : array_like, shape (N,)
+        Gaussian 1/e radii, m, each in (0, 100000] m.
+    optical_depths : array_like, shape (N,)
+        Extinction optical depths through the centres, each in [0, 10000].
+    albedos : array_like, shape (N,)
+        Single-scattering albedos, each in [0, 1].
+    asymmetry_g : float
+        Henyey-Greenstein asymmetry of the droplets, in [0, 0.99]; 0.8641 (Mie, r_eff 10 um,
+        550 nm) by default.
+
+    The arrays are stored as read-only C-contiguous float64 copies. ``N`` must be at least 1.
+    """
+
+    positions_m: NDArray[np.float64]
+    radii_m: NDArray[np.float64]
+    optical_depths: NDArray[np.float64]
+    albedos: NDArray[np.float64]
+    asymmetry_g: float = _DEFAULT_G
+
+    def __post_init__(self) -> None:
+        p = float_array("positions_m", self.positions_m)
+        if p.ndim != 2 or p.shape[1] != 3:
+            raise ValueError(f"positions_m must have shape (N, 3), got {p.shape}")
+        if p.shape[0] == 0:
+            raise ValueError("positions_m: a cloud needs at least one particle, got 0")
+        all_in_range("positions_m", p)
+        arrays = {"positions_m": p}
+        for name in ("radii_m", "optical_depths", "albedos"):
+            a = _vector(name, getattr(self, name))
+            if a.shape[0] != p.shape[0]:
+                raise ValueError(f"{name} has length {a.shape[0]}, expected {p.shape[0]} (one per particle)")
+            arrays[name] = a
+        for name, a in arrays.items():
+            c = np.array(a, dtype=np.float64, order="C")
+            c.flags.writeable = False
+            object.__setattr__(self, name, c)
+        object.__setattr__(self, "asymmetry_g", in_range("asymmetry_g", self.asymmetry_g))
+
+    @property
+    def n_particles(self) -> int:
+        """Number of particles N."""
+        return int(self.positions_m.shape[0])
+
+    def _args(
+        self,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]:
+        return (self.positions_m, self.radii_m, self.optical_depths, self.albedos, self.asymmetry_g)
+
+
+def particles(
+    kind: str = "cumulus",
+    *,
+    n_particles: int = 20000,
+    extent_m: float | None = None,
+    altitude_m: float = 1500.0,
+    seed: int = 0,
+) -> Cloud:
+    """A procedural, seeded cloud.
+
+    A kind is a density field over a box: Gaussian metaballs (``"cumulus"``: a tower of nine
+    cells above a flat base, as tall as it is wide; ``"broken"``: fourteen small cumulus cells
+    of three metaballs each scattered over a square; ``"stratocumulus"``: a layer a tenth of
+    its side thick, modulated by a grid of convective cells), multiplied by three octaves of
+    value noise. Positions are drawn uniformly in the box from a PCG64 stream seeded by
+    ``(seed, kind)`` and kept where the perturbed field exceeds a threshold, until
+    ``n_particles`` are kept. The kept share measures the cloud's volume V and the particles'
+    spacing s = (V / N)^(1/3): radii are 2 s times a uniform [0.8, 1.2], and optical depths
+    tau_i = beta V / (N pi r_i^2) make the particles' sum carry the extinction beta of the
+    kind's droplets (Mie at 550 nm; beta = 3 Q_ext LWC / (4 rho_w r_eff), Stephens 1978):
+    cumulus r_eff 10 um, LWC 1 g/m^3 (beta 0.157 /m, g 0.864); stratocumulus 5 um,
+    0.1 g/m^3 (0.032 /m, g 0.849); broken 15 um, 0.5 g/m^3 (0.052 /m, g 0.870).
+
+    Parameters
+    ----------
+    kind : {"cumulus", "stratocumulus", "broken"}
+        The cloud's kind.
+    n_particles : int
+        Particles, in [1, 1000000].
+    extent_m : float, optional
+        Horizontal extent, m, in [10, 100000] m: the cumulus' width (1500 m by default), the
+        side of the stratocumulus deck or the broken field (4000 m).
+    altitude_m : float
+        Altitude of the cloud's base above y = 0, m, in [0, 20000] m.
+    seed : int
+        Seed, in [0, 2^64).
+
+    Returns
+    -------
+    Cloud
+        Same arguments, same bits.
+    """
+    choice("kind", kind, KINDS)
+    n = integer_in_range("n_particles", n_particles)
+    extent = in_range("extent_m", _DEFAULT_EXTENT_M[kind] if extent_m is None else extent_m)
+    altitude = in_range("altitude_m", altitude_m)
+    s = integer_in_range("seed", seed)
+    p, r, t, a, g = _core.cloud_particles(kind, n, extent, altitude, s)
+    return Cloud(p, r, t, a, g)
+
+
+def _cloud(cloud: Any) -> Cloud:
+    if not isinstance(cloud, Cloud):
+        raise TypeError(f"cloud must be a skyfall.clouds.Cloud, got {type(cloud).__name__}")
+    return cloud
+
+
+def _sun(sun_direction: Any) -> tuple[float, float, float]:
+    v = float_array("sun_direction", sun_direction)
+    if v.shape != (3,):
+        raise ValueError(f"sun_direction must have 3 components, got shape {v.shape}")
+    x, y, z = _core.check_sun_direction((float(v[0]), float(v[1]), float(v[2])))
+    return (x, y, z)
+
+
+def harris_illumination(cloud: Cloud, sun_direction: Any, *, sun_radiance: float = 1.0) -> NDArray[np.float64]:
+    """Sunlight reaching each particle by Harris' sorted recurrence.
+
+    The particles are sorted along the light, nearest the sun first; each reads the light its
+    predecessors left at its centre, I_k = I_0 prod_{i<k} G_i(rho_ik), with
+    G_i(rho) = exp(-(1 - a_i g^2) tau_i exp(-rho^2 / r_i^2)) at distance rho from particle
+    i's axis along the light, then adds its own G for those after it. The predecessors'
+    footprints are summed exactly (a grid of cells across the light finds them), so the
+    reference has no pixel error; sums of log G keep dense clouds finite.
+
+    Parameters
+    ----------
+    cloud : Cloud
+        The cloud.
+    sun_direction : array_like, shape (3,)
+        Direction towards the sun (any non-zero length).
+    sun_radiance : float
+        Sunlight entering the cloud, in [0, 1e12]; the result is in its unit.
+
+    Returns
+    -------
+    ndarray of float64, shape (N,)
+        I_k per particle.
+    """
+    c = _cloud(cloud)
+    sun = _sun(sun_direction)
+    radiance = in_range("sun_radiance", sun_radiance)
+    return _core.harris_illumination(*c._args(), sun, radiance)
+
+
+@dataclass(frozen=True, eq=False)
+class AttenuationVolume:
+    """The share of sunlight Gamma left at each voxel of a light-aligned box.
+
+    Attributes
+    ----------
+    gamma : ndarray of float32, shape (R, R, R)
+        Gamma per voxel; axis 2 runs along the light's travel (away from the sun), axes 0 and
+        1 across it. Voxel (i, j, k)'s centre is at t = ((i, j, k) + 0.5) / R.
+    world_from_volume : ndarray of float64, shape (4, 4)
+        Maps box coordinates t in [0, 1]^3 (homogeneous) to world metres; its first three
+        columns are the box's orthogonal edges, the fourth its corner t = 0.
+    sun_direction : ndarray of float64, shape (3,)
+        The unit direction towards the sun it was built for.
+    """
+
+    gamma: NDArray[np.float32]
+    world_from_volume: NDArray[np.float64]
+    sun_direction: NDArray[np.float64]
+
+    @property
+    def resolution(self) -> int:
+        """Voxels per side R."""
+        return int(self.gamma.shape[0])
+
+    def sample(self, points_m: Any) -> NDArray[np.float32]:
+        """Trilinear Gamma at world points.
+
+        Parameters
+        ----------
+        points_m : array_like, shape (..., 3)
+            World points, m.
+
+        Returns
+        -------
+        ndarray of float32, shape (...)
+            Gamma; points outside the box read its nearest face (across the light about 1,
+            beyond the cloud along the light its whole shadow).
+        """
+        p = float_array("points_m", points_m)
+        if p.ndim == 0 or p.shape[-1] != 3:
+            raise ValueError(f"points_m must have shape (..., 3), got {p.shape}")
+        flat = np.ascontiguousarray(p.reshape(-1, 3))
+        out = _core.sample_attenuation(self.gamma, self.world_from_volume, flat)
+        return out.reshape(p.shape[:-1])
+
+
+def attenuation_volume(cloud: Cloud, sun_direction: Any, *, resolution: int = 128) -> AttenuationVolume:
+    """The multiplicative attenuation volume Gamma = exp(sum log G) of Shimada et al.
+
+    Built order-independently: each particle adds its footprint log G_i(rho) at its own depth
+    (half a slice behind its centre, shared linearly between two slices), and a prefix sum
+    along the light carries it to every voxel behind; the cost grows as particles x footprint
+    + voxels. The sums are fixed point (2^-28 in log Gamma), so shuffling the particles gives
+    the same bits; work is split across the light over the thread pool.
+
+    Parameters
+    ----------
+    cloud : Cloud
+        The cloud.
+    sun_direction : array_like, shape (3,)
+        Direction towards the sun (any non-zero length).
+    resolution : int
+        Voxels per side R, in [2, 512].
+
+    Returns
+    -------
+    AttenuationVolume
+        Gamma (R, R, R) float32 and its box.
+    """
+    c = _cloud(cloud)
+    sun = _sun(sun_direction)
+    r = integer_in_range("resolution", resolution)
+    gamma, world_from_volume = _core.attenuation_volume(*c._args(), sun, r)
+    gamma.flags.writeable = False
+    world_from_volume.flags.writeable = False
+    direction = np.array(sun, dtype=np.float64)
+    direction.flags.writeable = False
+    return AttenuationVolume(gamma, world_from_volume, direction)

@@ -1,0 +1,188 @@
+//! Wrappers of `skyfall_core::cloud`: a cloud's arrays in, numpy out, GIL released.
+
+use crate::errors::{CoreError, invalid};
+use numpy::PyUntypedArrayMethods;
+use numpy::ndarray::{Ix1, Ix2, Ix3};
+use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
+use pyo3::prelude::*;
+use skyfall_core::cloud::generate::{Kind, particles};
+use skyfall_core::cloud::harris::harris_illumination as harris;
+use skyfall_core::cloud::volume::{AttenuationVolume, VolumeBox, sample};
+use skyfall_core::cloud::{Cloud, sun_direction as sun_direction_of};
+
+/// A cloud's four arrays as the core's checked [`Cloud`].
+fn cloud_of(
+    positions_m: &PyReadonlyArray2<'_, f64>,
+    radii_m: &PyReadonlyArray1<'_, f64>,
+    optical_depths: &PyReadonlyArray1<'_, f64>,
+    albedos: &PyReadonlyArray1<'_, f64>,
+    asymmetry_g: f64,
+) -> PyResult<Cloud> {
+    let shape = positions_m.shape();
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(invalid(
+            "positions_m",
+            None,
+            format!("must have shape (N, 3), got {shape:?}"),
+        ));
+    }
+    let p = positions_m.as_slice()?;
+    let positions = p.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Ok(Cloud::new(
+        positions,
+        radii_m.as_slice()?.to_vec(),
+        optical_depths.as_slice()?.to_vec(),
+        albedos.as_slice()?.to_vec(),
+        asymmetry_g,
+    )
+    .map_err(CoreError)?)
+}
+
+type CloudArrays<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    f64,
+);
+
+/// A generated cloud: (positions_m (N, 3), radii_m, optical_depths, albedos, asymmetry_g).
+#[pyfunction]
+pub fn cloud_particles<'py>(
+    py: Python<'py>,
+    kind: &str,
+    n_particles: usize,
+    extent_m: f64,
+    altitude_m: f64,
+    seed: u64,
+) -> PyResult<CloudArrays<'py>> {
+    let kind = Kind::parse(kind).map_err(CoreError)?;
+    let c = py
+        .detach(|| particles(kind, n_particles, extent_m, altitude_m, seed))
+        .map_err(CoreError)?;
+    let flat: Vec<f64> = c.positions_m.iter().flatten().copied().collect();
+    let n = c.len();
+    Ok((
+        crate::alloc::from_slice::<f64, Ix2>(py, &[n, 3], &flat)?,
+        crate::alloc::from_slice::<f64, Ix1>(py, &[n], &c.radii_m)?,
+        crate::alloc::from_slice::<f64, Ix1>(py, &[n], &c.optical_depths)?,
+        crate::alloc::from_slice::<f64, Ix1>(py, &[n], &c.albedos)?,
+        c.asymmetry_g,
+    ))
+}
+
+/// Harris' per-particle sunlight, in the unit of `sun_radiance`.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+pub fn harris_illumination<'py>(
+    py: Python<'py>,
+    positions_m: PyReadonlyArray2<'py, f64>,
+    radii_m: PyReadonlyArray1<'py, f64>,
+    optical_depths: PyReadonlyArray1<'py, f64>,
+    albedos: PyReadonlyArray1<'py, f64>,
+    asymmetry_g: f64,
+    sun_direction: [f64; 3],
+    sun_radiance: f64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let c = cloud_of(
+        &positions_m,
+        &radii_m,
+        &optical_depths,
+        &albedos,
+        asymmetry_g,
+    )?;
+    let light = py
+        .detach(|| harris(&c, sun_direction, sun_radiance))
+        .map_err(CoreError)?;
+    crate::alloc::from_slice::<f64, Ix1>(py, &[light.len()], &light)
+}
+
+type VolumeArrays<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray2<f64>>);
+
+/// The attenuation volume: (Γ (R, R, R) float32, world_from_volume (4, 4)).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+pub fn attenuation_volume<'py>(
+    py: Python<'py>,
+    positions_m: PyReadonlyArray2<'py, f64>,
+    radii_m: PyReadonlyArray1<'py, f64>,
+    optical_depths: PyReadonlyArray1<'py, f64>,
+    albedos: PyReadonlyArray1<'py, f64>,
+    asymmetry_g: f64,
+    sun_direction: [f64; 3],
+    resolution: usize,
+) -> PyResult<VolumeArrays<'py>> {
+    let c = cloud_of(
+        &positions_m,
+        &radii_m,
+        &optical_depths,
+        &albedos,
+        asymmetry_g,
+    )?;
+    sun_direction_of(sun_direction).map_err(CoreError)?;
+    skyfall_core::ranges::RESOLUTION
+        .check(resolution as f64)
+        .map_err(CoreError)?;
+    let n = resolution;
+    let mut grid = None;
+    // Built straight into numpy's array (zeroed pages, first touched by the build's threads).
+    let gamma = crate::alloc::filled::<f32, Ix3>(py, &[n, n, n], |out| {
+        let g = py
+            .detach(|| AttenuationVolume::build_into(&c, sun_direction, n, out))
+            .map_err(CoreError)?;
+        grid = Some(g);
+        Ok(())
+    })?;
+    let grid = grid.ok_or_else(|| invalid("gamma", None, "internal: the volume was not built"))?;
+    Ok((
+        gamma,
+        crate::alloc::from_slice::<f64, Ix2>(py, &[4, 4], &grid.matrix())?,
+    ))
+}
+
+/// Trilinear Γ at world points (M, 3).
+#[pyfunction]
+pub fn sample_attenuation<'py>(
+    py: Python<'py>,
+    gamma: PyReadonlyArray3<'py, f32>,
+    world_from_volume: PyReadonlyArray2<'py, f64>,
+    points_m: PyReadonlyArray2<'py, f64>,
+) -> PyResult<Bound<'py, PyArray1<f32>>> {
+    let s = gamma.shape();
+    if s[0] != s[1] || s[1] != s[2] || s[0] == 0 {
+        return Err(invalid(
+            "gamma",
+            None,
+            format!("must be a non-empty cube, got {s:?}"),
+        ));
+    }
+    let n = s[0];
+    let grid = VolumeBox::from_matrix(world_from_volume.as_slice()?).map_err(CoreError)?;
+    let ps = points_m.shape();
+    if ps[1] != 3 {
+        return Err(invalid(
+            "points_m",
+            None,
+            format!("must have shape (M, 3), got {ps:?}"),
+        ));
+    }
+    let g = gamma.as_slice()?;
+    let p = points_m.as_slice()?;
+    if let Some(i) = p.iter().position(|x| !x.is_finite()) {
+        return Err(invalid("points_m", Some(i / 3), "must be finite"));
+    }
+    let out: Vec<f32> = py.detach(|| {
+        p.chunks_exact(3)
+            .map(|c| sample(g, n, &grid, glam::DVec3::new(c[0], c[1], c[2])))
+            .collect()
+    });
+    crate::alloc::from_slice::<f32, Ix1>(py, &[out.len()], &out)
+}
+
+/// Checks a sun direction (towards the sun): finite and non-zero; returns it normalised.
+#[pyfunction]
+pub fn check_sun_direction(sun_direction: [f64; 3]) -> PyResult<[f64; 3]> {
+    Ok(sun_direction_of(sun_direction)
+        .map_err(CoreError)?
+        .to_array())
+}
