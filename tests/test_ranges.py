@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from skyfall import Camera, PhotoScene, PointLight, Renderer, SpotLight, Weather, _core, physics, rain, scenes, sky
+from skyfall import windshield as ws
 
 RANGES = _core.RANGES
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -127,6 +128,20 @@ DOCUMENTED: list[tuple[Any, str]] = [
     (physics.drops_per_m3, "rain_rate_mm_h"),
     (physics.rain_rate_from_dsd, "rain_rate_mm_h"),
     (physics.rain_extinction_per_m, "rain_rate_mm_h"),
+    (ws.Windshield, "rain_rate_mm_h"),
+    (ws.Windshield, "glass_width_mm"),
+    (ws.Windshield, "glass_height_mm"),
+    (ws.Windshield, "glass_tilt_deg"),
+    (ws.Windshield, "car_speed_m_s"),
+    (ws.Windshield, "wipers"),
+    (ws.Windshield, "wiper_period_s"),
+    (ws.Windshield, "wiper_angles_deg"),
+    (ws.Windshield, "advancing_deg"),
+    (ws.Windshield, "receding_deg"),
+    (ws.Windshield, "cell_mm"),
+    (ws.Windshield, "particle_radius_mm"),
+    (ws.Windshield, "seed"),
+    (ws.Windshield.step, "dt_s"),
 ]
 
 
@@ -189,7 +204,7 @@ _tiny = Renderer(8, 6, backend="cpu")
 _street = scenes.street()
 _photo = np.full((6, 8, 3), 128, np.uint8)
 
-INTEGERS = {"width", "height", "seed", "samples", "ambient_samples", "sky", "size_px"}
+INTEGERS = {"width", "height", "seed", "samples", "ambient_samples", "sky", "size_px", "wipers"}
 
 PUBLIC: dict[str, Callable[[Any], object]] = {
     "rain_rate_mm_h": lambda v: Weather(rain_rate_mm_h=v),
@@ -243,6 +258,18 @@ PUBLIC: dict[str, Callable[[Any], object]] = {
     "airlight": lambda v: PhotoScene(_photo, airlight=(0.5, v, 0.5)),
     "camera_height_m": lambda v: PhotoScene(_photo, camera_height_m=v),
     "horizon_row": lambda v: PhotoScene(_photo, horizon_row=v),
+    "glass_width_mm": lambda v: ws.Windshield(glass_width_mm=v),
+    "glass_height_mm": lambda v: ws.Windshield(glass_height_mm=v),
+    "glass_tilt_deg": lambda v: ws.Windshield(glass_tilt_deg=v),
+    "car_speed_m_s": lambda v: ws.Windshield(car_speed_m_s=v),
+    "cell_mm": lambda v: ws.Windshield(cell_mm=v),
+    "advancing_deg": lambda v: ws.Windshield(advancing_deg=v),
+    "receding_deg": lambda v: ws.Windshield(receding_deg=v),
+    "wipers": lambda v: ws.Windshield(wipers=v),
+    "wiper_period_s": lambda v: ws.Windshield(wiper_period_s=v),
+    "wiper_angles_deg": lambda v: ws.Windshield(wiper_angles_deg=(v, v)),
+    "particle_radius_mm": lambda v: ws.Windshield(particle_radius_mm=v),
+    "dt_s": lambda v: ws.Windshield(glass_width_mm=20.0, glass_height_mm=20.0).step(v),
 }
 
 

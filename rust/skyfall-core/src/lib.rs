@@ -12,6 +12,7 @@
 //! - [`frame`]: the frame pipeline (scene stage, effect passes, output stage) and the CPU
 //!   backend's two output stages: float32 frames and 8-bit sRGB photos.
 //! - [`particles`]: the particle toolkit shared by rain and (next) snow.
+//! - [`windshield`]: drops on a windshield, wipers, and their refraction (Gotou, Tanaka & Sagawa).
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
@@ -29,5 +30,6 @@ mod seed;
 pub mod sky;
 pub mod snow;
 pub mod weather;
+pub mod windshield;
 
 pub use error::{Error, Result};
