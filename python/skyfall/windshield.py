@@ -413,6 +413,15 @@ class GlassView:
     blur_px: float = 0.0
     principal_px: tuple[float, float] | None = None
 
+    @staticmethod
+    def covering(windshield: Windshield, focal_px: float, width: int, height: int) -> float:
+        """The distance, m, at which the glass just covers a ``width`` x ``height`` frame (a
+        driver's view: the windshield fills it), at least 0.2 m."""
+        p = windshield.params
+        fore = math.sin(math.radians(max(p["glass_tilt_deg"], 1.0)))
+        d_mm = min(p["glass_width_mm"] * focal_px / width, p["glass_height_mm"] * fore * focal_px / height)
+        return max(d_mm * 1e-3, 0.2)
+
     def px_per_mm(self) -> float:
         """Image px per glass mm across the glass."""
         return self.focal_px / (self.distance_m * 1e3)
@@ -448,8 +457,10 @@ def composite(
     view: GlassView,
     *,
     refraction: Literal["offset", "snell"] = "offset",
+    blades: bool = True,
 ) -> tuple[NDArray[np.float32], dict[str, NDArray[np.float32]]]:
-    """``frame_rgb`` seen through ``windshield``'s drops as ``view`` places the glass.
+    """``frame_rgb`` seen through ``windshield``'s drops as ``view`` places the glass, with
+    the wipers' blades drawn over it (``blades``, :func:`draw_blades`).
 
     Returns
     -------
@@ -470,7 +481,47 @@ def composite(
         frame_rgb, field, focal_px=view.focal_px, slope_px=slope, refraction=refraction, blur_px=view.blur_px, principal_px=view.principal_px
     )
     height = np.maximum(field - np.float32(0.5), np.float32(0.0))
+    if blades:
+        draw_blades(rgb, windshield, view)
     return rgb, {"drop_mask": mask, "drop_height": height}
+
+
+BLADE_ALBEDO: Final = 0.04
+"""The blades' rubber and arm, relative to a white surface under the same sky."""
+
+
+def draw_blades(rgb: NDArray[np.float32], windshield: Windshield, view: GlassView) -> None:
+    """Draws the wipers' blades into ``rgb`` in place: dark (:data:`BLADE_ALBEDO`, in the
+    frame's units: 1.0 is a white surface under the open sky), anti-aliased over one pixel across their edges, sharp (not defocused)."""
+    p = windshield.params
+    s = view.px_per_mm()
+    fore = math.sin(math.radians(max(p["glass_tilt_deg"], 1.0)))
+    h, w = rgb.shape[:2]
+    for (px0, py0), angle, length, width in windshield.blades():
+        ends = np.array([[px0, py0], [px0 + length * math.cos(angle), py0 - length * math.sin(angle)]])
+        pe = view.to_px(windshield, ends)
+        lo = np.floor(pe.min(axis=0) - width * s).astype(int)
+        hi = np.ceil(pe.max(axis=0) + width * s).astype(int)
+        x0, y0 = max(lo[0], 0), max(lo[1], 0)
+        x1, y1 = min(hi[0], w), min(hi[1], h)
+        if x0 >= x1 or y0 >= y1:
+            continue
+        yy, xx = np.mgrid[y0:y1, x0:x1].astype(np.float64) + 0.5
+        # back to glass mm, then along and across the blade
+        gx = (xx - view.width / 2.0) / s + p["glass_width_mm"] / 2.0
+        gy = (yy - view.height / 2.0) / (s * fore) + p["glass_height_mm"] / 2.0
+        dx, dy = gx - px0, py0 - gy
+        c, sn = math.cos(angle), math.sin(angle)
+        along = dx * c + dy * sn
+        across = -dx * sn + dy * c
+        # one pixel of edge, measured in the blade's across direction on screen
+        px_across = s * math.hypot(sn, c * fore)
+        cover = np.clip((0.5 * width - np.abs(across)) * px_across + 0.5, 0.0, 1.0)
+        cover *= np.clip((length - along) * s + 0.5, 0.0, 1.0) * (along >= 0.0)
+        cover = cover.astype(np.float32)[..., None]
+        region = rgb[y0:y1, x0:x1]
+        region *= 1.0 - cover
+        region += cover * np.float32(BLADE_ALBEDO)
 
 
 def frame_stage(
@@ -479,13 +530,13 @@ def frame_stage(
     """The renderer's windshield stage: ``rgb`` seen through the glass of ``Weather(windshield=...)``.
 
     A preset's name is drawn by :func:`warm` at ``time_s`` and ``seed``; a :class:`Windshield`
-    is used as it stands. The glass lies 0.8 m in front of ``camera`` (a :class:`skyfall.Camera`
-    at the frame's resolution); a thin-lens camera (``f_number``) focused beyond it blurs the
+    is used as it stands. The glass lies in front of ``camera`` (a :class:`skyfall.Camera` at
+    the frame's resolution) where it just covers the frame (:meth:`GlassView.covering`); a thin-lens camera (``f_number``) focused beyond it blurs the
     drops by their blur circle (:func:`blur_circle_px`).
     """
     w = windshield if isinstance(windshield, Windshield) else warm(windshield, time_s, seed=seed)
     fx, _fy, cx, cy = camera.intrinsics()
-    distance_m = 0.8
+    distance_m = GlassView.covering(w, float(fx), int(camera.width), int(camera.height))
     blur = 0.0
     if getattr(camera, "f_number", None) is not None:
         f_mm = camera.focal_length_mm if camera.focal_length_mm is not None else fx * camera.sensor_width_mm / camera.width

@@ -58,7 +58,7 @@ const AIRFLOW_FRACTION: f64 = 0.5;
 /// Sliding speeds are capped here, m/s.
 const MAX_SPEED_M_S: f64 = 2.0;
 /// The longest internal step, s: a longer `dt` is split (the wipers move ≤ a few mm a step).
-pub const MAX_SUBSTEP_S: f64 = 1.0 / 120.0;
+pub const MAX_SUBSTEP_S: f64 = 1.0 / 60.0;
 /// Width of the arrival's diameter bins, mm.
 const BIN_MM: f64 = 0.1;
 /// The largest raindrop that arrives, mm.
@@ -899,19 +899,25 @@ impl Windshield {
         let r = self.config.particle_radius_mm;
         let m_p = self.particle_mass_kg();
         let wipers = self.config.wipers.clone();
-        // mesh -> particles: drops the blades touch or sweep over
-        for i in 0..self.state.drops.len() {
+        // mesh -> particles: drops the blades touch or sweep over (found in parallel)
+        let touched: Vec<bool> = self
+            .state
+            .drops
+            .par_iter()
+            .map(|d| {
+                d.mass_kg > 0.0 && {
+                    let a = self.base_radius_mm(d.mass_kg);
+                    wipers
+                        .iter()
+                        .any(|w| Self::swept(w, d.x_mm, d.y_mm, theta0, theta1, a))
+                }
+            })
+            .collect();
+        for (i, &hit) in touched.iter().enumerate() {
+            if !hit {
+                continue;
+            }
             let d = self.state.drops[i];
-            if d.mass_kg <= 0.0 {
-                continue;
-            }
-            let a = self.base_radius_mm(d.mass_kg);
-            if !wipers
-                .iter()
-                .any(|w| Self::swept(w, d.x_mm, d.y_mm, theta0, theta1, a))
-            {
-                continue;
-            }
             let n = ((d.mass_kg / m_p).round() as usize).clamp(1, 4096);
             let share = d.mass_kg / n as f64;
             for _ in 0..n {
@@ -963,25 +969,45 @@ impl Windshield {
         // off the glass: swept off; outside every region: back to the mesh, unless held
         let hold_a = self.config.hold_radius_mm;
         let half = (self.config.hold_cells / 2) as i64;
+        // each particle's fate against the mesh as it stands, found in parallel: 0 off the
+        // glass, 1 kept (in a region, or held), 2 back to the mesh
+        let fate: Vec<u8> = self
+            .state
+            .particles
+            .par_iter()
+            .map(|p| match self.cell_of(p.x_mm, p.y_mm) {
+                None => 0,
+                Some(c) => {
+                    if wipers
+                        .iter()
+                        .any(|w| self.in_region(w, p.x_mm, p.y_mm, theta1))
+                        || self.big_drop_near(c, half, hold_a)
+                    {
+                        1
+                    } else {
+                        2
+                    }
+                }
+            })
+            .collect();
         let particles = std::mem::take(&mut self.state.particles);
         let mut kept = Vec::with_capacity(particles.len());
-        for p in particles {
-            let Some(c) = self.cell_of(p.x_mm, p.y_mm) else {
-                self.state.swept_off_kg += p.mass_kg;
-                continue;
-            };
-            if wipers
-                .iter()
-                .any(|w| self.in_region(w, p.x_mm, p.y_mm, theta1))
-            {
-                kept.push(p);
-                continue;
+        for (p, f) in particles.into_iter().zip(fate) {
+            match f {
+                0 => self.state.swept_off_kg += p.mass_kg,
+                1 => kept.push(p),
+                _ => {
+                    // a drop made by an earlier particle of this step holds this one too
+                    let held = self
+                        .cell_of(p.x_mm, p.y_mm)
+                        .is_some_and(|c| self.big_drop_near(c, half, hold_a));
+                    if held {
+                        kept.push(p);
+                    } else {
+                        self.add_drop(p.x_mm, p.y_mm, p.mass_kg, SUB_METABALL_S, 0.0);
+                    }
+                }
             }
-            if self.big_drop_near(c, half, hold_a) {
-                kept.push(p);
-                continue;
-            }
-            self.add_drop(p.x_mm, p.y_mm, p.mass_kg, SUB_METABALL_S, 0.0);
         }
         self.state.particles = kept;
     }
