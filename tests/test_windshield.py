@@ -197,3 +197,23 @@ def test_composite_draws_the_drop_layers() -> None:
     assert 0.0 < layers["drop_mask"].mean() < 1.0
     assert ((layers["drop_height"] > 0) <= (layers["drop_mask"] > 0)).all()
     np.testing.assert_allclose(rgb, 0.3, atol=1e-6)
+
+
+def test_the_gpu_pass_draws_the_cpus_windshield() -> None:
+    # the renderer's stage on both backends, drops in focus (a pinhole camera): the GPU pass's
+    # height map and refraction against the CPU's, over the same frame
+    from skimage.metrics import structural_similarity
+
+    from skyfall import Renderer, Weather, scenes
+
+    glass = ws.Windshield(20.0, glass_width_mm=600.0, glass_height_mm=400.0, wiper_period_s=1.0, seed=4)
+    glass.step(0.6)
+    weather = Weather(rain_rate_mm_h=5.0, windshield=glass)
+    cpu = Renderer(160, 96, backend="cpu").render(scenes.street(), weather)
+    gpu = Renderer(160, 96, backend="gpu").render(scenes.street(), weather)
+    for name in ("drop_mask", "drop_height"):
+        a, b = cpu.layers[name], gpu.layers[name]
+        assert structural_similarity(a, b, data_range=max(float(a.max()), 1e-6)) >= 0.99, name
+    assert 0.02 < cpu.layers["drop_mask"].mean() < 0.9
+    ssim = structural_similarity(cpu.rgb, gpu.rgb, data_range=float(cpu.rgb.max()), channel_axis=-1)
+    assert ssim >= 0.99

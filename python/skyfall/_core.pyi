@@ -15,6 +15,7 @@ __all__ = [
     "metaball_height_map",
     "metaball_normals",
     "refract_through_drops",
+    "windshield_gpu",
     "apply_lut8",
     "encode_srgb8",
     "rain_drops",
@@ -243,3 +244,17 @@ def refract_through_drops(
     lookup_px: int,
     blur_px: float,
 ) -> tuple[NDArray[np.float32], NDArray[np.float32]]: ...
+def windshield_gpu(
+    device: GpuDevice,
+    centers_px: NDArray[np.float32],
+    radii_px: NDArray[np.float32],
+    frame: NDArray[np.float32],
+    *,
+    compress: bool,
+    refraction: str,
+    focal_px: float,
+    principal_px: tuple[float, float],
+    index: float,
+    slope_px: float,
+    lookup_px: int,
+) -> tuple[NDArray[np.float32], tuple[NDArray[np.float32], NDArray[np.float32]]]: ...

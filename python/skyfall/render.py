@@ -314,7 +314,7 @@ class Renderer:
             # The windshield: a full-frame stage after the particles, over either backend's frame.
             from skyfall import windshield as _ws
 
-            glass, drop_layers = _ws.frame_stage(rgb, weather.windshield, request["camera"], time_s=time_s, seed=seed)
+            glass, drop_layers = _ws.frame_stage(rgb, weather.windshield, request["camera"], time_s=time_s, seed=seed, device=self._device)
             rgb[...] = glass
             layers = {**layers, **drop_layers}
         return Frame(

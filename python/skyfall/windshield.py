@@ -39,6 +39,8 @@ __all__ = [
     "GlassView",
     "Windshield",
     "composite",
+    "draw_gpu",
+    "frame_stage",
     "furmidge_critical",
     "metaball_height_map",
     "normals",
@@ -420,7 +422,7 @@ class GlassView:
         p = windshield.params
         fore = math.sin(math.radians(max(p["glass_tilt_deg"], 1.0)))
         d_mm = min(p["glass_width_mm"] * focal_px / width, p["glass_height_mm"] * fore * focal_px / height)
-        return max(d_mm * 1e-3, 0.2)
+        return max(float(d_mm) * 1e-3, 0.2)
 
     def px_per_mm(self) -> float:
         """Image px per glass mm across the glass."""
@@ -458,9 +460,11 @@ def composite(
     *,
     refraction: Literal["offset", "snell"] = "offset",
     blades: bool = True,
+    device: Any = None,
 ) -> tuple[NDArray[np.float32], dict[str, NDArray[np.float32]]]:
     """``frame_rgb`` seen through ``windshield``'s drops as ``view`` places the glass, with
-    the wipers' blades drawn over it (``blades``, :func:`draw_blades`).
+    the wipers' blades drawn over it (``blades``, :func:`draw_blades`); on a GPU ``device``
+    (``Renderer(backend="gpu")``'s) the drops in focus are drawn by the GPU pass.
 
     Returns
     -------
@@ -473,13 +477,18 @@ def composite(
     centres = view.to_px(windshield, centres_mm) if len(centres_mm) else np.zeros((0, 2), np.float32)
     radii = (radii_mm * s).astype(np.float32)
     keep = radii > 0.05
-    field = metaball_height_map(centres[keep], radii[keep], (view.height, view.width))
     # a cap of the mean contact angle: edge slope tan(theta) for a drop of the typical 1.5 mm
     theta = math.radians(0.5 * (windshield.params["advancing_deg"] + windshield.params["receding_deg"]))
     slope = 1.5 * s * math.tan(min(theta, math.radians(80.0)))
-    rgb, mask = refract(
-        frame_rgb, field, focal_px=view.focal_px, slope_px=slope, refraction=refraction, blur_px=view.blur_px, principal_px=view.principal_px
-    )
+    if device is not None and view.blur_px == 0.0:
+        field, rgb, mask = draw_gpu(
+            device, centres[keep], radii[keep], frame_rgb, focal_px=view.focal_px, slope_px=slope, refraction=refraction, principal_px=view.principal_px
+        )
+    else:
+        field = metaball_height_map(centres[keep], radii[keep], (view.height, view.width))
+        rgb, mask = refract(
+            frame_rgb, field, focal_px=view.focal_px, slope_px=slope, refraction=refraction, blur_px=view.blur_px, principal_px=view.principal_px
+        )
     height = np.maximum(field - np.float32(0.5), np.float32(0.0))
     if blades:
         draw_blades(rgb, windshield, view)
@@ -524,15 +533,53 @@ def draw_blades(rgb: NDArray[np.float32], windshield: Windshield, view: GlassVie
         region += cover * np.float32(BLADE_ALBEDO)
 
 
+def draw_gpu(
+    device: Any,
+    centers_px: Any,
+    radii_px: Any,
+    frame: NDArray[np.float32],
+    *,
+    focal_px: float,
+    slope_px: float,
+    refraction: Literal["offset", "snell"] = "offset",
+    principal_px: tuple[float, float] | None = None,
+    index: float = WATER_INDEX,
+    lookup_px: int = 64,
+    compress: bool = True,
+) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float32]]:
+    """:func:`metaball_height_map` and :func:`refract` (in focus) in one GPU pass on
+    ``device`` (a GPU :class:`skyfall.Renderer`'s device): (field, rgb, coverage), the CPU's
+    within f32 rounding (``rust/skyfall-gpu/tests/windshield_gpu.rs``)."""
+    frame = np.ascontiguousarray(frame, np.float32)
+    h, w = frame.shape[:2]
+    pp = (w / 2.0, h / 2.0) if principal_px is None else (float(principal_px[0]), float(principal_px[1]))
+    field, (rgb, mask) = _core.windshield_gpu(
+        device,
+        np.ascontiguousarray(np.asarray(centers_px, np.float32).reshape(-1, 2)),
+        np.ascontiguousarray(np.asarray(radii_px, np.float32).reshape(-1)),
+        frame,
+        compress=bool(compress),
+        refraction=str(refraction),
+        focal_px=float(focal_px),
+        principal_px=pp,
+        index=float(index),
+        slope_px=float(slope_px),
+        lookup_px=int(lookup_px),
+    )
+    return field, rgb, mask
+
+
 def frame_stage(
-    rgb: NDArray[np.float32], windshield: Windshield | str, camera: Any, *, time_s: float, seed: int
+    rgb: NDArray[np.float32], windshield: Windshield | str, camera: Any, *, time_s: float, seed: int, device: Any = None
 ) -> tuple[NDArray[np.float32], dict[str, NDArray[np.float32]]]:
     """The renderer's windshield stage: ``rgb`` seen through the glass of ``Weather(windshield=...)``.
 
     A preset's name is drawn by :func:`warm` at ``time_s`` and ``seed``; a :class:`Windshield`
     is used as it stands. The glass lies in front of ``camera`` (a :class:`skyfall.Camera` at
     the frame's resolution) where it just covers the frame (:meth:`GlassView.covering`); a thin-lens camera (``f_number``) focused beyond it blurs the
-    drops by their blur circle (:func:`blur_circle_px`).
+    drops by their blur circle (:func:`blur_circle_px`). On a GPU renderer's ``device`` the
+    height map and the refraction run in the GPU pass (:func:`draw_gpu`) when the drops are in
+    focus; defocused drops, and the blades, are drawn on the CPU.
     """
     w = windshield if isinstance(windshield, Windshield) else warm(windshield, time_s, seed=seed)
     fx, _fy, cx, cy = camera.intrinsics()
@@ -542,4 +589,4 @@ def frame_stage(
         f_mm = camera.focal_length_mm if camera.focal_length_mm is not None else fx * camera.sensor_width_mm / camera.width
         blur = min(blur_circle_px(f_mm, camera.f_number, camera.focus_distance_m, camera.sensor_width_mm, camera.width, distance_m), 1024.0)
     view = GlassView(focal_px=float(fx), width=int(camera.width), height=int(camera.height), distance_m=distance_m, blur_px=blur, principal_px=(float(cx), float(cy)))
-    return composite(rgb, w, view)
+    return composite(rgb, w, view, device=device)

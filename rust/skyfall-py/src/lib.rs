@@ -46,7 +46,8 @@ mod _core {
     use super::weather::weather_optics;
     #[pymodule_export]
     use super::windshield::{
-        Windshield, furmidge_critical, metaball_height_map, metaball_normals, refract_through_drops,
+        Windshield, furmidge_critical, metaball_height_map, metaball_normals,
+        refract_through_drops, windshield_gpu,
     };
 
     use pyo3::prelude::*;

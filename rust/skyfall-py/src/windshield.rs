@@ -379,3 +379,64 @@ pub fn refract_through_drops<'py>(
     }
     Ok((rgb, mask))
 }
+
+/// The GPU pass on `device`: (field (H, W), rgb (H, W, 3), coverage (H, W)) of the metaballs
+/// over `frame`, in focus (`blur_px` is the CPU's).
+#[pyfunction]
+#[pyo3(signature = (device, centers_px, radii_px, frame, *, compress, refraction, focal_px, principal_px, index, slope_px, lookup_px))]
+#[allow(clippy::too_many_arguments)]
+pub fn windshield_gpu<'py>(
+    py: Python<'py>,
+    device: Bound<'py, crate::render::GpuDevice>,
+    centers_px: PyReadonlyArray2<'py, f32>,
+    radii_px: PyReadonlyArray1<'py, f32>,
+    frame: PyReadonlyArray3<'py, f32>,
+    compress: bool,
+    refraction: &str,
+    focal_px: f64,
+    principal_px: (f64, f64),
+    index: f64,
+    slope_px: f64,
+    lookup_px: usize,
+) -> PyResult<(Bound<'py, PyArray2<f32>>, Refracted<'py>)> {
+    let c = centers_px.as_array();
+    let shape = frame.shape().to_vec();
+    if c.ncols() != 2 || shape[2] != 3 {
+        return Err(invalid(
+            "centers_px",
+            None,
+            format!(
+                "centers_px must be (N, 2) and frame (H, W, 3), got {:?} and {:?}",
+                c.shape(),
+                shape
+            ),
+        ));
+    }
+    let centres: Vec<[f32; 2]> = c.rows().into_iter().map(|r| [r[0], r[1]]).collect();
+    let radii = radii_px.as_array().to_vec();
+    let (h, w) = (shape[0], shape[1]);
+    let r = Refraction {
+        mode: RefractMode::parse(refraction).map_err(CoreError)?,
+        focal_px,
+        principal_px: [principal_px.0, principal_px.1],
+        index,
+        slope_px,
+        lookup_px,
+        blur_px: 0.0,
+    };
+    let src = frame.as_slice()?;
+    let gpu = &device.get().inner;
+    let out = py
+        .detach(|| {
+            let pass = skyfall_gpu::windshield::WindshieldPass::new(&gpu.ctx)?;
+            pass.draw(&gpu.ctx, &centres, &radii, w, h, compress, src, &r)
+        })
+        .map_err(crate::errors::gpu_error)?;
+    Ok((
+        from_slice::<f32, Ix2>(py, &[h, w], &out.field)?,
+        (
+            from_slice::<f32, Ix3>(py, &[h, w, 3], &out.rgb)?,
+            from_slice::<f32, Ix2>(py, &[h, w], &out.mask)?,
+        ),
+    ))
+}

@@ -348,7 +348,7 @@ fn mirror(x: f64, n: usize) -> f64 {
 
 /// A box-averaged copy of `frame` (H·W·3) whose short side is `short_px` (or the frame
 /// itself where it is already that small, or `short_px` is 0): (values, width, height, scale).
-fn lookup_copy(
+pub fn lookup_copy(
     frame: &[f32],
     width: usize,
     height: usize,
