@@ -380,7 +380,7 @@ class Renderer:
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
         # A windshield refracts the whole frame: its frames take the float path, then encode.
-        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None and weather.windshield is None:
+        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None and getattr(weather, "windshield", None) is None:
             request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
             _core.render_photo8(request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out)
             return out
