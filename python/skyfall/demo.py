@@ -239,7 +239,7 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     still = windshield_still(renderer)
     dt = time.perf_counter() - t0
-    print(f"windshield ({WINDSHIELD_PRESET}), the wipers mid-sweep: 1280x720 in {dt * 1e3:.1f} ms (the glass warmed up and cached)")
+    print(f"windshield ({WINDSHIELD_PRESET}), the wipers mid-sweep: 1280x720 in {dt * 1e3:.1f} ms (with the glass's warm-up, then cached for the clip)")
     still.save(out / "windshield.png")
     windshield_files = ["windshield.png"]
     try:
