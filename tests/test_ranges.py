@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from skyfall import Camera, PhotoScene, PointLight, Renderer, SpotLight, Weather, _core, clouds, physics, rain, scenes, sky
+from skyfall import windshield as ws
 
 RANGES = _core.RANGES
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -138,6 +139,20 @@ DOCUMENTED: list[tuple[Any, str]] = [
     (clouds.Cloud, "asymmetry_g"),
     (clouds.harris_illumination, "sun_radiance"),
     (clouds.attenuation_volume, "resolution"),
+    (ws.Windshield, "rain_rate_mm_h"),
+    (ws.Windshield, "glass_width_mm"),
+    (ws.Windshield, "glass_height_mm"),
+    (ws.Windshield, "glass_tilt_deg"),
+    (ws.Windshield, "car_speed_m_s"),
+    (ws.Windshield, "wipers"),
+    (ws.Windshield, "wiper_period_s"),
+    (ws.Windshield, "wiper_angles_deg"),
+    (ws.Windshield, "advancing_deg"),
+    (ws.Windshield, "receding_deg"),
+    (ws.Windshield, "cell_mm"),
+    (ws.Windshield, "particle_radius_mm"),
+    (ws.Windshield, "seed"),
+    (ws.Windshield.step, "dt_s"),
 ]
 
 
@@ -201,7 +216,7 @@ _street = scenes.street()
 _photo = np.full((6, 8, 3), 128, np.uint8)
 _one_cloud = clouds.Cloud([[0.0, 0.0, 0.0]], [1.0], [1.0], [1.0])
 
-INTEGERS = {"width", "height", "seed", "samples", "ambient_samples", "sky", "size_px", "n_particles", "resolution"}
+INTEGERS = {"width", "height", "seed", "samples", "ambient_samples", "sky", "size_px", "n_particles", "resolution", "wipers"}
 
 PUBLIC: dict[str, Callable[[Any], object]] = {
     "rain_rate_mm_h": lambda v: Weather(rain_rate_mm_h=v),
@@ -265,6 +280,18 @@ PUBLIC: dict[str, Callable[[Any], object]] = {
     "asymmetry_g": lambda v: clouds.Cloud([[0.0, 0.0, 0.0]], [1.0], [1.0], [1.0], v),
     "sun_radiance": lambda v: clouds.harris_illumination(_one_cloud, [0.0, 1.0, 0.0], sun_radiance=v),
     "resolution": lambda v: clouds.attenuation_volume(_one_cloud, [0.0, 1.0, 0.0], resolution=v),
+    "glass_width_mm": lambda v: ws.Windshield(glass_width_mm=v),
+    "glass_height_mm": lambda v: ws.Windshield(glass_height_mm=v),
+    "glass_tilt_deg": lambda v: ws.Windshield(glass_tilt_deg=v),
+    "car_speed_m_s": lambda v: ws.Windshield(car_speed_m_s=v),
+    "cell_mm": lambda v: ws.Windshield(cell_mm=v),
+    "advancing_deg": lambda v: ws.Windshield(advancing_deg=v),
+    "receding_deg": lambda v: ws.Windshield(receding_deg=v),
+    "wipers": lambda v: ws.Windshield(wipers=v),
+    "wiper_period_s": lambda v: ws.Windshield(wiper_period_s=v),
+    "wiper_angles_deg": lambda v: ws.Windshield(wiper_angles_deg=(v, v)),
+    "particle_radius_mm": lambda v: ws.Windshield(particle_radius_mm=v),
+    "dt_s": lambda v: ws.Windshield(glass_width_mm=20.0, glass_height_mm=20.0).step(v),
 }
 
 

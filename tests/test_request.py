@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import skyfall
-from skyfall import PhotoScene, Renderer, Weather, _core, io, scenes
+from skyfall import PhotoScene, Renderer, Weather, _core, io, scenes, windshield
 
 
 @pytest.fixture
@@ -93,7 +93,8 @@ def test_the_haze_model_is_the_cores() -> None:
 
 def test_layers_are_the_cores() -> None:
     r = Renderer(16, 12, backend="cpu")
-    f = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, visibility_m=500.0))
+    glass = windshield.Windshield(5.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
+    f = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, visibility_m=500.0, windshield=glass))
     assert list(f.layers) == list(_core.LAYERS)
     assert list(r.render(scenes.street(), Weather(visibility_m=500.0)).layers) == ["transmittance"]
     assert r.render(scenes.street(), Weather()).layers == {}

@@ -17,6 +17,7 @@ import pytest
 from PIL import Image
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, _core, display, io, scenes, testing, widgets
+from skyfall.windshield import Windshield
 
 W, H = 48, 27
 
@@ -41,7 +42,9 @@ def test_every_layer_has_a_neutral_value_declared_with_it():
 
 
 def test_drawn_layers_are_the_frames_own_arrays(renderer):
-    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, visibility_m=300.0))
+    glass = Windshield(20.0, glass_width_mm=200.0, glass_height_mm=150.0, wipers=0)
+    glass.step(0.5)
+    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, visibility_m=300.0, windshield=glass))
     assert set(frame.layers) == set(_core.LAYERS)
     for name in _core.LAYERS:
         assert frame.layer(name) is frame.layers[name]
@@ -55,7 +58,9 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
     # the passes' own output where they drew nothing: where no streak lies (alpha 0, depth
     # inf; light rain close by, so that some pixels have none) and in next to no haze
     # (visibility 1e12 m and no rain: transmittance within 1e-6 of 1, the sky's path included)
-    rain = renderer.render(scenes.street(), Weather(rain_rate_mm_h=0.5, rain_near_m=1.0), seed=3)
+    # (and a dry windshield: its layers drawn, with no drop on them)
+    dry = Windshield(0.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
+    rain = renderer.render(scenes.street(), Weather(rain_rate_mm_h=0.5, rain_near_m=1.0, windshield=dry), seed=3)
     haze = renderer.render(scenes.street(), Weather(visibility_m=1e12))
     empty = rain.layers["rain_alpha"] == 0.0
     assert empty.any() and (~empty).any()

@@ -10,6 +10,12 @@ from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.weather import Weather
 
 __all__ = [
+    "Windshield",
+    "furmidge_critical",
+    "metaball_height_map",
+    "metaball_normals",
+    "refract_through_drops",
+    "windshield_gpu",
     "apply_lut8",
     "encode_srgb8",
     "rain_drops",
@@ -222,3 +228,64 @@ def sample_attenuation(
     gamma: NDArray[np.float32], world_from_volume: NDArray[np.float64], points_m: NDArray[np.float64]
 ) -> NDArray[np.float32]: ...
 def check_sun_direction(sun_direction: tuple[float, float, float]) -> list[float]: ...
+@final
+class Windshield:
+    def __new__(
+        cls,
+        *,
+        glass_width_mm: float,
+        glass_height_mm: float,
+        glass_tilt_deg: float,
+        car_speed_m_s: float,
+        rain_rate_mm_h: float,
+        wipers: int,
+        wiper_period_s: float,
+        wiper_angles_deg: tuple[float, float],
+        advancing_deg: float,
+        receding_deg: float,
+        cell_mm: float,
+        particle_radius_mm: float,
+        seed: int,
+        state: dict[str, object] | None = None,
+    ) -> Windshield: ...
+    def step(self, dt_s: float) -> None: ...
+    def drops(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.uint8]]: ...
+    def metaballs(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+    def blades(self) -> list[tuple[tuple[float, float], float, float, float]]: ...
+    def water_kg(self) -> tuple[float, float, float, float]: ...
+    @property
+    def t_s(self) -> float: ...
+    def arrival_kg_per_s(self) -> float: ...
+    def state(self) -> dict[str, object]: ...
+
+def furmidge_critical(advancing_deg: float, receding_deg: float, glass_tilt_deg: float) -> tuple[float, float]: ...
+def metaball_height_map(
+    centers_px: NDArray[np.float32], radii_px: NDArray[np.float32], width: int, height: int, compress: bool
+) -> NDArray[np.float32]: ...
+def metaball_normals(height_map: NDArray[np.float32], slope_px: float) -> NDArray[np.float32]: ...
+def refract_through_drops(
+    frame: NDArray[np.float32],
+    height_map: NDArray[np.float32],
+    *,
+    refraction: str,
+    focal_px: float,
+    principal_px: tuple[float, float],
+    index: float,
+    slope_px: float,
+    lookup_px: int,
+    blur_px: float,
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]: ...
+def windshield_gpu(
+    device: GpuDevice,
+    centers_px: NDArray[np.float32],
+    radii_px: NDArray[np.float32],
+    frame: NDArray[np.float32],
+    *,
+    compress: bool,
+    refraction: str,
+    focal_px: float,
+    principal_px: tuple[float, float],
+    index: float,
+    slope_px: float,
+    lookup_px: int,
+) -> tuple[NDArray[np.float32], tuple[NDArray[np.float32], NDArray[np.float32]]]: ...

@@ -310,6 +310,13 @@ class Renderer:
         # One core call: the core derives the sky, the haze and its airlight, the rain and its
         # light from the request, and names the layers it drew (skyfall._core.LAYERS).
         rgb, depth, layers, stats = _core.render_frame(request, device=self._device, out=arrays)
+        if weather.windshield is not None:
+            # The windshield: a full-frame stage after the particles, over either backend's frame.
+            from skyfall import windshield as _ws
+
+            glass, drop_layers = _ws.frame_stage(rgb, weather.windshield, request["camera"], time_s=time_s, seed=seed, device=self._device)
+            rgb[...] = glass
+            layers = {**layers, **drop_layers}
         return Frame(
             rgb=rgb,
             depth_m=depth,
@@ -340,8 +347,8 @@ class Renderer:
         within 1 code of it (nearly all equal). For an 8-bit :class:`PhotoScene` on the CPU
         backend the haze and the rain are fused into one pass over bands of rows that decodes,
         hazes, composites and encodes each pixel once, with no frame-sized float buffers: the
-        fast way to put rain on a dataset of photos. Other scenes and the GPU backend render
-        the float frame and encode it.
+        fast way to put rain on a dataset of photos. Other scenes, the GPU backend and weather
+        with a windshield render the float frame and encode it.
 
         Parameters
         ----------
@@ -372,7 +379,8 @@ class Renderer:
         self._check_srgb8_outputs(scene, out, rain_alpha_out)
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
-        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
+        # A windshield refracts the whole frame: its frames take the float path, then encode.
+        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None and getattr(weather, "windshield", None) is None:
             request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
             _core.render_photo8(request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out)
             return out

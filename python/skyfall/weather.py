@@ -8,6 +8,7 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
+from typing import Any
 
 from skyfall import _core
 from skyfall._validate import all_in_range, choice, flag, float_array, in_range, inside
@@ -73,6 +74,12 @@ class Weather:
         against (and the drops :func:`skyfall.rain.drops` lists). Billboards turn to face each
         camera, so two views of one seed share the voxels' streaks only approximately; stereo
         ground truth that must match drop for drop wants ``"drops"``.
+    windshield : skyfall.windshield.Windshield or str, optional
+        Look through a windshield in the rain (:mod:`skyfall.windshield`): a ``Windshield``
+        as it stands (the caller steps it), or a preset's name (:data:`skyfall.windshield.PRESETS`,
+        drawn by :func:`skyfall.windshield.warm` at the frame's time and seed). Its drops
+        refract the frame as the last stage and draw the layers ``drop_mask`` and
+        ``drop_height``. None (default): no glass, the frame's bits unchanged.
     """
 
     rain_rate_mm_h: float = 0.0
@@ -90,6 +97,7 @@ class Weather:
     sun_elevation_deg: float | None = None
     sun_azimuth_deg: float | None = None
     cloud_base_m: float | None = None
+    windshield: Any = None
 
     def __post_init__(self) -> None:
         r = in_range("rain_rate_mm_h", self.rain_rate_mm_h)
@@ -129,6 +137,14 @@ class Weather:
         if (self.sun_elevation_deg is None) != (self.sun_azimuth_deg is None):
             raise ValueError("give both sun_elevation_deg and sun_azimuth_deg, or neither")
         self.sky_model()  # the sky's own checks (a sun for the types that need one)
+        if self.windshield is not None:
+            from skyfall import windshield as _ws
+
+            if isinstance(self.windshield, str):
+                if self.windshield not in _ws.PRESETS:
+                    raise ValueError(f"windshield = {self.windshield!r} is not a preset: use one of {', '.join(map(repr, _ws.PRESETS))}")
+            elif not isinstance(self.windshield, _ws.Windshield):
+                raise TypeError(f"windshield must be a skyfall.windshield.Windshield or a preset's name, got {type(self.windshield).__name__}")
 
     @cached_property
     def _optics(self) -> tuple[float, float, float, float, float]:

@@ -14,6 +14,7 @@
 //! - [`particles`]: the particle toolkit shared by rain and (next) snow.
 //! - [`cloud`]: particle clouds, Harris' illumination and the attenuation volume (Shimada,
 //!   Shinya, Shiraishi & Harada).
+//! - [`windshield`]: drops on a windshield, wipers, and their refraction (Gotou, Tanaka & Sagawa).
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
@@ -32,5 +33,6 @@ mod seed;
 pub mod sky;
 pub mod snow;
 pub mod weather;
+pub mod windshield;
 
 pub use error::{Error, Result};

@@ -418,6 +418,79 @@ pub const SIZE_PX: Limit = Limit::new(
     "rain texture size, pixels per side (per metre of the cube)",
 );
 
+// The windshield (skyfall.windshield).
+/// Glass width.
+pub const GLASS_WIDTH_MM: Limit = Limit::new(
+    "glass_width_mm",
+    Range::closed(10.0, 4000.0, "mm"),
+    "windshield glass width",
+);
+/// Glass height along its slope.
+pub const GLASS_HEIGHT_MM: Limit = Limit::new(
+    "glass_height_mm",
+    Range::closed(10.0, 4000.0, "mm"),
+    "windshield glass height along its slope",
+);
+/// Glass inclination from the horizontal.
+pub const GLASS_TILT_DEG: Limit = Limit::new(
+    "glass_tilt_deg",
+    Range::closed(0.0, 90.0, "deg"),
+    "windshield inclination from the horizontal (90: upright)",
+);
+/// The car's speed.
+pub const CAR_SPEED_M_S: Limit = Limit::new(
+    "car_speed_m_s",
+    Range::closed(0.0, 80.0, "m/s"),
+    "the car's speed: airflow up the glass, rain swept into it",
+);
+/// The windshield's grid cell.
+pub const CELL_MM: Limit = Limit::new(
+    "cell_mm",
+    Range::closed(0.5, 10.0, "mm"),
+    "side of the windshield's grid cells (the mesh model)",
+);
+/// Advancing contact angle of water on the glass.
+pub const ADVANCING_DEG: Limit = Limit::new(
+    "advancing_deg",
+    Range::open(0.0, 180.0, "deg"),
+    "advancing contact angle of water on the glass",
+);
+/// Receding contact angle of water on the glass.
+pub const RECEDING_DEG: Limit = Limit::new(
+    "receding_deg",
+    Range::open(0.0, 180.0, "deg"),
+    "receding contact angle of water on the glass (below the advancing one)",
+);
+/// Number of wipers.
+pub const WIPERS: Limit = Limit::new(
+    "wipers",
+    Range::closed(0.0, 2.0, ""),
+    "number of wipers (0, 1 or 2)",
+);
+/// Wiper period.
+pub const WIPER_PERIOD_S: Limit = Limit::new(
+    "wiper_period_s",
+    Range::closed(0.2, 60.0, "s"),
+    "the wipers' period, there and back",
+);
+/// Wiper angles.
+pub const WIPER_ANGLES_DEG: Limit = Limit::new(
+    "wiper_angles_deg",
+    Range::closed(-30.0, 210.0, "deg"),
+    "the wipers' sweep, (from, to) from the glass's horizontal towards its top",
+);
+/// The particle model's particle radius.
+pub const PARTICLE_RADIUS_MM: Limit = Limit::new(
+    "particle_radius_mm",
+    Range::closed(0.2, 5.0, "mm"),
+    "base radius of the particle model's equal particles (near the wipers)",
+);
+/// A windshield's time step.
+pub const DT_S: Limit = Limit::new(
+    "dt_s",
+    Range::open_closed(0.0, 60.0, "s"),
+    "time step of the windshield simulation",
+);
 /// Every limit, for export and lookup by name.
 pub const ALL: &[Limit] = &[
     RAIN_RATE_MM_H,
@@ -481,6 +554,18 @@ pub const ALL: &[Limit] = &[
     ASYMMETRY_G,
     SUN_RADIANCE,
     RESOLUTION,
+    GLASS_WIDTH_MM,
+    GLASS_HEIGHT_MM,
+    GLASS_TILT_DEG,
+    CAR_SPEED_M_S,
+    CELL_MM,
+    ADVANCING_DEG,
+    RECEDING_DEG,
+    WIPERS,
+    WIPER_PERIOD_S,
+    WIPER_ANGLES_DEG,
+    PARTICLE_RADIUS_MM,
+    DT_S,
 ];
 
 /// The limit of the parameter `name`.

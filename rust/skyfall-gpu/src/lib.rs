@@ -6,7 +6,8 @@
 //!   [`pass::FrameEncoder`] a frame records into; [`uniforms`]: the passes' uniform blocks as
 //!   Pod structs; [`pool`]: buffers pooled across frames; [`readback`]: one mapped copy back.
 //! - One pass per file, its WGSL in `shaders/`: [`scene_raycast`], [`haze`], [`glow`],
-//!   [`rain`].
+//!   [`rain`]; [`windshield`] (the drops on the glass: drawn on request, not yet a stage of
+//!   [`frame`]).
 //! - [`frame`]: the passes in physical order on one encoder, one submission, one readback.
 //!
 //! Passes read and write storage buffers (one f32 per channel), so readback is a plain
@@ -23,5 +24,6 @@ pub mod rain;
 pub mod readback;
 pub mod scene_raycast;
 pub mod uniforms;
+pub mod windshield;
 
 pub use context::{AdapterChoice, GpuContext, GpuError};

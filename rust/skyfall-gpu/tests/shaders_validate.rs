@@ -35,3 +35,15 @@ fn rain_wgsl_is_valid() {
 fn glow_wgsl_is_valid() {
     validate("glow", include_str!("../src/shaders/glow.wgsl"));
 }
+
+#[test]
+fn windshield_wgsl_is_valid() {
+    validate(
+        "windshield_field",
+        include_str!("../src/shaders/windshield_field.wgsl"),
+    );
+    validate(
+        "windshield_refract",
+        include_str!("../src/shaders/windshield_refract.wgsl"),
+    );
+}

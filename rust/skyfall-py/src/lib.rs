@@ -16,6 +16,7 @@ mod render;
 mod request;
 mod sky;
 mod weather;
+mod windshield;
 
 use pyo3::prelude::*;
 
@@ -49,6 +50,11 @@ mod _core {
     use super::sky::{AmbientLightMap, SkyModel, cloud_base_m};
     #[pymodule_export]
     use super::weather::weather_optics;
+    #[pymodule_export]
+    use super::windshield::{
+        Windshield, furmidge_critical, metaball_height_map, metaball_normals,
+        refract_through_drops, windshield_gpu,
+    };
 
     use pyo3::prelude::*;
 

@@ -181,7 +181,7 @@ pub fn render_photo8<'py>(
 /// A wgpu device with every pass compiled, reused across frames.
 #[pyclass(frozen, module = "skyfall._core")]
 pub struct GpuDevice {
-    inner: GpuRenderer,
+    pub(crate) inner: GpuRenderer,
 }
 
 #[pymethods]

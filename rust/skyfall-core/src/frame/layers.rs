@@ -11,15 +11,25 @@ pub enum Layer {
     RainAlpha,
     /// The depth of the nearest visible streak, m; inf where none (the particle pass, rain).
     RainDepth,
+    /// The windshield's drops' coverage, 0–1 (the windshield stage).
+    DropMask,
+    /// The windshield's metaball field above its 0.5 threshold, 0 off the drops (the
+    /// windshield stage).
+    DropHeight,
 }
 
 /// How many layers there are.
-pub const LAYER_COUNT: usize = 3;
+pub const LAYER_COUNT: usize = 5;
 
 impl Layer {
     /// Every layer, in the order frames list them.
-    pub const ALL: [Layer; LAYER_COUNT] =
-        [Layer::Transmittance, Layer::RainAlpha, Layer::RainDepth];
+    pub const ALL: [Layer; LAYER_COUNT] = [
+        Layer::Transmittance,
+        Layer::RainAlpha,
+        Layer::RainDepth,
+        Layer::DropMask,
+        Layer::DropHeight,
+    ];
 
     /// The layer's name, as users see it (`frame.layers[name]`, EXR channel names).
     pub const fn name(self) -> &'static str {
@@ -27,6 +37,8 @@ impl Layer {
             Layer::Transmittance => "transmittance",
             Layer::RainAlpha => "rain_alpha",
             Layer::RainDepth => "rain_depth_m",
+            Layer::DropMask => "drop_mask",
+            Layer::DropHeight => "drop_height",
         }
     }
 
@@ -36,6 +48,10 @@ impl Layer {
             Layer::Transmittance => "haze transmittance e^(-sigma d) along the pixel's view ray",
             Layer::RainAlpha => "rain streak coverage 1 - prod(1 - a_i)",
             Layer::RainDepth => "depth of the nearest visible rain streak, m (inf: none)",
+            Layer::DropMask => "coverage of the windshield's drops, 0-1",
+            Layer::DropHeight => {
+                "the windshield's metaball field above its 0.5 threshold (0: no drop)"
+            }
         }
     }
 
@@ -46,14 +62,18 @@ impl Layer {
             Layer::Transmittance => 1.0,
             Layer::RainAlpha => 0.0,
             Layer::RainDepth => f32::INFINITY,
+            Layer::DropMask | Layer::DropHeight => 0.0,
         }
     }
 
-    /// Whether a frame with these passes draws the layer.
+    /// Whether a frame with these passes draws the layer. The windshield's layers are drawn by
+    /// its stage after the frame (`skyfall.windshield.composite`, over either backend's frame),
+    /// never by these passes.
     pub const fn drawn(self, haze: bool, rain: bool) -> bool {
         match self {
             Layer::Transmittance => haze,
             Layer::RainAlpha | Layer::RainDepth => rain,
+            Layer::DropMask | Layer::DropHeight => false,
         }
     }
 

@@ -1,0 +1,10 @@
+//! Water drops on a windshield (Gotou, Tanaka & Sagawa, *Real-Time Rendering of Flow of Water
+//! Drops on a Windshield*, Meijo University): the drops' simulation on the glass ([`sim`]: the
+//! mesh model away from the wipers, the particle model near them, the rain's arrival), when a
+//! drop slides ([`furmidge`]), and their drawing as refracting 2D metaballs ([`render`]).
+
+pub mod furmidge;
+pub mod render;
+pub mod sim;
+
+pub use sim::{DropKind, Metaball, Windshield, WindshieldConfig, WindshieldState, Wiper};

@@ -1,0 +1,249 @@
+//! The windshield pass: the metaball field, then the frame refracted through the drops
+//! (`shaders/windshield_field.wgsl`, `shaders/windshield_refract.wgsl`), against the CPU's
+//! `skyfall_core::windshield::render` (tested in `tests/windshield_gpu.rs`). The metaballs are
+//! binned into 16 × 16 tiles on the CPU, in their index order (the order the CPU sums them in);
+//! the lookup copy is the CPU's. In focus only: the drops' defocus blur is the CPU's.
+
+use crate::context::{GpuContext, GpuError};
+use crate::pass::{Binding, ComputePass};
+use crate::pool::{BufferPool, Pooled};
+use crate::readback::read_f32_into;
+use skyfall_core::error::{Error, Param};
+use skyfall_core::windshield::render::{self, CUTOFF, RefractMode, Refraction};
+
+const FIELD: &str = include_str!("shaders/windshield_field.wgsl");
+const REFRACT: &str = include_str!("shaders/windshield_refract.wgsl");
+const TILE: usize = 16;
+
+/// What the pass gives back: the field (H·W), the frame through the drops (H·W·3) and the
+/// drops' coverage (H·W).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindshieldOut {
+    /// The (compressed) metaball field.
+    pub field: Vec<f32>,
+    /// Linear RGB.
+    pub rgb: Vec<f32>,
+    /// Coverage.
+    pub mask: Vec<f32>,
+}
+
+/// The two compiled pipelines.
+#[derive(Debug)]
+pub struct WindshieldPass {
+    field: ComputePass,
+    refract: ComputePass,
+    pool: BufferPool,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct FieldParams {
+    dims: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RefractParams {
+    dims: [u32; 4],
+    opts: [u32; 4],
+    lens: [f32; 4],
+    more: [f32; 4],
+}
+
+const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+impl WindshieldPass {
+    /// Compiles the pass.
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        use Binding::*;
+        ctx.scoped(|| {
+            Ok(WindshieldPass {
+                field: ComputePass::new(
+                    ctx,
+                    "windshield_field",
+                    FIELD,
+                    &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
+                ),
+                refract: ComputePass::new(
+                    ctx,
+                    "windshield_refract",
+                    REFRACT,
+                    &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite],
+                ),
+                pool: BufferPool::default(),
+            })
+        })
+    }
+
+    fn upload<T: bytemuck::Pod>(
+        &self,
+        ctx: &GpuContext,
+        label: &str,
+        values: &[T],
+        usage: wgpu::BufferUsages,
+    ) -> Pooled {
+        let bytes: &[u8] = bytemuck::cast_slice(values);
+        let b = self
+            .pool
+            .take(ctx, label, (bytes.len() as u64).max(16), usage);
+        if !bytes.is_empty() {
+            ctx.queue.write_buffer(&b.buffer, 0, bytes);
+        }
+        b
+    }
+
+    /// The field of the metaballs (`centres_px`, `radii_px`) over a `width` × `height` frame,
+    /// and `frame` (H·W·3) refracted through it by `r` (its `blur_px` must be 0).
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw(
+        &self,
+        ctx: &GpuContext,
+        centres_px: &[[f32; 2]],
+        radii_px: &[f32],
+        width: usize,
+        height: usize,
+        compress: bool,
+        frame: &[f32],
+        r: &Refraction,
+    ) -> Result<WindshieldOut, GpuError> {
+        // the CPU's checks, on an empty map (sizes, radii, the lens)
+        render::height_map(centres_px, radii_px, 1, 1, false).map_err(GpuError::Core)?;
+        skyfall_core::ranges::WIDTH
+            .check(width as f64)
+            .map_err(GpuError::Core)?;
+        skyfall_core::ranges::HEIGHT
+            .check(height as f64)
+            .map_err(GpuError::Core)?;
+        r.validate().map_err(GpuError::Core)?;
+        let n = width * height;
+        if frame.len() != n * 3 {
+            return Err(GpuError::Core(Error::Length {
+                param: Param {
+                    name: "frame",
+                    index: None,
+                },
+                len: frame.len(),
+                expected: n * 3,
+            }));
+        }
+        if r.blur_px != 0.0 {
+            return Err(GpuError::Core(Error::Unusable {
+                param: Param {
+                    name: "blur_px",
+                    index: None,
+                },
+                value: r.blur_px,
+                message: "is not drawn by the GPU pass: blur on the CPU (blur_px = 0 here)".into(),
+            }));
+        }
+        ctx.check_buffer("the windshield's frame", (n * 12) as u64)?;
+        // tiles: each metaball in every tile its 4R square reaches, in index order
+        let (tx, ty) = (width.div_ceil(TILE), height.div_ceil(TILE));
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); tx * ty];
+        let mut balls: Vec<[f32; 4]> = Vec::with_capacity(centres_px.len());
+        for (i, (c, &rad)) in centres_px.iter().zip(radii_px).enumerate() {
+            balls.push([c[0], c[1], rad, 0.0]);
+            let reach = CUTOFF * rad;
+            let (x0, x1) = (c[0] - reach, c[0] + reach);
+            let (y0, y1) = (c[1] - reach, c[1] + reach);
+            if x1 < 0.0 || y1 < 0.0 || x0 > width as f32 || y0 > height as f32 {
+                continue;
+            }
+            let t = |v: f32, n: usize| ((v.max(0.0) as usize) / TILE).min(n - 1);
+            for tj in t(y0, ty)..=t(y1, ty) {
+                for ti in t(x0, tx)..=t(x1, tx) {
+                    lists[tj * tx + ti].push(i as u32);
+                }
+            }
+        }
+        let mut offsets = Vec::with_capacity(tx * ty + 1);
+        let mut items = Vec::new();
+        offsets.push(0u32);
+        for l in &lists {
+            items.extend_from_slice(l);
+            offsets.push(items.len() as u32);
+        }
+        let (look, lw, lh, scale) = render::lookup_copy(frame, width, height, r.lookup_px);
+        let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
+        let fp = FieldParams {
+            dims: [width as u32, height as u32, tx as u32, u32::from(compress)],
+        };
+        let rp = RefractParams {
+            dims: [width as u32, height as u32, lw as u32, lh as u32],
+            opts: [
+                scale as u32,
+                match r.mode {
+                    RefractMode::Offset => 0,
+                    RefractMode::Snell => 1,
+                },
+                0,
+                0,
+            ],
+            lens: [
+                r.focal_px as f32,
+                r.principal_px[0] as f32,
+                r.principal_px[1] as f32,
+                r.index as f32,
+            ],
+            more: [r.slope_px as f32, 0.0, 0.0, 0.0],
+        };
+        let bufs = ctx.scoped(|| {
+            let fpu = self.upload(ctx, "windshield field params", &[fp], uniform);
+            let rpu = self.upload(ctx, "windshield refract params", &[rp], uniform);
+            let bb = self.upload(ctx, "metaballs", &balls, STORAGE);
+            let ob = self.upload(ctx, "tile offsets", &offsets, STORAGE);
+            let ib = self.upload(ctx, "tile items", &items, STORAGE);
+            let lb = self.upload(ctx, "lookup", &look, STORAGE);
+            let frb = self.upload(ctx, "frame behind the glass", frame, STORAGE);
+            let field = self.pool.take(ctx, "field", (n * 4) as u64, STORAGE);
+            let rgb = self.pool.take(ctx, "rgb", (n * 12) as u64, STORAGE);
+            let mask = self.pool.take(ctx, "mask", (n * 4) as u64, STORAGE);
+            let total = (n * 20) as u64;
+            let staging = self.pool.take(
+                ctx,
+                "windshield readback",
+                total,
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            );
+            let mut enc = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("windshield"),
+                });
+            let (w, h) = (width as u32, height as u32);
+            self.field
+                .dispatch(ctx, &mut enc, &[&fpu, &bb, &ob, &ib, &field], w, h);
+            self.refract
+                .dispatch(ctx, &mut enc, &[&rpu, &field, &lb, &frb, &rgb, &mask], w, h);
+            let mut at = 0;
+            for (b, bytes) in [(&field, n * 4), (&rgb, n * 12), (&mask, n * 4)] {
+                enc.copy_buffer_to_buffer(&b.buffer, 0, &staging.buffer, at, bytes as u64);
+                at += bytes as u64;
+            }
+            ctx.queue.submit([enc.finish()]);
+            Ok((
+                [fpu, rpu, bb, ob, ib, lb, frb, field, rgb, mask],
+                staging,
+                total,
+            ))
+        })?;
+        let (held, staging, total) = bufs;
+        let mut out = WindshieldOut {
+            field: vec![0.0; n],
+            rgb: vec![0.0; n * 3],
+            mask: vec![0.0; n],
+        };
+        let read = read_f32_into(
+            ctx,
+            &staging.buffer,
+            total,
+            &mut [&mut out.field[..], &mut out.rgb[..], &mut out.mask[..]],
+        );
+        self.pool
+            .give_back(held.into_iter().chain(std::iter::once(staging)));
+        read?;
+        Ok(out)
+    }
+}
