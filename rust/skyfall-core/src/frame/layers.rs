@@ -11,15 +11,21 @@ pub enum Layer {
     RainAlpha,
     /// The depth of the nearest visible streak, m; inf where none (the particle pass, rain).
     RainDepth,
+    /// The flakes' coverage 1 − ∏(1 − aᵢ) (the particle pass, snow).
+    SnowAlpha,
 }
 
 /// How many layers there are.
-pub const LAYER_COUNT: usize = 3;
+pub const LAYER_COUNT: usize = 4;
 
 impl Layer {
     /// Every layer, in the order frames list them.
-    pub const ALL: [Layer; LAYER_COUNT] =
-        [Layer::Transmittance, Layer::RainAlpha, Layer::RainDepth];
+    pub const ALL: [Layer; LAYER_COUNT] = [
+        Layer::Transmittance,
+        Layer::RainAlpha,
+        Layer::RainDepth,
+        Layer::SnowAlpha,
+    ];
 
     /// The layer's name, as users see it (`frame.layers[name]`, EXR channel names).
     pub const fn name(self) -> &'static str {
@@ -27,6 +33,7 @@ impl Layer {
             Layer::Transmittance => "transmittance",
             Layer::RainAlpha => "rain_alpha",
             Layer::RainDepth => "rain_depth_m",
+            Layer::SnowAlpha => "snow_alpha",
         }
     }
 
@@ -36,6 +43,7 @@ impl Layer {
             Layer::Transmittance => "haze transmittance e^(-sigma d) along the pixel's view ray",
             Layer::RainAlpha => "rain streak coverage 1 - prod(1 - a_i)",
             Layer::RainDepth => "depth of the nearest visible rain streak, m (inf: none)",
+            Layer::SnowAlpha => "snowflake coverage 1 - prod(1 - a_i)",
         }
     }
 
@@ -46,14 +54,16 @@ impl Layer {
             Layer::Transmittance => 1.0,
             Layer::RainAlpha => 0.0,
             Layer::RainDepth => f32::INFINITY,
+            Layer::SnowAlpha => 0.0,
         }
     }
 
     /// Whether a frame with these passes draws the layer.
-    pub const fn drawn(self, haze: bool, rain: bool) -> bool {
+    pub const fn drawn(self, haze: bool, rain: bool, snow: bool) -> bool {
         match self {
             Layer::Transmittance => haze,
             Layer::RainAlpha | Layer::RainDepth => rain,
+            Layer::SnowAlpha => snow,
         }
     }
 
@@ -102,7 +112,12 @@ mod tests {
         let mut names: Vec<_> = Layer::ALL.iter().map(|l| l.name()).collect();
         names.dedup();
         assert_eq!(names.len(), LAYER_COUNT);
-        assert!(Layer::Transmittance.drawn(true, false) && !Layer::RainAlpha.drawn(true, false));
+        assert!(
+            Layer::Transmittance.drawn(true, false, false)
+                && !Layer::RainAlpha.drawn(true, false, true)
+                && Layer::SnowAlpha.drawn(false, false, true)
+                && !Layer::SnowAlpha.drawn(true, true, false)
+        );
     }
 
     #[test]
@@ -114,5 +129,6 @@ mod tests {
             1.0 - std::iter::empty::<f32>().product::<f32>()
         );
         assert!(Layer::RainDepth.neutral().is_infinite() && Layer::RainDepth.neutral() > 0.0);
+        assert_eq!(Layer::SnowAlpha.neutral(), Layer::RainAlpha.neutral());
     }
 }
