@@ -467,3 +467,105 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
         "the hidden lamp and the spot turned away have none"
     );
 }
+
+#[test]
+fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
+    // Flakes (every sprite, near ones several pixels wide) and drops in one far-to-near list
+    // over a photo of the CPU's box frame: the same counts, rgb and each effect's layers.
+    use skyfall_core::frame::float::render_into_reporting;
+    use skyfall_core::snow::flakes::SnowRegion;
+    use skyfall_core::snow::streaks::{SNOW_ALBEDO, SnowFrame, SnowOpacity};
+    let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let (scene, cam) = street();
+    let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let light = SceneLight::new(&sky, &amb);
+    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
+    let photo = SceneRef::Photo {
+        rgb: &bg.rgb,
+        depth_m: &bg.depth_m,
+    };
+    let rain = RainRegion::new(40.0, &[1.0, 1.4, 2.0], 4.0, [2.0, 0.0, 0.0], 0.7, 11).unwrap();
+    let shading = RainShading::open_sky();
+    let rf = RainFrame {
+        region: &rain,
+        exposure_s: 1.0 / 30.0,
+        camera_velocity_m_s: Vec3::ZERO,
+        lens: None,
+        ground: true,
+        shelter: &scene.boxes,
+        shading: &shading,
+    };
+    let snow_shading = RainShading {
+        reflectance: 1.0,
+        drop_radiance: SNOW_ALBEDO,
+        ..RainShading::open_sky()
+    };
+    for opacity in [SnowOpacity::Extinction, SnowOpacity::Levels] {
+        let region = SnowRegion::new(3.0, 5.0, [2.0, 0.0, 1.0], 0.7, 11).unwrap();
+        let sf = SnowFrame {
+            region: &region,
+            exposure_s: 1.0 / 30.0,
+            camera_velocity_m_s: Vec3::ZERO,
+            lens: None,
+            ground: true,
+            shelter: &scene.boxes,
+            shading: &snow_shading,
+            opacity,
+            extinction_per_m: 0.01,
+        };
+        for rain in [None, Some(&rf)] {
+            let c = render(photo, &cam, &light, None, rain, Some(&sf)).unwrap();
+            let g = gpu
+                .render(photo, &cam, &light, None, rain, Some(&sf))
+                .unwrap();
+            assert_eq!(c.rain, g.rain);
+            assert_eq!(
+                c.layers.0.iter().filter(|l| l.is_some()).count(),
+                if rain.is_some() { 3 } else { 1 }
+            );
+            let n = cam.pixels();
+            let (mut rgb, mut d) = (vec![0.0; 3 * n], vec![0.0; n]);
+            let (mut a, mut z, mut s) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let layers: Vec<(Layer, &mut [f32])> = match rain {
+                Some(_) => vec![
+                    (Layer::RainAlpha, &mut a[..]),
+                    (Layer::RainDepth, &mut z[..]),
+                    (Layer::SnowAlpha, &mut s[..]),
+                ],
+                None => vec![(Layer::SnowAlpha, &mut s[..])],
+            };
+            let (_, stats) = render_into_reporting(
+                photo,
+                &cam,
+                &light,
+                None,
+                rain,
+                Some(&sf),
+                FrameOut::from_layers(&mut rgb, &mut d, layers),
+            )
+            .unwrap();
+            let stats = stats.unwrap();
+            assert!(stats.streaks > 300, "{stats:?}");
+            let cs = c.layer(Layer::SnowAlpha).unwrap();
+            assert_eq!(cs, &s[..]);
+            let (worst_s, _) = max_abs(cs, g.layer(Layer::SnowAlpha).unwrap());
+            // The shader's cos may put a star's arm edge on the other side of a pixel centre:
+            // a few pixels differ by an arm's step, the rest by rounding.
+            let off = differing(cs, g.layer(Layer::SnowAlpha).unwrap(), 1e-4);
+            assert!(
+                off * 200 <= n && worst_s < 0.05,
+                "{off} snow alpha values differ, worst {worst_s}"
+            );
+            assert_rgb_agrees(&c.rgb, &g.rgb);
+            if rain.is_some() {
+                let (worst_a, _) = max_abs(
+                    c.layer(Layer::RainAlpha).unwrap(),
+                    g.layer(Layer::RainAlpha).unwrap(),
+                );
+                assert!(worst_a < 1e-4, "rain alpha max abs diff {worst_a}");
+                assert!(c.layer(Layer::RainAlpha).unwrap().iter().any(|&x| x > 1e-3));
+            }
+        }
+    }
+}
