@@ -13,6 +13,7 @@ __all__ = [
     "apply_lut8",
     "encode_srgb8",
     "rain_drops",
+    "snowflakes",
     "KOSCHMIEDER",
     "AIRLIGHT_PATCH_PX",
     "AIRLIGHT_TOP_FRACTION",
@@ -187,6 +188,10 @@ def rain_diameter_bins(diameters_mm: NDArray[np.float64]) -> tuple[NDArray[np.fl
 
 def rain_drops(
     center_m: list[float], weather: Weather, *, time_s: float, seed: int, ground: bool, shelter: NDArray[np.float32] | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
+
+def snowflakes(
+    center_m: list[float], weather: Weather, *, time_s: float, seed: int, ground: bool
 ) -> tuple[NDArray[np.float64], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
 
 def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...
