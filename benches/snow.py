@@ -89,8 +89,14 @@ def main() -> None:
         snowflakes = iaa.Snowflakes(flake_size=(0.2, 0.7), speed=(0.007, 0.03))
         peers.append({"impl": "imgaug Snowflakes", "s": median_s(lambda: snowflakes(image=photo8), repeat=3)})
         imgaug_note = ""
-    except Exception as exc:  # imgaug 0.4.0 does not import with numpy 2 (np.sctypes)
-        imgaug_note = f"imgaug Snowflakes not measured: imgaug 0.4.0 (its last release) installs but does not import with numpy {np.__version__} ({type(exc).__name__}: {exc})."
+    except ModuleNotFoundError:
+        imgaug_note = (
+            f"imgaug Snowflakes not measured: imgaug 0.4.0 (its last release) installs beside numpy {np.__version__} but its "
+            "import fails (AttributeError: `np.sctypes` was removed in the NumPy 2.0 release), so requirements-bench.txt "
+            "does not pin it and the venv does not hold it."
+        )
+    except Exception as exc:  # installed by hand, and broken by numpy 2
+        imgaug_note = f"imgaug Snowflakes not measured: its import fails with numpy {np.__version__} ({type(exc).__name__}: {exc})."
     print(peers, imgaug_note, flush=True)
 
     env = {"python": platform.python_version(), "machine": platform.machine(), "cpus": os.cpu_count(), "gpu": gpu_name}

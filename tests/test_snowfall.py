@@ -214,3 +214,14 @@ def test_bad_snow_inputs_are_clear_errors():
     # a region too large for memory is refused by name, before any flake is made
     with pytest.raises(ValueError, match="snow_near_m = 50"):
         Renderer(64, 48, backend="cpu").render(scenes.street(), Weather(snow_rate_mm_h=100.0, snow_near_m=50.0))
+
+
+def test_an_8bit_clip_fills_the_snow_layer_frame_by_frame(cpu):
+    scene = photo8(2)
+    weather = Weather(snow_rate_mm_h=2.0, wind_m_s=(1.0, 0.0, 0.0))
+    alpha = np.full((H, W), -1.0, np.float32)
+    for k, img in enumerate(cpu.render_sequence_srgb8(scene, weather, n_frames=2, fps=10.0, seed=4, snow_alpha_out=alpha)):
+        want = np.full((H, W), -1.0, np.float32)
+        assert img.tobytes() == cpu.render_srgb8(scene, weather, seed=4, time_s=k / 10.0, snow_alpha_out=want).tobytes()
+        np.testing.assert_array_equal(alpha, want)
+        assert alpha.max() > 0.0

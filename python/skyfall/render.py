@@ -564,6 +564,7 @@ class Renderer:
         out: NDArray[np.uint8] | None = None,
         rain_alpha_out: NDArray[np.float32] | None = None,
         progress: bool = False,
+        snow_alpha_out: NDArray[np.float32] | None = None,
     ) -> Iterator[NDArray[np.uint8]]:
         """:meth:`render_sequence` in 8-bit sRGB: each frame is :meth:`render_srgb8` at
         ``time_s = start_s + k / fps``, byte for byte.
@@ -578,6 +579,8 @@ class Renderer:
         rain_alpha_out : ndarray of float32, shape (H, W), optional
             Filled with each frame's rain coverage as its image is yielded (overwritten by
             the next frame).
+        snow_alpha_out : ndarray of float32, shape (H, W), optional
+            The same for the snowflakes' coverage.
 
         Returns
         -------
@@ -589,14 +592,16 @@ class Renderer:
             Every argument is checked when this is called, before the first frame (see
             :meth:`render_srgb8`).
         """
-        self._check_srgb8_outputs(scene, out, rain_alpha_out)
+        self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
         weather, times, options = self._sequence_args(
             scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
         )
 
         def frames() -> Iterator[NDArray[np.uint8]]:
             for t in times:
-                yield self.render_srgb8(scene, weather, time_s=t, out=out, rain_alpha_out=rain_alpha_out, **options)
+                yield self.render_srgb8(
+                    scene, weather, time_s=t, out=out, rain_alpha_out=rain_alpha_out, snow_alpha_out=snow_alpha_out, **options
+                )
 
         return frames()
 
