@@ -83,7 +83,8 @@ pub const ARM_MIN: f32 = 0.2;
 /// A procedural sprite: the particle's shape seen across its motion, a density p(x) over
 /// x = across / half-width in [0, 1] with mean 1 (so the streak's opacity-area α·w·L is kept).
 /// A streak long against its width is its sprite averaged along the path, which is the
-/// sprite's projection onto the axis across it: that projection is what is drawn.
+/// sprite's projection onto the axis across it: that projection is what is drawn, times the
+/// same profile along the path within half a width of either end ([`Sprite::end_profile`]).
 /// `ScreenStreak::packed` carries it as one float (layer·8 + kind + θ/(π/3)); `rain.wgsl`'s
 /// `sprite_profile` mirrors [`Sprite::profile`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -149,6 +150,30 @@ impl Sprite {
             SPRITE_AGGREGATE => 1.5 * one_minus,
             _ => 1.0,
         }
+    }
+
+    /// The sprite along the path at its ends: `e` px in from the nearer end of a band
+    /// `half_w` px in half-width, the profile at 1 − e/half_w within half a width of the end
+    /// (so a dot, a path as long as the flake is wide, is the profile across times the profile
+    /// along, a soft round blob rather than a square), 1 further in. Its mean over an end's
+    /// half-width is the profile's, 1: the opacity-area is kept.
+    #[inline(always)]
+    pub fn end_profile(&self, e: f32, half_w: f32) -> f32 {
+        if e < half_w {
+            self.profile(1.0 - e / half_w)
+        } else {
+            1.0
+        }
+    }
+
+    /// [`Self::end_profile`] for four values, lane for lane the same bits.
+    #[inline(always)]
+    pub fn end_profile_x4(&self, e: Vec4, half_w: Vec4) -> Vec4 {
+        Vec4::select(
+            e.cmplt(half_w),
+            self.profile_x4(Vec4::ONE - e / half_w),
+            Vec4::ONE,
+        )
     }
 
     /// [`Self::profile`] for four values, lane for lane the same bits.
@@ -506,7 +531,8 @@ impl ScreenStreak {
             width * (1.0 - across).clamp(0.0, 1.0)
         };
         if self.sprite.kind != SPRITE_FLAT && width >= 1.0 {
-            let p = self.sprite.profile(across / (0.5 * width));
+            let p = self.sprite.profile(across / (0.5 * width))
+                * self.sprite.end_profile(along.min(len - along), 0.5 * width);
             cov_across *= 1.0 + sprite_ramp(width) * (p - 1.0);
         }
         let cov_along = (along + 0.5)
@@ -539,7 +565,10 @@ impl ScreenStreak {
             width * clamp01(1.0 - across)
         };
         if !THIN && self.sprite.kind != SPRITE_FLAT && width >= 1.0 {
-            let p = self.sprite.profile(across / (0.5 * width));
+            let p = self.sprite.profile(across / (0.5 * width))
+                * self
+                    .sprite
+                    .end_profile(least(along, self.len - along), 0.5 * width);
             cov_across *= 1.0 + sprite_ramp(width) * (p - 1.0);
         }
         let cov_along = clamp01(least(along, self.len - along) + 0.5);
@@ -567,7 +596,10 @@ impl ScreenStreak {
         };
         if !THIN && self.sprite.kind != SPRITE_FLAT {
             // As `coverage`, lane by lane: only where the band is a pixel wide or more.
-            let p = self.sprite.profile_x4(across / (half * width));
+            let p = self.sprite.profile_x4(across / (half * width))
+                * self
+                    .sprite
+                    .end_profile_x4(along.min(Vec4::splat(self.len) - along), half * width);
             let ramp = clamp01(half * width - one);
             let shaped = cov_across * (one + ramp * (p - one));
             cov_across = Vec4::select(width.cmpge(one), shaped, cov_across);

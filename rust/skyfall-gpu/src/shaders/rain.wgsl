@@ -95,7 +95,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let rest = code - 8.0 * f32(layer);
         let kind = u32(floor(rest));
         if kind != 0u && width >= 1.0 {
-            let p = sprite_profile(kind, rest - f32(kind), across / (0.5 * width));
+            let turn = rest - f32(kind);
+            let half_w = 0.5 * width;
+            var p = sprite_profile(kind, turn, across / half_w);
+            // Sprite::end_profile: the profile along too, within half a width of either end.
+            let e = min(along, len - along);
+            if e < half_w {
+                p *= sprite_profile(kind, turn, 1.0 - e / half_w);
+            }
             cov_across *= 1.0 + clamp(0.5 * width - 1.0, 0.0, 1.0) * (p - 1.0);
         }
         let cov_along = min(clamp(along + 0.5, 0.0, 1.0), clamp(len - along + 0.5, 0.0, 1.0));
