@@ -94,8 +94,12 @@ def test_the_haze_model_is_the_cores() -> None:
 def test_layers_are_the_cores() -> None:
     r = Renderer(16, 12, backend="cpu")
     glass = windshield.Windshield(5.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
-    f = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, visibility_m=500.0, windshield=glass))
+    f = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, snow_rate_mm_h=0.5, visibility_m=500.0, windshield=glass))
     assert list(f.layers) == list(_core.LAYERS)
+    rain_only = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, visibility_m=500.0))
+    assert list(rain_only.layers) == ["transmittance", "rain_alpha", "rain_depth_m"]
+    snow_only = r.render(scenes.street(), Weather(snow_rate_mm_h=0.5))
+    assert list(snow_only.layers) == ["transmittance", "snow_alpha"]
     assert list(r.render(scenes.street(), Weather(visibility_m=500.0)).layers) == ["transmittance"]
     assert r.render(scenes.street(), Weather()).layers == {}
 

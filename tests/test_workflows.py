@@ -44,7 +44,7 @@ def test_every_layer_has_a_neutral_value_declared_with_it():
 def test_drawn_layers_are_the_frames_own_arrays(renderer):
     glass = Windshield(20.0, glass_width_mm=200.0, glass_height_mm=150.0, wipers=0)
     glass.step(0.5)
-    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, visibility_m=300.0, windshield=glass))
+    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, snow_rate_mm_h=0.5, visibility_m=300.0, windshield=glass))
     assert set(frame.layers) == set(_core.LAYERS)
     for name in _core.LAYERS:
         assert frame.layer(name) is frame.layers[name]
@@ -61,13 +61,21 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
     # (and a dry windshield: its layers drawn, with no drop on them)
     dry = Windshield(0.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
     rain = renderer.render(scenes.street(), Weather(rain_rate_mm_h=0.5, rain_near_m=1.0, windshield=dry), seed=3)
+    snow = renderer.render(scenes.street(), Weather(snow_rate_mm_h=0.2, snow_near_m=0.5), seed=3)
     haze = renderer.render(scenes.street(), Weather(visibility_m=1e12))
     empty = rain.layers["rain_alpha"] == 0.0
     assert empty.any() and (~empty).any()
+    bare = snow.layers["snow_alpha"] == 0.0
+    assert bare.any() and (~bare).any()
     for name in _core.LAYERS:
         layer = clear.layer(name)
         assert layer.shape == (H, W) and layer.dtype == np.float32 and not layer.flags.writeable
-        untouched = haze.layers[name] if name == "transmittance" else rain.layers[name][empty]
+        if name == "transmittance":
+            untouched = haze.layers[name]
+        elif name == "snow_alpha":
+            untouched = snow.layers[name][bare]
+        else:
+            untouched = rain.layers[name][empty]
         assert len(np.unique(layer)) == 1
         np.testing.assert_allclose(untouched, layer[0, 0], rtol=1e-6)
         with pytest.raises(ValueError):

@@ -19,6 +19,7 @@ __all__ = [
     "apply_lut8",
     "encode_srgb8",
     "rain_drops",
+    "snowflakes",
     "KOSCHMIEDER",
     "AIRLIGHT_PATCH_PX",
     "AIRLIGHT_TOP_FRACTION",
@@ -110,8 +111,9 @@ def render_photo8(
     out_srgb8: NDArray[np.uint8],
     *,
     rain_alpha_out: NDArray[np.float32] | None = None,
+    snow_alpha_out: NDArray[np.float32] | None = None,
 ) -> dict[str, int]: ...
-def weather_optics(weather: Weather) -> tuple[float, float, float, float, float]: ...
+def weather_optics(weather: Weather) -> tuple[float, float, float, float, float, float]: ...
 
 def cloud_base_m(rain_rate_mm_h: float) -> float: ...
 @final
@@ -197,6 +199,10 @@ def rain_diameter_bins(diameters_mm: NDArray[np.float64]) -> tuple[NDArray[np.fl
 
 def rain_drops(
     center_m: list[float], weather: Weather, *, time_s: float, seed: int, ground: bool, shelter: NDArray[np.float32] | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
+
+def snowflakes(
+    center_m: list[float], weather: Weather, *, time_s: float, seed: int, ground: bool
 ) -> tuple[NDArray[np.float64], NDArray[np.float32], NDArray[np.float32], NDArray[np.int64]]: ...
 
 def encode_srgb8(linear: NDArray[np.float32]) -> NDArray[np.uint8]: ...

@@ -340,6 +340,7 @@ class Renderer:
         ambient_samples: int = sky.MAP_SAMPLES,
         out: NDArray[np.uint8] | None = None,
         rain_alpha_out: NDArray[np.float32] | None = None,
+        snow_alpha_out: NDArray[np.float32] | None = None,
     ) -> NDArray[np.uint8]:
         """Render one frame straight to 8-bit sRGB: the augmentation path.
 
@@ -360,6 +361,9 @@ class Renderer:
         rain_alpha_out : ndarray of float32, shape (H, W), optional
             Filled with the rain's coverage (``frame.layers["rain_alpha"]``; zeros without
             rain) when given: the ground truth of a deraining dataset.
+        snow_alpha_out : ndarray of float32, shape (H, W), optional
+            Filled with the snowflakes' coverage (``frame.layers["snow_alpha"]``; zeros
+            without snow) when given.
 
         Raises
         ------
@@ -376,13 +380,15 @@ class Renderer:
             The image (``out`` when given).
         """
         weather = weather if weather is not None else Weather()
-        self._check_srgb8_outputs(scene, out, rain_alpha_out)
+        self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
         # A windshield refracts the whole frame: its frames take the float path, then encode.
         if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None and getattr(weather, "windshield", None) is None:
             request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
-            _core.render_photo8(request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out)
+            _core.render_photo8(
+                request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out, snow_alpha_out=snow_alpha_out
+            )
             return out
         frame = self.render(
             scene,
@@ -397,6 +403,8 @@ class Renderer:
         out[...] = io.to_srgb8(frame.rgb)
         if rain_alpha_out is not None:
             rain_alpha_out[...] = frame.layer("rain_alpha")
+        if snow_alpha_out is not None:
+            snow_alpha_out[...] = frame.layer("snow_alpha")
         return out
 
     def _out_arrays(self, out: Frame) -> dict[str, NDArray[np.float32] | None]:
@@ -410,7 +418,7 @@ class Renderer:
                 _check_writable(f"out's {name}", a, np.float32, (*shape, 3) if name == "rgb" else shape)
         return arrays
 
-    def _check_srgb8_outputs(self, scene: Any, out: Any, rain_alpha_out: Any) -> None:
+    def _check_srgb8_outputs(self, scene: Any, out: Any, rain_alpha_out: Any, snow_alpha_out: Any = None) -> None:
         """render_srgb8's outputs, checked after the photo's size (their shapes follow from it)."""
         self._check_photo_size(scene)
         shape = (self.height, self.width)
@@ -418,7 +426,9 @@ class Renderer:
             _check_writable("out", out, np.uint8, (*shape, 3))
         if rain_alpha_out is not None:
             _check_writable("rain_alpha_out", rain_alpha_out, np.float32, shape)
-        _check_apart(scene, {"out": out, "rain_alpha_out": rain_alpha_out})
+        if snow_alpha_out is not None:
+            _check_writable("snow_alpha_out", snow_alpha_out, np.float32, shape)
+        _check_apart(scene, {"out": out, "rain_alpha_out": rain_alpha_out, "snow_alpha_out": snow_alpha_out})
 
     def _check_photo_size(self, scene: Any) -> None:
         """A photo must be the renderer's size (a box scene is rendered at any size)."""
@@ -573,6 +583,7 @@ class Renderer:
         out: NDArray[np.uint8] | None = None,
         rain_alpha_out: NDArray[np.float32] | None = None,
         progress: bool = False,
+        snow_alpha_out: NDArray[np.float32] | None = None,
     ) -> Iterator[NDArray[np.uint8]]:
         """:meth:`render_sequence` in 8-bit sRGB: each frame is :meth:`render_srgb8` at
         ``time_s = start_s + k / fps``, byte for byte.
@@ -587,6 +598,8 @@ class Renderer:
         rain_alpha_out : ndarray of float32, shape (H, W), optional
             Filled with each frame's rain coverage as its image is yielded (overwritten by
             the next frame).
+        snow_alpha_out : ndarray of float32, shape (H, W), optional
+            The same for the snowflakes' coverage.
 
         Returns
         -------
@@ -598,14 +611,16 @@ class Renderer:
             Every argument is checked when this is called, before the first frame (see
             :meth:`render_srgb8`).
         """
-        self._check_srgb8_outputs(scene, out, rain_alpha_out)
+        self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
         weather, times, options = self._sequence_args(
             scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
         )
 
         def frames() -> Iterator[NDArray[np.uint8]]:
             for t in times:
-                yield self.render_srgb8(scene, weather, time_s=t, out=out, rain_alpha_out=rain_alpha_out, **options)
+                yield self.render_srgb8(
+                    scene, weather, time_s=t, out=out, rain_alpha_out=rain_alpha_out, snow_alpha_out=snow_alpha_out, **options
+                )
 
         return frames()
 

@@ -54,6 +54,17 @@ class Weather:
     cloud_base_m : float, optional
         Cloud base height, m, in [1, 20000]; sky light crosses H / sin(elevation) of the
         hazy air below it. Default: :func:`skyfall.sky.cloud_base_m` of the rain rate.
+    snow_near_m : float
+        Radius of the snow region around the camera in which flakes are drawn, m, in (0, 50]
+        (default 8: flakes fall about 1 m/s, so their streaks are short, and the largest, 10 mm,
+        is still about a pixel wide at 8 m in a 1080p frame with a 60 deg field of view);
+        beyond it, and for flakes under 1 mm, snow shows only as haze
+        (``snow_extinction_per_m``). The flakes in view go as snow_near_m^3.
+    snow_opacity : {"extinction", "levels"}
+        How a flake's opacity falls with its distance d: ``"extinction"`` (default)
+        continuously, e^(-sigma d) with sigma this weather's ``extinction_per_m`` (the snow's
+        own included), as the haze dims a surface at d; ``"levels"``: Koitabashi et al.'s three
+        levels, 0.75 / 0.5 / 0.25 in the near, middle and far thirds of ``snow_near_m``.
     wind_m_s : sequence of 3 float
         Wind velocity (x, y, z), m/s, each in [-60, 60]; drops move with it horizontally
         (the vertical component is ignored: drops fall at their terminal speed), so streaks
@@ -97,6 +108,8 @@ class Weather:
     sun_elevation_deg: float | None = None
     sun_azimuth_deg: float | None = None
     cloud_base_m: float | None = None
+    snow_near_m: float = 8.0
+    snow_opacity: str = "extinction"
     windshield: Any = None
 
     def __post_init__(self) -> None:
@@ -117,6 +130,8 @@ class Weather:
         object.__setattr__(self, "rain_near_m", near)
         object.__setattr__(self, "rain_diameters_mm", diams)
         choice("rain_method", self.rain_method, ("drops", "billboards"))
+        object.__setattr__(self, "snow_near_m", in_range("snow_near_m", self.snow_near_m))
+        choice("snow_opacity", self.snow_opacity, ("extinction", "levels"))
         for name in ("rain_streaks", "rain_sheltered"):
             object.__setattr__(self, name, flag(name, getattr(self, name)))
         object.__setattr__(self, "rain_rate_mm_h", r)
@@ -147,8 +162,8 @@ class Weather:
                 raise TypeError(f"windshield must be a skyfall.windshield.Windshield or a preset's name, got {type(self.windshield).__name__}")
 
     @cached_property
-    def _optics(self) -> tuple[float, float, float, float, float]:
-        """(sigma_air, sigma_rain, sigma, cloud base, airlight) from the core, which the frames use."""
+    def _optics(self) -> tuple[float, float, float, float, float, float]:
+        """(sigma_air, sigma_rain, sigma, cloud base, airlight, sigma_snow) from the core, which the frames use."""
         return _core.weather_optics(self)
 
     @property
@@ -162,8 +177,14 @@ class Weather:
         return self._optics[1]
 
     @property
+    def snow_extinction_per_m(self) -> float:
+        """Extinction by falling snow, 1/m: sum of N(D) 2 A(D) over the flakes of the rate (Gunn &
+        Marshall's sizes, Mitchell's projected areas; 0 without snow)."""
+        return self._optics[5]
+
+    @property
     def extinction_per_m(self) -> float:
-        """Total extinction sigma = sigma_air + sigma_rain, 1/m."""
+        """Total extinction sigma = sigma_air + sigma_rain + sigma_snow, 1/m."""
         return self._optics[2]
 
     @property

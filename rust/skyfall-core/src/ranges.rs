@@ -108,6 +108,12 @@ pub const RAIN_NEAR_M: Limit = Limit::new(
     Range::open_closed(0.0, 50.0, "m"),
     "radius of the rain region around the camera drawn as streaks",
 );
+/// Radius of the snow region drawn as flakes.
+pub const SNOW_NEAR_M: Limit = Limit::new(
+    "snow_near_m",
+    Range::open_closed(0.0, 50.0, "m"),
+    "radius of the snow region around the camera drawn as flakes",
+);
 /// Drop diameters whose bins are drawn.
 pub const RAIN_DIAMETERS_MM: Limit = Limit::new(
     "rain_diameters_mm",
@@ -501,6 +507,7 @@ pub const ALL: &[Limit] = &[
     SKY_ILLUMINANCE_LUX,
     WIND_M_S,
     RAIN_NEAR_M,
+    SNOW_NEAR_M,
     RAIN_DIAMETERS_MM,
     DIAMETERS_MM,
     SKY,

@@ -5,10 +5,13 @@
 use crate::error::{Error, Param, Result};
 use crate::haze::Haze;
 use crate::physics::extinction::rain_extinction_per_m;
+use crate::physics::snow::Snowfall;
 use crate::rain::drops::{RainMethod, RainRegion};
 use crate::ranges;
 use crate::sky::cie::SkyKind;
 use crate::sky::{Sky, cloud_base_m, sun_direction};
+use crate::snow::flakes::SnowRegion;
+pub use crate::snow::streaks::SnowOpacity;
 
 /// −ln(0.02): the meteorological visibility is where contrast falls to 2 % (Koschmieder).
 pub const KOSCHMIEDER: f64 = 3.912;
@@ -31,6 +34,10 @@ pub struct Weather {
     pub snow_rate_mm_h: f64,
     /// Bulk density of the snow cover, kg/m³.
     pub snow_density_kg_m3: f64,
+    /// Radius of the snow region drawn as flakes, m.
+    pub snow_near_m: f64,
+    /// How the flakes' opacity falls with distance.
+    pub snow_opacity: SnowOpacity,
     /// Meteorological visibility of the air without rain, m (inf: perfectly clear).
     pub visibility_m: f64,
     /// Horizontal illuminance E of the open sky at the ground, lux.
@@ -67,6 +74,7 @@ impl Weather {
             ranges::WIND_M_S.check_at(Some(i), w)?;
         }
         ranges::RAIN_NEAR_M.check(self.rain_near_m)?;
+        ranges::SNOW_NEAR_M.check(self.snow_near_m)?;
         ranges::RAIN_DIAMETERS_MM.check_all(&self.rain_diameters_mm)?;
         if let Some((el, az)) = self.sun_deg {
             ranges::SUN_ELEVATION_DEG.check(el)?;
@@ -95,9 +103,39 @@ impl Weather {
         rain_extinction_per_m(self.rain_rate_mm_h)
     }
 
-    /// Total extinction σ = σ_air + σ_rain, 1/m.
+    /// Extinction by falling snow, 1/m ([`Snowfall::extinction_per_m`] of the rate; 0 without
+    /// snow).
+    pub fn snow_extinction_per_m(&self) -> f64 {
+        if self.snow_rate_mm_h > 0.0 {
+            Snowfall::new(self.snow_rate_mm_h).extinction_per_m()
+        } else {
+            0.0
+        }
+    }
+
+    /// Total extinction σ = σ_air + σ_rain + σ_snow, 1/m.
     pub fn extinction_per_m(&self) -> f64 {
-        self.air_extinction_per_m() + self.rain_extinction_per_m()
+        let sigma = self.air_extinction_per_m() + self.rain_extinction_per_m();
+        if self.snow_rate_mm_h > 0.0 {
+            sigma + self.snow_extinction_per_m()
+        } else {
+            sigma
+        }
+    }
+
+    /// The snow region of a frame at `time_s` with `seed`, when it snows.
+    pub fn snow_region(&self, time_s: f64, seed: u64) -> Result<Option<SnowRegion>> {
+        if self.snow_rate_mm_h <= 0.0 {
+            return Ok(None);
+        }
+        SnowRegion::new(
+            self.snow_rate_mm_h,
+            self.snow_near_m,
+            self.wind_m_s,
+            time_s,
+            seed,
+        )
+        .map(Some)
     }
 
     /// The cloud base H in use, m: the given one, or [`cloud_base_m`] of the rain rate.
@@ -201,6 +239,8 @@ mod tests {
             rain_rate_mm_h: rate,
             snow_rate_mm_h: 0.0,
             snow_density_kg_m3: 100.0,
+            snow_near_m: 8.0,
+            snow_opacity: SnowOpacity::Extinction,
             visibility_m,
             sky_illuminance_lux: 10_000.0,
             wind_m_s: [0.0; 3],
@@ -234,6 +274,23 @@ mod tests {
         assert_eq!(h.airlight, [0.2, 0.3, 0.4]);
         // sky pixels are hazed up to the cloud base, above the eye
         assert_eq!(h.sky_ceiling_m, (cloud_base_m(10.0) - 1.6) as f32);
+    }
+
+    #[test]
+    fn snow_adds_its_own_extinction_to_the_haze() {
+        let mut w = weather(2.0, 3000.0);
+        let dry = w.extinction_per_m();
+        assert_eq!(w.snow_extinction_per_m(), 0.0);
+        assert!(w.snow_region(0.0, 1).unwrap().is_none());
+        w.snow_rate_mm_h = 1.5;
+        let sigma_snow = Snowfall::new(1.5).extinction_per_m();
+        assert_eq!(w.snow_extinction_per_m(), sigma_snow);
+        assert_eq!(w.extinction_per_m(), dry + sigma_snow);
+        let r = w.snow_region(2.5, 7).unwrap().unwrap();
+        assert_eq!((r.near_m, r.time_s, r.seed), (8.0, 2.5, 7));
+        w.snow_near_m = 0.0;
+        let e = w.validate().unwrap_err().to_string();
+        assert!(e.starts_with("snow_near_m = 0"), "{e}");
     }
 
     #[test]

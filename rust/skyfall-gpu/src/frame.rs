@@ -17,6 +17,7 @@ use skyfall_core::frame::{
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::streaks::RainFrame;
 use skyfall_core::scene::camera::Camera;
+use skyfall_core::snow::streaks::{SnowFrame, SnowStats};
 
 /// A device with every pass compiled, reused across frames.
 #[derive(Debug)]
@@ -61,14 +62,16 @@ impl GpuRenderer {
         light: &SceneLight<'_>,
         haze: Option<&Haze>,
         rain: Option<&RainFrame<'_>>,
+        snow: Option<&SnowFrame<'_>>,
     ) -> Result<FrameBuffers, GpuError> {
-        FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), |out| {
-            self.render_into(scene, cam, light, haze, rain, out)
+        FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), snow.is_some(), |out| {
+            self.render_into(scene, cam, light, haze, rain, snow, out)
         })
     }
 
     /// [`Self::render`] read back into the caller's buffers (see [`FrameOut`]); the rain's
     /// report when it rains.
+    #[allow(clippy::too_many_arguments)]
     pub fn render_into(
         &self,
         scene: SceneRef<'_>,
@@ -76,10 +79,27 @@ impl GpuRenderer {
         light: &SceneLight<'_>,
         haze: Option<&Haze>,
         rain: Option<&RainFrame<'_>>,
+        snow: Option<&SnowFrame<'_>>,
         out: FrameOut<'_>,
     ) -> Result<Option<RainReport>, GpuError> {
+        self.render_into_reporting(scene, cam, light, haze, rain, snow, out)
+            .map(|(rain, _)| rain)
+    }
+
+    /// [`Self::render_into`], with the snow's report too.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_into_reporting(
+        &self,
+        scene: SceneRef<'_>,
+        cam: &Camera,
+        light: &SceneLight<'_>,
+        haze: Option<&Haze>,
+        rain: Option<&RainFrame<'_>>,
+        snow: Option<&SnowFrame<'_>>,
+        out: FrameOut<'_>,
+    ) -> Result<(Option<RainReport>, Option<SnowStats>), GpuError> {
         check_frame_size(cam)?;
-        out.check(cam, haze.is_some(), rain.is_some())?;
+        out.check(cam, haze.is_some(), rain.is_some(), snow.is_some())?;
         let n = cam.pixels();
         self.ctx.check_buffer(
             &format!("a {}x{} RGB frame", cam.width, cam.height),
@@ -92,7 +112,7 @@ impl GpuRenderer {
                 SceneRef::Boxes(b) => Some((b, light)),
                 SceneRef::Photo { .. } => None,
             };
-            let passes = Passes::prepare(cam, lit, haze, rain)?;
+            let passes = Passes::prepare(cam, lit, haze, rain, snow)?;
             let mut f = FrameEncoder::new(ctx, &self.pool, cam);
             let (rgb, depth) = match scene {
                 SceneRef::Boxes(_) => (f.target("rgb", 3 * n), f.target("depth", n)),
@@ -102,10 +122,11 @@ impl GpuRenderer {
                 }
             };
             // The layers the passes draw, one buffer each.
-            let (haze_on, rain_on) = (passes.haze.is_some(), passes.particles.is_some());
+            let (haze_on, rain_on, snow_on) =
+                (passes.haze.is_some(), rain.is_some(), snow.is_some());
             let mut layers: Layers<Pooled> = Layers::default();
             for l in Layer::ALL {
-                if l.drawn(haze_on, rain_on) {
+                if l.drawn(haze_on, rain_on, snow_on) {
                     layers.set(l, f.target(l.name(), n));
                 }
             }
@@ -140,7 +161,7 @@ impl GpuRenderer {
                 }
             }
             f.read_back(outputs)?;
-            Ok(passes.rain_report())
+            Ok((passes.rain_report(), passes.snow_report()))
         })
     }
 

@@ -38,12 +38,13 @@ impl FramePass for RainPass {
             SOURCE,
             &[
                 Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadOnly, ReadWrite,
-                ReadWrite,
+                ReadWrite, ReadWrite,
             ],
         ))
     }
 
-    /// rgb composited in place, the rain's coverage and nearest depth written;
+    /// rgb composited in place, the rain's coverage and nearest depth and the snow's coverage
+    /// written (those the frame draws: each particle carries its layer);
     /// [`GpuError::TooLarge`] when the streaks or the tiles' lists of them do not fit one of
     /// the device's storage buffers.
     fn encode(
@@ -52,19 +53,31 @@ impl FramePass for RainPass {
         t: &FrameTargets<'_>,
         streaks: Self::Input<'_>,
     ) -> Result<(), GpuError> {
-        let (alpha, rain_depth) = (t.layer(Layer::RainAlpha)?, t.layer(Layer::RainDepth)?);
         let cam = f.cam;
+        // A layer the frame does not draw is bound to a one-value stand-in, never written
+        // (`params.layers`).
+        let unused = f.target("unused layer", 1);
+        let rain_layers = t
+            .layers
+            .get(Layer::RainAlpha)
+            .zip(t.layers.get(Layer::RainDepth));
+        let snow_layer = t.layers.get(Layer::SnowAlpha);
+        let (alpha, rain_depth) = rain_layers.unwrap_or((&unused, &unused));
+        let snow_alpha = snow_layer.unwrap_or(&unused);
         let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H)?;
-        // rain_near_m and the rain rate set how many streaks there are (the region's volume
-        // goes as rain_near_m³).
+        // rain_near_m, snow_near_m and the rates set how many streaks there are (a region's
+        // volume goes as its radius cubed).
         let mut packed: Vec<f32> = streaks.iter().flat_map(|s| s.packed()).collect();
-        let why = "(fewer with a smaller rain_near_m or rain rate)";
+        let why = "(fewer with a smaller rain_near_m, snow_near_m or rate)";
         f.ctx.check_buffer(
-            &format!("the rain's {} streaks {why}", streaks.len()),
+            &format!("the particles' {} streaks {why}", streaks.len()),
             (packed.len() * 4) as u64,
         )?;
         f.ctx.check_buffer(
-            &format!("the rain's tile lists ({} entries) {why}", indices.len()),
+            &format!(
+                "the particles' tile lists ({} entries) {why}",
+                indices.len()
+            ),
             (indices.len() * 4) as u64,
         )?;
         // Bindings may not be empty; the offsets keep padding unread.
@@ -79,6 +92,8 @@ impl FramePass for RainPass {
             tiles_x: cam.width.div_ceil(TILE_W),
             tile_w: TILE_W,
             tile_h: TILE_H,
+            layers: u32::from(rain_layers.is_some()) | (u32::from(snow_layer.is_some()) << 1),
+            pad: [0; 3],
         };
         let cam_buf = f.uniform("camera", &CameraUniform::new(cam));
         let params_buf = f.uniform("rain", &params);
@@ -97,9 +112,17 @@ impl FramePass for RainPass {
                 t.depth,
                 alpha,
                 rain_depth,
+                snow_alpha,
             ],
         );
-        f.hold([cam_buf, params_buf, streak_buf, offsets_buf, indices_buf]);
+        f.hold([
+            cam_buf,
+            params_buf,
+            streak_buf,
+            offsets_buf,
+            indices_buf,
+            unused,
+        ]);
         Ok(())
     }
 }

@@ -60,6 +60,11 @@ pub struct RainUniform {
     pub tile_w: u32,
     /// Tile height, px.
     pub tile_h: u32,
+    /// The layers drawn: bit 0 the rain's (rain_alpha, rain_depth_m), bit 1 the snow's
+    /// (snow_alpha).
+    pub layers: u32,
+    /// Padding to 16 bytes.
+    pub pad: [u32; 3],
 }
 
 /// `SceneInfo` in `shaders/scene_raycast.wgsl`.

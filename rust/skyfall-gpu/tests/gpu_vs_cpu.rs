@@ -101,9 +101,24 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let c = render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None).unwrap();
+    let c = render(
+        SceneRef::Boxes(&scene),
+        &cam,
+        &light,
+        Some(&haze),
+        None,
+        None,
+    )
+    .unwrap();
     let g = gpu
-        .render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None)
+        .render(
+            SceneRef::Boxes(&scene),
+            &cam,
+            &light,
+            Some(&haze),
+            None,
+            None,
+        )
         .unwrap();
     // Silhouette pixels may pick another surface when f32 rounding differs (FMA): allow 0.5 %.
     let (_, rgb_big) = max_abs(&c.rgb, &g.rgb);
@@ -118,8 +133,10 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
         rgb: &c.rgb,
         depth_m: &c.depth_m,
     };
-    let c2 = render(photo, &cam, &light, Some(&haze), None).unwrap();
-    let g2 = gpu.render(photo, &cam, &light, Some(&haze), None).unwrap();
+    let c2 = render(photo, &cam, &light, Some(&haze), None, None).unwrap();
+    let g2 = gpu
+        .render(photo, &cam, &light, Some(&haze), None, None)
+        .unwrap();
     let (worst, _) = max_abs(&c2.rgb, &g2.rgb);
     assert!(worst < 1e-5, "haze max abs diff {worst}");
     let (worst_t, _) = max_abs(
@@ -160,13 +177,15 @@ fn gpu_rain_matches_cpu_rain() {
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
+    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
     let photo = SceneRef::Photo {
         rgb: &bg.rgb,
         depth_m: &bg.depth_m,
     };
-    let c = render(photo, &cam, &light, None, Some(&rf)).unwrap();
-    let g = gpu.render(photo, &cam, &light, None, Some(&rf)).unwrap();
+    let c = render(photo, &cam, &light, None, Some(&rf), None).unwrap();
+    let g = gpu
+        .render(photo, &cam, &light, None, Some(&rf), None)
+        .unwrap();
     let ((cs, _), (gs, gd)) = (c.rain.unwrap(), g.rain.unwrap());
     assert_eq!(c.rain, g.rain);
     assert!(cs.streaks > 100);
@@ -197,7 +216,7 @@ fn gpu_rain_matches_cpu_rain() {
         ],
     );
     let (stats, drops) = gpu
-        .render_into(photo, &cam, &light, None, Some(&rf), out)
+        .render_into(photo, &cam, &light, None, Some(&rf), None, out)
         .unwrap()
         .unwrap();
     assert_eq!((stats, drops), (gs, gd));
@@ -215,7 +234,7 @@ fn gpu_rain_matches_cpu_rain() {
         ],
     );
     assert!(
-        gpu.render_into(photo, &cam, &light, None, Some(&rf), short)
+        gpu.render_into(photo, &cam, &light, None, Some(&rf), None, short)
             .is_err()
     );
     // Rain that does not fit the device's storage buffers is an error that names the streaks,
@@ -223,10 +242,10 @@ fn gpu_rain_matches_cpu_rain() {
     let mut small = GpuRenderer::new(AdapterChoice::Any).unwrap();
     let frame_bytes = (3 * n * 4) as u64;
     small.ctx.limits.max_storage_buffer_binding_size = frame_bytes;
-    assert!(small.render(photo, &cam, &light, None, None).is_ok());
+    assert!(small.render(photo, &cam, &light, None, None, None).is_ok());
     assert!((gs.streaks * 64) as u64 > frame_bytes);
     let err = small
-        .render(photo, &cam, &light, None, Some(&rf))
+        .render(photo, &cam, &light, None, Some(&rf), None)
         .unwrap_err();
     assert!(
         matches!(err, GpuError::TooLarge { .. }) && err.to_string().contains("streaks"),
@@ -261,14 +280,16 @@ fn gpu_rain_matches_cpu_rain_through_a_lens() {
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
+    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
     let photo = SceneRef::Photo {
         rgb: &bg.rgb,
         depth_m: &bg.depth_m,
     };
-    let c = render(photo, &cam, &light, None, Some(&rf)).unwrap();
-    let g = gpu.render(photo, &cam, &light, None, Some(&rf)).unwrap();
-    let p = render(photo, &cam, &light, None, Some(&pinhole)).unwrap();
+    let c = render(photo, &cam, &light, None, Some(&rf), None).unwrap();
+    let g = gpu
+        .render(photo, &cam, &light, None, Some(&rf), None)
+        .unwrap();
+    let p = render(photo, &cam, &light, None, Some(&pinhole), None).unwrap();
     assert_eq!(c.rain, g.rain);
     assert!(c.rain.unwrap().0.streaks > 100);
     let (ca, ga, pa) = (
@@ -304,9 +325,9 @@ fn gpu_matches_cpu_under_a_cie_sky_with_sky_visibility() {
     let sky = Sky::new(kind, 2e-3, 900.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let c = render(SceneRef::Boxes(&scene), &cam, &light, None, None).unwrap();
+    let c = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
     let g = gpu
-        .render(SceneRef::Boxes(&scene), &cam, &light, None, None)
+        .render(SceneRef::Boxes(&scene), &cam, &light, None, None, None)
         .unwrap();
     // Relative: the clear sky reaches 12 E/π and the WGSL evaluates it in f32 (the CPU in f64).
     // Away from silhouettes the sky and the map's trilinear sample agree to f32 rounding.
@@ -341,7 +362,7 @@ fn pooled_buffers_give_the_same_frames_and_do_not_grow() {
     let boxes = SceneRef::Boxes(&scene);
     assert_eq!(gpu.pooled_bytes(), 0);
     let first = gpu
-        .render(boxes, &cam, &light, Some(&h), Some(&rf))
+        .render(boxes, &cam, &light, Some(&h), Some(&rf), None)
         .unwrap();
     let after_one = gpu.pooled_bytes();
     assert!(after_one >= (cam.pixels() * 4 * 7) as u64, "{after_one}");
@@ -353,17 +374,17 @@ fn pooled_buffers_give_the_same_frames_and_do_not_grow() {
         Mat3::IDENTITY,
     )
     .unwrap();
-    gpu.render(boxes, &small, &light, None, None).unwrap();
+    gpu.render(boxes, &small, &light, None, None, None).unwrap();
     let dry = RainRegion::new(1.0, &[1.0], 2.0, [0.0; 3], 0.0, 9).unwrap();
     let drizzle = RainFrame { region: &dry, ..rf };
-    gpu.render(boxes, &cam, &light, Some(&h), Some(&drizzle))
+    gpu.render(boxes, &cam, &light, Some(&h), Some(&drizzle), None)
         .unwrap();
     let again = gpu
-        .render(boxes, &cam, &light, Some(&h), Some(&rf))
+        .render(boxes, &cam, &light, Some(&h), Some(&rf), None)
         .unwrap();
     assert_eq!(again, first);
     let settled = gpu.pooled_bytes();
-    gpu.render(boxes, &cam, &light, Some(&h), Some(&rf))
+    gpu.render(boxes, &cam, &light, Some(&h), Some(&rf), None)
         .unwrap();
     assert_eq!(gpu.pooled_bytes(), settled);
 }
@@ -399,9 +420,24 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
         spot(-5.0, Vec3::new(0.0, -0.3, -1.0)),
     ];
     let light = SceneLight::new(&sky, &amb).with_lights(&lights, 30.0);
-    let c = render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None).unwrap();
+    let c = render(
+        SceneRef::Boxes(&scene),
+        &cam,
+        &light,
+        Some(&haze),
+        None,
+        None,
+    )
+    .unwrap();
     let g = gpu
-        .render(SceneRef::Boxes(&scene), &cam, &light, Some(&haze), None)
+        .render(
+            SceneRef::Boxes(&scene),
+            &cam,
+            &light,
+            Some(&haze),
+            None,
+            None,
+        )
         .unwrap();
     // As the box scene without lights: silhouettes (and a light at a skip level's edge) may
     // differ where f32 rounding differs; everywhere else f32 rounding.
@@ -413,6 +449,7 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
         &cam,
         &SceneLight::new(&sky, &amb).with_lights(&[], 30.0),
         Some(&haze),
+        None,
         None,
     )
     .unwrap();
@@ -429,4 +466,106 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
         4,
         "the hidden lamp and the spot turned away have none"
     );
+}
+
+#[test]
+fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
+    // Flakes (every sprite, near ones several pixels wide) and drops in one far-to-near list
+    // over a photo of the CPU's box frame: the same counts, rgb and each effect's layers.
+    use skyfall_core::frame::float::render_into_reporting;
+    use skyfall_core::snow::flakes::SnowRegion;
+    use skyfall_core::snow::streaks::{SNOW_ALBEDO, SnowFrame, SnowOpacity};
+    let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let (scene, cam) = street();
+    let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let light = SceneLight::new(&sky, &amb);
+    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
+    let photo = SceneRef::Photo {
+        rgb: &bg.rgb,
+        depth_m: &bg.depth_m,
+    };
+    let rain = RainRegion::new(40.0, &[1.0, 1.4, 2.0], 4.0, [2.0, 0.0, 0.0], 0.7, 11).unwrap();
+    let shading = RainShading::open_sky();
+    let rf = RainFrame {
+        region: &rain,
+        exposure_s: 1.0 / 30.0,
+        camera_velocity_m_s: Vec3::ZERO,
+        lens: None,
+        ground: true,
+        shelter: &scene.boxes,
+        shading: &shading,
+    };
+    let snow_shading = RainShading {
+        reflectance: 1.0,
+        drop_radiance: SNOW_ALBEDO,
+        ..RainShading::open_sky()
+    };
+    for opacity in [SnowOpacity::Extinction, SnowOpacity::Levels] {
+        let region = SnowRegion::new(3.0, 5.0, [2.0, 0.0, 1.0], 0.7, 11).unwrap();
+        let sf = SnowFrame {
+            region: &region,
+            exposure_s: 1.0 / 30.0,
+            camera_velocity_m_s: Vec3::ZERO,
+            lens: None,
+            ground: true,
+            shelter: &scene.boxes,
+            shading: &snow_shading,
+            opacity,
+            extinction_per_m: 0.01,
+        };
+        for rain in [None, Some(&rf)] {
+            let c = render(photo, &cam, &light, None, rain, Some(&sf)).unwrap();
+            let g = gpu
+                .render(photo, &cam, &light, None, rain, Some(&sf))
+                .unwrap();
+            assert_eq!(c.rain, g.rain);
+            assert_eq!(
+                c.layers.0.iter().filter(|l| l.is_some()).count(),
+                if rain.is_some() { 3 } else { 1 }
+            );
+            let n = cam.pixels();
+            let (mut rgb, mut d) = (vec![0.0; 3 * n], vec![0.0; n]);
+            let (mut a, mut z, mut s) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let layers: Vec<(Layer, &mut [f32])> = match rain {
+                Some(_) => vec![
+                    (Layer::RainAlpha, &mut a[..]),
+                    (Layer::RainDepth, &mut z[..]),
+                    (Layer::SnowAlpha, &mut s[..]),
+                ],
+                None => vec![(Layer::SnowAlpha, &mut s[..])],
+            };
+            let (_, stats) = render_into_reporting(
+                photo,
+                &cam,
+                &light,
+                None,
+                rain,
+                Some(&sf),
+                FrameOut::from_layers(&mut rgb, &mut d, layers),
+            )
+            .unwrap();
+            let stats = stats.unwrap();
+            assert!(stats.streaks > 300, "{stats:?}");
+            let cs = c.layer(Layer::SnowAlpha).unwrap();
+            assert_eq!(cs, &s[..]);
+            let (worst_s, _) = max_abs(cs, g.layer(Layer::SnowAlpha).unwrap());
+            // The shader's cos may put a star's arm edge on the other side of a pixel centre:
+            // a few pixels differ by an arm's step, the rest by rounding.
+            let off = differing(cs, g.layer(Layer::SnowAlpha).unwrap(), 1e-4);
+            assert!(
+                off * 200 <= n && worst_s < 0.05,
+                "{off} snow alpha values differ, worst {worst_s}"
+            );
+            assert_rgb_agrees(&c.rgb, &g.rgb);
+            if rain.is_some() {
+                let (worst_a, _) = max_abs(
+                    c.layer(Layer::RainAlpha).unwrap(),
+                    g.layer(Layer::RainAlpha).unwrap(),
+                );
+                assert!(worst_a < 1e-4, "rain alpha max abs diff {worst_a}");
+                assert!(c.layer(Layer::RainAlpha).unwrap().iter().any(|&x| x > 1e-3));
+            }
+        }
+    }
 }

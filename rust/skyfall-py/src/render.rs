@@ -11,11 +11,13 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use skyfall_core::frame::float::render_into_reporting;
 use skyfall_core::frame::layers::Layer;
 use skyfall_core::frame::request::FrameSetup;
 use skyfall_core::frame::srgb8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
-use skyfall_core::frame::{FrameOut, RainReport, check_frame_size, render_into};
+use skyfall_core::frame::{FrameOut, RainReport, check_frame_size};
 use skyfall_core::rain::streaks::RainStats;
+use skyfall_core::snow::streaks::SnowStats;
 use skyfall_gpu::AdapterChoice;
 use skyfall_gpu::frame::GpuRenderer;
 
@@ -28,13 +30,22 @@ type FrameTuple<'py> = (
     Bound<'py, PyDict>,
 );
 
-/// The passes' counters by name: drops generated, streaks drawn, drops culled.
-fn stats<'py>(py: Python<'py>, report: Option<RainReport>) -> PyResult<Bound<'py, PyDict>> {
+/// The passes' counters by name: drops generated, streaks drawn, drops culled; flakes
+/// generated and their streaks drawn.
+fn stats<'py>(
+    py: Python<'py>,
+    report: Option<RainReport>,
+    snow: Option<SnowStats>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     if let Some((RainStats { streaks, culled }, drops)) = report {
         d.set_item("rain_drops", drops)?;
         d.set_item("rain_streaks", streaks)?;
         d.set_item("rain_culled", culled)?;
+    }
+    if let Some(SnowStats { flakes, streaks }) = snow {
+        d.set_item("snow_flakes", flakes)?;
+        d.set_item("snow_streaks", streaks)?;
     }
     Ok(d)
 }
@@ -69,12 +80,13 @@ pub fn render_frame<'py>(
     let parsed: ParsedRequest<'py> = request.parse(true)?;
     let req = parsed.request()?;
     let setup = FrameSetup::new(&req).map_err(CoreError)?;
-    let (scene, cam, light, haze, rain) = (
+    let (scene, cam, light, haze, rain, snow) = (
         req.scene_ref(),
         &req.camera,
         setup.light(),
         setup.haze.as_ref(),
         setup.rain(),
+        setup.snow(),
     );
     // Into numpy's arrays (see `FrameOut`): the caller's (`out`) where given, else new ones,
     // sized once the frame is known to fit.
@@ -90,14 +102,14 @@ pub fn render_frame<'py>(
     // The layers this frame draws, in the order they are declared.
     let mut layers: Vec<(Layer, F2<'py>)> = Vec::new();
     for layer in Layer::ALL {
-        if layer.drawn(haze.is_some(), rain.is_some()) {
+        if layer.drawn(haze.is_some(), rain.is_some(), snow.is_some()) {
             layers.push((
                 layer,
                 out.take::<f32, Ix2>(layer.name())?.map_or_else(plane, Ok)?,
             ));
         }
     }
-    let report = {
+    let (report, snow_report) = {
         fn busy(name: &'static str) -> impl Fn(numpy::BorrowError) -> PyErr {
             move |_| in_use(name)
         }
@@ -114,10 +126,30 @@ pub fn render_frame<'py>(
         let out = FrameOut::from_layers(rgb_w.as_slice_mut()?, depth_w.as_slice_mut()?, slices);
         match device.as_ref().map(|d| &d.get().inner) {
             Some(gpu) => py
-                .detach(|| gpu.render_into(scene, cam, &light, haze, rain.as_ref(), out))
+                .detach(|| {
+                    gpu.render_into_reporting(
+                        scene,
+                        cam,
+                        &light,
+                        haze,
+                        rain.as_ref(),
+                        snow.as_ref(),
+                        out,
+                    )
+                })
                 .map_err(gpu_error)?,
             None => py
-                .detach(|| render_into(scene, cam, &light, haze, rain.as_ref(), out))
+                .detach(|| {
+                    render_into_reporting(
+                        scene,
+                        cam,
+                        &light,
+                        haze,
+                        rain.as_ref(),
+                        snow.as_ref(),
+                        out,
+                    )
+                })
                 .map_err(CoreError)?,
         }
     };
@@ -125,14 +157,15 @@ pub fn render_frame<'py>(
     for (l, a) in layers {
         named.set_item(l.name(), a)?;
     }
-    Ok((rgb, depth, named, stats(py, report)?))
+    Ok((rgb, depth, named, stats(py, report, snow_report)?))
 }
 
 /// Renders the frame of `request` over its 8-bit sRGB photo `photo_srgb8` into `out_srgb8` on
-/// the CPU, fused (see `skyfall_core::frame::srgb8`); fills `rain_alpha_out` when given.
-/// Returns the passes' counters.
+/// the CPU, fused (see `skyfall_core::frame::srgb8`); fills `rain_alpha_out` and
+/// `snow_alpha_out` when given. Returns the passes' counters.
 #[pyfunction]
-#[pyo3(signature = (request, photo_srgb8, decode_table, out_srgb8, *, rain_alpha_out=None))]
+#[pyo3(signature = (request, photo_srgb8, decode_table, out_srgb8, *, rain_alpha_out=None, snow_alpha_out=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn render_photo8<'py>(
     py: Python<'py>,
     request: RequestArgs<'py>,
@@ -140,6 +173,7 @@ pub fn render_photo8<'py>(
     decode_table: PyReadonlyArray1<'py, f32>,
     mut out_srgb8: PyReadwriteArray3<'py, u8>,
     rain_alpha_out: Option<PyReadwriteArray2<'py, f32>>,
+    snow_alpha_out: Option<PyReadwriteArray2<'py, f32>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let parsed: ParsedRequest<'py> = request.parse(false)?;
     let req = parsed.request()?;
@@ -166,16 +200,22 @@ pub fn render_photo8<'py>(
         depth_m,
         decode,
     };
-    let mut alpha = rain_alpha_out;
+    let (mut alpha, mut snow_alpha) = (rain_alpha_out, snow_alpha_out);
     let out = Photo8Out {
         srgb: out_srgb8.as_slice_mut()?,
         rain_alpha: alpha.as_mut().map(|a| a.as_slice_mut()).transpose()?,
+        snow_alpha: snow_alpha.as_mut().map(|a| a.as_slice_mut()).transpose()?,
     };
-    let (cam, haze, rain) = (&req.camera, setup.haze.as_ref(), setup.rain());
+    let (cam, haze, rain, snow) = (&req.camera, setup.haze.as_ref(), setup.rain(), setup.snow());
     let report = py
-        .detach(|| render_photo8_core(cam, &photo, haze, rain.as_ref(), out))
+        .detach(|| render_photo8_core(cam, &photo, haze, rain.as_ref(), snow.as_ref(), out))
         .map_err(CoreError)?;
-    stats(py, report.map(|s| (s.rain, s.drops)))
+    let raining = rain.is_some();
+    stats(
+        py,
+        report.filter(|_| raining).map(|s| (s.rain, s.drops)),
+        report.and_then(|s| s.snow),
+    )
 }
 
 /// A wgpu device with every pass compiled, reused across frames.

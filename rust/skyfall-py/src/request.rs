@@ -14,7 +14,7 @@ use skyfall_core::rain::drops::RainMethod;
 use skyfall_core::scene::boxes::{BoxScene, SceneBox};
 use skyfall_core::scene::camera::{Camera, ThinLens};
 use skyfall_core::scene::lights::Light;
-use skyfall_core::weather::{SkySpec, Weather};
+use skyfall_core::weather::{SkySpec, SnowOpacity, Weather};
 use std::sync::Arc;
 
 /// `skyfall.Weather`'s fields.
@@ -23,6 +23,8 @@ pub struct WeatherSpec {
     rain_rate_mm_h: f64,
     snow_rate_mm_h: f64,
     snow_density_kg_m3: f64,
+    snow_near_m: f64,
+    snow_opacity: String,
     visibility_m: f64,
     sky_illuminance_lux: f64,
     wind_m_s: [f64; 3],
@@ -66,6 +68,8 @@ impl WeatherSpec {
             rain_rate_mm_h: self.rain_rate_mm_h,
             snow_rate_mm_h: self.snow_rate_mm_h,
             snow_density_kg_m3: self.snow_density_kg_m3,
+            snow_near_m: self.snow_near_m,
+            snow_opacity: SnowOpacity::parse(&self.snow_opacity).map_err(CoreError)?,
             visibility_m: self.visibility_m,
             sky_illuminance_lux: self.sky_illuminance_lux,
             wind_m_s: self.wind_m_s,

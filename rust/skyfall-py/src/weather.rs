@@ -5,9 +5,10 @@ use crate::request::WeatherSpec;
 use pyo3::prelude::*;
 
 /// (air extinction, rain extinction, total extinction σ, all 1/m; the cloud base in use, m;
-/// the sky's airlight relative to E/π) of `weather`, a `skyfall.Weather`.
+/// the sky's airlight relative to E/π; snow extinction, 1/m) of `weather`, a
+/// `skyfall.Weather`.
 #[pyfunction]
-pub fn weather_optics(weather: WeatherSpec) -> PyResult<(f64, f64, f64, f64, f64)> {
+pub fn weather_optics(weather: WeatherSpec) -> PyResult<(f64, f64, f64, f64, f64, f64)> {
     let w = weather.core()?;
     let sky = w.sky().map_err(CoreError)?;
     Ok((
@@ -16,5 +17,6 @@ pub fn weather_optics(weather: WeatherSpec) -> PyResult<(f64, f64, f64, f64, f64
         w.extinction_per_m(),
         w.cloud_base_height_m(),
         sky.airlight,
+        w.snow_extinction_per_m(),
     ))
 }

@@ -10,19 +10,21 @@ use crate::haze::{Haze, ViewRays, apply_row};
 use crate::particles::composite::{BAND_ROWS, bin_by_bands, composite_band_colour};
 use crate::rain::streaks::RainFrame;
 use crate::scene::camera::Camera;
+use crate::snow::streaks::{SnowFrame, SnowStats};
 use rayon::prelude::*;
 
 /// Renders a frame on the CPU: scene (ray cast under `light`, or photo copy) and haze fused
-/// row by row, then the rain streaks over the result.
+/// row by row, then the rain's and the snow's streaks over the result.
 pub fn render(
     scene: SceneRef<'_>,
     cam: &Camera,
     light: &SceneLight<'_>,
     haze: Option<&Haze>,
     rain: Option<&RainFrame<'_>>,
+    snow: Option<&SnowFrame<'_>>,
 ) -> Result<FrameBuffers> {
-    FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), |out| {
-        render_into(scene, cam, light, haze, rain, out)
+    FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), snow.is_some(), |out| {
+        render_into(scene, cam, light, haze, rain, snow, out)
     })
 }
 
@@ -33,13 +35,27 @@ pub fn render_into(
     light: &SceneLight<'_>,
     haze: Option<&Haze>,
     rain: Option<&RainFrame<'_>>,
+    snow: Option<&SnowFrame<'_>>,
     out: FrameOut<'_>,
 ) -> Result<Option<RainReport>> {
+    render_into_reporting(scene, cam, light, haze, rain, snow, out).map(|(rain, _)| rain)
+}
+
+/// [`render_into`], with the snow's report too.
+pub fn render_into_reporting(
+    scene: SceneRef<'_>,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    haze: Option<&Haze>,
+    rain: Option<&RainFrame<'_>>,
+    snow: Option<&SnowFrame<'_>>,
+    out: FrameOut<'_>,
+) -> Result<(Option<RainReport>, Option<SnowStats>)> {
     check_frame_size(cam)?;
     if let SceneRef::Photo { rgb, depth_m } = scene {
         check_photo(cam, rgb, depth_m)?;
     }
-    out.check(cam, haze.is_some(), rain.is_some())?;
+    out.check(cam, haze.is_some(), rain.is_some(), snow.is_some())?;
     let w = cam.width as usize;
     let FrameOut {
         rgb,
@@ -50,13 +66,14 @@ pub fn render_into(
     let rain_layers = layers
         .take(Layer::RainAlpha)
         .zip(layers.take(Layer::RainDepth));
+    let snow_layer = layers.take(Layer::SnowAlpha);
     // The passes first (the particles do not depend on the scene), the particles binned to
     // the bands.
     let lit = match scene {
         SceneRef::Boxes(b) => Some((b, light)),
         SceneRef::Photo { .. } => None,
     };
-    let passes = Passes::prepare(cam, lit, haze, rain)?;
+    let passes = Passes::prepare(cam, lit, haze, rain, snow)?;
     let glow = passes.glow.as_ref();
     let binned = passes
         .particles
@@ -69,14 +86,22 @@ pub fn render_into(
         Some(t) => t.chunks_mut(band).map(Some).collect(),
         None => (0..bands).map(|_| None).collect(),
     };
-    let mut rain_bands: Vec<Option<(&mut [f32], &mut [f32])>> = match rain_layers {
-        Some((alpha, rain_depth)) => alpha
-            .chunks_mut(band)
-            .zip(rain_depth.chunks_mut(band))
-            .map(Some)
-            .collect(),
-        None => (0..bands).map(|_| None).collect(),
-    };
+    // Each band's particle layers: [rain_alpha, rain_depth_m, snow_alpha], empty where the
+    // frame does not draw one (no particle of that effect is in the list then).
+    let mut rain_bands: Vec<[&mut [f32]; 3]> = (0..bands).map(|_| Default::default()).collect();
+    if let Some((alpha, rain_depth)) = rain_layers {
+        for (b, (a, d)) in rain_bands
+            .iter_mut()
+            .zip(alpha.chunks_mut(band).zip(rain_depth.chunks_mut(band)))
+        {
+            (b[0], b[1]) = (a, d);
+        }
+    }
+    if let Some(snow_alpha) = snow_layer {
+        for (b, s) in rain_bands.iter_mut().zip(snow_alpha.chunks_mut(band)) {
+            b[2] = s;
+        }
+    }
     let rays = ViewRays::new(cam);
     let particles = binned.as_ref().map(|(streaks, bins)| (*streaks, bins));
     // The pipeline, band by band while the band is in cache: the scene stage, then the effect
@@ -103,16 +128,21 @@ pub fn render_into(
                     g.apply_row(cam, y as u32, rgb_row);
                 }
             }
-            if let (Some((streaks, (offsets, indices))), Some((alpha, rain_depth))) =
-                (particles, rain_band.as_mut())
-            {
+            if let Some((streaks, (offsets, indices))) = particles {
                 let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
+                let [alpha, rain_depth, snow_alpha] = rain_band;
                 composite_band_colour(
-                    streaks, list, y0, w, depth_band, rgb_band, alpha, rain_depth,
+                    streaks,
+                    list,
+                    y0,
+                    w,
+                    depth_band,
+                    rgb_band,
+                    [&mut **alpha, &mut **rain_depth, &mut **snow_alpha],
                 );
             }
         });
-    Ok(passes.rain_report())
+    Ok((passes.rain_report(), passes.snow_report()))
 }
 
 /// The scene stage of one row: the box scene ray cast, or the photo's row copied.
@@ -170,7 +200,7 @@ mod tests {
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
         let light = SceneLight::new(&sky, &amb);
-        let fused = render(SceneRef::Boxes(&scene), &cam, &light, Some(&h), None).unwrap();
+        let fused = render(SceneRef::Boxes(&scene), &cam, &light, Some(&h), None, None).unwrap();
         let t_layer = fused.layer(Layer::Transmittance).unwrap().to_vec();
         for y in 0..30u32 {
             for x in 0..40u32 {
@@ -202,6 +232,7 @@ mod tests {
             },
             &cam,
             &light,
+            None,
             None,
             None,
         )
@@ -245,7 +276,7 @@ mod tests {
             shelter: &[],
             shading: &shading,
         };
-        let want = render(scene, &cam, &light, Some(&h), Some(&rf)).unwrap();
+        let want = render(scene, &cam, &light, Some(&h), Some(&rf), None).unwrap();
         let (mut rgb, mut d, mut t, mut a, mut rd) = (
             vec![f32::NAN; 3 * n],
             vec![f32::NAN; n],
@@ -262,7 +293,7 @@ mod tests {
                 (Layer::RainDepth, &mut rd[..]),
             ],
         );
-        let (stats, drops) = render_into(scene, &cam, &light, Some(&h), Some(&rf), out)
+        let (stats, drops) = render_into(scene, &cam, &light, Some(&h), Some(&rf), None, out)
             .unwrap()
             .unwrap();
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
@@ -275,7 +306,7 @@ mod tests {
         // Buffers that do not match the request are named.
         let short = FrameOut::from_layers(&mut rgb[1..], &mut d, []);
         assert!(matches!(
-            render_into(scene, &cam, &light, None, None, short),
+            render_into(scene, &cam, &light, None, None, None, short),
             Err(Error::Length {
                 param: Param { name: "rgb", .. },
                 ..
@@ -283,7 +314,7 @@ mod tests {
         ));
         let missing = FrameOut::from_layers(&mut rgb, &mut d, []);
         assert!(matches!(
-            render_into(scene, &cam, &light, Some(&h), None, missing),
+            render_into(scene, &cam, &light, Some(&h), None, None, missing),
             Err(Error::Length {
                 param: Param {
                     name: "transmittance",
@@ -301,7 +332,7 @@ mod tests {
             ],
         );
         assert!(matches!(
-            render_into(scene, &cam, &light, None, None, extra),
+            render_into(scene, &cam, &light, None, None, None, extra),
             Err(Error::Length {
                 param: Param {
                     name: "rain_alpha",
@@ -333,6 +364,7 @@ mod tests {
                 },
                 &cam,
                 &light,
+                None,
                 None,
                 None
             ),

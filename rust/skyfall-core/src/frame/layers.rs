@@ -11,6 +11,8 @@ pub enum Layer {
     RainAlpha,
     /// The depth of the nearest visible streak, m; inf where none (the particle pass, rain).
     RainDepth,
+    /// The flakes' coverage 1 − ∏(1 − aᵢ) (the particle pass, snow).
+    SnowAlpha,
     /// The windshield's drops' coverage, 0–1 (the windshield stage).
     DropMask,
     /// The windshield's metaball field above its 0.5 threshold, 0 off the drops (the
@@ -19,7 +21,7 @@ pub enum Layer {
 }
 
 /// How many layers there are.
-pub const LAYER_COUNT: usize = 5;
+pub const LAYER_COUNT: usize = 6;
 
 impl Layer {
     /// Every layer, in the order frames list them.
@@ -27,6 +29,7 @@ impl Layer {
         Layer::Transmittance,
         Layer::RainAlpha,
         Layer::RainDepth,
+        Layer::SnowAlpha,
         Layer::DropMask,
         Layer::DropHeight,
     ];
@@ -37,6 +40,7 @@ impl Layer {
             Layer::Transmittance => "transmittance",
             Layer::RainAlpha => "rain_alpha",
             Layer::RainDepth => "rain_depth_m",
+            Layer::SnowAlpha => "snow_alpha",
             Layer::DropMask => "drop_mask",
             Layer::DropHeight => "drop_height",
         }
@@ -48,6 +52,7 @@ impl Layer {
             Layer::Transmittance => "haze transmittance e^(-sigma d) along the pixel's view ray",
             Layer::RainAlpha => "rain streak coverage 1 - prod(1 - a_i)",
             Layer::RainDepth => "depth of the nearest visible rain streak, m (inf: none)",
+            Layer::SnowAlpha => "snowflake coverage 1 - prod(1 - a_i)",
             Layer::DropMask => "coverage of the windshield's drops, 0-1",
             Layer::DropHeight => {
                 "the windshield's metaball field above its 0.5 threshold (0: no drop)"
@@ -62,6 +67,7 @@ impl Layer {
             Layer::Transmittance => 1.0,
             Layer::RainAlpha => 0.0,
             Layer::RainDepth => f32::INFINITY,
+            Layer::SnowAlpha => 0.0,
             Layer::DropMask | Layer::DropHeight => 0.0,
         }
     }
@@ -69,10 +75,11 @@ impl Layer {
     /// Whether a frame with these passes draws the layer. The windshield's layers are drawn by
     /// its stage after the frame (`skyfall.windshield.composite`, over either backend's frame),
     /// never by these passes.
-    pub const fn drawn(self, haze: bool, rain: bool) -> bool {
+    pub const fn drawn(self, haze: bool, rain: bool, snow: bool) -> bool {
         match self {
             Layer::Transmittance => haze,
             Layer::RainAlpha | Layer::RainDepth => rain,
+            Layer::SnowAlpha => snow,
             Layer::DropMask | Layer::DropHeight => false,
         }
     }
@@ -122,7 +129,12 @@ mod tests {
         let mut names: Vec<_> = Layer::ALL.iter().map(|l| l.name()).collect();
         names.dedup();
         assert_eq!(names.len(), LAYER_COUNT);
-        assert!(Layer::Transmittance.drawn(true, false) && !Layer::RainAlpha.drawn(true, false));
+        assert!(
+            Layer::Transmittance.drawn(true, false, false)
+                && !Layer::RainAlpha.drawn(true, false, true)
+                && Layer::SnowAlpha.drawn(false, false, true)
+                && !Layer::SnowAlpha.drawn(true, true, false)
+        );
     }
 
     #[test]
@@ -134,5 +146,6 @@ mod tests {
             1.0 - std::iter::empty::<f32>().product::<f32>()
         );
         assert!(Layer::RainDepth.neutral().is_infinite() && Layer::RainDepth.neutral() > 0.0);
+        assert_eq!(Layer::SnowAlpha.neutral(), Layer::RainAlpha.neutral());
     }
 }

@@ -139,9 +139,9 @@ impl<'a> FrameOut<'a> {
         out
     }
 
-    /// Checks the buffers against a `cam` frame with or without haze and rain: every length,
-    /// and the layers given exactly when they are drawn.
-    pub fn check(&self, cam: &Camera, haze: bool, rain: bool) -> Result<()> {
+    /// Checks the buffers against a `cam` frame with or without haze, rain and snow: every
+    /// length, and the layers given exactly when they are drawn.
+    pub fn check(&self, cam: &Camera, haze: bool, rain: bool, snow: bool) -> Result<()> {
         let n = cam.pixels();
         let length = |name: &'static str, len: usize, expected: usize| Error::Length {
             param: Param { name, index: None },
@@ -155,9 +155,9 @@ impl<'a> FrameOut<'a> {
             return Err(length("depth_m", self.depth_m.len(), n));
         }
         for l in Layer::ALL {
-            let want = if l.drawn(haze, rain) { n } else { 0 };
+            let want = if l.drawn(haze, rain, snow) { n } else { 0 };
             let got = self.layers.get(l).map_or(0, |b| b.len());
-            if got != want || self.layers.get(l).is_some() != l.drawn(haze, rain) {
+            if got != want || self.layers.get(l).is_some() != l.drawn(haze, rain, snow) {
                 return Err(length(l.name(), got, want));
             }
         }
@@ -166,12 +166,13 @@ impl<'a> FrameOut<'a> {
 }
 
 impl FrameBuffers {
-    /// A `cam` frame's buffers (with each layer the passes draw, given `haze` and `rain`),
-    /// sized after the frame is checked to fit, filled by a backend's `render_into`.
+    /// A `cam` frame's buffers (with each layer the passes draw, given `haze`, `rain` and
+    /// `snow`), sized after the frame is checked to fit, filled by a backend's `render_into`.
     pub fn filled<E: From<Error>>(
         cam: &Camera,
         haze: bool,
         rain: bool,
+        snow: bool,
         render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
     ) -> std::result::Result<Self, E> {
         check_frame_size(cam)?;
@@ -183,7 +184,7 @@ impl FrameBuffers {
         );
         let mut layers: Layers<Vec<f32>> = Layers::default();
         for l in Layer::ALL {
-            if l.drawn(haze, rain) {
+            if l.drawn(haze, rain, snow) {
                 layers.set(l, try_filled_par(l.name(), n, 0.0f32)?);
             }
         }

@@ -14,6 +14,8 @@ use crate::scene::camera::{Camera, Defocus, ThinLens};
 use crate::scene::lights::Light;
 use crate::sky::Sky;
 use crate::sky::ambient::AmbientMap;
+use crate::snow::flakes::SnowRegion;
+use crate::snow::streaks::{SNOW_ALBEDO, SnowFrame, SnowOpacity};
 use crate::weather::Weather;
 use glam::Vec3;
 use std::sync::Arc;
@@ -88,6 +90,7 @@ pub struct FrameSetup {
     lights: Vec<Light>,
     sky_illuminance_lux: f32,
     rain: Option<(RainRegion, RainShading)>,
+    snow: Option<(SnowRegion, RainShading, SnowOpacity)>,
     shelter: Vec<SceneBox>,
     exposure_s: f32,
     camera_velocity_m_s: Vec3,
@@ -165,14 +168,29 @@ impl FrameSetup {
             }
             None => None,
         };
+        // The flakes are lit as the drops are, as opaque white scatterers (r = 1, their
+        // albedo's share of the light).
+        let snow = w.snow_region(req.time_s, req.seed)?.map(|region| {
+            let shading = RainShading {
+                reflectance: 1.0,
+                drop_radiance: SNOW_ALBEDO,
+                lights: req.lights.to_vec(),
+                sky_illuminance_lux: w.sky_illuminance_lux as f32,
+                cull_threshold: req.cull_threshold.map(|t| t as f32),
+                ambient: Some(Arc::clone(&req.ambient)),
+                radiance_scale: units,
+            };
+            (region, shading, w.snow_opacity)
+        });
         let (ground, boxes): (bool, &[SceneBox]) = match &req.scene {
             SceneData::Boxes(b) => (b.ground, &b.boxes),
             SceneData::Photo { occluders, .. } | SceneData::Photo8 { occluders, .. } => {
                 (false, occluders)
             }
         };
-        // The boxes that keep the rain off what they cover, when it rains and they do.
-        let shelter = if rain.is_some() && w.rain_sheltered {
+        // The boxes that keep the rain (and the snow) off what they cover, when it rains or
+        // snows and they do.
+        let shelter = if (rain.is_some() || snow.is_some()) && w.rain_sheltered {
             boxes.to_vec()
         } else {
             Vec::new()
@@ -190,6 +208,7 @@ impl FrameSetup {
             lights: req.lights.to_vec(),
             sky_illuminance_lux: w.sky_illuminance_lux as f32,
             rain,
+            snow,
             shelter,
             exposure_s: req.exposure_s as f32,
             camera_velocity_m_s: Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32),
@@ -215,5 +234,22 @@ impl FrameSetup {
             shelter: &self.shelter,
             shading,
         })
+    }
+
+    /// The snow the frame draws, when it snows.
+    pub fn snow(&self) -> Option<SnowFrame<'_>> {
+        self.snow
+            .as_ref()
+            .map(|(region, shading, opacity)| SnowFrame {
+                region,
+                exposure_s: self.exposure_s,
+                camera_velocity_m_s: self.camera_velocity_m_s,
+                lens: self.lens,
+                ground: self.ground,
+                shelter: &self.shelter,
+                shading,
+                opacity: *opacity,
+                extinction_per_m: self.haze.as_ref().map_or(0.0, |h| h.extinction_per_m),
+            })
     }
 }

@@ -19,9 +19,10 @@ use crate::error::{Error, Param, Result};
 use crate::haze::{Haze, ViewRays};
 use crate::particles::binning::bin_by_tiles;
 use crate::particles::composite::{Accumulator, composite_band};
-use crate::particles::streak::ScreenStreak;
+use crate::particles::streak::{LAYER_SNOW, ScreenStreak};
 use crate::rain::streaks::{RainFrame, RainStats};
 use crate::scene::camera::Camera;
+use crate::snow::streaks::{SnowFrame, SnowStats};
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use std::cell::RefCell;
@@ -48,6 +49,8 @@ pub struct Photo8Out<'a> {
     pub srgb: &'a mut [u8],
     /// The rain's coverage 1 − ∏(1 − aᵢ), H·W, when wanted.
     pub rain_alpha: Option<&'a mut [f32]>,
+    /// The snow's coverage 1 − ∏(1 − aᵢ), H·W, when wanted.
+    pub snow_alpha: Option<&'a mut [f32]>,
 }
 
 /// What the rain did: streak counts and drops generated.
@@ -57,6 +60,8 @@ pub struct Photo8Stats {
     pub rain: RainStats,
     /// Drops generated (in the voxels that can reach the view, less the sheltered ones).
     pub drops: usize,
+    /// The snow's flakes and streaks, when it snows.
+    pub snow: Option<SnowStats>,
 }
 
 fn length_error(name: &'static str, len: usize, expected: usize) -> Error {
@@ -77,6 +82,8 @@ struct Scratch {
     q: Vec<f32>,
     /// The coverage product ∏(1 − a), when the alpha layer is wanted.
     cover: Vec<f32>,
+    /// The snow's, when its layer is wanted.
+    snow_cover: Vec<f32>,
     /// A row's transmittance.
     t_row: Vec<f32>,
 }
@@ -87,13 +94,14 @@ thread_local! {
     static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
 
-/// Renders haze and rain over an 8-bit photo into `out` (same size), on the CPU. Returns the
-/// rain's counts when `rain` is given.
+/// Renders haze, rain and snow over an 8-bit photo into `out` (same size), on the CPU.
+/// Returns the particles' counts when `rain` or `snow` is given.
 pub fn render_photo8(
     cam: &Camera,
     photo: &Photo8<'_>,
     haze: Option<&Haze>,
     rain: Option<&RainFrame<'_>>,
+    snow: Option<&SnowFrame<'_>>,
     out: Photo8Out<'_>,
 ) -> Result<Option<Photo8Stats>> {
     check_frame_size(cam)?;
@@ -112,18 +120,31 @@ pub fn render_photo8(
     {
         return Err(length_error("rain_alpha", a.len(), n));
     }
+    if let Some(a) = &out.snow_alpha
+        && a.len() != n
+    {
+        return Err(length_error("snow_alpha", a.len(), n));
+    }
     crate::haze::check_depth(photo.depth_m)?;
 
-    let passes = Passes::prepare(cam, None, haze, rain)?;
-    let stats = passes
-        .rain_report()
-        .map(|(rain, drops)| Photo8Stats { rain, drops });
+    let passes = Passes::prepare(cam, None, haze, rain, snow)?;
+    let stats = (rain.is_some() || snow.is_some()).then(|| {
+        let (rain, drops) = passes.rain_report().unwrap_or_default();
+        Photo8Stats {
+            rain,
+            drops,
+            snow: passes.snow_report(),
+        }
+    });
     let streaks: &[ScreenStreak] = passes.particles.as_ref().map_or(&[], |p| &p.streaks);
     if haze.is_none() && streaks.is_empty() {
         // Nothing to draw: encode(decode(b)) = b for every byte (tested), so the bytes as they are.
         out.srgb.copy_from_slice(photo.srgb);
         if let Some(a) = out.rain_alpha {
             a.fill(crate::frame::layers::Layer::RainAlpha.neutral());
+        }
+        if let Some(a) = out.snow_alpha {
+            a.fill(crate::frame::layers::Layer::SnowAlpha.neutral());
         }
         return Ok(stats);
     }
@@ -144,6 +165,10 @@ pub fn render_photo8(
         Some(a) => a.chunks_mut(band).map(Some).collect(),
         None => (0..n.div_ceil(band)).map(|_| None).collect(),
     };
+    let mut snow_bands: Vec<Option<&mut [f32]>> = match out.snow_alpha {
+        Some(a) => a.chunks_mut(band).map(Some).collect(),
+        None => (0..n.div_ceil(band)).map(|_| None).collect(),
+    };
     let air = haze.map_or([0.0; 3], |h| h.airlight);
     // Grey light everywhere (the sky's; coloured lamps aside): Q's three channels are equal.
     let grey = streaks.iter().all(|s| {
@@ -154,8 +179,9 @@ pub fn render_photo8(
     out.srgb
         .par_chunks_mut(3 * band)
         .zip(alpha_bands.par_iter_mut())
+        .zip(snow_bands.par_iter_mut())
         .enumerate()
-        .for_each(|(bi, (out_band, alpha))| {
+        .for_each(|(bi, ((out_band, alpha), snow_alpha))| {
             let y0 = bi * BAND_ROWS;
             let rows = out_band.len() / (3 * w);
             let px = rows * w;
@@ -163,13 +189,20 @@ pub fn render_photo8(
             let src = &photo.srgb[3 * y0 * w..3 * (y0 * w + px)];
             SCRATCH.with(|cell| {
                 let mut guard = cell.borrow_mut();
-                let Scratch { p, q, cover, t_row } = &mut *guard;
+                let Scratch {
+                    p,
+                    q,
+                    cover,
+                    snow_cover,
+                    t_row,
+                } = &mut *guard;
                 // Sized for the band; a tile initialises its own columns before drawing (a tile's
                 // windows may spill a few columns into a neighbour's: they write those back
                 // unchanged, a = 0).
                 p.resize(px, 1.0);
                 q.resize(k * px, 0.0);
                 cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
+                snow_cover.resize(if snow_alpha.is_some() { px } else { 0 }, 1.0);
                 t_row.clear();
                 t_row.resize(w, 1.0);
                 for tx in 0..tiles_x {
@@ -184,7 +217,10 @@ pub fn render_photo8(
                             for c in 0..k {
                                 q[c * px + seg.start..c * px + seg.end].fill(0.0);
                             }
-                            if let Some(c) = cover.get_mut(seg) {
+                            if let Some(c) = cover.get_mut(seg.clone()) {
+                                c.fill(1.0);
+                            }
+                            if let Some(c) = snow_cover.get_mut(seg) {
                                 c.fill(1.0);
                             }
                         }
@@ -194,7 +230,16 @@ pub fn render_photo8(
                         } else {
                             raster_tile::<3>
                         };
-                        raster(streaks, mine, y0, rows, w, cols.clone(), depth, p, q, cover);
+                        raster(
+                            streaks,
+                            mine,
+                            (y0, rows, w),
+                            cols.clone(),
+                            depth,
+                            p,
+                            q,
+                            [cover, snow_cover],
+                        );
                     }
                     let t_seg = &mut t_row[..cols.len()];
                     for row in 0..rows {
@@ -240,14 +285,19 @@ pub fn render_photo8(
                                 out_row,
                             ),
                         }
-                        if let Some(a) = alpha.as_deref_mut() {
-                            let a = &mut a[seg.clone()];
-                            if rained {
-                                for (o, c) in a.iter_mut().zip(&cover[seg]) {
-                                    *o = 1.0 - c;
+                        for (layer, cov) in [
+                            (alpha.as_deref_mut(), &*cover),
+                            (snow_alpha.as_deref_mut(), &*snow_cover),
+                        ] {
+                            if let Some(a) = layer {
+                                let a = &mut a[seg.clone()];
+                                if rained {
+                                    for (o, c) in a.iter_mut().zip(&cov[seg.clone()]) {
+                                        *o = 1.0 - c;
+                                    }
+                                } else {
+                                    a.fill(0.0);
                                 }
-                            } else {
-                                a.fill(0.0);
                             }
                         }
                     }
@@ -266,19 +316,21 @@ struct AffineAccumulator<'a, const K: usize> {
     p: &'a mut [f32],
     q: [&'a mut [f32]; K],
     cover: &'a mut [f32],
+    /// The snow's coverage product, when its layer is wanted (else empty).
+    snow_cover: &'a mut [f32],
 }
 
 impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
-    /// The light per channel and r.
-    type Streak = ([f32; 3], f32);
+    /// The light per channel, r, and whether it is the snow's.
+    type Streak = ([f32; 3], f32, bool);
 
     #[inline(always)]
-    fn streak(&self, light: Vec3, r: f32) -> Self::Streak {
-        (light.to_array(), r)
+    fn streak(&self, light: Vec3, r: f32, layer: u8) -> Self::Streak {
+        (light.to_array(), r, layer == LAYER_SNOW)
     }
 
     #[inline(always)]
-    fn add_x4(&mut self, (l, r): &Self::Streak, i: usize, a: Vec4, _inv_z: Vec4) {
+    fn add_x4(&mut self, (l, r, snow): &Self::Streak, i: usize, a: Vec4, _inv_z: Vec4) {
         let end = i + 4;
         let ar = a * *r;
         let keep = Vec4::ONE - ar;
@@ -286,21 +338,30 @@ impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
         for (q, &lc) in self.q.iter_mut().zip(l) {
             (Vec4::from_slice(&q[i..end]) * keep + ar * lc).write_to_slice(&mut q[i..end]);
         }
-        if end <= self.cover.len() {
-            (Vec4::from_slice(&self.cover[i..end]) * (Vec4::ONE - a))
-                .write_to_slice(&mut self.cover[i..end]);
+        let cover = if *snow {
+            &mut *self.snow_cover
+        } else {
+            &mut *self.cover
+        };
+        if end <= cover.len() {
+            (Vec4::from_slice(&cover[i..end]) * (Vec4::ONE - a)).write_to_slice(&mut cover[i..end]);
         }
     }
 
     #[inline(always)]
-    fn add(&mut self, (l, r): &Self::Streak, i: usize, a: f32, _inv_z: f32) {
+    fn add(&mut self, (l, r, snow): &Self::Streak, i: usize, a: f32, _inv_z: f32) {
         let ar = a * r;
         let keep = 1.0 - ar;
         self.p[i] *= keep;
         for (q, &lc) in self.q.iter_mut().zip(l) {
             q[i] = q[i] * keep + ar * lc;
         }
-        if let Some(c) = self.cover.get_mut(i) {
+        let cover = if *snow {
+            &mut *self.snow_cover
+        } else {
+            &mut *self.cover
+        };
+        if let Some(c) = cover.get_mut(i) {
             *c *= 1.0 - a;
         }
     }
@@ -308,30 +369,32 @@ impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
 
 /// Composites a tile's streaks (`mine`, indices into `streaks`, far to near; the tile: the
 /// band's rows, columns `cols`) into the band's affine maps (see [`AffineAccumulator`]: P in
-/// `p`, Q in `q`'s `K` planes, the coverage product in `cover` when it is not empty).
+/// `p`, Q in `q`'s `K` planes, the rain's and the snow's coverage products in `cover` and
+/// `snow_cover` when they are not empty).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn raster_tile<const K: usize>(
     streaks: &[ScreenStreak],
     mine: &[u32],
-    y0: usize,
-    rows: usize,
-    w: usize,
+    (y0, rows, w): (usize, usize, usize),
     cols: std::ops::Range<usize>,
     depth: &[f32],
     p: &mut [f32],
     q: &mut [f32],
-    cover: &mut [f32],
+    [cover, snow_cover]: [&mut [f32]; 2],
 ) {
     let px = p.len();
     let mut planes = q.chunks_exact_mut(px);
     let q: [&mut [f32]; K] = std::array::from_fn(|_| planes.next().unwrap_or_default());
-    let cover = if cover.is_empty() {
-        cover
-    } else {
-        &mut cover[..px]
+    let cut = |c: &mut [f32]| c.len().min(px);
+    let (nc, ns) = (cut(cover), cut(snow_cover));
+    let (cover, snow_cover) = (&mut cover[..nc], &mut snow_cover[..ns]);
+    let mut acc = AffineAccumulator::<K> {
+        p,
+        q,
+        cover,
+        snow_cover,
     };
-    let mut acc = AffineAccumulator::<K> { p, q, cover };
     composite_band(streaks, mine, y0, rows, w, cols, depth, &mut acc);
 }
 
@@ -565,6 +628,7 @@ mod tests {
             &light,
             Some(&haze),
             Some(&rf),
+            None,
         )
         .unwrap();
         let mut expected = vec![0u8; srgb.len()];
@@ -581,9 +645,11 @@ mod tests {
             &photo,
             Some(&haze),
             Some(&rf),
+            None,
             Photo8Out {
                 srgb: &mut out,
                 rain_alpha: Some(&mut alpha),
+                snow_alpha: None,
             },
         )
         .unwrap()
@@ -714,9 +780,11 @@ mod tests {
             &photo,
             Some(&haze),
             None,
+            None,
             Photo8Out {
                 srgb: &mut out,
                 rain_alpha: None,
+                snow_alpha: None,
             },
         )
         .unwrap();
@@ -727,9 +795,11 @@ mod tests {
             &photo,
             None,
             None,
+            None,
             Photo8Out {
                 srgb: &mut out,
                 rain_alpha: Some(&mut alpha),
+                snow_alpha: None,
             },
         )
         .unwrap();
@@ -755,9 +825,11 @@ mod tests {
             &short,
             None,
             None,
+            None,
             Photo8Out {
                 srgb: &mut out,
                 rain_alpha: None,
+                snow_alpha: None,
             },
         )
         .unwrap_err();
@@ -773,9 +845,11 @@ mod tests {
             &bad,
             None,
             None,
+            None,
             Photo8Out {
                 srgb: &mut out,
                 rain_alpha: None,
+                snow_alpha: None,
             },
         )
         .unwrap_err();
@@ -793,9 +867,11 @@ mod tests {
             &ok,
             None,
             None,
+            None,
             Photo8Out {
                 srgb: &mut out[..3],
                 rain_alpha: None,
+                snow_alpha: None,
             },
         )
         .unwrap_err();

@@ -8,7 +8,7 @@
 //! must treat as nothing (no branch on it).
 
 use super::binning::bin_by_tiles;
-use super::streak::ScreenStreak;
+use super::streak::{LAYER_SNOW, ScreenStreak};
 use super::walk::{for_each_fragment_in, for_each_fragment_x4};
 use crate::error::Result;
 use crate::scene::camera::Camera;
@@ -24,9 +24,10 @@ pub trait Accumulator {
     /// Per-streak values the accumulator needs (its light, arranged as the accumulator reads
     /// it), made once per streak and band.
     type Streak;
-    /// The per-streak values of `light`, the streak's received light per channel, and `r`,
-    /// the share of it the streak shows.
-    fn streak(&self, light: Vec3, r: f32) -> Self::Streak;
+    /// The per-streak values of `light`, the streak's received light per channel, `r`,
+    /// the share of it the streak shows, and `layer`, the effect whose layers it draws into
+    /// ([`super::streak::LAYER_RAIN`], [`super::streak::LAYER_SNOW`]).
+    fn streak(&self, light: Vec3, r: f32, layer: u8) -> Self::Streak;
     /// Four consecutive pixels of a row from `i` (i + 4 ≤ the band's pixels).
     fn add_x4(&mut self, s: &Self::Streak, i: usize, a: Vec4, inv_z: Vec4);
     /// One pixel.
@@ -57,7 +58,7 @@ pub fn composite_band<A: Accumulator>(
         if let Some(&ahead) = list.get(n + 8) {
             std::hint::black_box(streaks[ahead as usize].touch());
         }
-        let st = acc.streak(s.light(), s.reflectance());
+        let st = acc.streak(s.light(), s.reflectance(), s.layer());
         let walked = for_each_fragment_x4(s, y0, rows, w, cols.clone(), |i, a, inv_z| {
             let Some(end) = i.checked_add(4).filter(|&e| e <= px) else {
                 return;
@@ -80,32 +81,43 @@ pub fn composite_band<A: Accumulator>(
 }
 
 /// The float frame's accumulator over a band: the colour composited in place,
-/// C ← C + a·r·(I_R − C) (r per streak); the coverage product ∏(1 − a) (in `alpha`, turned into 1 − it by
-/// [`ColourAccumulator::finish`]) and the nearest visible fragment's depth.
+/// C ← C + a·r·(I_R − C) (r per streak); per layer, the coverage product ∏(1 − a) (in
+/// `alpha` for the rain's particles and `snow_alpha` for the snow's, turned into 1 − it by
+/// [`ColourAccumulator::finish`]) and the rain's nearest visible fragment's depth. A layer's
+/// buffers may be empty when the list holds no particle of its effect.
 pub struct ColourAccumulator<'a> {
     /// Linear RGB of the band, 3 per pixel.
     pub rgb: &'a mut [f32],
-    /// ∏(1 − a) per pixel while compositing.
+    /// ∏(1 − a) of the rain's particles per pixel while compositing.
     pub alpha: &'a mut [f32],
-    /// Nearest visible depth per pixel, m (inf: none).
+    /// Nearest visible rain particle's depth per pixel, m (inf: none).
     pub rain_depth_m: &'a mut [f32],
+    /// ∏(1 − a) of the snow's particles per pixel while compositing.
+    pub snow_alpha: &'a mut [f32],
 }
 
 impl<'a> ColourAccumulator<'a> {
-    /// Starts a band: the coverage product at 1, no depth.
-    pub fn new(rgb: &'a mut [f32], alpha: &'a mut [f32], rain_depth_m: &'a mut [f32]) -> Self {
+    /// Starts a band: the coverage products at 1, no depth.
+    pub fn new(
+        rgb: &'a mut [f32],
+        alpha: &'a mut [f32],
+        rain_depth_m: &'a mut [f32],
+        snow_alpha: &'a mut [f32],
+    ) -> Self {
         alpha.fill(1.0);
         rain_depth_m.fill(f32::INFINITY);
+        snow_alpha.fill(1.0);
         ColourAccumulator {
             rgb,
             alpha,
             rain_depth_m,
+            snow_alpha,
         }
     }
 
-    /// Ends the band: the coverage 1 − ∏(1 − aᵢ).
+    /// Ends the band: the coverages 1 − ∏(1 − aᵢ).
     pub fn finish(self) {
-        for a in self.alpha.iter_mut() {
+        for a in self.alpha.iter_mut().chain(self.snow_alpha.iter_mut()) {
             *a = 1.0 - *a;
         }
     }
@@ -113,11 +125,11 @@ impl<'a> ColourAccumulator<'a> {
 
 impl Accumulator for ColourAccumulator<'_> {
     /// The light per channel, and as the three vectors of four pixels' twelve interleaved
-    /// colour values: R G B R | G B R G | B R G B.
-    type Streak = ([f32; 3], [Vec4; 3], f32);
+    /// colour values: R G B R | G B R G | B R G B; r; whether it is the snow's.
+    type Streak = ([f32; 3], [Vec4; 3], f32, bool);
 
     #[inline(always)]
-    fn streak(&self, light: Vec3, r: f32) -> Self::Streak {
+    fn streak(&self, light: Vec3, r: f32, layer: u8) -> Self::Streak {
         let [lr, lg, lb] = light.to_array();
         (
             [lr, lg, lb],
@@ -127,11 +139,12 @@ impl Accumulator for ColourAccumulator<'_> {
                 Vec4::new(lb, lr, lg, lb),
             ],
             r,
+            layer == LAYER_SNOW,
         )
     }
 
     #[inline(always)]
-    fn add_x4(&mut self, (_, lv, r): &Self::Streak, i: usize, a: Vec4, inv_z: Vec4) {
+    fn add_x4(&mut self, (_, lv, r, snow): &Self::Streak, i: usize, a: Vec4, inv_z: Vec4) {
         let end = i + 4;
         // As `add`, lane by lane (same bits).
         let ar = a * *r;
@@ -141,6 +154,11 @@ impl Accumulator for ColourAccumulator<'_> {
             let cv = Vec4::from_slice(&c[4 * m..4 * m + 4]);
             (cv + *ar * (*l - cv)).write_to_slice(&mut c[4 * m..4 * m + 4]);
         }
+        if *snow {
+            let sa = &mut self.snow_alpha[i..end];
+            (Vec4::from_slice(sa) * (Vec4::ONE - a)).write_to_slice(sa);
+            return;
+        }
         let alpha = &mut self.alpha[i..end];
         (Vec4::from_slice(alpha) * (Vec4::ONE - a)).write_to_slice(alpha);
         let z = Vec4::select(a.cmpgt(Vec4::ZERO), Vec4::ONE / inv_z, Vec4::INFINITY);
@@ -149,10 +167,14 @@ impl Accumulator for ColourAccumulator<'_> {
     }
 
     #[inline(always)]
-    fn add(&mut self, (light, _, r): &Self::Streak, i: usize, a: f32, inv_z: f32) {
+    fn add(&mut self, (light, _, r, snow): &Self::Streak, i: usize, a: f32, inv_z: f32) {
         let ar = a * r;
         for (c, l) in self.rgb[3 * i..3 * i + 3].iter_mut().zip(light) {
             *c += ar * (l - *c);
+        }
+        if *snow {
+            self.snow_alpha[i] *= 1.0 - a;
+            return;
         }
         self.alpha[i] *= 1.0 - a;
         let z = if a > 0.0 { 1.0 / inv_z } else { f32::INFINITY };
@@ -184,26 +206,49 @@ pub fn bin_by_bands(cam: &Camera, streaks: &[ScreenStreak]) -> Result<(Vec<u32>,
 /// whole frame, bands of rows in parallel; each band draws only the streaks binned to it.
 #[cfg(test)]
 pub fn composite_streaks(cam: &Camera, streaks: &[ScreenStreak], t: RainTargets<'_>) -> Result<()> {
+    composite_streaks_with_snow(cam, streaks, t, &mut [])
+}
+
+/// [`composite_streaks`] with the snow's coverage layer too (H·W, or empty when no flakes).
+#[cfg(test)]
+pub fn composite_streaks_with_snow(
+    cam: &Camera,
+    streaks: &[ScreenStreak],
+    t: RainTargets<'_>,
+    snow_alpha: &mut [f32],
+) -> Result<()> {
     use rayon::prelude::*;
     let w = cam.width as usize;
     let band = BAND_ROWS * w;
     let (offsets, indices) = bin_by_bands(cam, streaks)?;
+    let bands = t.depth_m.len().div_ceil(band);
+    let mut snow: Vec<&mut [f32]> = snow_alpha.chunks_mut(band).collect();
+    snow.resize_with(bands, Default::default);
     t.rgb
         .par_chunks_mut(3 * band)
         .zip(t.depth_m.par_chunks(band))
         .zip(t.alpha.par_chunks_mut(band))
         .zip(t.rain_depth_m.par_chunks_mut(band))
+        .zip(snow.par_iter_mut())
         .enumerate()
-        .for_each(|(bi, (((rgb, depth), alpha), rdepth))| {
+        .for_each(|(bi, ((((rgb, depth), alpha), rdepth), snow))| {
             let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
-            composite_band_colour(streaks, list, bi * BAND_ROWS, w, depth, rgb, alpha, rdepth);
+            composite_band_colour(
+                streaks,
+                list,
+                bi * BAND_ROWS,
+                w,
+                depth,
+                rgb,
+                [alpha, rdepth, snow],
+            );
         });
     Ok(())
 }
 
 /// One band of the float frame: rows from `y0` (as many as `depth` holds), every column, the
-/// colour `rgb` composited in place, `alpha` and `rain_depth_m` overwritten.
-#[allow(clippy::too_many_arguments)]
+/// colour `rgb` composited in place, the layers `[rain_alpha, rain_depth_m, snow_alpha]`
+/// overwritten (a layer's buffer empty when no particle of its effect is in the list).
 #[inline(never)]
 pub fn composite_band_colour(
     streaks: &[ScreenStreak],
@@ -212,14 +257,16 @@ pub fn composite_band_colour(
     w: usize,
     depth: &[f32],
     rgb: &mut [f32],
-    alpha: &mut [f32],
-    rain_depth_m: &mut [f32],
+    [alpha, rain_depth_m, snow_alpha]: [&mut [f32]; 3],
 ) {
     let px = depth.len();
+    let cut = |b: &mut [f32]| b.len().min(px);
+    let (na, nd, ns) = (cut(alpha), cut(rain_depth_m), cut(snow_alpha));
     let mut acc = ColourAccumulator::new(
         &mut rgb[..3 * px],
-        &mut alpha[..px],
-        &mut rain_depth_m[..px],
+        &mut alpha[..na],
+        &mut rain_depth_m[..nd],
+        &mut snow_alpha[..ns],
     );
     composite_band(streaks, list, y0, px / w, w, 0..w, depth, &mut acc);
     acc.finish();

@@ -25,6 +25,20 @@ pub fn permute_in_place<T: Copy>(v: &mut [T], mut from: Vec<u32>) {
     }
 }
 
+/// Sorts streaks far to near, ties in their given order: (key, index) pairs are a total order,
+/// so the unstable sort of the small pairs gives the stable sort's order, the same in every
+/// process, without moving the streaks around.
+pub fn far_to_near(streaks: &mut [super::streak::ScreenStreak]) {
+    use rayon::prelude::*;
+    let mut order: Vec<(f32, u32)> = streaks
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s.inv_za + s.inv_zb, i as u32))
+        .collect();
+    order.par_sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
+    permute_in_place(streaks, order.into_iter().map(|(_, i)| i).collect());
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -55,6 +55,156 @@ pub struct ScreenStreak {
     pub(crate) inv_len: f32,
     pub(crate) slope: f32,
     pub(crate) half: f32,
+    /// Which effect's layers the particle draws into ([`LAYER_RAIN`], [`LAYER_SNOW`]).
+    pub(crate) layer: u8,
+    /// Its sprite across the path ([`Sprite`]; the rain's: flat).
+    pub(crate) sprite: Sprite,
+}
+
+/// Layer index of the rain's particles: `rain_alpha` and `rain_depth_m`.
+pub const LAYER_RAIN: u8 = 0;
+/// Layer index of the snow's particles: `snow_alpha`.
+pub const LAYER_SNOW: u8 = 1;
+
+/// The kinds of sprite a particle's path can carry across it.
+pub const SPRITE_FLAT: u8 = 0;
+/// A lump (an aggregate seen as a disc): the disc's projection, (4/π)·√(1 − x²).
+pub const SPRITE_LUMP: u8 = 1;
+/// A six-armed stellar dendrite at an angle θ to the path: a quarter a disc-like core, three
+/// quarters its three diameters (arms), each projected onto the axis across the path as a
+/// uniform density over |x| ≤ c_k = max(|cos(θ + kπ/3)|, [`ARM_MIN`]).
+pub const SPRITE_STAR: u8 = 2;
+/// A broad, flat aggregate: 1.5·(1 − x²).
+pub const SPRITE_AGGREGATE: u8 = 3;
+/// The narrowest projected arm of a star, as a share of its half-width (an arm along the path
+/// projects to a line: it is given this width instead).
+pub const ARM_MIN: f32 = 0.2;
+
+/// A procedural sprite: the particle's shape seen across its motion, a density p(x) over
+/// x = across / half-width in [0, 1] with mean 1 (so the streak's opacity-area α·w·L is kept).
+/// A streak long against its width is its sprite averaged along the path, which is the
+/// sprite's projection onto the axis across it: that projection is what is drawn, times the
+/// same profile along the path within half a width of either end ([`Sprite::end_profile`]).
+/// `ScreenStreak::packed` carries it as one float (layer·8 + kind + θ/(π/3)); `rain.wgsl`'s
+/// `sprite_profile` mirrors [`Sprite::profile`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sprite {
+    kind: u8,
+    /// θ / (π/3) in [0, 1) (stars only).
+    turn: f32,
+    /// 1/c_k per arm (stars), and the c_k.
+    arm: [f32; 3],
+    inv_arm: [f32; 3],
+}
+
+impl Sprite {
+    /// The rain's: flat across (its silhouette is in α).
+    pub const FLAT: Sprite = Sprite {
+        kind: SPRITE_FLAT,
+        turn: 0.0,
+        arm: [1.0; 3],
+        inv_arm: [1.0; 3],
+    };
+
+    /// A sprite of `kind` (one of the `SPRITE_*`), a star turned by `turn`·π/3 (in [0, 1)).
+    pub fn new(kind: u8, turn: f32) -> Self {
+        let kind = kind.min(SPRITE_AGGREGATE);
+        let turn = if kind == SPRITE_STAR {
+            turn.clamp(0.0, 0.999)
+        } else {
+            0.0
+        };
+        let third = std::f32::consts::FRAC_PI_3;
+        let arm: [f32; 3] =
+            std::array::from_fn(|k| (turn * third + k as f32 * third).cos().abs().max(ARM_MIN));
+        Sprite {
+            kind,
+            turn,
+            arm,
+            inv_arm: arm.map(|c| 1.0 / c),
+        }
+    }
+
+    /// Its kind (`SPRITE_*`).
+    pub fn kind(&self) -> u8 {
+        self.kind
+    }
+
+    /// The density across at x = across / half-width (≥ 0), mean 1 over [0, 1].
+    #[inline(always)]
+    pub fn profile(&self, x: f32) -> f32 {
+        let one_minus = pos(1.0 - x * x);
+        match self.kind {
+            SPRITE_LUMP => std::f32::consts::FRAC_2_PI * 2.0 * one_minus.sqrt(),
+            SPRITE_STAR => {
+                let disc = std::f32::consts::FRAC_2_PI * 2.0 * one_minus.sqrt();
+                let arm = |k: usize| {
+                    if x <= self.arm[k] {
+                        self.inv_arm[k]
+                    } else {
+                        0.0
+                    }
+                };
+                0.25 * disc + 0.25 * (arm(0) + arm(1) + arm(2))
+            }
+            SPRITE_AGGREGATE => 1.5 * one_minus,
+            _ => 1.0,
+        }
+    }
+
+    /// The sprite along the path at its ends: `e` px in from the nearer end of a band
+    /// `half_w` px in half-width, the profile at 1 − e/half_w within half a width of the end
+    /// (so a dot, a path as long as the flake is wide, is the profile across times the profile
+    /// along, a soft round blob rather than a square), 1 further in. Its mean over an end's
+    /// half-width is the profile's, 1: the opacity-area is kept.
+    #[inline(always)]
+    pub fn end_profile(&self, e: f32, half_w: f32) -> f32 {
+        if e < half_w {
+            self.profile(1.0 - e / half_w)
+        } else {
+            1.0
+        }
+    }
+
+    /// [`Self::end_profile`] for four values, lane for lane the same bits.
+    #[inline(always)]
+    pub fn end_profile_x4(&self, e: Vec4, half_w: Vec4) -> Vec4 {
+        Vec4::select(
+            e.cmplt(half_w),
+            self.profile_x4(Vec4::ONE - e / half_w),
+            Vec4::ONE,
+        )
+    }
+
+    /// [`Self::profile`] for four values, lane for lane the same bits.
+    #[inline(always)]
+    pub fn profile_x4(&self, x: Vec4) -> Vec4 {
+        let one_minus = (Vec4::ONE - x * x).max(Vec4::ZERO);
+        let k = std::f32::consts::FRAC_2_PI * 2.0;
+        match self.kind {
+            SPRITE_LUMP => Vec4::splat(k) * one_minus.sqrt(),
+            SPRITE_STAR => {
+                let disc = Vec4::splat(k) * one_minus.sqrt();
+                let arm = |j: usize| {
+                    Vec4::select(
+                        x.cmple(Vec4::splat(self.arm[j])),
+                        Vec4::splat(self.inv_arm[j]),
+                        Vec4::ZERO,
+                    )
+                };
+                Vec4::splat(0.25) * disc + Vec4::splat(0.25) * (arm(0) + arm(1) + arm(2))
+            }
+            SPRITE_AGGREGATE => Vec4::splat(1.5) * one_minus,
+            _ => Vec4::ONE,
+        }
+    }
+}
+
+/// How much of a sprite shows on a band `width` px wide: none below 2 px (the pixels average
+/// it away), all from 4 px.
+#[inline(always)]
+fn sprite_ramp(width: f32) -> f32 {
+    clamp01(0.5 * width - 1.0)
 }
 
 /// A point relative to the camera's position (as particles are kept) in camera space.
@@ -178,6 +328,8 @@ pub fn screen_streak_through(
         inv_len,
         slope,
         half,
+        layer: LAYER_RAIN,
+        sprite: Sprite::FLAT,
     })
 }
 
@@ -198,9 +350,48 @@ impl ScreenStreak {
         self.reflectance
     }
 
+    /// Which effect's layers it draws into ([`LAYER_RAIN`], [`LAYER_SNOW`]).
+    pub fn layer(&self) -> u8 {
+        self.layer
+    }
+
+    /// Its sprite.
+    pub fn sprite(&self) -> Sprite {
+        self.sprite
+    }
+
+    /// The streak drawn into `layer`'s layers with `sprite` across it, its light `light`, r
+    /// `reflectance` and α scaled by `opacity` (a particle's share of its band's silhouette
+    /// and its fading with distance).
+    pub fn with_particle(
+        mut self,
+        layer: u8,
+        sprite: Sprite,
+        light: Vec3,
+        reflectance: f32,
+        opacity: f32,
+    ) -> Self {
+        self.layer = layer;
+        self.sprite = sprite;
+        self.light = light;
+        self.reflectance = reflectance;
+        self.alpha *= opacity;
+        self
+    }
+
+    /// α, the share of the exposure a pixel on its path is covered (times its opacity).
+    pub fn alpha(&self) -> f32 {
+        self.alpha
+    }
+
+    /// The sprite and layer as the packed float: layer·8 + kind + turn.
+    fn sprite_code(&self) -> f32 {
+        f32::from(self.layer) * 8.0 + f32::from(self.sprite.kind) + self.sprite.turn
+    }
+
     /// The streak as 16 floats for the GPU pass: a.xy, the unit direction | length, reach
     /// (the distance from the axis beyond which a pixel gets no coverage), w_a, w_b | 1/z_a,
-    /// 1/z_b, α, r | light rgb, 0. Direction, length and reach are the values
+    /// 1/z_b, α, r | light rgb, sprite (layer·8 + kind + turn: 0 for rain). Direction, length and reach are the values
     /// [`Self::fragment`] uses, so the shader does not compute its own.
     pub fn packed(&self) -> [f32; 16] {
         [
@@ -219,7 +410,7 @@ impl ScreenStreak {
             self.light.x,
             self.light.y,
             self.light.z,
-            0.0,
+            self.sprite_code(),
         ]
     }
 
@@ -334,11 +525,16 @@ impl ScreenStreak {
             0.0
         };
         let width = self.wa + (self.wb - self.wa) * k;
-        let cov_across = if width >= 1.0 {
+        let mut cov_across = if width >= 1.0 {
             (0.5 * width + 0.5 - across).clamp(0.0, 1.0)
         } else {
             width * (1.0 - across).clamp(0.0, 1.0)
         };
+        if self.sprite.kind != SPRITE_FLAT && width >= 1.0 {
+            let p = self.sprite.profile(across / (0.5 * width))
+                * self.sprite.end_profile(along.min(len - along), 0.5 * width);
+            cov_across *= 1.0 + sprite_ramp(width) * (p - 1.0);
+        }
         let cov_along = (along + 0.5)
             .clamp(0.0, 1.0)
             .min((len - along + 0.5).clamp(0.0, 1.0));
@@ -361,13 +557,20 @@ impl ScreenStreak {
     pub(crate) fn coverage<const THIN: bool>(&self, along: f32, across: f32) -> (f32, f32) {
         let k = clamp01(along * self.inv_len);
         let width = self.wa + (self.wb - self.wa) * k;
-        let cov_across = if THIN {
+        let mut cov_across = if THIN {
             width * pos(1.0 - across)
         } else if width >= 1.0 {
             clamp01(0.5 * width + 0.5 - across)
         } else {
             width * clamp01(1.0 - across)
         };
+        if !THIN && self.sprite.kind != SPRITE_FLAT && width >= 1.0 {
+            let p = self.sprite.profile(across / (0.5 * width))
+                * self
+                    .sprite
+                    .end_profile(least(along, self.len - along), 0.5 * width);
+            cov_across *= 1.0 + sprite_ramp(width) * (p - 1.0);
+        }
         let cov_along = clamp01(least(along, self.len - along) + 0.5);
         (
             self.alpha * cov_across * cov_along,
@@ -384,13 +587,23 @@ impl ScreenStreak {
         let clamp01 = |x: Vec4| x.max(zero).min(one);
         let k = clamp01(along * self.inv_len);
         let width = Vec4::splat(self.wa) + Vec4::splat(self.wb - self.wa) * k;
-        let cov_across = if THIN {
+        let mut cov_across = if THIN {
             width * (one - across).max(zero)
         } else {
             let wide = clamp01(half * width + half - across);
             let thin = width * clamp01(one - across);
             Vec4::select(width.cmpge(one), wide, thin)
         };
+        if !THIN && self.sprite.kind != SPRITE_FLAT {
+            // As `coverage`, lane by lane: only where the band is a pixel wide or more.
+            let p = self.sprite.profile_x4(across / (half * width))
+                * self
+                    .sprite
+                    .end_profile_x4(along.min(Vec4::splat(self.len) - along), half * width);
+            let ramp = clamp01(half * width - one);
+            let shaped = cov_across * (one + ramp * (p - one));
+            cov_across = Vec4::select(width.cmpge(one), shaped, cov_across);
+        }
         let cov_along = clamp01(along.min(Vec4::splat(self.len) - along) + half);
         (
             Vec4::splat(self.alpha) * cov_across * cov_along,

@@ -16,7 +16,7 @@ use super::drops::Drop;
 use crate::error::Result;
 #[cfg(test)]
 use crate::particles::composite::{RainTargets, composite_streaks};
-use crate::particles::order::permute_in_place;
+use crate::particles::order::far_to_near;
 use crate::particles::streak::{ScreenStreak, screen_streak_through};
 use crate::scene::camera::{Camera, Defocus};
 use crate::scene::lights::Light;
@@ -118,16 +118,8 @@ pub fn prepare(
             s.light *= shading.radiance_scale;
         }
     }
-    // Far to near, ties in the drops' order: (key, index) pairs are a total order, so the
-    // unstable sort of the small pairs gives the stable sort's order, the same in every
-    // process, without moving the streaks around.
-    let mut order: Vec<(f32, u32)> = streaks
-        .iter()
-        .enumerate()
-        .map(|(i, s)| (s.inv_za + s.inv_zb, i as u32))
-        .collect();
-    order.par_sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
-    permute_in_place(&mut streaks, order.into_iter().map(|(_, i)| i).collect());
+    // Far to near, ties in the drops' order.
+    far_to_near(&mut streaks);
     stats.streaks = streaks.len();
     (streaks, stats)
 }

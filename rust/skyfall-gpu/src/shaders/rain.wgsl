@@ -1,12 +1,41 @@
-// Rain streaks over the frame, per pixel over its tile's streaks (sorted far to near on the
-// CPU). CPU reference: skyfall_core::particles (ScreenStreak::fragment, composite_band),
-// kept line for line comparable. Prepended with common.wgsl.
+// Particle streaks (rain and snow) over the frame, per pixel over its tile's streaks (sorted
+// far to near on the CPU). CPU reference: skyfall_core::particles (ScreenStreak::fragment,
+// Sprite::profile, composite_band), kept line for line comparable. Prepended with common.wgsl.
 
 struct RainParams {
     streak_count: u32,
     tiles_x: u32,
     tile_w: u32,
     tile_h: u32,
+    layers: u32,  // bit 0: rain_alpha and rain_depth_m drawn; bit 1: snow_alpha
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+// Sprite::profile: a particle's density across its path at x = across / half-width, mean 1
+// over [0, 1]; kind 0 flat (rain), 1 lump, 2 six-armed star turned by turn·π/3, 3 aggregate.
+fn sprite_profile(kind: u32, turn: f32, x: f32) -> f32 {
+    let one_minus = max(1.0 - x * x, 0.0);
+    let disc = 1.2732395 * sqrt(one_minus);
+    if kind == 1u {
+        return disc;
+    }
+    if kind == 2u {
+        let third = 1.0471976;
+        var arms = 0.0;
+        for (var k = 0u; k < 3u; k++) {
+            let c = max(abs(cos(turn * third + f32(k) * third)), 0.2);
+            if x <= c {
+                arms += 1.0 / c;
+            }
+        }
+        return 0.25 * disc + 0.25 * arms;
+    }
+    if kind == 3u {
+        return 1.5 * one_minus;
+    }
+    return 1.0;
 }
 
 @group(0) @binding(0) var<uniform> cam: Camera;
@@ -18,6 +47,7 @@ struct RainParams {
 @group(0) @binding(6) var<storage, read> depth: array<f32>;
 @group(0) @binding(7) var<storage, read_write> alpha: array<f32>;
 @group(0) @binding(8) var<storage, read_write> rain_depth: array<f32>;
+@group(0) @binding(9) var<storage, read_write> snow_alpha: array<f32>;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -30,6 +60,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = (gid.y / params.tile_h) * params.tiles_x + gid.x / params.tile_w;
     var c = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);
     var keep = 1.0;
+    var keep_snow = 1.0;
     var z_min = infinity();
     let scene_depth = depth[i];
     for (var j = offsets[t]; j < offsets[t + 1u]; j++) {
@@ -58,6 +89,22 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         } else {
             cov_across = width * clamp(1.0 - across, 0.0, 1.0);
         }
+        // The sprite: packed as layer·8 + kind + turn (0 for rain).
+        let code = streaks[4u * k + 3u].w;
+        let layer = u32(floor(code / 8.0));
+        let rest = code - 8.0 * f32(layer);
+        let kind = u32(floor(rest));
+        if kind != 0u && width >= 1.0 {
+            let turn = rest - f32(kind);
+            let half_w = 0.5 * width;
+            var p = sprite_profile(kind, turn, across / half_w);
+            // Sprite::end_profile: the profile along too, within half a width of either end.
+            let e = min(along, len - along);
+            if e < half_w {
+                p *= sprite_profile(kind, turn, 1.0 - e / half_w);
+            }
+            cov_across *= 1.0 + clamp(0.5 * width - 1.0, 0.0, 1.0) * (p - 1.0);
+        }
         let cov_along = min(clamp(along + 0.5, 0.0, 1.0), clamp(len - along + 0.5, 0.0, 1.0));
         let cov = cov_across * cov_along;
         if cov <= 0.0 {
@@ -72,12 +119,21 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let fa = s2.z * cov;
         let ar = fa * s2.w;  // r, per streak
         c += ar * (light - c);
-        keep *= 1.0 - fa;
-        z_min = min(z_min, z);
+        if layer == 1u {
+            keep_snow *= 1.0 - fa;
+        } else {
+            keep *= 1.0 - fa;
+            z_min = min(z_min, z);
+        }
     }
     rgb[3u * i] = c.x;
     rgb[3u * i + 1u] = c.y;
     rgb[3u * i + 2u] = c.z;
-    alpha[i] = 1.0 - keep;
-    rain_depth[i] = z_min;
+    if (params.layers & 1u) != 0u {
+        alpha[i] = 1.0 - keep;
+        rain_depth[i] = z_min;
+    }
+    if (params.layers & 2u) != 0u {
+        snow_alpha[i] = 1.0 - keep_snow;
+    }
 }
