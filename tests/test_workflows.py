@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from skyfall import Camera, PhotoScene, Renderer, Weather, _core, display, io, scenes, testing, widgets
+from skyfall import Camera, PhotoScene, Renderer, Weather, _core, display, io, scenes, snow, testing, widgets
 
 W, H = 48, 27
 
@@ -41,7 +41,8 @@ def test_every_layer_has_a_neutral_value_declared_with_it():
 
 
 def test_drawn_layers_are_the_frames_own_arrays(renderer):
-    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, visibility_m=300.0))
+    cover = snow.accumulate(scenes.street(), Weather(snow_rate_mm_h=2.0), duration_s=600.0, dt_s=600.0, resolution_m=4.0)
+    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, visibility_m=300.0), snow_cover=cover)
     assert set(frame.layers) == set(_core.LAYERS)
     for name in _core.LAYERS:
         assert frame.layer(name) is frame.layers[name]
@@ -57,12 +58,14 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
     # (visibility 1e12 m and no rain: transmittance within 1e-6 of 1, the sky's path included)
     rain = renderer.render(scenes.street(), Weather(rain_rate_mm_h=0.5, rain_near_m=1.0), seed=3)
     haze = renderer.render(scenes.street(), Weather(visibility_m=1e12))
+    bare = snow.accumulate(scenes.street(), Weather(), duration_s=0.0, resolution_m=4.0)  # no snow: depth 0
+    cover = renderer.render(scenes.street(), Weather(), snow_cover=bare).layers["snow_depth_m"]
     empty = rain.layers["rain_alpha"] == 0.0
     assert empty.any() and (~empty).any()
     for name in _core.LAYERS:
         layer = clear.layer(name)
         assert layer.shape == (H, W) and layer.dtype == np.float32 and not layer.flags.writeable
-        untouched = haze.layers[name] if name == "transmittance" else rain.layers[name][empty]
+        untouched = haze.layers[name] if name == "transmittance" else cover if name == "snow_depth_m" else rain.layers[name][empty]
         assert len(np.unique(layer)) == 1
         np.testing.assert_allclose(untouched, layer[0, 0], rtol=1e-6)
         with pytest.raises(ValueError):
@@ -224,5 +227,5 @@ def test_renderer_cache_makes_one_renderer_per_size():
 def test_weather_fields_pass_through_unchanged():
     # the helper's keyword arguments are Weather's own: a field it does not know is an error
     assert {f.name for f in dataclasses.fields(Weather)} >= {"visibility_m", "wind_m_s", "rain_near_m"}
-    with pytest.raises(TypeError, match="snow_rate"):
-        testing.with_weather(photo8(), snow_rate_mm_h=1.0)
+    with pytest.raises(TypeError, match="hail_rate"):
+        testing.with_weather(photo8(), hail_rate_mm_h=1.0)

@@ -17,7 +17,7 @@ sky
 Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`.
 """
 
-from skyfall import io, physics, rain, scenes, sky
+from skyfall import io, physics, rain, scenes, sky, snow
 from skyfall._core import GpuUnavailableError, SkyfallError, __version__
 from skyfall.camera import Camera
 from skyfall.lights import PointLight, SpotLight
@@ -41,4 +41,5 @@ __all__ = [
     "rain",
     "scenes",
     "sky",
+    "snow",
 ]

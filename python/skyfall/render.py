@@ -27,6 +27,7 @@ from skyfall.weather import Weather
 
 if TYPE_CHECKING:
     from skyfall._core import _Request
+    from skyfall.snow import SnowCover
 
 __all__ = ["BACKENDS", "Frame", "Renderer"]
 
@@ -255,6 +256,7 @@ class Renderer:
         ambient_spacing_m: float = 1.0,
         ambient_samples: int = sky.MAP_SAMPLES,
         out: Frame | None = None,
+        snow_cover: SnowCover | None = None,
     ) -> Frame:
         """Render one frame.
 
@@ -288,13 +290,18 @@ class Renderer:
             back in the new frame (layers this frame does not draw are left out of it; layers
             it draws that ``out`` lacks are new arrays). Fresh arrays cost the kernel's zeroing
             of every page (58 MB per 1080p frame with its layers); reusing them saves that.
+        snow_cover : SnowCover, optional
+            Snow lying on the scene (:func:`skyfall.snow.accumulate` of this scene): its
+            surfaces whiten and lift by the depth on them, and the frame carries
+            ``layers["snow_depth_m"]`` (the depth on each pixel's surface, 0 where none).
+            None (default): no cover, and the frame is exactly the one without it.
 
         Returns
         -------
         Frame
         """
         weather = weather if weather is not None else Weather()
-        request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
+        request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, snow_cover)
         arrays = self._out_arrays(out) if out is not None else None
         # One core call: the core derives the sky, the haze and its airlight, the rain and its
         # light from the request, and names the layers it drew (skyfall._core.LAYERS).
@@ -322,6 +329,7 @@ class Renderer:
         ambient_samples: int = sky.MAP_SAMPLES,
         out: NDArray[np.uint8] | None = None,
         rain_alpha_out: NDArray[np.float32] | None = None,
+        snow_cover: SnowCover | None = None,
     ) -> NDArray[np.uint8]:
         """Render one frame straight to 8-bit sRGB: the augmentation path.
 
@@ -342,6 +350,9 @@ class Renderer:
         rain_alpha_out : ndarray of float32, shape (H, W), optional
             Filled with the rain's coverage (``frame.layers["rain_alpha"]``; zeros without
             rain) when given: the ground truth of a deraining dataset.
+        snow_cover : SnowCover, optional
+            As for :meth:`render`. A frame with a cover is rendered on the float path and
+            encoded (the fused 8-bit path does not draw covers).
 
         Raises
         ------
@@ -361,7 +372,7 @@ class Renderer:
         self._check_srgb8_outputs(scene, out, rain_alpha_out)
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
-        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None:
+        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None and snow_cover is None:
             request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
             _core.render_photo8(request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out)
             return out
@@ -374,6 +385,7 @@ class Renderer:
             cull_threshold=cull_threshold,
             ambient_spacing_m=ambient_spacing_m,
             ambient_samples=ambient_samples,
+            snow_cover=snow_cover,
         )
         out[...] = io.to_srgb8(frame.rgb)
         if rain_alpha_out is not None:
@@ -420,6 +432,7 @@ class Renderer:
         cull_threshold: float | None,
         ambient_spacing_m: float,
         ambient_samples: int,
+        snow_cover: SnowCover | None = None,
     ) -> _Request:
         """The frame's request for ``_core.render_frame`` and ``_core.render_photo8``: the
         frame's own objects (the core reads them attribute by attribute), with the scene's
@@ -438,7 +451,7 @@ class Renderer:
         else:
             raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
         cull = None if cull_threshold is None else in_range("cull_threshold", cull_threshold)
-        return {
+        request: _Request = {
             "camera": cam,
             "weather": weather,
             "scene": scene,
@@ -447,6 +460,12 @@ class Renderer:
             "cull_threshold": cull,
             "ambient": self._ambient(scene, weather, cam, ambient_spacing_m, ambient_samples),
         }
+        if snow_cover is not None:
+            core_cover = getattr(snow_cover, "core", None)
+            if not isinstance(core_cover, _core.SnowCoverGrid):
+                raise TypeError(f"snow_cover must be a skyfall.snow.SnowCover, got {type(snow_cover).__name__}")
+            request["snow_cover"] = core_cover
+        return request
 
     @staticmethod
     def _ambient(

@@ -11,15 +11,22 @@ pub enum Layer {
     RainAlpha,
     /// The depth of the nearest visible streak, m; inf where none (the particle pass, rain).
     RainDepth,
+    /// The depth of snow lying on the visible surface, m; 0 where none (the scene stage, with
+    /// a snow cover).
+    SnowDepth,
 }
 
 /// How many layers there are.
-pub const LAYER_COUNT: usize = 3;
+pub const LAYER_COUNT: usize = 4;
 
 impl Layer {
     /// Every layer, in the order frames list them.
-    pub const ALL: [Layer; LAYER_COUNT] =
-        [Layer::Transmittance, Layer::RainAlpha, Layer::RainDepth];
+    pub const ALL: [Layer; LAYER_COUNT] = [
+        Layer::Transmittance,
+        Layer::RainAlpha,
+        Layer::RainDepth,
+        Layer::SnowDepth,
+    ];
 
     /// The layer's name, as users see it (`frame.layers[name]`, EXR channel names).
     pub const fn name(self) -> &'static str {
@@ -27,6 +34,7 @@ impl Layer {
             Layer::Transmittance => "transmittance",
             Layer::RainAlpha => "rain_alpha",
             Layer::RainDepth => "rain_depth_m",
+            Layer::SnowDepth => "snow_depth_m",
         }
     }
 
@@ -36,6 +44,7 @@ impl Layer {
             Layer::Transmittance => "haze transmittance e^(-sigma d) along the pixel's view ray",
             Layer::RainAlpha => "rain streak coverage 1 - prod(1 - a_i)",
             Layer::RainDepth => "depth of the nearest visible rain streak, m (inf: none)",
+            Layer::SnowDepth => "depth of snow lying on the visible surface, m (0: none)",
         }
     }
 
@@ -46,14 +55,21 @@ impl Layer {
             Layer::Transmittance => 1.0,
             Layer::RainAlpha => 0.0,
             Layer::RainDepth => f32::INFINITY,
+            Layer::SnowDepth => 0.0,
         }
     }
 
-    /// Whether a frame with these passes draws the layer.
+    /// Whether a frame with these passes and no snow cover draws the layer.
     pub const fn drawn(self, haze: bool, rain: bool) -> bool {
+        self.drawn_with_cover(haze, rain, false)
+    }
+
+    /// Whether a frame with these passes, and a snow cover or not, draws the layer.
+    pub const fn drawn_with_cover(self, haze: bool, rain: bool, snow_cover: bool) -> bool {
         match self {
             Layer::Transmittance => haze,
             Layer::RainAlpha | Layer::RainDepth => rain,
+            Layer::SnowDepth => snow_cover,
         }
     }
 

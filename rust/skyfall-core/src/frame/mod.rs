@@ -142,6 +142,17 @@ impl<'a> FrameOut<'a> {
     /// Checks the buffers against a `cam` frame with or without haze and rain: every length,
     /// and the layers given exactly when they are drawn.
     pub fn check(&self, cam: &Camera, haze: bool, rain: bool) -> Result<()> {
+        self.check_with_cover(cam, haze, rain, false)
+    }
+
+    /// [`Self::check`] for a frame with a snow cover or not.
+    pub fn check_with_cover(
+        &self,
+        cam: &Camera,
+        haze: bool,
+        rain: bool,
+        snow_cover: bool,
+    ) -> Result<()> {
         let n = cam.pixels();
         let length = |name: &'static str, len: usize, expected: usize| Error::Length {
             param: Param { name, index: None },
@@ -155,9 +166,10 @@ impl<'a> FrameOut<'a> {
             return Err(length("depth_m", self.depth_m.len(), n));
         }
         for l in Layer::ALL {
-            let want = if l.drawn(haze, rain) { n } else { 0 };
+            let drawn = l.drawn_with_cover(haze, rain, snow_cover);
+            let want = if drawn { n } else { 0 };
             let got = self.layers.get(l).map_or(0, |b| b.len());
-            if got != want || self.layers.get(l).is_some() != l.drawn(haze, rain) {
+            if got != want || self.layers.get(l).is_some() != drawn {
                 return Err(length(l.name(), got, want));
             }
         }
@@ -174,6 +186,17 @@ impl FrameBuffers {
         rain: bool,
         render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
     ) -> std::result::Result<Self, E> {
+        Self::filled_with_cover(cam, haze, rain, false, render_into)
+    }
+
+    /// [`Self::filled`] for a frame with a snow cover or not.
+    pub fn filled_with_cover<E: From<Error>>(
+        cam: &Camera,
+        haze: bool,
+        rain: bool,
+        snow_cover: bool,
+        render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
+    ) -> std::result::Result<Self, E> {
         check_frame_size(cam)?;
         let n = cam.pixels();
         // Reserved fallibly: out of memory is an error, never an abort.
@@ -183,7 +206,7 @@ impl FrameBuffers {
         );
         let mut layers: Layers<Vec<f32>> = Layers::default();
         for l in Layer::ALL {
-            if l.drawn(haze, rain) {
+            if l.drawn_with_cover(haze, rain, snow_cover) {
                 layers.set(l, try_filled_par(l.name(), n, 0.0f32)?);
             }
         }

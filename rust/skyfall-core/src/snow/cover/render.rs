@@ -1,0 +1,415 @@
+//! The cover in a frame: white, lifted surfaces with the albedo of snow, lit as the surfaces
+//! are (the ambient-light map, the lamps), and the `snow_depth_m` layer.
+//!
+//! - **Box scenes**: the snow is the height field's columns from each cell's base up to the
+//!   base plus the depth, ray cast cell by cell (a 2D DDA over the grid,
+//!   [`SnowRender::trace`]) up to the boxes' own hit; a ray that meets a column's top sees it
+//!   with normal +Y, one that meets its side (above the base: below it is the box or the
+//!   ground) with that side's normal.
+//! - **Photos**: each pixel's world point (depth through the camera) and its normal from the
+//!   depth map's neighbours; the snow of its cell lies on it when the point is on the cell's
+//!   top surface and the normal faces up ([`photo_depth_m`]); the pixel whitens towards the
+//!   snow's radiance by the cover's coverage.
+//!
+//! - Beyond the grid, upward faces of a box scene carry the open ground's cover
+//!   ([`super::SnowCover::open_depth_m`], not lifted): the far ground of an open scene.
+//!
+//! Coverage: thin snow lets the surface beneath show; its share of the pixel is
+//! 1 − e^(−d/[`COVER_EFOLD_M`]) (our choice: 3 cm hide 95 %). Albedo [`SNOW_ALBEDO`].
+
+use super::SnowCover;
+use super::heightfield::{PHOTO_RANGE_M, photo_points};
+use crate::error::Result;
+use crate::scene::boxes::{BoxScene, trace};
+use crate::scene::camera::Camera;
+use crate::scene::raycast::inverse_direction;
+use crate::sky::ambient::AmbientMap;
+use glam::Vec3;
+
+/// Albedo of fresh snow in the visible, 0.85: fresh dry snow reflects 0.80–0.90 of the
+/// visible sunlight (Cuffey & Paterson, *The Physics of Glaciers*, 4th ed., 2010, Table 5.2,
+/// fresh dry snow 0.75–0.98; Warren, *Optical properties of snow*, Rev. Geophys. 1982: above
+/// 0.9 at 0.4–0.7 µm for deep fine-grained snow, less for the broadband and older snow).
+pub const SNOW_ALBEDO: f32 = 0.85;
+
+/// Depth of snow over which its coverage of the surface beneath rises to 1 − 1/e, m.
+pub const COVER_EFOLD_M: f32 = 0.01;
+
+/// Snow on photo surfaces whose normal's y is at least this (60° from level).
+const UP_MIN: f32 = 0.5;
+/// … and fully from this (about 37°).
+const UP_FULL: f32 = 0.8;
+
+/// Coverage of a surface by `depth_m` of snow.
+#[inline]
+pub fn coverage(depth_m: f32) -> f32 {
+    if depth_m > 0.0 {
+        1.0 - (-depth_m / COVER_EFOLD_M).exp()
+    } else {
+        0.0
+    }
+}
+
+/// A cover ready to draw.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SnowRender {
+    origin: [f32; 2],
+    spacing: f32,
+    nx: usize,
+    nz: usize,
+    base: Vec<f32>,
+    depth: Vec<f32>,
+    y_lo: f32,
+    y_hi: f32,
+    /// The depth on level open ground, m: drawn on upward faces beyond the grid.
+    open_depth: f32,
+    /// For a photo: the snow's depth on each pixel's surface, m.
+    pub photo_depth_m: Option<Vec<f32>>,
+    /// The photo's units relative to the renderer's (the snow's radiance is scaled by it).
+    pub radiance_scale: Vec3,
+}
+
+impl SnowRender {
+    /// The cover of a box scene.
+    pub fn boxes(cover: &SnowCover) -> Self {
+        let g = cover.field.grid;
+        let base: Vec<f32> = cover.field.base_m.iter().map(|&b| b as f32).collect();
+        let depth: Vec<f32> = cover.depth_m.iter().map(|&d| d as f32).collect();
+        let (mut y_lo, mut y_hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (&b, &d) in base.iter().zip(depth.iter()) {
+            if d > 0.0 && !b.is_nan() {
+                y_lo = y_lo.min(b);
+                y_hi = y_hi.max(b + d);
+            }
+        }
+        SnowRender {
+            origin: [g.origin_m[0] as f32, g.origin_m[1] as f32],
+            spacing: g.spacing_m as f32,
+            nx: g.nx,
+            nz: g.nz,
+            base,
+            depth,
+            y_lo,
+            y_hi,
+            open_depth: cover.open_depth_m as f32,
+            photo_depth_m: None,
+            radiance_scale: Vec3::ONE,
+        }
+    }
+
+    /// The cover of a photo seen by `cam` with `depth_m`, in the photo's units
+    /// `radiance_scale`.
+    pub fn photo(
+        cover: &SnowCover,
+        cam: &Camera,
+        depth_m: &[f32],
+        radiance_scale: Vec3,
+    ) -> Result<Self> {
+        if depth_m.len() != cam.pixels() {
+            return Err(crate::error::Error::Length {
+                param: crate::error::Param {
+                    name: "depth_m",
+                    index: None,
+                },
+                len: depth_m.len(),
+                expected: cam.pixels(),
+            });
+        }
+        let mut r = SnowRender::boxes(cover);
+        r.photo_depth_m = Some(photo_depth_m(cover, cam, depth_m));
+        r.radiance_scale = radiance_scale;
+        // A photo's snow is drawn per pixel, never ray cast.
+        r.y_lo = f32::INFINITY;
+        r.y_hi = f32::NEG_INFINITY;
+        Ok(r)
+    }
+
+    /// The grid's flat buffers for the GPU: (origin x, origin z, spacing, nx, nz, y_lo,
+    /// y_hi), base and depth per cell.
+    pub fn gpu_grid(&self) -> ([f32; 5], [u32; 2], &[f32], &[f32]) {
+        (
+            [
+                self.origin[0],
+                self.origin[1],
+                self.spacing,
+                self.y_lo,
+                self.y_hi,
+            ],
+            [self.nx as u32, self.nz as u32],
+            &self.base,
+            &self.depth,
+        )
+    }
+
+    /// Whether world point `p` lies over the grid.
+    #[inline]
+    pub fn covers(&self, p: Vec3) -> bool {
+        let (u, v) = (
+            (p.x - self.origin[0]) / self.spacing,
+            (p.z - self.origin[1]) / self.spacing,
+        );
+        u >= 0.0 && v >= 0.0 && u < self.nx as f32 && v < self.nz as f32
+    }
+
+    /// Nearest snow along `o + t·d`, 0 ≤ t ≤ `t_max`: (t, normal, depth of snow there).
+    pub fn trace(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, Vec3, f32)> {
+        if self.y_lo > self.y_hi {
+            return None;
+        }
+        let s = self.spacing;
+        let lo = Vec3::new(self.origin[0], self.y_lo, self.origin[1]);
+        let hi = Vec3::new(
+            self.origin[0] + s * self.nx as f32,
+            self.y_hi,
+            self.origin[1] + s * self.nz as f32,
+        );
+        let inv = inverse_direction(d);
+        let t1v = (lo - o) * inv;
+        let t2v = (hi - o) * inv;
+        let (tn, tf) = (t1v.min(t2v), t1v.max(t2v));
+        let t_enter = tn.max_element().max(0.0);
+        let t_exit = tf.min_element().min(t_max);
+        if t_enter > t_exit {
+            return None;
+        }
+        // The entry face's normal, for a hit on the first cell's side.
+        let mut side = if tn.x >= tn.y && tn.x >= tn.z {
+            Vec3::new(-d.x.signum(), 0.0, 0.0)
+        } else if tn.z >= tn.y {
+            Vec3::new(0.0, 0.0, -d.z.signum())
+        } else {
+            Vec3::new(0.0, -d.y.signum(), 0.0)
+        };
+        let p = o + d * t_enter;
+        let cell = |v: f32, o: f32, n: usize| (((v - o) / s).floor().max(0.0) as usize).min(n - 1);
+        let (mut i, mut k) = (
+            cell(p.x, self.origin[0], self.nx),
+            cell(p.z, self.origin[1], self.nz),
+        );
+        let (sx, sz) = (d.x >= 0.0, d.z >= 0.0);
+        let boundary = |c: usize, o: f32, up: bool| o + s * (c as f32 + if up { 1.0 } else { 0.0 });
+        let mut tx = if d.x != 0.0 {
+            (boundary(i, self.origin[0], sx) - o.x) * inv.x
+        } else {
+            f32::INFINITY
+        };
+        let mut tz = if d.z != 0.0 {
+            (boundary(k, self.origin[1], sz) - o.z) * inv.z
+        } else {
+            f32::INFINITY
+        };
+        let (dtx, dtz) = ((s * inv.x).abs(), (s * inv.z).abs());
+        let mut t_in = t_enter;
+        for _ in 0..(self.nx + self.nz + 2) {
+            let t_out = tx.min(tz).min(t_exit);
+            let idx = k * self.nx + i;
+            let dep = self.depth[idx];
+            if dep > 0.0 {
+                let b = self.base[idx];
+                let top = b + dep;
+                let (a0, a1) = if d.y != 0.0 {
+                    let ta = (b - o.y) / d.y;
+                    let tb = (top - o.y) / d.y;
+                    (ta.min(tb), ta.max(tb))
+                } else if o.y >= b && o.y <= top {
+                    (f32::NEG_INFINITY, f32::INFINITY)
+                } else {
+                    (f32::INFINITY, f32::NEG_INFINITY)
+                };
+                let h0 = t_in.max(a0);
+                let h1 = t_out.min(a1);
+                if h0 <= h1 {
+                    let n = if h0 > t_in {
+                        Vec3::new(0.0, -d.y.signum(), 0.0)
+                    } else {
+                        side
+                    };
+                    return Some((h0, n, dep));
+                }
+            }
+            if t_out >= t_exit {
+                return None;
+            }
+            if tx <= tz {
+                if (sx && i + 1 >= self.nx) || (!sx && i == 0) {
+                    return None;
+                }
+                i = if sx { i + 1 } else { i - 1 };
+                t_in = tx;
+                tx += dtx;
+                side = Vec3::new(if sx { -1.0 } else { 1.0 }, 0.0, 0.0);
+            } else {
+                if (sz && k + 1 >= self.nz) || (!sz && k == 0) {
+                    return None;
+                }
+                k = if sz { k + 1 } else { k - 1 };
+                t_in = tz;
+                tz += dtz;
+                side = Vec3::new(0.0, 0.0, if sz { -1.0 } else { 1.0 });
+            }
+        }
+        None
+    }
+
+    /// One pixel of a box scene with the cover: (radiance, depth along the axis, depth of snow
+    /// seen there), lit as [`crate::frame::scene::shade_pixel`] lights the surfaces.
+    #[inline]
+    pub fn shade_pixel(
+        &self,
+        scene: &BoxScene,
+        cam: &Camera,
+        light: &crate::frame::scene::SceneLight<'_>,
+        x: u32,
+        y: u32,
+    ) -> (Vec3, f32, f32) {
+        let dir = cam.ray_direction(x, y);
+        let hit = trace(scene, cam.eye(), dir);
+        let t_max = hit.map_or(f32::INFINITY, |h| h.0);
+        match self.trace(cam.eye(), dir, t_max) {
+            Some((t, n, dep)) => {
+                let p = cam.eye() + dir * t;
+                // Thin snow shows the surface it lies on.
+                let under = match hit {
+                    Some((_, hn, ha)) if hn.y > 0.5 => ha,
+                    _ => Vec3::splat(SNOW_ALBEDO),
+                };
+                let c = coverage(dep);
+                let a = under * (1.0 - c) + Vec3::splat(SNOW_ALBEDO * c);
+                (light.surface_radiance(&scene.boxes, p, n, a), t, dep)
+            }
+            None => match hit {
+                // Beyond the grid, upward faces carry the open ground's snow (not lifted).
+                Some((t, n, ha))
+                    if n.y > 0.5 && self.open_depth > 0.0 && !self.covers(cam.eye() + dir * t) =>
+                {
+                    let p = cam.eye() + dir * t;
+                    let c = coverage(self.open_depth);
+                    let a = ha * (1.0 - c) + Vec3::splat(SNOW_ALBEDO * c);
+                    (
+                        light.surface_radiance(&scene.boxes, p, n, a),
+                        t,
+                        self.open_depth,
+                    )
+                }
+                _ => {
+                    let (c, t) = crate::frame::scene::shade_pixel(scene, cam, light, x, y);
+                    (c, t, 0.0)
+                }
+            },
+        }
+    }
+
+    /// A photo's row `y` whitened by the snow on its pixels (`rgb_row` linear, in the photo's
+    /// units; `depth_row` its depth, m); writes the snow's depth per pixel into `snow_row`.
+    pub fn photo_row(
+        &self,
+        cam: &Camera,
+        ambient: &AmbientMap,
+        y: usize,
+        rgb_row: &mut [f32],
+        depth_row: &[f32],
+        snow_row: Option<&mut [f32]>,
+    ) {
+        let w = depth_row.len();
+        let Some(per_pixel) = &self.photo_depth_m else {
+            return;
+        };
+        let row = &per_pixel[y * w..(y + 1) * w];
+        for (x, &dep) in row.iter().enumerate() {
+            if dep <= 0.0 {
+                continue;
+            }
+            let p = cam.eye() + cam.ray_direction(x as u32, y as u32) * depth_row[x];
+            let e = ambient.sample(p)[0];
+            let snow = self.radiance_scale * (SNOW_ALBEDO * e);
+            let c = coverage(dep);
+            for k in 0..3 {
+                let v = &mut rgb_row[3 * x + k];
+                *v = *v * (1.0 - c) + snow[k] * c;
+            }
+        }
+        if let Some(out) = snow_row {
+            out.copy_from_slice(row);
+        }
+    }
+}
+
+/// The depth of snow on each pixel's surface of a photo, m: its cell's depth where the pixel's
+/// point lies on the cell's top surface (within one cell's width) and its normal (from the
+/// depth map through the camera) faces up, weighted from 0 at 60° from level to 1 at 37°;
+/// pixels beyond [`PHOTO_RANGE_M`] get the open ground's cover, as level ground in the open.
+pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f32> {
+    let g = cover.field.grid;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let points = photo_points(cam, depth_m);
+    let open = cover.open_depth_m as f32;
+    let eye = cam.eye();
+    let world = |x: usize, y: usize| -> Option<Vec3> {
+        let d = depth_m[y * w + x];
+        (d.is_finite() && d > 0.0).then(|| eye + cam.ray_direction(x as u32, y as u32) * d)
+    };
+    let mut out = vec![0.0f32; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let Some(p) = world(x, y) else { continue };
+            // The normal from the neighbours, each side the nearer in depth (edges of objects
+            // would bend it).
+            let pick = |a: Option<Vec3>, b: Option<Vec3>| match (a, b) {
+                (Some(a), Some(b)) => {
+                    if (a - p).length_squared() <= (b - p).length_squared() {
+                        Some(a - p)
+                    } else {
+                        Some(p - b)
+                    }
+                }
+                (Some(a), None) => Some(a - p),
+                (None, Some(b)) => Some(p - b),
+                (None, None) => None,
+            };
+            let dx = pick(
+                (x + 1 < w).then(|| world(x + 1, y)).flatten(),
+                (x > 0).then(|| world(x - 1, y)).flatten(),
+            );
+            let dy = pick(
+                (y + 1 < h).then(|| world(x, y + 1)).flatten(),
+                (y > 0).then(|| world(x, y - 1)).flatten(),
+            );
+            let (Some(dx), Some(dy)) = (dx, dy) else {
+                continue;
+            };
+            let mut n = dx.cross(dy).normalize_or_zero();
+            if n.dot(eye - p) < 0.0 {
+                n = -n;
+            }
+            let up = ((n.y - UP_MIN) / (UP_FULL - UP_MIN)).clamp(0.0, 1.0);
+            if up <= 0.0 {
+                continue;
+            }
+            let d = match points[y * w + x] {
+                Some(q) => match g.cell_of(q[0], q[2]) {
+                    Some((i, k)) => {
+                        let c = k * g.nx + i;
+                        let b = cover.field.base_m[c];
+                        if !b.is_nan() && q[1] >= b - g.spacing_m {
+                            cover.depth_m[c] as f32
+                        } else {
+                            0.0
+                        }
+                    }
+                    None => 0.0,
+                },
+                // Beyond the height field's range: level open ground.
+                None => {
+                    let (dxz, dzz) = (f64::from(p.x - eye.x), f64::from(p.z - eye.z));
+                    if dxz * dxz + dzz * dzz > PHOTO_RANGE_M * PHOTO_RANGE_M {
+                        open
+                    } else {
+                        0.0
+                    }
+                }
+            };
+            out[y * w + x] = d * up;
+        }
+    }
+    out
+}
