@@ -35,6 +35,10 @@ pub const SNOW_ALBEDO: f32 = 0.85;
 /// Depth of snow over which its coverage of the surface beneath rises to 1 − 1/e, m.
 pub const COVER_EFOLD_M: f32 = 0.01;
 
+/// A photo pixel's normal is taken from the depth map's points this share of the image's
+/// width to either side (4 px at 741 px).
+const NORMAL_SPAN_FRACTION: f32 = 1.0 / 185.0;
+
 /// Snow on photo surfaces whose normal's y is at least this (60° from level).
 const UP_MIN: f32 = 0.5;
 /// … and fully from this (about 37°).
@@ -141,6 +145,32 @@ impl SnowRender {
         )
     }
 
+    /// The snow surface's normal over cell (i, k): from the central differences of its top
+    /// over the neighbours that carry snow on the same surface (bases within a cell's width).
+    fn normal(&self, i: usize, k: usize) -> Vec3 {
+        let s = self.spacing;
+        let c = k * self.nx + i;
+        let top = |j: usize| self.base[j] + self.depth[j];
+        let same = |j: usize| self.depth[j] > 0.0 && (self.base[j] - self.base[c]).abs() <= s;
+        let slope = |lo: Option<usize>, hi: Option<usize>| {
+            let lo = lo.filter(|&j| same(j));
+            let hi = hi.filter(|&j| same(j));
+            match (lo, hi) {
+                (Some(l), Some(h)) => (top(h) - top(l)) / (2.0 * s),
+                (None, Some(h)) => (top(h) - top(c)) / s,
+                (Some(l), None) => (top(c) - top(l)) / s,
+                (None, None) => 0.0,
+            }
+            .clamp(-1.0, 1.0)
+        };
+        let gx = slope((i > 0).then(|| c - 1), (i + 1 < self.nx).then_some(c + 1));
+        let gz = slope(
+            (k > 0).then(|| c - self.nx),
+            (k + 1 < self.nz).then_some(c + self.nx),
+        );
+        Vec3::new(-gx, 1.0, -gz).normalize()
+    }
+
     /// Whether world point `p` lies over the grid.
     #[inline]
     pub fn covers(&self, p: Vec3) -> bool {
@@ -219,8 +249,10 @@ impl SnowRender {
                 let h0 = t_in.max(a0);
                 let h1 = t_out.min(a1);
                 if h0 <= h1 {
-                    let n = if h0 > t_in {
-                        Vec3::new(0.0, -d.y.signum(), 0.0)
+                    // A step lower than half a cell is the snow's own relief: it shows the
+                    // surface's slope, not a wall.
+                    let n = if h0 > t_in || o.y + d.y * h0 - b < 0.5 * s {
+                        self.normal(i, k)
                     } else {
                         side
                     };
@@ -335,8 +367,9 @@ impl SnowRender {
 }
 
 /// The depth of snow on each pixel's surface of a photo, m: its cell's depth where the pixel's
-/// point lies on the cell's top surface (within one cell's width) and its normal (from the
-/// depth map through the camera) faces up, weighted from 0 at 60° from level to 1 at 37°;
+/// point lies on the cell's top surface (within two cells' width and 1 % of its distance: the
+/// depth map's noise) and its normal (from the
+/// depth map through the camera, [`NORMAL_SPAN_FRACTION`] of the width across) faces up, weighted from 0 at 60° from level to 1 at 37°;
 /// pixels beyond [`PHOTO_RANGE_M`] get the open ground's cover, as level ground in the open.
 pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f32> {
     let g = cover.field.grid;
@@ -348,6 +381,11 @@ pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f3
         let d = depth_m[y * w + x];
         (d.is_finite() && d > 0.0).then(|| eye + cam.ray_direction(x as u32, y as u32) * d)
     };
+    // Neighbours NORMAL_SPAN_FRACTION of the width apart: a depth map's steps (quantised
+    // disparities, sensor noise) would turn a floor into a staircase of walls.
+    let k = ((w as f32 * NORMAL_SPAN_FRACTION).round() as usize).max(1);
+    let v = cover.fall_velocity_m_s;
+    let up_wind = -Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32).normalize_or(Vec3::NEG_Y);
     let mut out = vec![0.0f32; w * h];
     for y in 0..h {
         for x in 0..w {
@@ -367,12 +405,12 @@ pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f3
                 (None, None) => None,
             };
             let dx = pick(
-                (x + 1 < w).then(|| world(x + 1, y)).flatten(),
-                (x > 0).then(|| world(x - 1, y)).flatten(),
+                (x + k < w).then(|| world(x + k, y)).flatten(),
+                (x >= k).then(|| world(x - k, y)).flatten(),
             );
             let dy = pick(
-                (y + 1 < h).then(|| world(x, y + 1)).flatten(),
-                (y > 0).then(|| world(x, y - 1)).flatten(),
+                (y + k < h).then(|| world(x, y + k)).flatten(),
+                (y >= k).then(|| world(x, y - k)).flatten(),
             );
             let (Some(dx), Some(dy)) = (dx, dy) else {
                 continue;
@@ -390,8 +428,16 @@ pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f3
                     Some((i, k)) => {
                         let c = k * g.nx + i;
                         let b = cover.field.base_m[c];
-                        if !b.is_nan() && q[1] >= b - g.spacing_m {
+                        // Within two cells and 1 % of the distance (a depth map's noise) of
+                        // the cell's top.
+                        let tol = 2.0 * g.spacing_m + 0.01 * f64::from(depth_m[y * w + x]);
+                        if !b.is_nan() && q[1] >= b - tol {
                             cover.depth_m[c] as f32
+                        } else if !sheltered(cam, depth_m, p, up_wind) {
+                            // Below its cell's top (another surface seen over the same cell),
+                            // yet open to the snow in the photo's own 2.5D view: level open
+                            // ground's cover.
+                            open
                         } else {
                             0.0
                         }
@@ -412,4 +458,40 @@ pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f3
         }
     }
     out
+}
+
+/// How far above a photo's point [`sheltered`] looks for what covers it, m.
+const SHELTER_REACH_M: f32 = 3.0;
+/// Its steps, m.
+const SHELTER_STEP_M: f32 = 0.02;
+/// How far behind the depth map's surface a point counts as inside what the photo shows, m.
+const SHELTER_THICKNESS_M: f32 = 0.3;
+
+/// The 2.5D shadow test through a photo's depth map: whether the snow falling towards `p`
+/// (from `up_wind`, the reverse of its fall) meets what the photo shows first: points up that
+/// line, in steps, projected into the image, each hidden behind the depth map's surface by
+/// less than [`SHELTER_THICKNESS_M`] (the surface is taken that thick) shelters `p`.
+fn sheltered(cam: &Camera, depth_m: &[f32], p: Vec3, up_wind: Vec3) -> bool {
+    let (w, h) = (cam.width as f32, cam.height as f32);
+    let inv = cam.rotation.transpose();
+    let eye = cam.eye();
+    let steps = (SHELTER_REACH_M / SHELTER_STEP_M) as usize;
+    for j in 1..=steps {
+        let s = p + up_wind * (j as f32 * SHELTER_STEP_M);
+        let c = inv * (s - eye);
+        let z = -c.z;
+        if z <= 0.0 {
+            return false;
+        }
+        let u = cam.cx + cam.fx * c.x / z;
+        let v = cam.cy - cam.fy * c.y / z;
+        if !(u >= 0.0 && v >= 0.0 && u < w && v < h) {
+            return false;
+        }
+        let d = depth_m[v as usize * cam.width as usize + u as usize];
+        if d < z - SHELTER_STEP_M && z - d < SHELTER_THICKNESS_M {
+            return true;
+        }
+    }
+    false
 }

@@ -265,11 +265,17 @@ fn the_cover_is_drawn_lifted_above_its_surface() {
         (t - 7.5).abs() < 1e-5 && nrm == Vec3::Y && d == 0.5,
         "{t} {nrm}"
     );
-    // From the side, 2.2 m up (within the snow, above the box): the snow's face at x = 0.
+    // From the side, 2.3 m up (within the snow, above the box): the snow's face at x = 0;
+    // 2.2 m up, less than half a cell above its base, the face is drawn as the surface's
+    // relief (its slope, level here).
+    let (t, nrm, _) = r
+        .trace(Vec3::new(-3.0, 2.3, 1.1), Vec3::X, f32::INFINITY)
+        .unwrap();
+    assert!((t - 3.0).abs() < 1e-5 && nrm == -Vec3::X, "{t} {nrm}");
     let (t, nrm, _) = r
         .trace(Vec3::new(-3.0, 2.2, 1.1), Vec3::X, f32::INFINITY)
         .unwrap();
-    assert!((t - 3.0).abs() < 1e-5 && nrm == -Vec3::X, "{t} {nrm}");
+    assert!((t - 3.0).abs() < 1e-5 && nrm == Vec3::Y, "{t} {nrm}");
     // 1.5 m up the box's own wall is not snow; 2.6 m up passes over it.
     assert!(
         r.trace(Vec3::new(-3.0, 1.5, 1.1), Vec3::X, f32::INFINITY)
