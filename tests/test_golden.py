@@ -159,16 +159,17 @@ def snow_golden(demo) -> Path:
     return GOLDEN / (f"{demo.name}_{PHOTO_W}w.png" if demo.name.startswith("photo") else f"{demo.name}_{W}x{H}.png")
 
 
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
 @pytest.mark.parametrize("demo", SNOW_DEMOS, ids=[d.name for d in SNOW_DEMOS])
-def test_the_snow_demos_match_their_goldens(demo):
-    # skyfall.demo_snow's frames under their covers, on the CPU backend (SKYFALL_UPDATE_GOLDEN=1
-    # with -k snow_demos writes these two alone).
+def test_the_snow_demos_match_their_goldens(demo, backend):
+    # skyfall.demo_snow's frames under their covers, on both backends against the CPU's
+    # goldens (SKYFALL_UPDATE_GOLDEN=1 with -k snow_demos writes these two alone, from the CPU).
     path = snow_golden(demo)
-    bare, snowy = demo.render(PHOTO_W if demo.name.startswith("photo") else W, H)
+    bare, snowy = demo.render(PHOTO_W if demo.name.startswith("photo") else W, H, backend=backend)
     image = png8(snowy)
-    if UPDATE:
+    if UPDATE and backend == "cpu":
         io.write_image(path, image)
     stats = compare(image, io.to_srgb8(io.read_image(path)))
-    assert within(stats, "cpu"), f"{demo.name}: SSIM {stats[0]:.5f}, mean {stats[1]:.4f} codes, {stats[2]:.3%} > 1 code"
+    assert within(stats, backend), f"{demo.name} on {backend}: SSIM {stats[0]:.5f}, mean {stats[1]:.4f} codes, {stats[2]:.3%} > 1 code"
     # the snow whitened the picture where it lies
     assert png8(snowy).mean() > png8(bare).mean() + 5

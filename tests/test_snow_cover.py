@@ -218,3 +218,16 @@ def _photo_ground(depth: np.ndarray, cam, r: Renderer) -> np.ndarray:
 def _wall_face(depth: np.ndarray, cam, r: Renderer) -> np.ndarray:
     p = _points(depth, cam, r)
     return np.isfinite(depth) & (np.abs(p[..., 2] + 12.0) < 1e-3) & (p[..., 1] > 0.2) & (p[..., 1] < 2.8)
+
+
+def test_the_gpu_backend_draws_the_cover_as_the_cpu_does() -> None:
+    street = scenes.street()
+    w = Weather(snow_rate_mm_h=3.0, wind_m_s=(0.3, 0.0, 1.5))
+    cover = snow.accumulate(street, w, duration_s=HOUR, resolution_m=0.5)
+    cpu = Renderer(160, 90, backend="cpu").render(street, w, snow_cover=cover)
+    gpu = Renderer(160, 90, backend="gpu").render(street, w, snow_cover=cover)
+    assert sorted(gpu.layers) == ["snow_depth_m"]
+    # f32 rounding may move a silhouette by a pixel (as tests/test_render.py allows)
+    assert np.mean(np.abs(cpu.rgb - gpu.rgb) > 1e-3) <= 0.005
+    assert np.mean(cpu.layers["snow_depth_m"] != gpu.layers["snow_depth_m"]) <= 0.005
+    assert (cpu.layers["snow_depth_m"] > 0).mean() > 0.2

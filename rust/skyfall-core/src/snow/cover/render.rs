@@ -181,6 +181,11 @@ impl SnowRender {
         u >= 0.0 && v >= 0.0 && u < self.nx as f32 && v < self.nz as f32
     }
 
+    /// The depth drawn on upward faces beyond the grid, m.
+    pub fn open_depth_m(&self) -> f32 {
+        self.open_depth
+    }
+
     /// Nearest snow along `o + t·d`, 0 ≤ t ≤ `t_max`: (t, normal, depth of snow there).
     pub fn trace(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, Vec3, f32)> {
         if self.y_lo > self.y_hi {
