@@ -75,6 +75,7 @@ bench: build vulkan
 	$(PY) benches/bench_render.py
 	$(PY) benches/bench_rain.py
 	$(PY) benches/bench_sky.py
+	$(PY) benches/snow_cover.py
 
 # A/B of the bench rows against BASE, timed alternately in one run: benches/results/ab.md.
 # BASE's wheel and venv are cached under .ab-cache/ by commit; BASE_WHEEL=<wheel of BASE> skips its build.
