@@ -231,3 +231,14 @@ def test_the_gpu_backend_draws_the_cover_as_the_cpu_does() -> None:
     assert np.mean(np.abs(cpu.rgb - gpu.rgb) > 1e-3) <= 0.005
     assert np.mean(cpu.layers["snow_depth_m"] != gpu.layers["snow_depth_m"]) <= 0.005
     assert (cpu.layers["snow_depth_m"] > 0).mean() > 0.2
+
+
+def test_a_sequence_carries_the_cover_in_every_frame() -> None:
+    r = Renderer(48, 27, backend="cpu")
+    w = Weather(snow_rate_mm_h=2.0)
+    cover = snow.accumulate(scenes.street(), w, duration_s=HOUR, resolution_m=1.0)
+    one = r.render(scenes.street(), w, time_s=0.5, snow_cover=cover)
+    frames = list(r.render_sequence(scenes.street(), w, n_frames=2, fps=2.0, snow_cover=cover))
+    assert np.array_equal(frames[1].rgb, one.rgb) and np.array_equal(frames[1].layers["snow_depth_m"], one.layers["snow_depth_m"])
+    codes = list(r.render_sequence_srgb8(scenes.street(), w, n_frames=2, fps=2.0, snow_cover=cover))
+    np.testing.assert_array_equal(codes[1], io.to_srgb8(one.rgb))

@@ -93,7 +93,9 @@ class Frame:
     layers : dict of str to ndarray of float32, shape (H, W)
         Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d)); rain adds
         ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
-        nearest visible streak, inf where none): only the layers this frame's passes drew.
+        nearest visible streak, inf where none); a snow cover (``snow_cover=``) adds
+        ``snow_depth_m`` (the depth of snow on each pixel's surface, 0 where none): only the
+        layers this frame's passes drew.
         :meth:`layer` gives any layer, with its neutral value where it was not drawn. The
         clean frame is the same render without rain.
     backend : str
@@ -506,6 +508,7 @@ class Renderer:
         ambient_samples: int = sky.MAP_SAMPLES,
         out: Frame | None = None,
         progress: bool = False,
+        snow_cover: SnowCover | None = None,
     ) -> Iterator[Frame]:
         """Render ``n_frames`` consecutive frames at ``fps``, one at a time: temporally
         coherent rain.
@@ -531,6 +534,8 @@ class Renderer:
             copy what you keep (``frame.rgb.copy()``). None: fresh arrays for every frame.
         progress : bool
             Show a tqdm progress bar while the frames are rendered.
+        snow_cover : SnowCover, optional
+            Snow lying on the scene in every frame (see :meth:`render`).
 
         Returns
         -------
@@ -544,7 +549,7 @@ class Renderer:
         if out is not None:
             self._out_arrays(out)
         weather, times, options = self._sequence_args(
-            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
+            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
         )
 
         def frames() -> Iterator[Frame]:
@@ -573,13 +578,14 @@ class Renderer:
         out: NDArray[np.uint8] | None = None,
         rain_alpha_out: NDArray[np.float32] | None = None,
         progress: bool = False,
+        snow_cover: SnowCover | None = None,
     ) -> Iterator[NDArray[np.uint8]]:
         """:meth:`render_sequence` in 8-bit sRGB: each frame is :meth:`render_srgb8` at
         ``time_s = start_s + k / fps``, byte for byte.
 
         Parameters
         ----------
-        scene, weather, n_frames, fps, seed, camera, start_s, cull_threshold, ambient_spacing_m, ambient_samples, progress
+        scene, weather, n_frames, fps, seed, camera, start_s, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
             As for :meth:`render_sequence`.
         out : ndarray of uint8, shape (H, W, 3), optional
             Where to write every frame: each array yielded is then ``out``, overwritten by
@@ -600,7 +606,7 @@ class Renderer:
         """
         self._check_srgb8_outputs(scene, out, rain_alpha_out)
         weather, times, options = self._sequence_args(
-            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
+            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
         )
 
         def frames() -> Iterator[NDArray[np.uint8]]:
@@ -622,6 +628,7 @@ class Renderer:
         ambient_spacing_m: float,
         ambient_samples: int,
         progress: bool,
+        snow_cover: SnowCover | None = None,
     ) -> tuple[Weather, Iterator[float], dict[str, Any]]:
         """A sequence's arguments, all checked now (as :meth:`render` checks them): its
         weather, its frame times (behind a progress bar, started at the first frame) and the
@@ -629,10 +636,12 @@ class Renderer:
         weather = weather if weather is not None else Weather()
         times = _frame_times(n_frames, fps, start_s)
         show = flag("progress", progress)
-        self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples)
+        self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples, snow_cover)
         options: dict[str, Any] = dict(
             camera=camera, seed=seed, cull_threshold=cull_threshold, ambient_spacing_m=ambient_spacing_m, ambient_samples=ambient_samples
         )
+        if snow_cover is not None:
+            options["snow_cover"] = snow_cover
         return weather, _progress(times, show), options
 
 

@@ -20,7 +20,7 @@
 use super::SnowCover;
 use super::heightfield::{PHOTO_RANGE_M, photo_points};
 use crate::error::Result;
-use crate::scene::boxes::{BoxScene, trace};
+use crate::scene::boxes::{BoxScene, surface_albedo, trace};
 use crate::scene::camera::Camera;
 use crate::scene::raycast::inverse_direction;
 use crate::sky::ambient::AmbientMap;
@@ -31,6 +31,9 @@ use glam::Vec3;
 /// fresh dry snow 0.75–0.98; Warren, *Optical properties of snow*, Rev. Geophys. 1982: above
 /// 0.9 at 0.4–0.7 µm for deep fine-grained snow, less for the broadband and older snow).
 pub const SNOW_ALBEDO: f32 = 0.85;
+
+/// Most height bands [`SnowRender::trace`] keeps apart (more: one).
+const MAX_BANDS: usize = 64;
 
 /// Depth of snow over which its coverage of the surface beneath rises to 1 − 1/e, m.
 pub const COVER_EFOLD_M: f32 = 0.01;
@@ -57,6 +60,9 @@ pub fn coverage(depth_m: f32) -> f32 {
 /// A cover ready to draw.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SnowRender {
+    /// The disjoint height ranges snow lies in (empty: one, [y_lo, y_hi]); the ray cast visits
+    /// only the stretches of a ray within them.
+    bands: Vec<(f32, f32)>,
     origin: [f32; 2],
     spacing: f32,
     nx: usize,
@@ -86,7 +92,26 @@ impl SnowRender {
                 y_hi = y_hi.max(b + d);
             }
         }
+        // The heights snow lies at: each cell's [base, top], merged where they overlap.
+        let mut spans: Vec<(f32, f32)> = base
+            .iter()
+            .zip(depth.iter())
+            .filter(|(b, d)| **d > 0.0 && !b.is_nan())
+            .map(|(&b, &d)| (b, b + d))
+            .collect();
+        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut bands: Vec<(f32, f32)> = Vec::new();
+        for (lo, hi) in spans {
+            match bands.last_mut() {
+                Some(last) if lo <= last.1 => last.1 = last.1.max(hi),
+                _ => bands.push((lo, hi)),
+            }
+        }
+        if bands.len() > MAX_BANDS {
+            bands.clear(); // one slab, [y_lo, y_hi]
+        }
         SnowRender {
+            bands,
             origin: [g.origin_m[0] as f32, g.origin_m[1] as f32],
             spacing: g.spacing_m as f32,
             nx: g.nx,
@@ -191,11 +216,48 @@ impl SnowRender {
         if self.y_lo > self.y_hi {
             return None;
         }
+        if self.bands.is_empty() {
+            return self.trace_in(o, d, t_max, self.y_lo, self.y_hi);
+        }
+        // Only where the ray is at a height some snow lies at (the bands are disjoint, so
+        // their stretches of the ray are too): nearest first.
+        let mut spans: [(f32, f32, f32); MAX_BANDS] = [(0.0, 0.0, 0.0); MAX_BANDS];
+        let mut n = 0;
+        for &(lo, hi) in &self.bands {
+            let (t0, t1) = if d.y != 0.0 {
+                let (a, b) = ((lo - o.y) / d.y, (hi - o.y) / d.y);
+                (a.min(b), a.max(b))
+            } else if o.y >= lo && o.y <= hi {
+                (0.0, f32::INFINITY)
+            } else {
+                continue;
+            };
+            if t1 >= 0.0 && t0 <= t_max {
+                spans[n] = (t0, lo, hi);
+                n += 1;
+            }
+        }
+        let spans = &mut spans[..n];
+        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+        spans
+            .iter()
+            .find_map(|&(_, lo, hi)| self.trace_in(o, d, t_max, lo, hi))
+    }
+
+    /// [`Self::trace`] within the heights [`y_lo`, `y_hi`] (the DDA over the grid's slab).
+    fn trace_in(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+        y_lo: f32,
+        y_hi: f32,
+    ) -> Option<(f32, Vec3, f32)> {
         let s = self.spacing;
-        let lo = Vec3::new(self.origin[0], self.y_lo, self.origin[1]);
+        let lo = Vec3::new(self.origin[0], y_lo, self.origin[1]);
         let hi = Vec3::new(
             self.origin[0] + s * self.nx as f32,
-            self.y_hi,
+            y_hi,
             self.origin[1] + s * self.nz as f32,
         );
         let inv = inverse_direction(d);
@@ -328,10 +390,18 @@ impl SnowRender {
                         self.open_depth,
                     )
                 }
-                _ => {
-                    let (c, t) = crate::frame::scene::shade_pixel(scene, cam, light, x, y);
-                    (c, t, 0.0)
+                // No snow: the surface as the scene stage shades it (`shade_pixel`, from the
+                // same hit).
+                Some((t, n, ha)) => {
+                    let p = cam.eye() + dir * t;
+                    let a = surface_albedo(ha, n, p);
+                    (light.surface_radiance(&scene.boxes, p, n, a), t, 0.0)
                 }
+                None => (
+                    Vec3::splat(light.sky.sky_pixel(dir.normalize())),
+                    f32::INFINITY,
+                    0.0,
+                ),
             },
         }
     }
