@@ -42,6 +42,7 @@ from skimage.metrics import structural_similarity
 from skyfall import PhotoScene, Renderer, Weather, io, scenes
 from skyfall.demo import DEMO_FRAMES, STREET_RAIN_DAY, rain_alpha_png
 from skyfall.demo_photo import PHOTO_FRAMES
+from skyfall.demo_snow import SNOW_DEMOS, png8
 
 GOLDEN = Path(__file__).parent / "data" / "golden"
 UPDATE = os.environ.get("SKYFALL_UPDATE_GOLDEN") == "1"
@@ -117,7 +118,7 @@ def test_frames_match_their_goldens(rendered, goldens, name):
 
 
 def test_the_goldens_are_the_demo_frames_and_show_rain(goldens):
-    photos = [f"{f.name}_{PHOTO_W}w.png" for f in PHOTO_FRAMES]
+    photos = [f"{f.name}_{PHOTO_W}w.png" for f in PHOTO_FRAMES] + [snow_golden(d).name for d in SNOW_DEMOS]
     assert sorted(p.name for p in GOLDEN.glob("*.png")) == sorted([f"{n}_{W}x{H}.png" for n in NAMES] + photos)
     for name in NAMES:
         assert goldens[name].shape == ((H, W) if name.endswith("alpha") else (H, W, 3)), name
@@ -151,3 +152,24 @@ def test_the_bounds_reject_other_rain():
     for image in (other_seed, no_streaks):
         for backend in BOUNDS:
             assert not within(compare(image, want), backend)
+
+
+def snow_golden(demo) -> Path:
+    """The golden of a snow demo: the street at 320 x 180, the photo at 160 px wide."""
+    return GOLDEN / (f"{demo.name}_{PHOTO_W}w.png" if demo.name.startswith("photo") else f"{demo.name}_{W}x{H}.png")
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+@pytest.mark.parametrize("demo", SNOW_DEMOS, ids=[d.name for d in SNOW_DEMOS])
+def test_the_snow_demos_match_their_goldens(demo, backend):
+    # skyfall.demo_snow's frames under their covers, on both backends against the CPU's
+    # goldens (SKYFALL_UPDATE_GOLDEN=1 with -k snow_demos writes these two alone, from the CPU).
+    path = snow_golden(demo)
+    bare, snowy = demo.render(PHOTO_W if demo.name.startswith("photo") else W, H, backend=backend)
+    image = png8(snowy)
+    if UPDATE and backend == "cpu":
+        io.write_image(path, image)
+    stats = compare(image, io.to_srgb8(io.read_image(path)))
+    assert within(stats, backend), f"{demo.name} on {backend}: SSIM {stats[0]:.5f}, mean {stats[1]:.4f} codes, {stats[2]:.3%} > 1 code"
+    # the snow whitened the picture where it lies
+    assert png8(snowy).mean() > png8(bare).mean() + 5

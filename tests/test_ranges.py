@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skyfall import Camera, PhotoScene, PointLight, Renderer, SpotLight, Weather, _core, clouds, physics, rain, scenes, sky
+from skyfall import Camera, PhotoScene, PointLight, Renderer, SpotLight, Weather, _core, clouds, physics, rain, scenes, sky, snow
 from skyfall import windshield as ws
 
 RANGES = _core.RANGES
@@ -68,6 +68,11 @@ DOCUMENTED: list[tuple[Any, str]] = [
     (Weather, "rain_rate_mm_h"),
     (Weather, "snow_rate_mm_h"),
     (Weather, "snow_density_kg_m3"),
+    (snow.accumulate, "duration_s"),
+    (snow.accumulate, "dt_s"),
+    (snow.accumulate, "resolution_m"),
+    (snow.accumulate, "roughness"),
+    (snow.accumulate, "seed"),
     (Weather, "visibility_m"),
     (Weather, "sky_illuminance_lux"),
     (Weather, "sun_elevation_deg"),
@@ -224,6 +229,10 @@ PUBLIC: dict[str, Callable[[Any], object]] = {
     "snow_rate_mm_h": lambda v: Weather(snow_rate_mm_h=v),
     "snow_density_kg_m3": lambda v: Weather(snow_density_kg_m3=v),
     "rain_rates_mm_h": lambda v: rain.textures([v], [1.0], size_px=16),
+    "duration_s": lambda v: snow.accumulate(scenes.empty(), Weather(), duration_s=v, resolution_m=10.0),
+    "dt_s": lambda v: snow.accumulate(scenes.empty(), Weather(), duration_s=60.0, dt_s=v, resolution_m=10.0),
+    "resolution_m": lambda v: snow.accumulate(scenes.empty(), Weather(), duration_s=60.0, resolution_m=v),
+    "roughness": lambda v: snow.accumulate(scenes.empty(), Weather(), duration_s=60.0, resolution_m=10.0, roughness=v),
     "visibility_m": lambda v: Weather(visibility_m=v),
     "sky_illuminance_lux": lambda v: Weather(sky_illuminance_lux=v),
     "wind_m_s": lambda v: Weather(wind_m_s=(0.0, 0.0, v)),

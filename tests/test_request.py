@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import skyfall
-from skyfall import PhotoScene, Renderer, Weather, _core, io, scenes, windshield
+from skyfall import PhotoScene, Renderer, Weather, _core, io, scenes, snow, windshield
 
 
 @pytest.fixture
@@ -94,7 +94,9 @@ def test_the_haze_model_is_the_cores() -> None:
 def test_layers_are_the_cores() -> None:
     r = Renderer(16, 12, backend="cpu")
     glass = windshield.Windshield(5.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
-    f = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, snow_rate_mm_h=0.5, visibility_m=500.0, windshield=glass))
+    snowy = Weather(rain_rate_mm_h=5.0, snow_rate_mm_h=0.5, visibility_m=500.0, windshield=glass)
+    cover = snow.accumulate(scenes.street(), snowy, duration_s=600.0, dt_s=600.0, resolution_m=4.0)
+    f = r.render(scenes.street(), snowy, snow_cover=cover)
     assert list(f.layers) == list(_core.LAYERS)
     rain_only = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, visibility_m=500.0))
     assert list(rain_only.layers) == ["transmittance", "rain_alpha", "rain_depth_m"]

@@ -115,7 +115,7 @@ def test_bad_values_are_refused_naming_the_parameter(kwargs: dict[str, object], 
 
 def test_a_bad_step_and_an_unknown_preset_are_refused() -> None:
     w = ws.Windshield(glass_width_mm=100.0, glass_height_mm=100.0)
-    with pytest.raises(ValueError, match=r"^dt_s = 0.0 is outside the valid range \(0, 60\] s"):
+    with pytest.raises(ValueError, match=r"^dt_s = 0.0 is outside the valid range \(0, 1e7\] s"):
         w.step(0.0)
     with pytest.raises(ValueError, match="not a preset"):
         ws.preset("hail")

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from skyfall import Camera, PhotoScene, Renderer, Weather, _core, display, io, scenes, testing, widgets
+from skyfall import Camera, PhotoScene, Renderer, Weather, _core, display, io, scenes, snow, testing, widgets
 from skyfall.windshield import Windshield
 
 W, H = 48, 27
@@ -44,7 +44,8 @@ def test_every_layer_has_a_neutral_value_declared_with_it():
 def test_drawn_layers_are_the_frames_own_arrays(renderer):
     glass = Windshield(20.0, glass_width_mm=200.0, glass_height_mm=150.0, wipers=0)
     glass.step(0.5)
-    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, snow_rate_mm_h=0.5, visibility_m=300.0, windshield=glass))
+    cover = snow.accumulate(scenes.street(), Weather(snow_rate_mm_h=2.0), duration_s=600.0, dt_s=600.0, resolution_m=4.0)
+    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, snow_rate_mm_h=0.5, visibility_m=300.0, windshield=glass), snow_cover=cover)
     assert set(frame.layers) == set(_core.LAYERS)
     for name in _core.LAYERS:
         assert frame.layer(name) is frame.layers[name]
@@ -61,19 +62,23 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
     # (and a dry windshield: its layers drawn, with no drop on them)
     dry = Windshield(0.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
     rain = renderer.render(scenes.street(), Weather(rain_rate_mm_h=0.5, rain_near_m=1.0, windshield=dry), seed=3)
-    snow = renderer.render(scenes.street(), Weather(snow_rate_mm_h=0.2, snow_near_m=0.5), seed=3)
+    snowy = renderer.render(scenes.street(), Weather(snow_rate_mm_h=0.2, snow_near_m=0.5), seed=3)
     haze = renderer.render(scenes.street(), Weather(visibility_m=1e12))
+    bare = snow.accumulate(scenes.street(), Weather(), duration_s=0.0, resolution_m=4.0)  # no snow: depth 0
+    cover = renderer.render(scenes.street(), Weather(), snow_cover=bare).layers["snow_depth_m"]
     empty = rain.layers["rain_alpha"] == 0.0
     assert empty.any() and (~empty).any()
-    bare = snow.layers["snow_alpha"] == 0.0
-    assert bare.any() and (~bare).any()
+    clear_of_flakes = snowy.layers["snow_alpha"] == 0.0
+    assert clear_of_flakes.any() and (~clear_of_flakes).any()
     for name in _core.LAYERS:
         layer = clear.layer(name)
         assert layer.shape == (H, W) and layer.dtype == np.float32 and not layer.flags.writeable
         if name == "transmittance":
             untouched = haze.layers[name]
         elif name == "snow_alpha":
-            untouched = snow.layers[name][bare]
+            untouched = snowy.layers[name][clear_of_flakes]
+        elif name == "snow_depth_m":
+            untouched = cover
         else:
             untouched = rain.layers[name][empty]
         assert len(np.unique(layer)) == 1

@@ -20,7 +20,7 @@ sky
 Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`.
 """
 
-from skyfall import clouds, io, physics, rain, scenes, sky
+from skyfall import clouds, io, physics, rain, scenes, sky, snow
 from skyfall._core import GpuUnavailableError, SkyfallError, __version__
 from skyfall.camera import Camera
 from skyfall.lights import PointLight, SpotLight
@@ -45,4 +45,5 @@ __all__ = [
     "rain",
     "scenes",
     "sky",
+    "snow",
 ]

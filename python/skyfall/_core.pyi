@@ -1,6 +1,6 @@
 """Type stubs for the compiled ``skyfall._core`` module (checked by mypy.stubtest)."""
 
-from typing import TypedDict, final
+from typing import NotRequired, TypedDict, final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,6 +29,9 @@ __all__ = [
     "FRAME_BUDGET_BYTES",
     "AmbientLightMap",
     "GpuDevice",
+    "SnowCoverGrid",
+    "snow_cover_boxes",
+    "snow_cover_photo",
     "GpuUnavailableError",
     "render_frame",
     "render_photo8",
@@ -95,6 +98,7 @@ class _Request(TypedDict):
     seed: int
     cull_threshold: float | None
     ambient: AmbientLightMap
+    snow_cover: NotRequired[SnowCoverGrid]
 
 LAYERS: dict[str, str]
 """The layers a frame can carry, name -> meaning, in the order frames list them."""
@@ -154,6 +158,52 @@ class AmbientLightMap:
     @property
     def solid(self) -> NDArray[np.bool_]: ...
     def sample(self, points_m: NDArray[np.float32]) -> NDArray[np.float32]: ...
+
+@final
+class SnowCoverGrid:
+    """A snow cover (``skyfall.snow.SnowCover.core``): its height field and depth per cell."""
+
+    @property
+    def depth_m(self) -> NDArray[np.float64]: ...
+    @property
+    def base_m(self) -> NDArray[np.float64]: ...
+    @property
+    def origin_m(self) -> tuple[float, float]: ...
+    @property
+    def spacing_m(self) -> float: ...
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    @property
+    def budget(self) -> tuple[float, float, float, float]: ...
+    @property
+    def steps(self) -> tuple[int, float]: ...
+    @property
+    def fall_velocity_m_s(self) -> tuple[float, float, float]: ...
+
+def snow_cover_boxes(
+    boxes: NDArray[np.float32],
+    ground: bool,
+    weather: Weather,
+    lo_m: list[float],
+    hi_m: list[float],
+    *,
+    resolution_m: float,
+    duration_s: float,
+    dt_s: float,
+    roughness: float,
+    seed: int,
+) -> SnowCoverGrid: ...
+def snow_cover_photo(
+    camera: Camera,
+    depth_m: NDArray[np.float32],
+    weather: Weather,
+    *,
+    resolution_m: float,
+    duration_s: float,
+    dt_s: float,
+    roughness: float,
+    seed: int,
+) -> SnowCoverGrid: ...
 
 @final
 class GpuDevice:

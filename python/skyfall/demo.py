@@ -33,6 +33,10 @@ photo_rain.png, photo_rain_portrait.png
     Real photos through the 8-bit path, before and after (:mod:`skyfall.demo_photo`):
     scikit-image's rocket at dusk in 15 mm/h rain with a made depth map (the sky keeps its
     dusk, the towers fade into the photo's own airlight), its astronaut in 25 mm/h.
+street_snow.png, photo_snow.png
+    The street after an hour of snow in a light wind along it (bare in the lee of the
+    buildings), and a photo with a measured depth map under snow, before and after
+    (:mod:`skyfall.demo_snow`).
 """
 
 from __future__ import annotations
@@ -249,6 +253,9 @@ def main(argv: list[str] | None = None) -> int:
     from skyfall import demo_photo
 
     photos = demo_photo.write(out)
+    from skyfall import demo_snow
+
+    photos += demo_snow.write(out)
     names = ("rain_textures.exr", "rain_textures.png", "terminal_velocity.png", "street.exr", "street.png")
     for name in (*names, "street_rain_day.exr", "street_rain_day.png", "street_rain_day_alpha.png", "ambient_light.png", "street_rain.exr", "street_rain.png"):
         print(f"wrote {out / name}")

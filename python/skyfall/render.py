@@ -27,6 +27,7 @@ from skyfall.weather import Weather
 
 if TYPE_CHECKING:
     from skyfall._core import _Request
+    from skyfall.snow import SnowCover
 
 __all__ = ["BACKENDS", "Frame", "Renderer"]
 
@@ -92,7 +93,9 @@ class Frame:
     layers : dict of str to ndarray of float32, shape (H, W)
         Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d)); rain adds
         ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
-        nearest visible streak, inf where none): only the layers this frame's passes drew.
+        nearest visible streak, inf where none); a snow cover (``snow_cover=``) adds
+        ``snow_depth_m`` (the depth of snow on each pixel's surface, 0 where none): only the
+        layers this frame's passes drew.
         :meth:`layer` gives any layer, with its neutral value where it was not drawn. The
         clean frame is the same render without rain.
     backend : str
@@ -266,6 +269,7 @@ class Renderer:
         ambient_spacing_m: float = 1.0,
         ambient_samples: int = sky.MAP_SAMPLES,
         out: Frame | None = None,
+        snow_cover: SnowCover | None = None,
     ) -> Frame:
         """Render one frame.
 
@@ -299,13 +303,18 @@ class Renderer:
             back in the new frame (layers this frame does not draw are left out of it; layers
             it draws that ``out`` lacks are new arrays). Fresh arrays cost the kernel's zeroing
             of every page (58 MB per 1080p frame with its layers); reusing them saves that.
+        snow_cover : SnowCover, optional
+            Snow lying on the scene (:func:`skyfall.snow.accumulate` of this scene): its
+            surfaces whiten and lift by the depth on them, and the frame carries
+            ``layers["snow_depth_m"]`` (the depth on each pixel's surface, 0 where none).
+            None (default): no cover, and the frame is exactly the one without it.
 
         Returns
         -------
         Frame
         """
         weather = weather if weather is not None else Weather()
-        request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
+        request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, snow_cover)
         arrays = self._out_arrays(out) if out is not None else None
         # One core call: the core derives the sky, the haze and its airlight, the rain and its
         # light from the request, and names the layers it drew (skyfall._core.LAYERS).
@@ -341,6 +350,7 @@ class Renderer:
         out: NDArray[np.uint8] | None = None,
         rain_alpha_out: NDArray[np.float32] | None = None,
         snow_alpha_out: NDArray[np.float32] | None = None,
+        snow_cover: SnowCover | None = None,
     ) -> NDArray[np.uint8]:
         """Render one frame straight to 8-bit sRGB: the augmentation path.
 
@@ -364,6 +374,9 @@ class Renderer:
         snow_alpha_out : ndarray of float32, shape (H, W), optional
             Filled with the snowflakes' coverage (``frame.layers["snow_alpha"]``; zeros
             without snow) when given.
+        snow_cover : SnowCover, optional
+            As for :meth:`render`. A frame with a cover is rendered on the float path and
+            encoded (the fused 8-bit path does not draw covers).
 
         Raises
         ------
@@ -384,7 +397,8 @@ class Renderer:
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
         # A windshield refracts the whole frame: its frames take the float path, then encode.
-        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None and getattr(weather, "windshield", None) is None:
+        # A snow cover is not drawn by the fused 8-bit path: its frames take the float path too.
+        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None and getattr(weather, "windshield", None) is None and snow_cover is None:
             request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
             _core.render_photo8(
                 request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out, snow_alpha_out=snow_alpha_out
@@ -399,6 +413,7 @@ class Renderer:
             cull_threshold=cull_threshold,
             ambient_spacing_m=ambient_spacing_m,
             ambient_samples=ambient_samples,
+            snow_cover=snow_cover,
         )
         out[...] = io.to_srgb8(frame.rgb)
         if rain_alpha_out is not None:
@@ -449,6 +464,7 @@ class Renderer:
         cull_threshold: float | None,
         ambient_spacing_m: float,
         ambient_samples: int,
+        snow_cover: SnowCover | None = None,
     ) -> _Request:
         """The frame's request for ``_core.render_frame`` and ``_core.render_photo8``: the
         frame's own objects (the core reads them attribute by attribute), with the scene's
@@ -467,7 +483,7 @@ class Renderer:
         else:
             raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
         cull = None if cull_threshold is None else in_range("cull_threshold", cull_threshold)
-        return {
+        request: _Request = {
             "camera": cam,
             "weather": weather,
             "scene": scene,
@@ -476,6 +492,12 @@ class Renderer:
             "cull_threshold": cull,
             "ambient": self._ambient(scene, weather, cam, ambient_spacing_m, ambient_samples),
         }
+        if snow_cover is not None:
+            core_cover = getattr(snow_cover, "core", None)
+            if not isinstance(core_cover, _core.SnowCoverGrid):
+                raise TypeError(f"snow_cover must be a skyfall.snow.SnowCover, got {type(snow_cover).__name__}")
+            request["snow_cover"] = core_cover
+        return request
 
     @staticmethod
     def _ambient(
@@ -516,6 +538,7 @@ class Renderer:
         ambient_samples: int = sky.MAP_SAMPLES,
         out: Frame | None = None,
         progress: bool = False,
+        snow_cover: SnowCover | None = None,
     ) -> Iterator[Frame]:
         """Render ``n_frames`` consecutive frames at ``fps``, one at a time: temporally
         coherent rain.
@@ -541,6 +564,8 @@ class Renderer:
             copy what you keep (``frame.rgb.copy()``). None: fresh arrays for every frame.
         progress : bool
             Show a tqdm progress bar while the frames are rendered.
+        snow_cover : SnowCover, optional
+            Snow lying on the scene in every frame (see :meth:`render`).
 
         Returns
         -------
@@ -554,7 +579,7 @@ class Renderer:
         if out is not None:
             self._out_arrays(out)
         weather, times, options = self._sequence_args(
-            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
+            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
         )
 
         def frames() -> Iterator[Frame]:
@@ -584,13 +609,14 @@ class Renderer:
         rain_alpha_out: NDArray[np.float32] | None = None,
         progress: bool = False,
         snow_alpha_out: NDArray[np.float32] | None = None,
+        snow_cover: SnowCover | None = None,
     ) -> Iterator[NDArray[np.uint8]]:
         """:meth:`render_sequence` in 8-bit sRGB: each frame is :meth:`render_srgb8` at
         ``time_s = start_s + k / fps``, byte for byte.
 
         Parameters
         ----------
-        scene, weather, n_frames, fps, seed, camera, start_s, cull_threshold, ambient_spacing_m, ambient_samples, progress
+        scene, weather, n_frames, fps, seed, camera, start_s, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
             As for :meth:`render_sequence`.
         out : ndarray of uint8, shape (H, W, 3), optional
             Where to write every frame: each array yielded is then ``out``, overwritten by
@@ -613,7 +639,7 @@ class Renderer:
         """
         self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
         weather, times, options = self._sequence_args(
-            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
+            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
         )
 
         def frames() -> Iterator[NDArray[np.uint8]]:
@@ -637,6 +663,7 @@ class Renderer:
         ambient_spacing_m: float,
         ambient_samples: int,
         progress: bool,
+        snow_cover: SnowCover | None = None,
     ) -> tuple[Weather, Iterator[float], dict[str, Any]]:
         """A sequence's arguments, all checked now (as :meth:`render` checks them): its
         weather, its frame times (behind a progress bar, started at the first frame) and the
@@ -644,10 +671,12 @@ class Renderer:
         weather = weather if weather is not None else Weather()
         times = _frame_times(n_frames, fps, start_s)
         show = flag("progress", progress)
-        self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples)
+        self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples, snow_cover)
         options: dict[str, Any] = dict(
             camera=camera, seed=seed, cull_threshold=cull_threshold, ambient_spacing_m=ambient_spacing_m, ambient_samples=ambient_samples
         )
+        if snow_cover is not None:
+            options["snow_cover"] = snow_cover
         return weather, _progress(times, show), options
 
 

@@ -84,6 +84,31 @@ pub const SNOW_DENSITY_KG_M3: Limit = Limit::new(
     Range::closed(20.0, 917.0, "kg/m^3"),
     "bulk density of the snow cover (fresh snow 70-150; 917: solid ice)",
 );
+/// How long the snow of a cover falls (`skyfall.snow.accumulate`).
+pub const DURATION_S: Limit = Limit::new(
+    "duration_s",
+    Range::closed(0.0, 1e7, "s"),
+    "how long the snow of a cover falls (0: no cover)",
+);
+/// A simulation's time step: the snow cover's and the windshield's (one name, one range).
+pub const DT_S: Limit = Limit::new(
+    "dt_s",
+    Range::open_closed(0.0, 1e7, "s"),
+    "time step: of the snow cover's accumulation (longer than duration_s: one step), or of a \
+     windshield (run in internal steps of at most 1/120 s, so its cost grows with dt_s)",
+);
+/// Cell side of the cover's height field.
+pub const RESOLUTION_M: Limit = Limit::new(
+    "resolution_m",
+    Range::closed(0.01, 100.0, "m"),
+    "cell side of the snow cover's height field",
+);
+/// Amplitude of the cover's random factor.
+pub const ROUGHNESS: Limit = Limit::new(
+    "roughness",
+    Range::closed(0.0, 1.0, ""),
+    "amplitude of the snow cover's random factor r = 1 + roughness u, u in [-1, 1]",
+);
 /// Meteorological visibility of the air without rain.
 pub const VISIBILITY_M: Limit = Limit::new(
     "visibility_m",
@@ -491,18 +516,16 @@ pub const PARTICLE_RADIUS_MM: Limit = Limit::new(
     Range::closed(0.2, 5.0, "mm"),
     "base radius of the particle model's equal particles (near the wipers)",
 );
-/// A windshield's time step.
-pub const DT_S: Limit = Limit::new(
-    "dt_s",
-    Range::open_closed(0.0, 60.0, "s"),
-    "time step of the windshield simulation",
-);
 /// Every limit, for export and lookup by name.
 pub const ALL: &[Limit] = &[
     RAIN_RATE_MM_H,
     RAIN_RATES_MM_H,
     SNOW_RATE_MM_H,
     SNOW_DENSITY_KG_M3,
+    DURATION_S,
+    DT_S,
+    RESOLUTION_M,
+    ROUGHNESS,
     VISIBILITY_M,
     SKY_ILLUMINANCE_LUX,
     WIND_M_S,
@@ -572,7 +595,6 @@ pub const ALL: &[Limit] = &[
     WIPER_PERIOD_S,
     WIPER_ANGLES_DEG,
     PARTICLE_RADIUS_MM,
-    DT_S,
 ];
 
 /// The limit of the parameter `name`.

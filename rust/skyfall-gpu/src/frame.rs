@@ -64,9 +64,15 @@ impl GpuRenderer {
         rain: Option<&RainFrame<'_>>,
         snow: Option<&SnowFrame<'_>>,
     ) -> Result<FrameBuffers, GpuError> {
-        FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), snow.is_some(), |out| {
-            self.render_into(scene, cam, light, haze, rain, snow, out)
-        })
+        let cover = light.snow.is_some();
+        FrameBuffers::filled(
+            cam,
+            haze.is_some(),
+            rain.is_some(),
+            snow.is_some(),
+            cover,
+            |out| self.render_into(scene, cam, light, haze, rain, snow, out),
+        )
     }
 
     /// [`Self::render`] read back into the caller's buffers (see [`FrameOut`]); the rain's
@@ -99,7 +105,13 @@ impl GpuRenderer {
         out: FrameOut<'_>,
     ) -> Result<(Option<RainReport>, Option<SnowStats>), GpuError> {
         check_frame_size(cam)?;
-        out.check(cam, haze.is_some(), rain.is_some(), snow.is_some())?;
+        out.check(
+            cam,
+            haze.is_some(),
+            rain.is_some(),
+            snow.is_some(),
+            light.snow.is_some(),
+        )?;
         let n = cam.pixels();
         self.ctx.check_buffer(
             &format!("a {}x{} RGB frame", cam.width, cam.height),
@@ -114,11 +126,29 @@ impl GpuRenderer {
             };
             let passes = Passes::prepare(cam, lit, haze, rain, snow)?;
             let mut f = FrameEncoder::new(ctx, &self.pool, cam);
+            let mut snow_photo = None;
             let (rgb, depth) = match scene {
                 SceneRef::Boxes(_) => (f.target("rgb", 3 * n), f.target("depth", n)),
                 SceneRef::Photo { rgb, depth_m } => {
                     check_photo(cam, rgb, depth_m)?;
-                    (f.upload("rgb", rgb), f.upload("depth", depth_m))
+                    match light.snow {
+                        // A photo's cover whitens its pixels on the CPU (the scene stage of a
+                        // photo is its copy), uploaded with its layer.
+                        Some(snow) => {
+                            let w = cam.width as usize;
+                            let mut white = rgb.to_vec();
+                            let mut layer = vec![0.0f32; cam.pixels()];
+                            for (y, (row, s_row)) in
+                                white.chunks_mut(3 * w).zip(layer.chunks_mut(w)).enumerate()
+                            {
+                                let d_row = &depth_m[y * w..(y + 1) * w];
+                                snow.photo_row(cam, light.ambient, y, row, d_row, Some(s_row));
+                            }
+                            snow_photo = Some(f.upload("snow_depth_m", &layer));
+                            (f.upload("rgb", &white), f.upload("depth", depth_m))
+                        }
+                        None => (f.upload("rgb", rgb), f.upload("depth", depth_m)),
+                    }
                 }
             };
             // The layers the passes draw, one buffer each.
@@ -126,8 +156,14 @@ impl GpuRenderer {
                 (passes.haze.is_some(), rain.is_some(), snow.is_some());
             let mut layers: Layers<Pooled> = Layers::default();
             for l in Layer::ALL {
-                if l.drawn(haze_on, rain_on, snow_on) {
-                    layers.set(l, f.target(l.name(), n));
+                if l.drawn(haze_on, rain_on, snow_on, light.snow.is_some()) {
+                    match (l, snow_photo.take()) {
+                        (Layer::SnowDepth, Some(b)) => layers.set(l, b),
+                        (_, taken) => {
+                            snow_photo = taken;
+                            layers.set(l, f.target(l.name(), n));
+                        }
+                    }
                 }
             }
             let targets = FrameTargets {

@@ -4,7 +4,9 @@ use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
 use crate::uniforms::{
     AmbientUniform, BoxElement, CameraUniform, LampUniform, LightElement, SceneUniform, SkyUniform,
+    SnowUniform,
 };
+use skyfall_core::frame::layers::Layer;
 use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::cie::SkyKind;
@@ -13,11 +15,14 @@ const SOURCE: &str = include_str!("shaders/scene_raycast.wgsl");
 
 /// The compiled pass, twice: with the lights' code, and without it (`LIT = false`) for scenes
 /// without lights, so that an effect switched off costs nothing (on lavapipe the lit pipeline
-/// made the unlit street 1.18x slower even though its light loop never ran).
+/// made the unlit street 1.18x slower even though its light loop never ran); and both again
+/// with the snow cover's code (`SNOW = true`), for frames with a cover.
 #[derive(Debug)]
 pub struct SceneRaycastPass {
     lit: ComputePass,
     unlit: ComputePass,
+    lit_snow: ComputePass,
+    unlit_snow: ComputePass,
 }
 
 impl FramePass for SceneRaycastPass {
@@ -28,14 +33,22 @@ impl FramePass for SceneRaycastPass {
         use Binding::*;
         let bindings = [
             Uniform, Uniform, ReadOnly, ReadWrite, ReadWrite, Uniform, Uniform, ReadOnly, ReadOnly,
-            Uniform, ReadOnly,
+            Uniform, ReadOnly, Uniform, ReadOnly, ReadWrite,
         ];
-        let pass = |lit: f64| {
-            ComputePass::with_constants(ctx, "scene_raycast", SOURCE, &bindings, &[("LIT", lit)])
+        let pass = |lit: f64, snow: f64| {
+            ComputePass::with_constants(
+                ctx,
+                "scene_raycast",
+                SOURCE,
+                &bindings,
+                &[("LIT", lit), ("SNOW", snow)],
+            )
         };
         SceneRaycastPass {
-            lit: pass(1.0),
-            unlit: pass(0.0),
+            lit: pass(1.0, 0.0),
+            unlit: pass(0.0, 0.0),
+            lit_snow: pass(1.0, 1.0),
+            unlit_snow: pass(0.0, 1.0),
         }
     }
 
@@ -104,6 +117,33 @@ impl FramePass for SceneRaycastPass {
         if lights.is_empty() {
             lights.push(LightElement::default()); // counts.x = 0 keeps it unread
         }
+        // The snow cover's grid (a cell of none where the frame has no cover: its pipeline
+        // does not read them).
+        let (snow_info, cells) = match light.snow {
+            Some(r) => {
+                let (g, dims, base, depth) = r.gpu_grid();
+                f.ctx
+                    .check_buffer("the snow cover", (base.len() * 8) as u64)?;
+                let cells: Vec<[f32; 2]> = base.iter().zip(depth).map(|(&b, &d)| [b, d]).collect();
+                let info = SnowUniform {
+                    grid: [g[0], g[1], g[2], r.open_depth_m()],
+                    range: [
+                        g[3],
+                        g[4],
+                        skyfall_core::snow::cover::SNOW_ALBEDO,
+                        skyfall_core::snow::cover::render::COVER_EFOLD_M,
+                    ],
+                    dims: [dims[0], dims[1], 0, 0],
+                };
+                (info, cells)
+            }
+            None => (SnowUniform::default(), vec![[0.0f32; 2]]),
+        };
+        let snow_dummy = f.target("snow_dummy", 1);
+        let snow_out = match light.snow {
+            Some(_) => t.layer(Layer::SnowDepth)?,
+            None => &snow_dummy,
+        };
         let buffers = [
             f.uniform("camera", &CameraUniform::new(f.cam)),
             f.uniform("scene", &info),
@@ -114,19 +154,37 @@ impl FramePass for SceneRaycastPass {
             f.upload("ambient_solid", &m.solid),
             f.uniform("lamps", &lamps),
             f.upload("lights", &lights),
+            f.uniform("snow", &snow_info),
+            f.upload("snow_cells", &cells),
         ];
-        let [cam, info, boxes, sky, amb, values, solid, lamps, lights] = &buffers;
+        let [
+            cam,
+            info,
+            boxes,
+            sky,
+            amb,
+            values,
+            solid,
+            lamps,
+            lights,
+            snow,
+            cells,
+        ] = &buffers;
+        let pass = match (light.lights.is_empty(), light.snow.is_some()) {
+            (true, false) => &self.unlit,
+            (false, false) => &self.lit,
+            (true, true) => &self.unlit_snow,
+            (false, true) => &self.lit_snow,
+        };
         f.dispatch(
-            if light.lights.is_empty() {
-                &self.unlit
-            } else {
-                &self.lit
-            },
+            pass,
             &[
-                cam, info, boxes, t.rgb, t.depth, sky, amb, values, solid, lamps, lights,
+                cam, info, boxes, t.rgb, t.depth, sky, amb, values, solid, lamps, lights, snow,
+                cells, snow_out,
             ],
         );
         f.hold(buffers);
+        f.hold([snow_dummy]);
         Ok(())
     }
 }

@@ -77,6 +77,18 @@ pub struct SceneUniform {
     pub counts: [u32; 4],
 }
 
+/// `SnowInfo` in `shaders/scene_raycast.wgsl`: the snow cover's grid.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct SnowUniform {
+    /// Origin x, origin z (m), cell side (m), depth on open ground (m).
+    pub grid: [f32; 4],
+    /// Lowest base and highest top of the cells with snow (m), albedo, coverage e-fold (m).
+    pub range: [f32; 4],
+    /// Cells along x and z.
+    pub dims: [u32; 4],
+}
+
 /// `SceneBox` in `shaders/scene_raycast.wgsl` (a storage array's element).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]

@@ -569,3 +569,87 @@ fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
         }
     }
 }
+
+#[test]
+fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
+    use skyfall_core::snow::cover::{CoverParams, Grid, HeightField, SnowRender, accumulate};
+    let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let (scene, cam) = street();
+    let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let grid = Grid::covering([-20.0, -100.0], [20.0, 10.0], 0.5).unwrap();
+    let field = HeightField::from_boxes(&scene, grid).unwrap();
+    let weather = skyfall_core::weather::Weather {
+        rain_rate_mm_h: 0.0,
+        snow_rate_mm_h: 5.0,
+        snow_density_kg_m3: 100.0,
+        snow_near_m: 8.0,
+        snow_opacity: skyfall_core::snow::streaks::SnowOpacity::Extinction,
+        visibility_m: f64::INFINITY,
+        sky_illuminance_lux: 10_000.0,
+        wind_m_s: [0.3, 0.0, 0.2],
+        rain_near_m: 5.0,
+        rain_diameters_mm: vec![1.0],
+        rain_streaks: true,
+        rain_method: skyfall_core::rain::drops::RainMethod::Billboards,
+        rain_sheltered: true,
+        sky: skyfall_core::weather::SkySpec::Overcast,
+        sun_deg: None,
+        cloud_base_m: None,
+    };
+    let params = CoverParams {
+        duration_s: 3600.0,
+        dt_s: 300.0,
+        roughness: 0.2,
+        seed: 1,
+    };
+    let cover = accumulate(field, &weather, &params, None).unwrap();
+    let snow = SnowRender::boxes(&cover);
+    let light = SceneLight::new(&sky, &amb).with_snow(Some(&snow));
+    let c = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
+    let g = gpu
+        .render(SceneRef::Boxes(&scene), &cam, &light, None, None, None)
+        .unwrap();
+    assert_rgb_agrees(&c.rgb, &g.rgb);
+    let (c_snow, g_snow) = (
+        c.layer(Layer::SnowDepth).unwrap(),
+        g.layer(Layer::SnowDepth).unwrap(),
+    );
+    let covered = c_snow.iter().filter(|&&d| d > 0.0).count();
+    assert!(covered * 8 > c_snow.len(), "{covered} pixels under snow");
+    assert!(differing(c_snow, g_snow, 1e-3) * 200 <= c_snow.len());
+    let (_, depth_big) = max_abs(&c.depth_m, &g.depth_m);
+    assert!(
+        depth_big * 200 <= c.depth_m.len(),
+        "{depth_big} depths differ"
+    );
+    // Without the cover the GPU frame is the one it always was.
+    let bare = SceneLight::new(&sky, &amb);
+    let g0 = gpu
+        .render(SceneRef::Boxes(&scene), &cam, &bare, None, None, None)
+        .unwrap();
+    assert!(g0.layer(Layer::SnowDepth).is_none());
+    assert!(max_abs(&g0.rgb, &g.rgb).1 > 1000);
+    // A photo of the bare frame under the same cover: the CPU's whitening, uploaded.
+    let photo = SceneRef::Photo {
+        rgb: &g0.rgb,
+        depth_m: &g0.depth_m,
+    };
+    let pcover = accumulate(
+        HeightField::from_depth_map(&cam, &g0.depth_m, 0.5).unwrap(),
+        &weather,
+        &params,
+        None,
+    )
+    .unwrap();
+    let psnow = SnowRender::photo(&pcover, &cam, &g0.depth_m, Vec3::ONE).unwrap();
+    let plight = SceneLight::new(&sky, &amb).with_snow(Some(&psnow));
+    let cp = render(photo, &cam, &plight, None, None, None).unwrap();
+    let gp = gpu.render(photo, &cam, &plight, None, None, None).unwrap();
+    assert_eq!(cp.rgb, gp.rgb);
+    assert_eq!(
+        cp.layer(Layer::SnowDepth).unwrap(),
+        gp.layer(Layer::SnowDepth).unwrap()
+    );
+    assert!(cp.layer(Layer::SnowDepth).unwrap().iter().any(|&d| d > 0.0));
+}

@@ -15,6 +15,7 @@ mod ranges;
 mod render;
 mod request;
 mod sky;
+mod snow;
 mod snow_frame;
 mod weather;
 mod windshield;
@@ -49,6 +50,8 @@ mod _core {
     use super::render::{GpuDevice, render_frame, render_photo8};
     #[pymodule_export]
     use super::sky::{AmbientLightMap, SkyModel, cloud_base_m};
+    #[pymodule_export]
+    use super::snow::{SnowCoverGrid, snow_cover_boxes, snow_cover_photo};
     #[pymodule_export]
     use super::snow_frame::snowflakes;
     #[pymodule_export]

@@ -102,7 +102,12 @@ pub fn render_frame<'py>(
     // The layers this frame draws, in the order they are declared.
     let mut layers: Vec<(Layer, F2<'py>)> = Vec::new();
     for layer in Layer::ALL {
-        if layer.drawn(haze.is_some(), rain.is_some(), snow.is_some()) {
+        if layer.drawn(
+            haze.is_some(),
+            rain.is_some(),
+            snow.is_some(),
+            light.snow.is_some(),
+        ) {
             layers.push((
                 layer,
                 out.take::<f32, Ix2>(layer.name())?.map_or_else(plane, Ok)?,

@@ -265,6 +265,9 @@ pub struct RequestArgs<'py> {
     seed: u64,
     cull_threshold: Option<f64>,
     ambient: Bound<'py, AmbientLightMap>,
+    /// The snow cover drawn on the scene (`skyfall.snow.SnowCover`'s core), when given.
+    #[pyo3(default)]
+    snow_cover: Option<Bound<'py, crate::snow::SnowCoverGrid>>,
 }
 
 /// A request's parts: the Python arrays it borrows, and the rest, owned.
@@ -278,6 +281,7 @@ pub struct ParsedRequest<'py> {
     seed: u64,
     cull_threshold: Option<f64>,
     ambient: Arc<skyfall_core::sky::ambient::AmbientMap>,
+    snow_cover: Option<Arc<skyfall_core::snow::cover::SnowCover>>,
 }
 
 impl<'py> RequestArgs<'py> {
@@ -321,6 +325,7 @@ impl<'py> RequestArgs<'py> {
             seed: self.seed,
             cull_threshold: self.cull_threshold,
             ambient: Arc::clone(&self.ambient.get().map),
+            snow_cover: self.snow_cover.map(|c| Arc::clone(&c.get().cover)),
         })
     }
 }
@@ -364,6 +369,7 @@ impl<'py> ParsedRequest<'py> {
             seed: self.seed,
             cull_threshold: self.cull_threshold,
             ambient: Arc::clone(&self.ambient),
+            snow_cover: self.snow_cover.as_deref(),
         })
     }
 }

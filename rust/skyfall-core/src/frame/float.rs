@@ -23,9 +23,15 @@ pub fn render(
     rain: Option<&RainFrame<'_>>,
     snow: Option<&SnowFrame<'_>>,
 ) -> Result<FrameBuffers> {
-    FrameBuffers::filled(cam, haze.is_some(), rain.is_some(), snow.is_some(), |out| {
-        render_into(scene, cam, light, haze, rain, snow, out)
-    })
+    let cover = light.snow.is_some();
+    FrameBuffers::filled(
+        cam,
+        haze.is_some(),
+        rain.is_some(),
+        snow.is_some(),
+        cover,
+        |out| render_into(scene, cam, light, haze, rain, snow, out),
+    )
 }
 
 /// [`render`] into the caller's buffers (see [`FrameOut`]); the rain's report when it rains.
@@ -55,7 +61,8 @@ pub fn render_into_reporting(
     if let SceneRef::Photo { rgb, depth_m } = scene {
         check_photo(cam, rgb, depth_m)?;
     }
-    out.check(cam, haze.is_some(), rain.is_some(), snow.is_some())?;
+    let cover = light.snow.is_some();
+    out.check(cam, haze.is_some(), rain.is_some(), snow.is_some(), cover)?;
     let w = cam.width as usize;
     let FrameOut {
         rgb,
@@ -63,6 +70,7 @@ pub fn render_into_reporting(
         mut layers,
     } = out;
     let trans = layers.take(Layer::Transmittance);
+    let snow_depth = layers.take(Layer::SnowDepth);
     let rain_layers = layers
         .take(Layer::RainAlpha)
         .zip(layers.take(Layer::RainDepth));
@@ -102,46 +110,60 @@ pub fn render_into_reporting(
             b[2] = s;
         }
     }
+    // The snow cover's depth per band (a frame with a cover only).
+    let mut cover_bands: Vec<Option<&mut [f32]>> = match snow_depth {
+        Some(t) => t.chunks_mut(band).map(Some).collect(),
+        None => (0..bands).map(|_| None).collect(),
+    };
     let rays = ViewRays::new(cam);
     let particles = binned.as_ref().map(|(streaks, bins)| (*streaks, bins));
     // The pipeline, band by band while the band is in cache: the scene stage, then the effect
-    // passes in physical order (haze, the lights' glows, rain).
+    // passes in physical order (haze, the lights' glows, the particles).
     rgb.par_chunks_mut(3 * band)
         .zip(depth.par_chunks_mut(band))
         .zip(t_bands.par_iter_mut())
         .zip(rain_bands.par_iter_mut())
+        .zip(cover_bands.par_iter_mut())
         .enumerate()
-        .for_each(|(bi, (((rgb_band, depth_band), t_band), rain_band))| {
-            let y0 = bi * BAND_ROWS;
-            for (k, (rgb_row, depth_row)) in rgb_band
-                .chunks_mut(3 * w)
-                .zip(depth_band.chunks_mut(w))
-                .enumerate()
-            {
-                let y = y0 + k;
-                scene_row(scene, cam, light, y, rgb_row, depth_row);
-                if let (Some(h), Some(t_band)) = (haze, t_band.as_deref_mut()) {
-                    let t_row = &mut t_band[k * w..(k + 1) * w];
-                    apply_row(h, &rays.row(y as u32, 0..w), rgb_row, depth_row, t_row);
+        .for_each(
+            |(bi, ((((rgb_band, depth_band), t_band), rain_band), cover_band))| {
+                let y0 = bi * BAND_ROWS;
+                for (k, (rgb_row, depth_row)) in rgb_band
+                    .chunks_mut(3 * w)
+                    .zip(depth_band.chunks_mut(w))
+                    .enumerate()
+                {
+                    let y = y0 + k;
+                    match (light.snow, cover_band.as_deref_mut()) {
+                        (Some(snow), Some(s_band)) => {
+                            let s_row = &mut s_band[k * w..(k + 1) * w];
+                            snow_scene_row(scene, cam, light, snow, y, rgb_row, depth_row, s_row);
+                        }
+                        _ => scene_row(scene, cam, light, y, rgb_row, depth_row),
+                    }
+                    if let (Some(h), Some(t_band)) = (haze, t_band.as_deref_mut()) {
+                        let t_row = &mut t_band[k * w..(k + 1) * w];
+                        apply_row(h, &rays.row(y as u32, 0..w), rgb_row, depth_row, t_row);
+                    }
+                    if let Some(g) = glow {
+                        g.apply_row(cam, y as u32, rgb_row);
+                    }
                 }
-                if let Some(g) = glow {
-                    g.apply_row(cam, y as u32, rgb_row);
+                if let Some((streaks, (offsets, indices))) = particles {
+                    let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
+                    let [alpha, rain_depth, snow_alpha] = rain_band;
+                    composite_band_colour(
+                        streaks,
+                        list,
+                        y0,
+                        w,
+                        depth_band,
+                        rgb_band,
+                        [&mut **alpha, &mut **rain_depth, &mut **snow_alpha],
+                    );
                 }
-            }
-            if let Some((streaks, (offsets, indices))) = particles {
-                let list = &indices[offsets[bi] as usize..offsets[bi + 1] as usize];
-                let [alpha, rain_depth, snow_alpha] = rain_band;
-                composite_band_colour(
-                    streaks,
-                    list,
-                    y0,
-                    w,
-                    depth_band,
-                    rgb_band,
-                    [&mut **alpha, &mut **rain_depth, &mut **snow_alpha],
-                );
-            }
-        });
+            },
+        );
     Ok((passes.rain_report(), passes.snow_report()))
 }
 
@@ -166,6 +188,34 @@ fn scene_row(
         SceneRef::Photo { rgb, depth_m } => {
             rgb_row.copy_from_slice(&rgb[3 * w * y..3 * w * (y + 1)]);
             depth_row.copy_from_slice(&depth_m[w * y..w * (y + 1)]);
+        }
+    }
+}
+
+/// [`scene_row`] with a snow cover on the surfaces, its depth into `snow_row`.
+#[allow(clippy::too_many_arguments)]
+fn snow_scene_row(
+    scene: SceneRef<'_>,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    snow: &crate::snow::cover::SnowRender,
+    y: usize,
+    rgb_row: &mut [f32],
+    depth_row: &mut [f32],
+    snow_row: &mut [f32],
+) {
+    match scene {
+        SceneRef::Boxes(b) => {
+            for x in 0..depth_row.len() {
+                let (c, d, s) = snow.shade_pixel(b, cam, light, x as u32, y as u32);
+                rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
+                depth_row[x] = d;
+                snow_row[x] = s;
+            }
+        }
+        SceneRef::Photo { .. } => {
+            scene_row(scene, cam, light, y, rgb_row, depth_row);
+            snow.photo_row(cam, light.ambient, y, rgb_row, depth_row, Some(snow_row));
         }
     }
 }

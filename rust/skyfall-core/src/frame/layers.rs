@@ -13,6 +13,9 @@ pub enum Layer {
     RainDepth,
     /// The flakes' coverage 1 − ∏(1 − aᵢ) (the particle pass, snow).
     SnowAlpha,
+    /// The depth of snow lying on the visible surface, m; 0 where none (the scene stage, with
+    /// a snow cover).
+    SnowDepth,
     /// The windshield's drops' coverage, 0–1 (the windshield stage).
     DropMask,
     /// The windshield's metaball field above its 0.5 threshold, 0 off the drops (the
@@ -21,7 +24,7 @@ pub enum Layer {
 }
 
 /// How many layers there are.
-pub const LAYER_COUNT: usize = 6;
+pub const LAYER_COUNT: usize = 7;
 
 impl Layer {
     /// Every layer, in the order frames list them.
@@ -30,6 +33,7 @@ impl Layer {
         Layer::RainAlpha,
         Layer::RainDepth,
         Layer::SnowAlpha,
+        Layer::SnowDepth,
         Layer::DropMask,
         Layer::DropHeight,
     ];
@@ -41,6 +45,7 @@ impl Layer {
             Layer::RainAlpha => "rain_alpha",
             Layer::RainDepth => "rain_depth_m",
             Layer::SnowAlpha => "snow_alpha",
+            Layer::SnowDepth => "snow_depth_m",
             Layer::DropMask => "drop_mask",
             Layer::DropHeight => "drop_height",
         }
@@ -53,6 +58,7 @@ impl Layer {
             Layer::RainAlpha => "rain streak coverage 1 - prod(1 - a_i)",
             Layer::RainDepth => "depth of the nearest visible rain streak, m (inf: none)",
             Layer::SnowAlpha => "snowflake coverage 1 - prod(1 - a_i)",
+            Layer::SnowDepth => "depth of snow lying on the visible surface, m (0: none)",
             Layer::DropMask => "coverage of the windshield's drops, 0-1",
             Layer::DropHeight => {
                 "the windshield's metaball field above its 0.5 threshold (0: no drop)"
@@ -68,18 +74,20 @@ impl Layer {
             Layer::RainAlpha => 0.0,
             Layer::RainDepth => f32::INFINITY,
             Layer::SnowAlpha => 0.0,
+            Layer::SnowDepth => 0.0,
             Layer::DropMask | Layer::DropHeight => 0.0,
         }
     }
 
-    /// Whether a frame with these passes draws the layer. The windshield's layers are drawn by
-    /// its stage after the frame (`skyfall.windshield.composite`, over either backend's frame),
-    /// never by these passes.
-    pub const fn drawn(self, haze: bool, rain: bool, snow: bool) -> bool {
+    /// Whether a frame with these passes (haze, rain, snowfall, a snow cover) draws the layer.
+    /// The windshield's layers are drawn by its stage after the frame
+    /// (`skyfall.windshield.composite`, over either backend's frame), never by these passes.
+    pub const fn drawn(self, haze: bool, rain: bool, snow: bool, snow_cover: bool) -> bool {
         match self {
             Layer::Transmittance => haze,
             Layer::RainAlpha | Layer::RainDepth => rain,
             Layer::SnowAlpha => snow,
+            Layer::SnowDepth => snow_cover,
             Layer::DropMask | Layer::DropHeight => false,
         }
     }
@@ -130,10 +138,13 @@ mod tests {
         names.dedup();
         assert_eq!(names.len(), LAYER_COUNT);
         assert!(
-            Layer::Transmittance.drawn(true, false, false)
-                && !Layer::RainAlpha.drawn(true, false, true)
-                && Layer::SnowAlpha.drawn(false, false, true)
-                && !Layer::SnowAlpha.drawn(true, true, false)
+            Layer::Transmittance.drawn(true, false, false, false)
+                && !Layer::RainAlpha.drawn(true, false, true, true)
+                && Layer::SnowAlpha.drawn(false, false, true, false)
+                && !Layer::SnowAlpha.drawn(true, true, false, true)
+                && Layer::SnowDepth.drawn(false, false, false, true)
+                && !Layer::SnowDepth.drawn(true, true, true, false)
+                && !Layer::DropMask.drawn(true, true, true, true)
         );
     }
 

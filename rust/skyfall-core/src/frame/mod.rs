@@ -139,9 +139,16 @@ impl<'a> FrameOut<'a> {
         out
     }
 
-    /// Checks the buffers against a `cam` frame with or without haze, rain and snow: every
-    /// length, and the layers given exactly when they are drawn.
-    pub fn check(&self, cam: &Camera, haze: bool, rain: bool, snow: bool) -> Result<()> {
+    /// Checks the buffers against a `cam` frame with or without haze, rain, snowfall and a snow
+    /// cover: every length, and the layers given exactly when they are drawn.
+    pub fn check(
+        &self,
+        cam: &Camera,
+        haze: bool,
+        rain: bool,
+        snow: bool,
+        snow_cover: bool,
+    ) -> Result<()> {
         let n = cam.pixels();
         let length = |name: &'static str, len: usize, expected: usize| Error::Length {
             param: Param { name, index: None },
@@ -155,9 +162,10 @@ impl<'a> FrameOut<'a> {
             return Err(length("depth_m", self.depth_m.len(), n));
         }
         for l in Layer::ALL {
-            let want = if l.drawn(haze, rain, snow) { n } else { 0 };
+            let drawn = l.drawn(haze, rain, snow, snow_cover);
+            let want = if drawn { n } else { 0 };
             let got = self.layers.get(l).map_or(0, |b| b.len());
-            if got != want || self.layers.get(l).is_some() != l.drawn(haze, rain, snow) {
+            if got != want || self.layers.get(l).is_some() != drawn {
                 return Err(length(l.name(), got, want));
             }
         }
@@ -173,6 +181,7 @@ impl FrameBuffers {
         haze: bool,
         rain: bool,
         snow: bool,
+        snow_cover: bool,
         render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
     ) -> std::result::Result<Self, E> {
         check_frame_size(cam)?;
@@ -184,7 +193,7 @@ impl FrameBuffers {
         );
         let mut layers: Layers<Vec<f32>> = Layers::default();
         for l in Layer::ALL {
-            if l.drawn(haze, rain, snow) {
+            if l.drawn(haze, rain, snow, snow_cover) {
                 layers.set(l, try_filled_par(l.name(), n, 0.0f32)?);
             }
         }

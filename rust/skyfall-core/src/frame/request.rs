@@ -14,6 +14,7 @@ use crate::scene::camera::{Camera, Defocus, ThinLens};
 use crate::scene::lights::Light;
 use crate::sky::Sky;
 use crate::sky::ambient::AmbientMap;
+use crate::snow::cover::{SnowCover, SnowRender};
 use crate::snow::flakes::SnowRegion;
 use crate::snow::streaks::{SNOW_ALBEDO, SnowFrame, SnowOpacity};
 use crate::weather::Weather;
@@ -77,6 +78,8 @@ pub struct FrameRequest<'a> {
     /// The scene's ambient-light map under this weather's sky (the open sky's light everywhere
     /// where nothing hides it).
     pub ambient: Arc<AmbientMap>,
+    /// The snow lying on the scene's surfaces ([`crate::snow::cover::accumulate`]); None: none.
+    pub snow_cover: Option<&'a SnowCover>,
 }
 
 /// What a frame's passes need, derived from its request.
@@ -96,6 +99,7 @@ pub struct FrameSetup {
     camera_velocity_m_s: Vec3,
     lens: Option<Defocus>,
     ground: bool,
+    snow_cover: Option<SnowRender>,
 }
 
 impl FrameRequest<'_> {
@@ -201,7 +205,15 @@ impl FrameSetup {
             .as_ref()
             .map(|l| l.defocus(&req.camera))
             .transpose()?;
+        let snow_cover = match (req.snow_cover, &req.scene) {
+            (None, _) => None,
+            (Some(c), SceneData::Boxes(_)) => Some(SnowRender::boxes(c)),
+            (Some(c), SceneData::Photo { depth_m, .. } | SceneData::Photo8 { depth_m, .. }) => {
+                Some(SnowRender::photo(c, &req.camera, depth_m, units)?)
+            }
+        };
         Ok(FrameSetup {
+            snow_cover,
             sky,
             haze,
             ambient: Arc::clone(&req.ambient),
@@ -221,6 +233,7 @@ impl FrameSetup {
     pub fn light(&self) -> SceneLight<'_> {
         SceneLight::new(&self.sky, &self.ambient)
             .with_lights(&self.lights, self.sky_illuminance_lux)
+            .with_snow(self.snow_cover.as_ref())
     }
 
     /// The rain the frame draws, when it draws streaks.

@@ -39,6 +39,8 @@ pub struct SceneLight<'a> {
     pub lights: &'a [Light],
     /// The sky's horizontal illuminance E, lux: the unit a light's illuminance is divided by.
     pub sky_illuminance_lux: f32,
+    /// The snow cover on the surfaces, when the frame has one.
+    pub snow: Option<&'a crate::snow::cover::SnowRender>,
 }
 
 impl<'a> SceneLight<'a> {
@@ -49,6 +51,7 @@ impl<'a> SceneLight<'a> {
             ambient,
             lights: &[],
             sky_illuminance_lux: 1.0,
+            snow: None,
         }
     }
 
@@ -59,6 +62,30 @@ impl<'a> SceneLight<'a> {
             sky_illuminance_lux,
             ..self
         }
+    }
+
+    /// Radiance (relative) of a Lambertian face of albedo `a` and normal `n` at `p`: the sky
+    /// light of the map on its normal and the lights, with the shadows of `boxes` (as
+    /// [`shade_pixel`] lights the boxes; the snow cover's surfaces use it).
+    #[inline]
+    pub fn surface_radiance(
+        &self,
+        boxes: &[crate::scene::boxes::SceneBox],
+        p: Vec3,
+        n: Vec3,
+        a: Vec3,
+    ) -> Vec3 {
+        let e = AmbientMap::channel(n).map_or(0.0, |c| self.ambient.sample(p)[c]);
+        let sky_lit = a * e;
+        if self.lights.is_empty() {
+            return sky_lit;
+        }
+        sky_lit + a * self.lamp_light(boxes, p, n, a, sky_lit)
+    }
+
+    /// The same with the snow cover `snow` on its surfaces.
+    pub fn with_snow(self, snow: Option<&'a crate::snow::cover::SnowRender>) -> Self {
+        SceneLight { snow, ..self }
     }
 
     /// Illuminance relative to E on the face of normal `n` at `p` from the lights, with the

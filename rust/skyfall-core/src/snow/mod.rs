@@ -8,5 +8,6 @@
 //! - [`streaks`]: a frame's flakes lit, faded with distance, given their sprites and projected
 //!   into the particle list.
 
+pub mod cover;
 pub mod flakes;
 pub mod streaks;

@@ -30,6 +30,18 @@ override LIT: bool = true;
 @group(0) @binding(8) var<storage, read> amb_solid: array<u32>;
 @group(0) @binding(9) var<uniform> lamps: LampInfo;
 @group(0) @binding(10) var<storage, read> lights: array<LightElement>;
+@group(0) @binding(11) var<uniform> snow: SnowInfo;
+@group(0) @binding(12) var<storage, read> snow_cells: array<vec2<f32>>;
+@group(0) @binding(13) var<storage, read_write> snow_out: array<f32>;
+
+// True in the pipelines for frames with a snow cover (skyfall_core::snow::cover::render).
+override SNOW: bool = false;
+
+struct SnowInfo {
+    grid: vec4<f32>,    // origin x, origin z (m), cell side (m), depth on open ground (m)
+    range: vec4<f32>,   // lowest base, highest top of the cells with snow (m), albedo, coverage e-fold (m)
+    dims: vec4<u32>,    // cells along x, along z
+}
 
 struct LampInfo {
     params: vec4<f32>,   // 1/E (1/lux), SHADOW_SKIP_RELATIVE, unused x2
@@ -272,6 +284,177 @@ fn lamp_light(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>, ambient: vec3<f32>) -> v
     return sum * lamps.params.x;
 }
 
+// --- the snow cover (skyfall_core::snow::cover::render::SnowRender) ---------------------
+
+fn snow_signum(v: f32) -> f32 {
+    return select(1.0, -1.0, v < 0.0);
+}
+
+fn snow_top(j: u32) -> f32 {
+    let c = snow_cells[j];
+    return c.x + c.y;
+}
+
+fn snow_same(j: u32, c: u32) -> bool {
+    return snow_cells[j].y > 0.0 && abs(snow_cells[j].x - snow_cells[c].x) <= snow.grid.z;
+}
+
+// One axis of SnowRender::normal's central differences (lo, hi: neighbours, or c for none).
+fn snow_slope(c: u32, lo: u32, hi: u32, has_lo: bool, has_hi: bool) -> f32 {
+    let l = has_lo && snow_same(lo, c);
+    let h = has_hi && snow_same(hi, c);
+    let s = snow.grid.z;
+    var g = 0.0;
+    if l && h {
+        g = (snow_top(hi) - snow_top(lo)) / (2.0 * s);
+    } else if h {
+        g = (snow_top(hi) - snow_top(c)) / s;
+    } else if l {
+        g = (snow_top(c) - snow_top(lo)) / s;
+    }
+    return clamp(g, -1.0, 1.0);
+}
+
+fn snow_normal(i: u32, k: u32) -> vec3<f32> {
+    let nx = snow.dims.x;
+    let c = k * nx + i;
+    let gx = snow_slope(c, c - select(0u, 1u, i > 0u), c + 1u, i > 0u, i + 1u < nx);
+    let gz = snow_slope(c, c - select(0u, nx, k > 0u), c + nx, k > 0u, k + 1u < snow.dims.y);
+    return normalize(vec3<f32>(-gx, 1.0, -gz));
+}
+
+struct SnowHit {
+    t: f32,
+    n: vec3<f32>,
+    d: f32,
+    hit: bool,
+}
+
+// SnowRender::trace: the nearest snow along o + t d, 0 <= t <= t_max (a 2D DDA over the grid).
+fn snow_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> SnowHit {
+    var none = SnowHit(0.0, vec3<f32>(0.0), 0.0, false);
+    if snow.range.x > snow.range.y {
+        return none;
+    }
+    let s = snow.grid.z;
+    let nx = snow.dims.x;
+    let nz = snow.dims.y;
+    let lo = vec3<f32>(snow.grid.x, snow.range.x, snow.grid.y);
+    let hi = vec3<f32>(snow.grid.x + s * f32(nx), snow.range.y, snow.grid.y + s * f32(nz));
+    let inv = vec3<f32>(1.0 / safe(d.x), 1.0 / safe(d.y), 1.0 / safe(d.z));
+    let t1v = (lo - o) * inv;
+    let t2v = (hi - o) * inv;
+    let tn = min(t1v, t2v);
+    let tf = max(t1v, t2v);
+    let t_enter = max(max(max(tn.x, tn.y), tn.z), 0.0);
+    let t_exit = min(min(min(tf.x, tf.y), tf.z), t_max);
+    if t_enter > t_exit {
+        return none;
+    }
+    var side: vec3<f32>;
+    if tn.x >= tn.y && tn.x >= tn.z {
+        side = vec3<f32>(-snow_signum(d.x), 0.0, 0.0);
+    } else if tn.z >= tn.y {
+        side = vec3<f32>(0.0, 0.0, -snow_signum(d.z));
+    } else {
+        side = vec3<f32>(0.0, -snow_signum(d.y), 0.0);
+    }
+    let p = o + d * t_enter;
+    var i = min(u32(max(floor((p.x - snow.grid.x) / s), 0.0)), nx - 1u);
+    var k = min(u32(max(floor((p.z - snow.grid.y) / s), 0.0)), nz - 1u);
+    let sx = d.x >= 0.0;
+    let sz = d.z >= 0.0;
+    var tx = 3.4e38;
+    if d.x != 0.0 {
+        tx = (snow.grid.x + s * (f32(i) + select(0.0, 1.0, sx)) - o.x) * inv.x;
+    }
+    var tz = 3.4e38;
+    if d.z != 0.0 {
+        tz = (snow.grid.y + s * (f32(k) + select(0.0, 1.0, sz)) - o.z) * inv.z;
+    }
+    let dtx = abs(s * inv.x);
+    let dtz = abs(s * inv.z);
+    var t_in = t_enter;
+    for (var step = 0u; step < nx + nz + 2u; step++) {
+        let t_out = min(min(tx, tz), t_exit);
+        let idx = k * nx + i;
+        let cell = snow_cells[idx];
+        let dep = cell.y;
+        if dep > 0.0 {
+            let b = cell.x;
+            let top = b + dep;
+            var a0 = 3.4e38;
+            var a1 = -3.4e38;
+            if d.y != 0.0 {
+                let ta = (b - o.y) / d.y;
+                let tb = (top - o.y) / d.y;
+                a0 = min(ta, tb);
+                a1 = max(ta, tb);
+            } else if o.y >= b && o.y <= top {
+                a0 = -3.4e38;
+                a1 = 3.4e38;
+            }
+            let h0 = max(t_in, a0);
+            let h1 = min(t_out, a1);
+            if h0 <= h1 {
+                var n = side;
+                if h0 > t_in || o.y + d.y * h0 - b < 0.5 * s {
+                    n = snow_normal(i, k);
+                }
+                return SnowHit(h0, n, dep, true);
+            }
+        }
+        if t_out >= t_exit {
+            return none;
+        }
+        if tx <= tz {
+            if (sx && i + 1u >= nx) || (!sx && i == 0u) {
+                return none;
+            }
+            i = select(i - 1u, i + 1u, sx);
+            t_in = tx;
+            tx += dtx;
+            side = vec3<f32>(select(1.0, -1.0, sx), 0.0, 0.0);
+        } else {
+            if (sz && k + 1u >= nz) || (!sz && k == 0u) {
+                return none;
+            }
+            k = select(k - 1u, k + 1u, sz);
+            t_in = tz;
+            tz += dtz;
+            side = vec3<f32>(0.0, 0.0, select(1.0, -1.0, sz));
+        }
+    }
+    return none;
+}
+
+fn snow_covers(p: vec3<f32>) -> bool {
+    let u = (p.x - snow.grid.x) / snow.grid.z;
+    let v = (p.z - snow.grid.y) / snow.grid.z;
+    return u >= 0.0 && v >= 0.0 && u < f32(snow.dims.x) && v < f32(snow.dims.y);
+}
+
+fn snow_coverage(dep: f32) -> f32 {
+    if dep > 0.0 {
+        return 1.0 - exp(-dep / snow.range.w);
+    }
+    return 0.0;
+}
+
+// SceneLight::surface_radiance.
+fn surface_radiance(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> vec3<f32> {
+    let ch = ambient_channel(n);
+    var e = 0.0;
+    if ch < CHANNELS {
+        e = ambient_sample(p, ch);
+    }
+    var c = a * e;
+    if LIT && lamps.counts.x != 0u {
+        c = c + a * lamp_light(p, n, a, c);
+    }
+    return c;
+}
+
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let w = cam.size.x;
@@ -313,6 +496,43 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             best_a = b.albedo.xyz;
         }
     }
+    let i = gid.y * w + gid.x;
+    if SNOW {
+        // SnowRender::shade_pixel.
+        let sh = snow_trace(origin, dir, select(3.4e38, best_t, hit));
+        var found = false;
+        var sc = vec3<f32>(0.0);
+        var st = 0.0;
+        var sd = 0.0;
+        let albedo = snow.range.z;
+        if sh.hit {
+            let p = origin + dir * sh.t;
+            var under = vec3<f32>(albedo);
+            if hit && best_n.y > 0.5 {
+                under = best_a;
+            }
+            let cv = snow_coverage(sh.d);
+            sc = surface_radiance(p, sh.n, under * (1.0 - cv) + vec3<f32>(albedo * cv));
+            st = sh.t;
+            sd = sh.d;
+            found = true;
+        } else if hit && best_n.y > 0.5 && snow.grid.w > 0.0 && !snow_covers(origin + dir * best_t) {
+            let p = origin + dir * best_t;
+            let cv = snow_coverage(snow.grid.w);
+            sc = surface_radiance(p, best_n, best_a * (1.0 - cv) + vec3<f32>(albedo * cv));
+            st = best_t;
+            sd = snow.grid.w;
+            found = true;
+        }
+        snow_out[i] = sd;
+        if found {
+            rgb[3u * i] = sc.x;
+            rgb[3u * i + 1u] = sc.y;
+            rgb[3u * i + 2u] = sc.z;
+            depth[i] = st;
+            return;
+        }
+    }
     var c: vec3<f32>;
     var d: f32;
     if hit {
@@ -332,7 +552,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         c = vec3<f32>(sky.e_scale.y * relative_to_zenith(normalize(dir)));
         d = infinity();
     }
-    let i = gid.y * w + gid.x;
     rgb[3u * i] = c.x;
     rgb[3u * i + 1u] = c.y;
     rgb[3u * i + 2u] = c.z;

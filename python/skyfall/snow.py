@@ -1,0 +1,240 @@
+"""The snow cover: where the snow lies after it has fallen with the wind.
+
+After Koitabashi, Matsubara, Moriya & Takahashi, *Snowfall and snow-cover scenes with wind*
+(Tokyo Denki University), made physical: the ground and the box tops (or a photo's surfaces,
+from its depth map through its camera) are a height field of square cells; each step a shadow
+buffer rendered along the snow's mean fall direction (the wind plus the flakes' mass-weighted
+fall speed, downward) decides which cells the snow reaches, and those grow by the depth that
+the rate, the step and the snow's density give, R * dt * rho_water / rho_snow, times the flux
+through the cell's own surface (1 on level ground, more on faces turned to the wind, less on
+faces turned from it); then the paper's random factor r (seeded, moving snow between cells
+without making any) and its 4-neighbour smoothing (of the step's increment, on each surface).
+The snow's own height enters the height field, so drifts build. The method is described in
+full in ``rust/skyfall-core/src/snow/cover/mod.rs``.
+
+Mass is kept: the snow that fell on the catchment's lit cells (``fallen_kg``) is the snow lying
+on it (``lying_kg``); the open sky's share over the same area (``open_sky_kg``) differs from it
+by the wind's shadows and what it carried across the catchment's sides.
+
+Rendering: pass the cover to :meth:`skyfall.Renderer.render` (``snow_cover=``): the surfaces
+whiten (albedo 0.85, fresh snow) and lift by the depth lying on them, lit by the sky and the
+lamps as the surfaces are, and the frame carries ``layers["snow_depth_m"]``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from skyfall import _core
+from skyfall._validate import float_array, in_range, integer
+from skyfall.scenes import BoxScene, PhotoScene
+from skyfall.weather import Weather
+
+__all__ = ["SNOW_ALBEDO", "SnowCover", "accumulate", "open_depth_m"]
+
+SNOW_ALBEDO = 0.85
+"""Albedo of the drawn snow (fresh dry snow reflects 0.80-0.90 of visible light: Cuffey &
+Paterson, *The Physics of Glaciers*, 4th ed., 2010, Table 5.2)."""
+
+MARGIN_M = 10.0
+"""How far a box scene's default grid reaches beyond its boxes and its camera, m."""
+
+
+@dataclass(frozen=True)
+class SnowCover:
+    """The snow lying on a scene after :func:`accumulate`.
+
+    Attributes
+    ----------
+    depth_m : ndarray of float64, shape (nz, nx)
+        Depth of snow per cell, m (0 where none or no surface). Row k, column i is the cell
+        whose centre is ``origin_m + ((i + 0.5) * spacing_m, (k + 0.5) * spacing_m)`` in
+        world (x, z).
+    base_m : ndarray of float64, shape (nz, nx)
+        Height of the surface the snow lies on (ground, box top, a photo's highest point in
+        the cell), m; NaN where there is none.
+    origin_m : tuple of 2 float
+        World (x, z) of the grid's corner, m.
+    spacing_m : float
+        Cell side, m.
+    shape : tuple of 2 int
+        (nz, nx).
+    fallen_kg, lying_kg, open_sky_kg : float
+        Snow that fell on the catchment's lit cells, snow lying on it at the end (equal: mass
+        is kept), and snow that fell through the level plane over its surface cells
+        (R * rho_water * area * duration), kg.
+    open_depth_m : float
+        The depth the run lays on level open ground, R * duration * rho_water / rho_snow, m.
+    steps : int
+        Steps run (``ceil(duration_s / dt_s)``, each of ``dt_s`` = duration / steps).
+    dt_s : float
+        The step used, s.
+    fall_velocity_m_s : tuple of 3 float
+        The snow's mean fall velocity (wind plus the flakes' fall speed), m/s.
+    """
+
+    depth_m: NDArray[np.float64]
+    base_m: NDArray[np.float64]
+    origin_m: tuple[float, float]
+    spacing_m: float
+    shape: tuple[int, int]
+    fallen_kg: float
+    lying_kg: float
+    open_sky_kg: float
+    open_depth_m: float
+    steps: int
+    dt_s: float
+    fall_velocity_m_s: tuple[float, float, float]
+    core: _core.SnowCoverGrid = field(repr=False, compare=False)
+
+    @property
+    def x_m(self) -> NDArray[np.float64]:
+        """World x of each column's cell centres, m, shape (nx,)."""
+        return np.asarray(self.origin_m[0] + (np.arange(self.shape[1]) + 0.5) * self.spacing_m, dtype=np.float64)
+
+    @property
+    def z_m(self) -> NDArray[np.float64]:
+        """World z of each row's cell centres, m, shape (nz,)."""
+        return np.asarray(self.origin_m[1] + (np.arange(self.shape[0]) + 0.5) * self.spacing_m, dtype=np.float64)
+
+    @property
+    def fall_angle_deg(self) -> float:
+        """Angle of the snow's mean fall from the vertical, degrees."""
+        vx, vy, vz = self.fall_velocity_m_s
+        return math.degrees(math.atan2(math.hypot(vx, vz), -vy)) if vy < 0 else 0.0
+
+
+def open_depth_m(weather: Weather, duration_s: float) -> float:
+    """The depth of snow ``weather`` lays on level open ground in ``duration_s``, m:
+    R * duration * rho_water / rho_snow (1 mm/h of water at 100 kg/m^3 for one hour: 0.01 m).
+
+    Parameters
+    ----------
+    weather : Weather
+        Its ``snow_rate_mm_h`` and ``snow_density_kg_m3``.
+    duration_s : float
+        How long it snows, s, in [0, 1e7].
+
+    Returns
+    -------
+    float
+    """
+    t = in_range("duration_s", duration_s)
+    return weather.snow_rate_mm_h * 1e-3 / 3600.0 * t * 1000.0 / weather.snow_density_kg_m3
+
+
+def _extent(scene: BoxScene, extent_m: Any) -> tuple[list[float], list[float]]:
+    """The box scene's grid extent: ``extent_m`` (x0, z0, x1, z1), or its boxes and camera
+    with :data:`MARGIN_M` around them."""
+    if extent_m is not None:
+        e = float_array("extent_m", extent_m).reshape(-1)
+        if e.size != 4 or not np.all(np.isfinite(e)) or not (e[2] > e[0] and e[3] > e[1]):
+            raise ValueError(f"extent_m must be (x0, z0, x1, z1) with x1 > x0 and z1 > z0, finite, m; got {extent_m!r}")
+        return [float(e[0]), float(e[1])], [float(e[2]), float(e[3])]
+    cam = np.asarray(scene.camera.position_m, dtype=np.float64)
+    xs = [cam[0]]
+    zs = [cam[2]]
+    if len(scene.boxes):
+        xs += [float(scene.boxes[:, 0].min()), float(scene.boxes[:, 3].max())]
+        zs += [float(scene.boxes[:, 2].min()), float(scene.boxes[:, 5].max())]
+    margin = MARGIN_M if len(scene.boxes) else 3 * MARGIN_M
+    return [min(xs) - margin, min(zs) - margin], [max(xs) + margin, max(zs) + margin]
+
+
+def accumulate(
+    scene: BoxScene | PhotoScene,
+    weather: Weather,
+    *,
+    duration_s: float,
+    dt_s: float = 60.0,
+    resolution_m: float = 0.5,
+    seed: int = 0,
+    roughness: float = 0.1,
+    extent_m: Any = None,
+) -> SnowCover:
+    """Let ``weather``'s snow fall on ``scene`` for ``duration_s`` and return the cover.
+
+    Parameters
+    ----------
+    scene : BoxScene or PhotoScene
+        A box scene (its ground and box tops) or a photo (its surfaces from the depth map
+        through its camera; points more than 200 m from the camera, horizontally, are left
+        out and drawn as level open ground).
+    weather : Weather
+        ``snow_rate_mm_h`` (water equivalent), ``snow_density_kg_m3`` and ``wind_m_s``.
+    duration_s : float
+        How long it snows, s, in [0, 1e7].
+    dt_s : float
+        Time step, s, in (0, 1e7]; a run takes ``ceil(duration_s / dt_s)`` equal steps (a
+        step longer than the run: one step), at most 100000.
+    resolution_m : float
+        Cell side of the height field, m, in [0.01, 100]; at most 4096^2 cells.
+    seed : int
+        Seeds the random factor, in [0, 2^64).
+    roughness : float
+        In [0, 1]: the amplitude of the paper's random factor r = 1 + roughness * u (u
+        uniform between -1 and 1 per cell, fixed over the run); 0: a smooth cover.
+    extent_m : array_like of 4 float, optional
+        A box scene's grid, (x0, z0, x1, z1) in world metres; by default its boxes and its
+        camera with 10 m around them (an empty scene: 30 m around the camera).
+
+    Returns
+    -------
+    SnowCover
+
+    Raises
+    ------
+    ValueError
+        For values outside their ranges (named), too many cells or steps, or an updraft
+        (``wind_m_s[1]``) that keeps the snow from falling.
+
+    Examples
+    --------
+    >>> from skyfall import Weather, scenes, snow
+    >>> cover = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0), duration_s=3600.0, resolution_m=2.0)
+    >>> round(float(cover.depth_m.mean()), 6)
+    0.01
+    """
+    if not isinstance(weather, Weather):
+        raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
+    res = in_range("resolution_m", resolution_m)
+    dur = in_range("duration_s", duration_s)
+    dt = in_range("dt_s", dt_s)
+    rough = in_range("roughness", roughness)
+    seed_ = integer("seed", seed, 0, 2**64 - 1)
+    if isinstance(scene, BoxScene):
+        lo, hi = _extent(scene, extent_m)
+        boxes = np.ascontiguousarray(scene.boxes, dtype=np.float32).reshape(-1, 9)
+        grid = _core.snow_cover_boxes(
+            boxes, bool(scene.ground), weather, lo, hi, resolution_m=res, duration_s=dur, dt_s=dt, roughness=rough, seed=seed_
+        )
+    elif isinstance(scene, PhotoScene):
+        if extent_m is not None:
+            raise ValueError("extent_m sets a box scene's grid; a photo's follows its depth map")
+        grid = _core.snow_cover_photo(
+            scene.camera, scene.depth_m, weather, resolution_m=res, duration_s=dur, dt_s=dt, roughness=rough, seed=seed_
+        )
+    else:
+        raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
+    fallen, lying, open_sky, open_depth = grid.budget
+    steps, dt_used = grid.steps
+    return SnowCover(
+        depth_m=grid.depth_m,
+        base_m=grid.base_m,
+        origin_m=grid.origin_m,
+        spacing_m=grid.spacing_m,
+        shape=grid.shape,
+        fallen_kg=fallen,
+        lying_kg=lying,
+        open_sky_kg=open_sky,
+        open_depth_m=open_depth,
+        steps=steps,
+        dt_s=dt_used,
+        fall_velocity_m_s=grid.fall_velocity_m_s,
+        core=grid,
+    )

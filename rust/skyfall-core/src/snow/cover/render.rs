@@ -1,0 +1,572 @@
+//! The cover in a frame: white, lifted surfaces with the albedo of snow, lit as the surfaces
+//! are (the ambient-light map, the lamps), and the `snow_depth_m` layer.
+//!
+//! - **Box scenes**: the snow is the height field's columns from each cell's base up to the
+//!   base plus the depth, ray cast cell by cell (a 2D DDA over the grid,
+//!   [`SnowRender::trace`]) up to the boxes' own hit; a ray that meets a column's top sees it
+//!   with normal +Y, one that meets its side (above the base: below it is the box or the
+//!   ground) with that side's normal.
+//! - **Photos**: each pixel's world point (depth through the camera) and its normal from the
+//!   depth map's neighbours; the snow of its cell lies on it when the point is on the cell's
+//!   top surface and the normal faces up ([`photo_depth_m`]); the pixel whitens towards the
+//!   snow's radiance by the cover's coverage.
+//!
+//! - Beyond the grid, upward faces of a box scene carry the open ground's cover
+//!   ([`super::SnowCover::open_depth_m`], not lifted): the far ground of an open scene.
+//!
+//! Coverage: thin snow lets the surface beneath show; its share of the pixel is
+//! 1 − e^(−d/[`COVER_EFOLD_M`]) (our choice: 3 cm hide 95 %). Albedo [`SNOW_ALBEDO`].
+
+use super::SnowCover;
+use super::heightfield::{PHOTO_RANGE_M, photo_points};
+use crate::error::Result;
+use crate::scene::boxes::{BoxScene, surface_albedo, trace};
+use crate::scene::camera::Camera;
+use crate::scene::raycast::inverse_direction;
+use crate::sky::ambient::AmbientMap;
+use glam::Vec3;
+
+/// Albedo of fresh snow in the visible, 0.85: fresh dry snow reflects 0.80–0.90 of the
+/// visible sunlight (Cuffey & Paterson, *The Physics of Glaciers*, 4th ed., 2010, Table 5.2,
+/// fresh dry snow 0.75–0.98; Warren, *Optical properties of snow*, Rev. Geophys. 1982: above
+/// 0.9 at 0.4–0.7 µm for deep fine-grained snow, less for the broadband and older snow).
+pub const SNOW_ALBEDO: f32 = 0.85;
+
+/// Most height bands [`SnowRender::trace`] keeps apart (more: one).
+const MAX_BANDS: usize = 64;
+
+/// Depth of snow over which its coverage of the surface beneath rises to 1 − 1/e, m.
+pub const COVER_EFOLD_M: f32 = 0.01;
+
+/// A photo pixel's normal is taken from the depth map's points this share of the image's
+/// width to either side (4 px at 741 px).
+const NORMAL_SPAN_FRACTION: f32 = 1.0 / 185.0;
+
+/// Snow on photo surfaces whose normal's y is at least this (60° from level).
+const UP_MIN: f32 = 0.5;
+/// … and fully from this (about 37°).
+const UP_FULL: f32 = 0.8;
+
+/// Coverage of a surface by `depth_m` of snow.
+#[inline]
+pub fn coverage(depth_m: f32) -> f32 {
+    if depth_m > 0.0 {
+        1.0 - (-depth_m / COVER_EFOLD_M).exp()
+    } else {
+        0.0
+    }
+}
+
+/// A cover ready to draw.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SnowRender {
+    /// The disjoint height ranges snow lies in (empty: one, [y_lo, y_hi]); the ray cast visits
+    /// only the stretches of a ray within them.
+    bands: Vec<(f32, f32)>,
+    origin: [f32; 2],
+    spacing: f32,
+    nx: usize,
+    nz: usize,
+    base: Vec<f32>,
+    depth: Vec<f32>,
+    y_lo: f32,
+    y_hi: f32,
+    /// The depth on level open ground, m: drawn on upward faces beyond the grid.
+    open_depth: f32,
+    /// For a photo: the snow's depth on each pixel's surface, m.
+    pub photo_depth_m: Option<Vec<f32>>,
+    /// The photo's units relative to the renderer's (the snow's radiance is scaled by it).
+    pub radiance_scale: Vec3,
+}
+
+impl SnowRender {
+    /// The cover of a box scene.
+    pub fn boxes(cover: &SnowCover) -> Self {
+        let g = cover.field.grid;
+        let base: Vec<f32> = cover.field.base_m.iter().map(|&b| b as f32).collect();
+        let depth: Vec<f32> = cover.depth_m.iter().map(|&d| d as f32).collect();
+        let (mut y_lo, mut y_hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (&b, &d) in base.iter().zip(depth.iter()) {
+            if d > 0.0 && !b.is_nan() {
+                y_lo = y_lo.min(b);
+                y_hi = y_hi.max(b + d);
+            }
+        }
+        // The heights snow lies at: each cell's [base, top], merged where they overlap.
+        let mut spans: Vec<(f32, f32)> = base
+            .iter()
+            .zip(depth.iter())
+            .filter(|(b, d)| **d > 0.0 && !b.is_nan())
+            .map(|(&b, &d)| (b, b + d))
+            .collect();
+        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut bands: Vec<(f32, f32)> = Vec::new();
+        for (lo, hi) in spans {
+            match bands.last_mut() {
+                Some(last) if lo <= last.1 => last.1 = last.1.max(hi),
+                _ => bands.push((lo, hi)),
+            }
+        }
+        if bands.len() > MAX_BANDS {
+            bands.clear(); // one slab, [y_lo, y_hi]
+        }
+        SnowRender {
+            bands,
+            origin: [g.origin_m[0] as f32, g.origin_m[1] as f32],
+            spacing: g.spacing_m as f32,
+            nx: g.nx,
+            nz: g.nz,
+            base,
+            depth,
+            y_lo,
+            y_hi,
+            open_depth: cover.open_depth_m as f32,
+            photo_depth_m: None,
+            radiance_scale: Vec3::ONE,
+        }
+    }
+
+    /// The cover of a photo seen by `cam` with `depth_m`, in the photo's units
+    /// `radiance_scale`.
+    pub fn photo(
+        cover: &SnowCover,
+        cam: &Camera,
+        depth_m: &[f32],
+        radiance_scale: Vec3,
+    ) -> Result<Self> {
+        if depth_m.len() != cam.pixels() {
+            return Err(crate::error::Error::Length {
+                param: crate::error::Param {
+                    name: "depth_m",
+                    index: None,
+                },
+                len: depth_m.len(),
+                expected: cam.pixels(),
+            });
+        }
+        let mut r = SnowRender::boxes(cover);
+        r.photo_depth_m = Some(photo_depth_m(cover, cam, depth_m));
+        r.radiance_scale = radiance_scale;
+        // A photo's snow is drawn per pixel, never ray cast.
+        r.y_lo = f32::INFINITY;
+        r.y_hi = f32::NEG_INFINITY;
+        Ok(r)
+    }
+
+    /// The grid's flat buffers for the GPU: (origin x, origin z, spacing, nx, nz, y_lo,
+    /// y_hi), base and depth per cell.
+    pub fn gpu_grid(&self) -> ([f32; 5], [u32; 2], &[f32], &[f32]) {
+        (
+            [
+                self.origin[0],
+                self.origin[1],
+                self.spacing,
+                self.y_lo,
+                self.y_hi,
+            ],
+            [self.nx as u32, self.nz as u32],
+            &self.base,
+            &self.depth,
+        )
+    }
+
+    /// The snow surface's normal over cell (i, k): from the central differences of its top
+    /// over the neighbours that carry snow on the same surface (bases within a cell's width).
+    fn normal(&self, i: usize, k: usize) -> Vec3 {
+        let s = self.spacing;
+        let c = k * self.nx + i;
+        let top = |j: usize| self.base[j] + self.depth[j];
+        let same = |j: usize| self.depth[j] > 0.0 && (self.base[j] - self.base[c]).abs() <= s;
+        let slope = |lo: Option<usize>, hi: Option<usize>| {
+            let lo = lo.filter(|&j| same(j));
+            let hi = hi.filter(|&j| same(j));
+            match (lo, hi) {
+                (Some(l), Some(h)) => (top(h) - top(l)) / (2.0 * s),
+                (None, Some(h)) => (top(h) - top(c)) / s,
+                (Some(l), None) => (top(c) - top(l)) / s,
+                (None, None) => 0.0,
+            }
+            .clamp(-1.0, 1.0)
+        };
+        let gx = slope((i > 0).then(|| c - 1), (i + 1 < self.nx).then_some(c + 1));
+        let gz = slope(
+            (k > 0).then(|| c - self.nx),
+            (k + 1 < self.nz).then_some(c + self.nx),
+        );
+        Vec3::new(-gx, 1.0, -gz).normalize()
+    }
+
+    /// Whether world point `p` lies over the grid.
+    #[inline]
+    pub fn covers(&self, p: Vec3) -> bool {
+        let (u, v) = (
+            (p.x - self.origin[0]) / self.spacing,
+            (p.z - self.origin[1]) / self.spacing,
+        );
+        u >= 0.0 && v >= 0.0 && u < self.nx as f32 && v < self.nz as f32
+    }
+
+    /// The depth drawn on upward faces beyond the grid, m.
+    pub fn open_depth_m(&self) -> f32 {
+        self.open_depth
+    }
+
+    /// Nearest snow along `o + t·d`, 0 ≤ t ≤ `t_max`: (t, normal, depth of snow there).
+    pub fn trace(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, Vec3, f32)> {
+        if self.y_lo > self.y_hi {
+            return None;
+        }
+        if self.bands.is_empty() {
+            return self.trace_in(o, d, t_max, self.y_lo, self.y_hi);
+        }
+        // Only where the ray is at a height some snow lies at (the bands are disjoint, so
+        // their stretches of the ray are too): nearest first.
+        let mut spans: [(f32, f32, f32); MAX_BANDS] = [(0.0, 0.0, 0.0); MAX_BANDS];
+        let mut n = 0;
+        for &(lo, hi) in &self.bands {
+            let (t0, t1) = if d.y != 0.0 {
+                let (a, b) = ((lo - o.y) / d.y, (hi - o.y) / d.y);
+                (a.min(b), a.max(b))
+            } else if o.y >= lo && o.y <= hi {
+                (0.0, f32::INFINITY)
+            } else {
+                continue;
+            };
+            if t1 >= 0.0 && t0 <= t_max {
+                spans[n] = (t0, lo, hi);
+                n += 1;
+            }
+        }
+        let spans = &mut spans[..n];
+        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+        spans
+            .iter()
+            .find_map(|&(_, lo, hi)| self.trace_in(o, d, t_max, lo, hi))
+    }
+
+    /// [`Self::trace`] within the heights [`y_lo`, `y_hi`] (the DDA over the grid's slab).
+    fn trace_in(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+        y_lo: f32,
+        y_hi: f32,
+    ) -> Option<(f32, Vec3, f32)> {
+        let s = self.spacing;
+        let lo = Vec3::new(self.origin[0], y_lo, self.origin[1]);
+        let hi = Vec3::new(
+            self.origin[0] + s * self.nx as f32,
+            y_hi,
+            self.origin[1] + s * self.nz as f32,
+        );
+        let inv = inverse_direction(d);
+        let t1v = (lo - o) * inv;
+        let t2v = (hi - o) * inv;
+        let (tn, tf) = (t1v.min(t2v), t1v.max(t2v));
+        let t_enter = tn.max_element().max(0.0);
+        let t_exit = tf.min_element().min(t_max);
+        if t_enter > t_exit {
+            return None;
+        }
+        // The entry face's normal, for a hit on the first cell's side.
+        let mut side = if tn.x >= tn.y && tn.x >= tn.z {
+            Vec3::new(-d.x.signum(), 0.0, 0.0)
+        } else if tn.z >= tn.y {
+            Vec3::new(0.0, 0.0, -d.z.signum())
+        } else {
+            Vec3::new(0.0, -d.y.signum(), 0.0)
+        };
+        let p = o + d * t_enter;
+        let cell = |v: f32, o: f32, n: usize| (((v - o) / s).floor().max(0.0) as usize).min(n - 1);
+        let (mut i, mut k) = (
+            cell(p.x, self.origin[0], self.nx),
+            cell(p.z, self.origin[1], self.nz),
+        );
+        let (sx, sz) = (d.x >= 0.0, d.z >= 0.0);
+        let boundary = |c: usize, o: f32, up: bool| o + s * (c as f32 + if up { 1.0 } else { 0.0 });
+        let mut tx = if d.x != 0.0 {
+            (boundary(i, self.origin[0], sx) - o.x) * inv.x
+        } else {
+            f32::INFINITY
+        };
+        let mut tz = if d.z != 0.0 {
+            (boundary(k, self.origin[1], sz) - o.z) * inv.z
+        } else {
+            f32::INFINITY
+        };
+        let (dtx, dtz) = ((s * inv.x).abs(), (s * inv.z).abs());
+        let mut t_in = t_enter;
+        for _ in 0..(self.nx + self.nz + 2) {
+            let t_out = tx.min(tz).min(t_exit);
+            let idx = k * self.nx + i;
+            let dep = self.depth[idx];
+            if dep > 0.0 {
+                let b = self.base[idx];
+                let top = b + dep;
+                let (a0, a1) = if d.y != 0.0 {
+                    let ta = (b - o.y) / d.y;
+                    let tb = (top - o.y) / d.y;
+                    (ta.min(tb), ta.max(tb))
+                } else if o.y >= b && o.y <= top {
+                    (f32::NEG_INFINITY, f32::INFINITY)
+                } else {
+                    (f32::INFINITY, f32::NEG_INFINITY)
+                };
+                let h0 = t_in.max(a0);
+                let h1 = t_out.min(a1);
+                if h0 <= h1 {
+                    // A step lower than half a cell is the snow's own relief: it shows the
+                    // surface's slope, not a wall.
+                    let n = if h0 > t_in || o.y + d.y * h0 - b < 0.5 * s {
+                        self.normal(i, k)
+                    } else {
+                        side
+                    };
+                    return Some((h0, n, dep));
+                }
+            }
+            if t_out >= t_exit {
+                return None;
+            }
+            if tx <= tz {
+                if (sx && i + 1 >= self.nx) || (!sx && i == 0) {
+                    return None;
+                }
+                i = if sx { i + 1 } else { i - 1 };
+                t_in = tx;
+                tx += dtx;
+                side = Vec3::new(if sx { -1.0 } else { 1.0 }, 0.0, 0.0);
+            } else {
+                if (sz && k + 1 >= self.nz) || (!sz && k == 0) {
+                    return None;
+                }
+                k = if sz { k + 1 } else { k - 1 };
+                t_in = tz;
+                tz += dtz;
+                side = Vec3::new(0.0, 0.0, if sz { -1.0 } else { 1.0 });
+            }
+        }
+        None
+    }
+
+    /// One pixel of a box scene with the cover: (radiance, depth along the axis, depth of snow
+    /// seen there), lit as [`crate::frame::scene::shade_pixel`] lights the surfaces.
+    #[inline]
+    pub fn shade_pixel(
+        &self,
+        scene: &BoxScene,
+        cam: &Camera,
+        light: &crate::frame::scene::SceneLight<'_>,
+        x: u32,
+        y: u32,
+    ) -> (Vec3, f32, f32) {
+        let dir = cam.ray_direction(x, y);
+        let hit = trace(scene, cam.eye(), dir);
+        let t_max = hit.map_or(f32::INFINITY, |h| h.0);
+        match self.trace(cam.eye(), dir, t_max) {
+            Some((t, n, dep)) => {
+                let p = cam.eye() + dir * t;
+                // Thin snow shows the surface it lies on.
+                let under = match hit {
+                    Some((_, hn, ha)) if hn.y > 0.5 => ha,
+                    _ => Vec3::splat(SNOW_ALBEDO),
+                };
+                let c = coverage(dep);
+                let a = under * (1.0 - c) + Vec3::splat(SNOW_ALBEDO * c);
+                (light.surface_radiance(&scene.boxes, p, n, a), t, dep)
+            }
+            None => match hit {
+                // Beyond the grid, upward faces carry the open ground's snow (not lifted).
+                Some((t, n, ha))
+                    if n.y > 0.5 && self.open_depth > 0.0 && !self.covers(cam.eye() + dir * t) =>
+                {
+                    let p = cam.eye() + dir * t;
+                    let c = coverage(self.open_depth);
+                    let a = ha * (1.0 - c) + Vec3::splat(SNOW_ALBEDO * c);
+                    (
+                        light.surface_radiance(&scene.boxes, p, n, a),
+                        t,
+                        self.open_depth,
+                    )
+                }
+                // No snow: the surface as the scene stage shades it (`shade_pixel`, from the
+                // same hit).
+                Some((t, n, ha)) => {
+                    let p = cam.eye() + dir * t;
+                    let a = surface_albedo(ha, n, p);
+                    (light.surface_radiance(&scene.boxes, p, n, a), t, 0.0)
+                }
+                None => (
+                    Vec3::splat(light.sky.sky_pixel(dir.normalize())),
+                    f32::INFINITY,
+                    0.0,
+                ),
+            },
+        }
+    }
+
+    /// A photo's row `y` whitened by the snow on its pixels (`rgb_row` linear, in the photo's
+    /// units; `depth_row` its depth, m); writes the snow's depth per pixel into `snow_row`.
+    pub fn photo_row(
+        &self,
+        cam: &Camera,
+        ambient: &AmbientMap,
+        y: usize,
+        rgb_row: &mut [f32],
+        depth_row: &[f32],
+        snow_row: Option<&mut [f32]>,
+    ) {
+        let w = depth_row.len();
+        let Some(per_pixel) = &self.photo_depth_m else {
+            return;
+        };
+        let row = &per_pixel[y * w..(y + 1) * w];
+        for (x, &dep) in row.iter().enumerate() {
+            if dep <= 0.0 {
+                continue;
+            }
+            let p = cam.eye() + cam.ray_direction(x as u32, y as u32) * depth_row[x];
+            let e = ambient.sample(p)[0];
+            let snow = self.radiance_scale * (SNOW_ALBEDO * e);
+            let c = coverage(dep);
+            for k in 0..3 {
+                let v = &mut rgb_row[3 * x + k];
+                *v = *v * (1.0 - c) + snow[k] * c;
+            }
+        }
+        if let Some(out) = snow_row {
+            out.copy_from_slice(row);
+        }
+    }
+}
+
+/// The depth of snow on each pixel's surface of a photo, m: its cell's depth where the pixel's
+/// point lies on the cell's top surface (within two cells' width and 1 % of its distance: the
+/// depth map's noise) and its normal (from the
+/// depth map through the camera, [`NORMAL_SPAN_FRACTION`] of the width across) faces up, weighted from 0 at 60° from level to 1 at 37°;
+/// pixels beyond [`PHOTO_RANGE_M`] get the open ground's cover, as level ground in the open.
+pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f32> {
+    let g = cover.field.grid;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let points = photo_points(cam, depth_m);
+    let open = cover.open_depth_m as f32;
+    let eye = cam.eye();
+    let world = |x: usize, y: usize| -> Option<Vec3> {
+        let d = depth_m[y * w + x];
+        (d.is_finite() && d > 0.0).then(|| eye + cam.ray_direction(x as u32, y as u32) * d)
+    };
+    // Neighbours NORMAL_SPAN_FRACTION of the width apart: a depth map's steps (quantised
+    // disparities, sensor noise) would turn a floor into a staircase of walls.
+    let k = ((w as f32 * NORMAL_SPAN_FRACTION).round() as usize).max(1);
+    let v = cover.fall_velocity_m_s;
+    let up_wind = -Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32).normalize_or(Vec3::NEG_Y);
+    let mut out = vec![0.0f32; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let Some(p) = world(x, y) else { continue };
+            // The normal from the neighbours, each side the nearer in depth (edges of objects
+            // would bend it).
+            let pick = |a: Option<Vec3>, b: Option<Vec3>| match (a, b) {
+                (Some(a), Some(b)) => {
+                    if (a - p).length_squared() <= (b - p).length_squared() {
+                        Some(a - p)
+                    } else {
+                        Some(p - b)
+                    }
+                }
+                (Some(a), None) => Some(a - p),
+                (None, Some(b)) => Some(p - b),
+                (None, None) => None,
+            };
+            let dx = pick(
+                (x + k < w).then(|| world(x + k, y)).flatten(),
+                (x >= k).then(|| world(x - k, y)).flatten(),
+            );
+            let dy = pick(
+                (y + k < h).then(|| world(x, y + k)).flatten(),
+                (y >= k).then(|| world(x, y - k)).flatten(),
+            );
+            let (Some(dx), Some(dy)) = (dx, dy) else {
+                continue;
+            };
+            let mut n = dx.cross(dy).normalize_or_zero();
+            if n.dot(eye - p) < 0.0 {
+                n = -n;
+            }
+            let up = ((n.y - UP_MIN) / (UP_FULL - UP_MIN)).clamp(0.0, 1.0);
+            if up <= 0.0 {
+                continue;
+            }
+            let d = match points[y * w + x] {
+                Some(q) => match g.cell_of(q[0], q[2]) {
+                    Some((i, k)) => {
+                        let c = k * g.nx + i;
+                        let b = cover.field.base_m[c];
+                        // Within two cells and 1 % of the distance (a depth map's noise) of
+                        // the cell's top.
+                        let tol = 2.0 * g.spacing_m + 0.01 * f64::from(depth_m[y * w + x]);
+                        if !b.is_nan() && q[1] >= b - tol {
+                            cover.depth_m[c] as f32
+                        } else if !sheltered(cam, depth_m, p, up_wind) {
+                            // Below its cell's top (another surface seen over the same cell),
+                            // yet open to the snow in the photo's own 2.5D view: level open
+                            // ground's cover.
+                            open
+                        } else {
+                            0.0
+                        }
+                    }
+                    None => 0.0,
+                },
+                // Beyond the height field's range: level open ground.
+                None => {
+                    let (dxz, dzz) = (f64::from(p.x - eye.x), f64::from(p.z - eye.z));
+                    if dxz * dxz + dzz * dzz > PHOTO_RANGE_M * PHOTO_RANGE_M {
+                        open
+                    } else {
+                        0.0
+                    }
+                }
+            };
+            out[y * w + x] = d * up;
+        }
+    }
+    out
+}
+
+/// How far above a photo's point [`sheltered`] looks for what covers it, m.
+const SHELTER_REACH_M: f32 = 3.0;
+/// Its steps, m.
+const SHELTER_STEP_M: f32 = 0.02;
+/// How far behind the depth map's surface a point counts as inside what the photo shows, m.
+const SHELTER_THICKNESS_M: f32 = 0.3;
+
+/// The 2.5D shadow test through a photo's depth map: whether the snow falling towards `p`
+/// (from `up_wind`, the reverse of its fall) meets what the photo shows first: points up that
+/// line, in steps, projected into the image, each hidden behind the depth map's surface by
+/// less than [`SHELTER_THICKNESS_M`] (the surface is taken that thick) shelters `p`.
+fn sheltered(cam: &Camera, depth_m: &[f32], p: Vec3, up_wind: Vec3) -> bool {
+    let (w, h) = (cam.width as f32, cam.height as f32);
+    let inv = cam.rotation.transpose();
+    let eye = cam.eye();
+    let steps = (SHELTER_REACH_M / SHELTER_STEP_M) as usize;
+    for j in 1..=steps {
+        let s = p + up_wind * (j as f32 * SHELTER_STEP_M);
+        let c = inv * (s - eye);
+        let z = -c.z;
+        if z <= 0.0 {
+            return false;
+        }
+        let u = cam.cx + cam.fx * c.x / z;
+        let v = cam.cy - cam.fy * c.y / z;
+        if !(u >= 0.0 && v >= 0.0 && u < w && v < h) {
+            return false;
+        }
+        let d = depth_m[v as usize * cam.width as usize + u as usize];
+        if d < z - SHELTER_STEP_M && z - d < SHELTER_THICKNESS_M {
+            return true;
+        }
+    }
+    false
+}

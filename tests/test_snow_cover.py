@@ -1,0 +1,250 @@
+"""The snow cover (skyfall.snow.accumulate) against what is known without it: the depth on
+open level ground R * t * rho_water / rho_snow, the geometry of a box's wind shadow
+(h * tan of the fall angle), exact mass bookkeeping, and the frames that draw it."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from skyfall import PhotoScene, Renderer, Weather, io, scenes, snow
+
+HOUR = 3600.0
+
+
+def wall(height_m: float = 4.0) -> scenes.BoxScene:
+    """A wall across the wind (x in [0, 2] m, z in [-50, 50] m) on open ground."""
+    return scenes.boxes([{"min": (0.0, 0.0, -50.0), "max": (2.0, height_m, 50.0)}])
+
+
+def test_open_level_ground_in_still_air_gets_rate_times_time_times_density_ratio() -> None:
+    # 1 mm/h of water at 100 kg/m^3 for one hour: 1.000 cm.
+    w = Weather(snow_rate_mm_h=1.0, snow_density_kg_m3=100.0)
+    smooth = snow.accumulate(scenes.empty(), w, duration_s=HOUR, dt_s=60.0, resolution_m=1.0, roughness=0.0)
+    np.testing.assert_allclose(smooth.depth_m, 0.01, rtol=1e-9)
+    rough = snow.accumulate(scenes.empty(), w, duration_s=HOUR, dt_s=60.0, resolution_m=1.0, seed=5)
+    assert abs(rough.depth_m.mean() / 0.01 - 1.0) < 0.01
+    assert 0.0 < rough.depth_m.std() < 0.1 * 0.01
+    assert snow.open_depth_m(w, HOUR) == pytest.approx(0.01, rel=1e-12)
+    assert rough.open_depth_m == pytest.approx(0.01, rel=1e-12)
+    # Denser snow lies thinner: at 250 kg/m^3, 4 mm.
+    dense = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0, snow_density_kg_m3=250.0), duration_s=HOUR, resolution_m=2.0)
+    assert dense.depth_m.mean() == pytest.approx(0.004, rel=1e-9)
+
+
+def test_a_wall_in_slanted_wind_leaves_its_shadow_bare_and_the_upwind_side_covered() -> None:
+    spacing = 0.25
+    w = Weather(snow_rate_mm_h=2.0, wind_m_s=(2.5, 0.0, 0.0))
+    cover = snow.accumulate(wall(), w, duration_s=HOUR, dt_s=120.0, resolution_m=spacing, extent_m=(-10, -3, 30, 3))
+    vx, vy, vz = cover.fall_velocity_m_s
+    assert vx == 2.5 and vz == 0.0 and 0.8 < -vy < 1.2  # Locatelli & Hobbs' aggregates fall at ~1 m/s
+    length = 4.0 * math.tan(math.radians(cover.fall_angle_deg))
+    assert length == pytest.approx(4.0 * vx / -vy, rel=1e-9)
+    x = cover.x_m
+    profile = cover.depth_m[cover.shape[0] // 2]
+    open_d = cover.open_depth_m
+    upwind = x < -2 * spacing
+    top = (x > spacing) & (x < 2.0 - spacing)
+    shadow = (x > 2.0 + 2 * spacing) & (x < 2.0 + length - 2 * spacing)
+    np.testing.assert_allclose(profile[upwind], open_d, rtol=0.15)
+    np.testing.assert_allclose(profile[top], open_d, rtol=0.15)
+    assert shadow.sum() > 10 and np.all(profile[shadow] == 0.0)
+    # The shadow ends h * tan(fall angle) behind the wall, within two cells.
+    behind = (x > 2.0) & (profile > 0.5 * open_d)
+    end = x[behind][0] - 2.0
+    assert abs(end - length) <= 2 * spacing, (end, length)
+    # The lee of the wall is bare, the ground beyond its shadow covered.
+    assert profile[np.searchsorted(x, 2.0)] == 0.0
+    assert profile[-5] > 0.8 * open_d
+
+
+def test_snow_fallen_on_the_catchment_is_snow_lying_on_it() -> None:
+    w = Weather(snow_rate_mm_h=5.0, snow_density_kg_m3=120.0, wind_m_s=(4.0, 0.0, 1.5))
+    cover = snow.accumulate(scenes.street(), w, duration_s=2 * HOUR, dt_s=600.0, resolution_m=1.0, roughness=0.5)
+    lying = float(cover.depth_m.sum()) * cover.spacing_m**2 * 120.0
+    assert lying == pytest.approx(cover.fallen_kg, rel=1e-12)
+    assert cover.lying_kg == pytest.approx(cover.fallen_kg, rel=1e-12)
+    # The buildings' wind shadows held back snow the open sky let through.
+    assert cover.fallen_kg < 0.98 * cover.open_sky_kg
+    # In still air over open ground nothing is held back.
+    still = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=5.0), duration_s=HOUR, resolution_m=2.0)
+    assert still.fallen_kg == pytest.approx(still.open_sky_kg, rel=1e-12)
+
+
+def _digest() -> str:
+    w = Weather(snow_rate_mm_h=3.0, wind_m_s=(3.0, 0.0, -2.0))
+    c = snow.accumulate(wall(), w, duration_s=1800.0, dt_s=300.0, resolution_m=0.5, seed=11, extent_m=(-10, -3, 30, 3))
+    return hashlib.sha256(c.depth_m.tobytes()).hexdigest()
+
+
+def test_the_cover_is_the_same_bits_in_another_process_and_depends_on_the_seed() -> None:
+    code = "import sys; sys.path.insert(0, 'tests'); import test_snow_cover as t; print(t._digest())"
+    other = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=None)
+    assert other.stdout.strip() == _digest()
+    w = Weather(snow_rate_mm_h=3.0, wind_m_s=(3.0, 0.0, -2.0))
+    a = snow.accumulate(wall(), w, duration_s=1800.0, dt_s=300.0, resolution_m=0.5, seed=11, extent_m=(-10, -3, 30, 3))
+    b = snow.accumulate(wall(), w, duration_s=1800.0, dt_s=300.0, resolution_m=0.5, seed=12, extent_m=(-10, -3, 30, 3))
+    assert not np.array_equal(a.depth_m, b.depth_m)
+
+
+def test_hard_cases_are_finite_or_refused_naming_the_parameter() -> None:
+    none = snow.accumulate(wall(), Weather(wind_m_s=(5.0, 0.0, 0.0)), duration_s=HOUR, resolution_m=1.0)
+    assert none.steps == 0 and not none.depth_m.any() and none.fallen_kg == 0.0
+    gale = snow.accumulate(wall(), Weather(snow_rate_mm_h=100.0, wind_m_s=(60.0, 0.0, 0.0)), duration_s=HOUR, dt_s=2 * HOUR, resolution_m=0.5)
+    assert gale.steps == 1 and gale.dt_s == HOUR
+    assert np.all(np.isfinite(gale.depth_m)) and gale.depth_m.min() >= 0.0
+    assert gale.lying_kg == pytest.approx(gale.fallen_kg, rel=1e-12)
+    assert gale.depth_m.max() < 1.5  # 100 mm/h of water for an hour: 1 m on open ground
+    with pytest.raises(ValueError, match=r"^wind_m_s\[1\] = 5.0 m/s lifts the snow"):
+        snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0, wind_m_s=(0.0, 5.0, 0.0)), duration_s=60.0, resolution_m=5.0)
+    with pytest.raises(ValueError, match=r"^resolution_m = 0.01 m over .* cells"):
+        snow.accumulate(scenes.street(), Weather(snow_rate_mm_h=1.0), duration_s=60.0, resolution_m=0.01)
+    with pytest.raises(ValueError, match=r"^dt_s = 0.01 s gives"):
+        snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0), duration_s=HOUR, dt_s=0.01, resolution_m=5.0)
+    with pytest.raises(ValueError, match="extent_m"):
+        snow.accumulate(scenes.empty(), Weather(), duration_s=60.0, extent_m=(0, 0, -1, 1))
+    with pytest.raises(TypeError, match="weather"):
+        snow.accumulate(scenes.empty(), None, duration_s=60.0)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="snow_cover"):
+        Renderer(8, 6, backend="cpu").render(scenes.empty(), snow_cover="deep")  # type: ignore[arg-type]
+
+
+def _ground_cell_depth(cover: snow.SnowCover, frame_depth: np.ndarray, renderer: Renderer, cam) -> np.ndarray:
+    """The cover's depth at each pixel's ground point (NaN where the pixel is not ground
+    over the grid), from the depth map through the camera."""
+    p = _points(np.where(np.isfinite(frame_depth), frame_depth, 0.0), cam, renderer)
+    i = np.floor((p[..., 0] - cover.origin_m[0]) / cover.spacing_m).astype(int)
+    k = np.floor((p[..., 2] - cover.origin_m[1]) / cover.spacing_m).astype(int)
+    inside = np.isfinite(frame_depth) & (i >= 0) & (k >= 0) & (i < cover.shape[1]) & (k < cover.shape[0]) & (np.abs(p[..., 1]) < 0.05)
+    out = np.full(frame_depth.shape, np.nan)
+    out[inside] = cover.depth_m[k[inside], i[inside]]
+    # Ground under the awning lies beneath the awning's cell (its snow is on the awning).
+    out[inside] = np.where(np.abs(cover.base_m[k[inside], i[inside]]) < 1e-6, out[inside], np.nan)
+    return out
+
+
+def test_a_frame_shows_the_cover_white_and_its_depth_layer() -> None:
+    r = Renderer(96, 54, backend="cpu")
+    w = Weather(snow_rate_mm_h=2.0, wind_m_s=(1.5, 0.0, 0.0))
+    street = scenes.street()
+    cover = snow.accumulate(street, w, duration_s=HOUR, resolution_m=0.5)
+    # drawn once the snow has stopped: no flakes nor their haze over the cover
+    after = Weather(wind_m_s=w.wind_m_s)
+    bare = r.render(street, after)
+    white = r.render(street, after, snow_cover=cover)
+    layer = white.layers["snow_depth_m"]
+    want = _ground_cell_depth(cover, white.depth_m, r, street.camera)
+    ground = np.isfinite(want)
+    assert ground.sum() > 500
+    # Each ground pixel shows its cell's depth (but where a grazing ray meets the snow's edge
+    # in the cell next to the one its point falls in).
+    agree = np.isclose(layer[ground], want[ground], rtol=1e-6, atol=1e-7)
+    assert agree.mean() > 0.99, agree.mean()
+    covered = ground & (layer > 0.01)
+    assert covered.sum() > 300
+    # Thin snow shows the asphalt: albedo 0.12 + (0.85 - 0.12) * (1 - e^(-d / 1 cm)), lit as
+    # the bare ground is.
+    frac = 1.0 - np.exp(-layer[covered] / 0.01)
+    ratio = white.rgb[covered][:, 1] / bare.rgb[covered][:, 1]
+    # (The lifted surface is met a little nearer, where the sky light differs slightly, and
+    # at edges the bare pixel sees something else.)
+    rel = ratio / ((0.12 + (snow.SNOW_ALBEDO - 0.12) * frac) / 0.12) - 1.0
+    assert abs(np.median(rel)) < 0.005 and np.mean(np.abs(rel) < 0.02) > 0.9
+    # Sky and walls carry no snow; a cover of no snow is no cover, bit for bit.
+    assert np.all(layer[np.isinf(white.depth_m)] == 0.0)
+    empty = snow.accumulate(street, Weather(), duration_s=HOUR, resolution_m=0.5)
+    same = r.render(street, after, snow_cover=empty)
+    assert np.array_equal(same.rgb, bare.rgb) and np.array_equal(same.depth_m, bare.depth_m)
+    # The 8-bit path draws it too (through the float frame).
+    np.testing.assert_array_equal(r.render_srgb8(street, after, snow_cover=cover), io.to_srgb8(white.rgb))
+
+
+def test_snow_lies_on_a_photos_upward_surfaces_and_not_in_its_wind_shadow() -> None:
+    # The photo: a rendered frame of a wall across the wind, with its depth map.
+    r = Renderer(120, 68, backend="cpu")
+    scene = scenes.boxes(
+        [{"min": (-20.0, 0.0, -14.0), "max": (20.0, 3.0, -12.0)}],
+        camera=scenes.Camera((0.0, 6.0, 0.0), pitch_deg=-25.0, vertical_fov_deg=60.0),
+    )
+    shot = r.render(scene)
+    photo = PhotoScene(shot.rgb, shot.depth_m, camera=scene.camera, encoding="linear", airlight="sky")
+    still = snow.accumulate(photo, Weather(snow_rate_mm_h=2.0), duration_s=HOUR, resolution_m=0.5, roughness=0.0)
+    frame = r.render(photo, Weather(snow_rate_mm_h=2.0), snow_cover=still)
+    d = frame.layers["snow_depth_m"]
+    normal_up = _photo_ground(shot.depth_m, scene.camera, r)
+    # Level ground and the wall's top: the open depth (2 cm); the wall's face: none.
+    level = normal_up & (d > 0)
+    assert level.sum() > 0.5 * normal_up.sum()
+    np.testing.assert_allclose(np.median(d[level]), 0.02, rtol=0.01)
+    face = _wall_face(shot.depth_m, scene.camera, r)
+    assert face.sum() > 50 and np.all(d[face] == 0.0)
+    assert np.all(frame.rgb[level].mean(axis=1) > shot.rgb[level].mean(axis=1))
+    # Wind from behind the wall towards the camera (+z): the ground in front of it, in its
+    # lee, is bare for h * tan(angle) = 3 * 1.5/1 m, the ground beyond that covered.
+    windy = Weather(snow_rate_mm_h=2.0, wind_m_s=(0.0, 0.0, 1.5))
+    cover = snow.accumulate(photo, windy, duration_s=HOUR, resolution_m=0.5, roughness=0.0)
+    length = 3.0 * math.tan(math.radians(cover.fall_angle_deg))
+    z = cover.z_m
+    at = int(np.searchsorted(cover.x_m, 0.0))
+    col, base = cover.depth_m[:, at], cover.base_m[:, at]
+    lee = (z > -12.0 + 1.0) & (z < -12.0 + length - 1.0) & np.isfinite(base)
+    assert lee.sum() >= 5 and np.all(col[lee] == 0.0)
+    beyond = (z > -12.0 + length + 1.0) & np.isfinite(base)
+    assert beyond.sum() >= 5 and np.all(col[beyond] > 0.5 * cover.open_depth_m)
+
+
+def _points(depth: np.ndarray, cam, r: Renderer) -> np.ndarray:
+    fx, fy, cx, cy = cam.with_resolution(r.width, r.height).intrinsics()
+    y, x = np.mgrid[0 : r.height, 0 : r.width] + 0.5
+    rays = np.stack([(x - cx) / fx, -(y - cy) / fy, -np.ones_like(x)], axis=-1) @ np.asarray(cam.rotation).T
+    return np.asarray(cam.position_m) + rays * depth[..., None]
+
+
+def _photo_ground(depth: np.ndarray, cam, r: Renderer) -> np.ndarray:
+    """Pixels on level surfaces (the ground, the wall's top), away from edges."""
+    p = _points(depth, cam, r)
+    finite = np.isfinite(depth)
+    on = finite & ((np.abs(p[..., 1]) < 1e-3) | (np.abs(p[..., 1] - 3.0) < 1e-3))
+    inner = on.copy()
+    inner[1:-1, 1:-1] &= on[:-2, 1:-1] & on[2:, 1:-1] & on[1:-1, :-2] & on[1:-1, 2:]
+    inner[[0, -1], :] = False
+    inner[:, [0, -1]] = False
+    return inner
+
+
+def _wall_face(depth: np.ndarray, cam, r: Renderer) -> np.ndarray:
+    p = _points(depth, cam, r)
+    return np.isfinite(depth) & (np.abs(p[..., 2] + 12.0) < 1e-3) & (p[..., 1] > 0.2) & (p[..., 1] < 2.8)
+
+
+def test_the_gpu_backend_draws_the_cover_as_the_cpu_does() -> None:
+    street = scenes.street()
+    w = Weather(snow_rate_mm_h=3.0, wind_m_s=(0.3, 0.0, 1.5))
+    cover = snow.accumulate(street, w, duration_s=HOUR, resolution_m=0.5)
+    after = Weather(wind_m_s=w.wind_m_s)  # the snow has stopped: the cover alone
+    cpu = Renderer(160, 90, backend="cpu").render(street, after, snow_cover=cover)
+    gpu = Renderer(160, 90, backend="gpu").render(street, after, snow_cover=cover)
+    assert sorted(gpu.layers) == ["snow_depth_m"]
+    # while it snows, the flakes and their haze are drawn over it too
+    falling = Renderer(160, 90, backend="gpu").render(street, w, snow_cover=cover)
+    assert sorted(falling.layers) == ["snow_alpha", "snow_depth_m", "transmittance"]
+    # f32 rounding may move a silhouette by a pixel (as tests/test_render.py allows)
+    assert np.mean(np.abs(cpu.rgb - gpu.rgb) > 1e-3) <= 0.005
+    assert np.mean(cpu.layers["snow_depth_m"] != gpu.layers["snow_depth_m"]) <= 0.005
+    assert (cpu.layers["snow_depth_m"] > 0).mean() > 0.2
+
+
+def test_a_sequence_carries_the_cover_in_every_frame() -> None:
+    r = Renderer(48, 27, backend="cpu")
+    w = Weather(snow_rate_mm_h=2.0)
+    cover = snow.accumulate(scenes.street(), w, duration_s=HOUR, resolution_m=1.0)
+    one = r.render(scenes.street(), w, time_s=0.5, snow_cover=cover)
+    frames = list(r.render_sequence(scenes.street(), w, n_frames=2, fps=2.0, snow_cover=cover))
+    assert np.array_equal(frames[1].rgb, one.rgb) and np.array_equal(frames[1].layers["snow_depth_m"], one.layers["snow_depth_m"])
+    codes = list(r.render_sequence_srgb8(scenes.street(), w, n_frames=2, fps=2.0, snow_cover=cover))
+    np.testing.assert_array_equal(codes[1], io.to_srgb8(one.rgb))
