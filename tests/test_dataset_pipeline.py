@@ -4,6 +4,7 @@ stage recorded per item, an interrupt that leaves every written item complete.""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -155,3 +156,41 @@ def test_a_snow_range_is_drawn_last_and_moves_no_other_parameter(tmp_path):
     assert both.sha256() != rain.sha256()
     with pytest.raises(ValueError, match="snow_rate_mm_h"):
         config(tmp_path, snow_rate_mm_h="1:500")
+
+
+def test_snow_with_its_cover_and_a_windshield_give_their_layers(tmp_path):
+    cfg = config(tmp_path / "snowy", variants=2, rain_rate_mm_h=0, snow_rate_mm_h="1:3", snow_hours="0.5:1", snow_resolution_m=2.0,
+                 wind_m_s="-1:1", layers=("snow_alpha", "snow_depth_m", "rain_alpha"))
+    s = generate(cfg, progress=False)
+    assert (s.generated, s.errors) == (2, 0), s.error_messages
+    for i in range(2):
+        stem = cfg.out / "items" / f"{i:06d}"
+        assert np.load(f"{stem}.snow_alpha.npy").max() > 0.0   # flakes
+        assert np.load(f"{stem}.snow_depth_m.npy").max() > 0.001  # lying snow, m
+        assert np.load(f"{stem}.rain_alpha.npy").max() == 0.0   # no rain: the neutral layer
+    rows = [r for r in (json.loads((cfg.out / "items" / f"{i:06d}.json").read_text()) for i in range(2))]
+    for r in rows:
+        assert 0.5 <= r["params"]["snow_hours"] <= 1.0 and r["snow_cover"]["mean_depth_m"] > 0.0
+        # an hour at R mm/h of water lays about R cm at 100 kg/m^3 on open ground; less under the
+        # buildings' shelter, none on walls
+        assert r["snow_cover"]["mean_depth_m"] < 0.01 * r["params"]["snow_rate_mm_h"] * r["params"]["snow_hours"] * 1.5
+    # the same items again, one alone: the same bytes (the cover is seeded by the item)
+    alone = config(tmp_path / "alone", variants=2, rain_rate_mm_h=0, snow_rate_mm_h="1:3", snow_hours="0.5:1", snow_resolution_m=2.0,
+                   wind_m_s="-1:1", layers=("snow_alpha", "snow_depth_m", "rain_alpha"))
+    generate(alone, progress=False, indices=[1])
+    for name in rows[1]["files"]:
+        assert (alone.out / "items" / name).read_bytes() == (cfg.out / "items" / name).read_bytes(), name
+    with pytest.raises(ValueError, match="snow_hours needs snow_rate_mm_h"):
+        config(tmp_path, snow_hours="1:2")
+    with pytest.raises(ValueError, match=r"snow_hours = 3000 is outside the valid range \[0, 2778\] h"):
+        config(tmp_path, snow_rate_mm_h=1, snow_hours=3000)
+
+
+def test_a_windshield_preset_per_item(tmp_path):
+    cfg = config(tmp_path / "glass", variants=2, rain_rate_mm_h="5:10", windshield="drizzle", layers=("drop_mask", "drop_height"))
+    s = generate(cfg, progress=False)
+    assert (s.generated, s.errors) == (2, 0), s.error_messages
+    masks = [np.load(cfg.out / "items" / f"{i:06d}.drop_mask.npy") for i in range(2)]
+    assert all(m.max() > 0.0 for m in masks) and not np.array_equal(masks[0], masks[1])  # drops, a time each
+    with pytest.raises(ValueError, match="windshield = 'hail' must be one of"):
+        config(tmp_path, windshield="hail")

@@ -24,6 +24,7 @@ from skyfall.dataset_sample import DatasetConfig, ItemParams, sample_item
 from skyfall.photo import level_camera
 from skyfall.render import Frame, Renderer
 from skyfall.scenes import BoxScene, PhotoScene
+from skyfall.snow import SnowCover
 from skyfall.weather import Weather
 
 __all__ = ["COSTS", "ItemSource", "Staged", "Worker", "item_files", "prepare", "render_item", "render_items", "render_stage", "verify_item", "write_stage"]
@@ -120,12 +121,46 @@ class Worker:
 
 
 def _weather(config: DatasetConfig, p: ItemParams) -> Weather:
+    glass = None
+    if config.windshield is not None:
+        from skyfall.windshield import warm
+
+        glass = warm(config.windshield, p.windshield_time_s, seed=config.seed)
     return Weather(
         rain_rate_mm_h=p.rain_rate_mm_h,
         snow_rate_mm_h=p.snow_rate_mm_h,
         visibility_m=p.visibility_m,
         wind_m_s=(p.wind_m_s, 0.0, 0.0),
         rain_near_m=config.rain_near_m,
+        windshield=glass,
+    )
+
+
+COVER_DT_S = 300.0
+"""The time step of an item's snow cover, s (one step when the cover is shorter)."""
+
+
+def _cover(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, p: ItemParams) -> SnowCover | None:
+    """The item's snow cover: its snow rate and wind over ``p.snow_hours`` (None: no cover)."""
+    if p.snow_hours <= 0.0 or p.snow_rate_mm_h <= 0.0:
+        return None
+    from skyfall import snow
+
+    return snow.accumulate(scene, weather, duration_s=p.snow_hours * 3600.0, dt_s=COVER_DT_S, resolution_m=config.snow_resolution_m, seed=p.render_seed)
+
+
+def _fast(config: DatasetConfig, scene: BoxScene | PhotoScene, renderer: Renderer, cover: SnowCover | None) -> bool:
+    """Whether the fused 8-bit path makes the item: an 8-bit photo on the CPU backend, only
+    the layers that path fills, no EXR, no snow cover and no windshield (full-frame stages
+    the fused path does not draw)."""
+    return (
+        isinstance(scene, PhotoScene)
+        and scene.srgb8 is not None
+        and renderer.backend == "cpu"
+        and set(config.layers) <= {"rain_alpha", "snow_alpha"}
+        and not config.exr
+        and cover is None
+        and config.windshield is None
     )
 
 
@@ -316,23 +351,20 @@ def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None
         renderer = worker.renderer(w, h)
         t1 = time.perf_counter()
         t["read"] += t1 - t0
+        cover = _cover(cfg, scene, weather, p)
         if cfg.sequence is not None:
-            _render_clip(worker, renderer, scene, camera, weather, p, row, t)
+            _render_clip(worker, renderer, scene, camera, weather, p, row, t, cover)
             return staged
-        fast = (
-            isinstance(scene, PhotoScene)
-            and scene.srgb8 is not None
-            and renderer.backend == "cpu"
-            and set(cfg.layers) <= {"rain_alpha"}
-            and not cfg.exr
-        )
+        fast = _fast(cfg, scene, renderer, cover)
         row["path"] = "srgb8" if fast else "float"
         kw: dict[str, Any] = {"seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
+        if cover is not None:
+            kw["snow_cover"] = cover
+            row["snow_cover"] = {"mean_depth_m": float(np.mean(cover.depth_m)), "spacing_m": float(cover.spacing_m)}
         if fast:
-            alpha = np.empty((h, w), np.float32)
-            staged.rainy = renderer.render_srgb8(scene, weather, rain_alpha_out=alpha if cfg.layers else None, **kw)
-            if cfg.layers:
-                staged.layers["rain_alpha"] = alpha
+            outs = {name: np.empty((h, w), np.float32) for name in cfg.layers}
+            staged.rainy = renderer.render_srgb8(scene, weather, rain_alpha_out=outs.get("rain_alpha"), snow_alpha_out=outs.get("snow_alpha"), **kw)
+            staged.layers.update(outs)
         else:
             frame = renderer.render(scene, weather, camera=camera, **kw)
             staged.layers = {name: frame.layer(name) for name in cfg.layers}
@@ -340,7 +372,7 @@ def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None
         if isinstance(scene, PhotoScene):
             staged.clean = scene.srgb8 if scene.srgb8 is not None else io.to_srgb8(scene.image)
         else:
-            clean_linear = renderer.render(scene, Weather(), camera=camera, ambient_spacing_m=cfg.ambient_spacing_m).rgb
+            clean_linear = renderer.render(scene, Weather(), camera=camera, ambient_spacing_m=cfg.ambient_spacing_m).rgb  # no weather, no cover
             staged.clean = io.to_srgb8(clean_linear)
         if staged.frame is not None:
             staged.rainy = io.to_srgb8(staged.frame.rgb)
@@ -401,6 +433,7 @@ def _render_clip(
     p: ItemParams,
     row: dict[str, Any],
     t: dict[str, float],
+    cover: SnowCover | None = None,
 ) -> None:
     """Write an item's clip: frame k at ``time_s = k / fps`` streamed to the encoder as it is
     rendered (one frame in memory, never N), the clean clip (the photo, or the street rendered
@@ -418,7 +451,7 @@ def _render_clip(
     # each layer's (N, H, W) stack mapped from its temporary file, filled frame by frame
     files_out = {name: NpyStack(folder / f"{stem}.{name}.npy", (cfg.sequence, h, w)) for name in cfg.layers}
     try:
-        _write_clip(worker, renderer, scene, camera, weather, p, row, t, files_out)
+        _write_clip(worker, renderer, scene, camera, weather, p, row, t, files_out, cover)
     except BaseException:
         for f in files_out.values():
             f.discard()
@@ -435,6 +468,7 @@ def _write_clip(
     row: dict[str, Any],
     t: dict[str, float],
     files_out: dict[str, NpyStack],
+    cover: SnowCover | None = None,
 ) -> None:
     """:func:`_render_clip`'s work, the layer stacks given."""
     from skyfall import video
@@ -445,21 +479,24 @@ def _write_clip(
     h, w = int(row["height"]), int(row["width"])
     folder = cfg.out / "items"
     stacks = {name: f.array for name, f in files_out.items()}
-    fast = isinstance(scene, PhotoScene) and scene.srgb8 is not None and renderer.backend == "cpu" and set(cfg.layers) <= {"rain_alpha"}
+    fast = _fast(cfg, scene, renderer, cover)
     row["path"] = "srgb8" if fast else "float"
     kw: dict[str, Any] = {"n_frames": n, "fps": fps, "seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
+    if cover is not None:
+        kw["snow_cover"] = cover
     render_s = [0.0]
 
     def rainy() -> Iterator[NDArray[np.uint8]]:
         """The rainy frames in order, each filling its slice of the layer stacks."""
         t0 = time.perf_counter()
         if fast:
-            alpha = stacks.get("rain_alpha")
-            buf = np.empty((h, w), np.float32) if alpha is not None else None
-            images = renderer.render_sequence_srgb8(scene, weather, out=np.empty((h, w, 3), np.uint8), rain_alpha_out=buf, **kw)
+            bufs = {name: np.empty((h, w), np.float32) for name in stacks}
+            images = renderer.render_sequence_srgb8(
+                scene, weather, out=np.empty((h, w, 3), np.uint8), rain_alpha_out=bufs.get("rain_alpha"), snow_alpha_out=bufs.get("snow_alpha"), **kw
+            )
             for k, image in enumerate(images):
-                if alpha is not None:
-                    alpha[k] = buf
+                for name, buf in bufs.items():
+                    stacks[name][k] = buf
                 render_s[0] += time.perf_counter() - t0
                 yield image
                 t0 = time.perf_counter()

@@ -21,7 +21,7 @@ from skyfall._validate import in_range, integer, real
 
 __all__ = ["DatasetConfig", "EXR_COMPRESSIONS", "PNG_STRATEGIES", "ItemParams", "parse_range", "sample_item", "LAYER_NAMES", "RANGE_OPTIONS"]
 
-LAYER_NAMES = ("rain_alpha", "rain_depth_m", "transmittance")
+LAYER_NAMES = ("rain_alpha", "rain_depth_m", "transmittance", "snow_alpha", "snow_depth_m", "drop_mask", "drop_height")
 """The ground-truth layers an item can write (``layers=``)."""
 
 # option -> (the parameter whose valid range its ends must lie in, how it is sampled)
@@ -38,7 +38,7 @@ RANGE_OPTIONS: dict[str, tuple[str, str]] = {
 Range = tuple[float, float]
 
 
-def parse_range(name: str, value: Any) -> Range:
+def parse_range(name: str, value: Any, *, check: bool = True) -> Range:
     """A parameter range ``(lo, hi)`` from ``"1:50"``, ``"10"``, a number or a pair.
 
     Parameters
@@ -47,6 +47,8 @@ def parse_range(name: str, value: Any) -> Range:
         The option's name (``rain_rate_mm_h``, ...), whose valid range both ends must lie in.
     value : str, float or sequence of 2 float
         ``"lo:hi"`` or ``[lo, hi]`` samples in [lo, hi]; one number is a fixed value.
+    check : bool
+        Check both ends against the parameter's valid range (False: the caller checks them).
 
     Raises
     ------
@@ -72,12 +74,25 @@ def parse_range(name: str, value: Any) -> Range:
     else:
         raise TypeError(f"{name} must be a number, a range 'lo:hi' or a pair [lo, hi], got {value!r}")
     param = RANGE_OPTIONS[name][0] if name in RANGE_OPTIONS else name
-    checked = [in_range(param, e) for e in ends]
+    checked = [in_range(param, e) for e in ends] if check else [float(e) for e in ends]
     lo, hi = checked[0], checked[-1]
     if lo > hi:
         raise ValueError(f"{name} = {lo:g}:{hi:g} is empty: lo must be at most hi")
     if RANGE_OPTIONS.get(name, ("", "uniform"))[1] == "log" and math.isinf(lo) != math.isinf(hi):
         raise ValueError(f"{name} = {lo:g}:{hi:g}: a log-uniform range must be finite at both ends, or a fixed inf")
+    return (lo, hi)
+
+
+HOURS_MAX = 1e7 / 3600.0
+"""The longest cover, h: ``skyfall.snow.accumulate``'s ``duration_s`` of 1e7 s."""
+
+
+def _hours(value: Any) -> Range:
+    """``snow_hours``: a range of hours in [0, :data:`HOURS_MAX`]."""
+    lo, hi = parse_range("snow_hours", value, check=False)
+    for v in (lo, hi):
+        if not 0.0 <= v <= HOURS_MAX:
+            raise ValueError(f"snow_hours = {v:g} is outside the valid range [0, {HOURS_MAX:.0f}] h")
     return (lo, hi)
 
 
@@ -124,6 +139,20 @@ class DatasetConfig:
     snow_rate_mm_h : (lo, hi)
         Snowfall rate as liquid-water equivalent, mm/h, in [0, 100], uniform (default 0: no
         snow); rain and snow may fall together.
+    snow_hours : (lo, hi)
+        How long the snow has been lying, h, uniform in [0, 2777] (default 0: no cover): each
+        item's cover is :func:`skyfall.snow.accumulate` of its own snow rate and wind over
+        that time (``snow_resolution_m`` cells, 300 s steps, the item's seed), drawn with the
+        frame (``snow_depth_m``). Needs ``snow_rate_mm_h``.
+    snow_resolution_m : float
+        The cover's cell side, m, in [0.01, 100] (default 0.25: about a second per item for
+        an hour of snow on the street).
+    windshield : str, optional
+        A :data:`skyfall.windshield.PRESETS` name: each item seen through a windshield in that
+        rain (its own glass rate, wipers and car speed), at a time drawn per item in
+        [0, 60) s from one warmed-up state per worker (:func:`skyfall.windshield.warm`, the
+        run's seed; the first item of a worker pays the warm-up, several seconds), with the
+        ``drop_mask`` and ``drop_height`` layers.
     rain_near_m : float
         Radius of the streak region, m (:class:`skyfall.Weather`).
     depth_scale_m : float, optional
@@ -198,6 +227,9 @@ class DatasetConfig:
     focus_distance_m: Range | None = None
     wind_m_s: Range = (0.0, 0.0)
     snow_rate_mm_h: Range = (0.0, 0.0)
+    snow_hours: Range = (0.0, 0.0)
+    snow_resolution_m: float = 0.25
+    windshield: str | None = None
     rain_near_m: float = 5.0
     depth_scale_m: float | None = None
     camera_height_m: float = 1.6
@@ -239,6 +271,15 @@ class DatasetConfig:
         if self.focus_distance_m is not None and self.f_number is None:
             raise ValueError("focus_distance_m needs f_number (a pinhole is in focus at every distance)")
         set_(self, "rain_near_m", in_range("rain_near_m", self.rain_near_m))
+        set_(self, "snow_hours", _hours(self.snow_hours))
+        if self.snow_hours[1] > 0.0 and self.snow_rate_mm_h[1] <= 0.0:
+            raise ValueError("snow_hours needs snow_rate_mm_h (a cover is the snow that fell)")
+        set_(self, "snow_resolution_m", in_range("resolution_m", self.snow_resolution_m))
+        if self.windshield is not None:
+            from skyfall.windshield import PRESETS
+
+            if self.windshield not in PRESETS:
+                raise ValueError(f"windshield = {self.windshield!r} must be one of {', '.join(PRESETS)}")
         if self.depth_scale_m is not None:
             s = float(self.depth_scale_m)
             if not (math.isfinite(s) and s > 0.0):
@@ -295,8 +336,9 @@ class DatasetConfig:
                 d.pop(name)
         if d["exr_compression"] == "zip":  # the checksum of the options before it was one
             d.pop("exr_compression")
-        if d["snow_rate_mm_h"] == [0.0, 0.0]:  # no snow: the checksum of before
-            d.pop("snow_rate_mm_h")
+        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None)):
+            if d[name] == plain:  # not used: the checksum of before it was an option
+                d.pop(name)
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()
 
     @classmethod
@@ -332,6 +374,8 @@ class ItemParams:
     camera_dyaw_deg: float
     camera_dpitch_deg: float
     snow_rate_mm_h: float = 0.0
+    snow_hours: float = 0.0
+    windshield_time_s: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
         """The parameters as JSON values (inf as the string "inf")."""
@@ -374,6 +418,8 @@ def sample_item(config: DatasetConfig, index: int) -> ItemParams:
     j, jd = config.camera_jitter_m, config.camera_jitter_deg
     dx, dz, dyaw, dpitch = (float(v) for v in rng.uniform(-1.0, 1.0, 4))
     snow = _draw(rng, config.snow_rate_mm_h, "uniform")  # drawn last: the draws before keep their values
+    hours = _draw(rng, config.snow_hours, "uniform")
+    glass_t = 60.0 * float(rng.random())
     assert rate is not None and vis is not None and exposure is not None and wind is not None and snow is not None
     if f_number is not None and focus is None:
         focus = math.inf
@@ -391,4 +437,6 @@ def sample_item(config: DatasetConfig, index: int) -> ItemParams:
         camera_dyaw_deg=dyaw * jd,
         camera_dpitch_deg=dpitch * jd / 2.0,
         snow_rate_mm_h=snow,
+        snow_hours=hours if hours is not None else 0.0,
+        windshield_time_s=glass_t if config.windshield is not None else 0.0,
     )
