@@ -8,10 +8,12 @@ use glam::DVec3;
 use numpy::ndarray::{Ix1, Ix2};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
+use skyfall_core::particles::Particle;
 use skyfall_core::rain::drops::{Drop, drops_near};
 use skyfall_core::rain::shelter::remove_sheltered;
 
-type DropArrays<'py> = (
+/// Particles as numpy arrays: positions, velocities, diameters, ids.
+pub type ParticleArrays<'py> = (
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<f32>>,
     Bound<'py, PyArray1<f32>>,
@@ -32,7 +34,7 @@ pub fn rain_drops<'py>(
     seed: u64,
     ground: bool,
     shelter: Option<PyReadonlyArray2<'py, f32>>,
-) -> PyResult<DropArrays<'py>> {
+) -> PyResult<ParticleArrays<'py>> {
     skyfall_core::ranges::TIME_S
         .check(time_s)
         .map_err(CoreError)?;
@@ -48,28 +50,38 @@ pub fn rain_drops<'py>(
         remove_sheltered(&mut d, &boxes, c.as_vec3(), reg.near_m as f32);
         d
     });
-    let n = drops.len();
+    particle_arrays(py, c, &drops)
+}
+
+/// Particles kept relative to `c` as arrays: world positions (N, 3, f64), velocities
+/// (N, 3), diameters (N,) in m, ids (N, 5). The drops' and the flakes' ground truth alike.
+pub fn particle_arrays<'py>(
+    py: Python<'py>,
+    c: DVec3,
+    particles: &[Particle],
+) -> PyResult<ParticleArrays<'py>> {
+    let n = particles.len();
     let pos = filled::<f64, Ix2>(py, &[n, 3], |out| {
-        // The core keeps drops relative to the centre; these are world positions.
-        for (o, d) in out.chunks_exact_mut(3).zip(&drops) {
+        // The core keeps particles relative to the centre; these are world positions.
+        for (o, d) in out.chunks_exact_mut(3).zip(particles) {
             o.copy_from_slice(&(c + d.position_m.as_dvec3()).to_array());
         }
         Ok(())
     })?;
     let vel = filled::<f32, Ix2>(py, &[n, 3], |out| {
-        for (o, d) in out.chunks_exact_mut(3).zip(&drops) {
+        for (o, d) in out.chunks_exact_mut(3).zip(particles) {
             o.copy_from_slice(&d.velocity_m_s.to_array());
         }
         Ok(())
     })?;
     let diam = filled::<f32, Ix1>(py, &[n], |out| {
-        for (o, d) in out.iter_mut().zip(&drops) {
+        for (o, d) in out.iter_mut().zip(particles) {
             *o = d.diameter_m;
         }
         Ok(())
     })?;
     let ids = filled::<i64, Ix2>(py, &[n, 5], |out| {
-        for (o, d) in out.chunks_exact_mut(5).zip(&drops) {
+        for (o, d) in out.chunks_exact_mut(5).zip(particles) {
             o.copy_from_slice(&d.id);
         }
         Ok(())
