@@ -170,3 +170,16 @@ def test_outputs_that_overlap_the_inputs_are_refused(backend):
     float_scene = PhotoScene(io.decode_srgb8(img), depth, camera=Camera((0.0, 1.6, 0.0)), encoding="linear")
     with pytest.raises(ValueError, match="rain_alpha_out overlaps the scene's image"):
         r.render_srgb8(float_scene, rain, rain_alpha_out=float_scene.image.reshape(-1)[: H * W].reshape(H, W))
+
+
+def test_fuses_srgb8_says_which_path_render_srgb8_takes():
+    from skyfall import snow, windshield
+
+    r = Renderer(32, 24, backend="cpu")
+    photo8 = PhotoScene(np.full((24, 32, 3), 120, np.uint8), depth_m=np.full((24, 32), 30.0, np.float32))
+    assert r.fuses_srgb8(photo8, Weather(rain_rate_mm_h=5.0))
+    assert not r.fuses_srgb8(scenes.street(), Weather())
+    glass = windshield.Windshield(5.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
+    assert not r.fuses_srgb8(photo8, Weather(windshield=glass))
+    cover = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0), duration_s=600.0, dt_s=600.0, resolution_m=10.0)
+    assert not r.fuses_srgb8(photo8, Weather(), cover)

@@ -149,19 +149,10 @@ def _cover(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather
     return snow.accumulate(scene, weather, duration_s=p.snow_hours * 3600.0, dt_s=COVER_DT_S, resolution_m=config.snow_resolution_m, seed=p.render_seed)
 
 
-def _fast(config: DatasetConfig, scene: BoxScene | PhotoScene, renderer: Renderer, cover: SnowCover | None) -> bool:
-    """Whether the fused 8-bit path makes the item: an 8-bit photo on the CPU backend, only
-    the layers that path fills, no EXR, no snow cover and no windshield (full-frame stages
-    the fused path does not draw)."""
-    return (
-        isinstance(scene, PhotoScene)
-        and scene.srgb8 is not None
-        and renderer.backend == "cpu"
-        and set(config.layers) <= {"rain_alpha", "snow_alpha"}
-        and not config.exr
-        and cover is None
-        and config.windshield is None
-    )
+def _fast(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer, cover: SnowCover | None) -> bool:
+    """Whether the fused 8-bit path makes the item: the renderer fuses it
+    (:meth:`Renderer.fuses_srgb8`), only the layers that path fills are asked for, no EXR."""
+    return renderer.fuses_srgb8(scene, weather, cover) and set(config.layers) <= {"rain_alpha", "snow_alpha"} and not config.exr
 
 
 def _lens(p: ItemParams) -> dict[str, Any]:
@@ -355,7 +346,7 @@ def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None
         if cfg.sequence is not None:
             _render_clip(worker, renderer, scene, camera, weather, p, row, t, cover)
             return staged
-        fast = _fast(cfg, scene, renderer, cover)
+        fast = _fast(cfg, scene, weather, renderer, cover)
         row["path"] = "srgb8" if fast else "float"
         kw: dict[str, Any] = {"seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
         if cover is not None:
@@ -479,7 +470,7 @@ def _write_clip(
     h, w = int(row["height"]), int(row["width"])
     folder = cfg.out / "items"
     stacks = {name: f.array for name, f in files_out.items()}
-    fast = _fast(cfg, scene, renderer, cover)
+    fast = _fast(cfg, scene, weather, renderer, cover)
     row["path"] = "srgb8" if fast else "float"
     kw: dict[str, Any] = {"n_frames": n, "fps": fps, "seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
     if cover is not None:

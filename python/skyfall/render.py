@@ -336,6 +336,32 @@ class Renderer:
             stats=stats,
         )
 
+    def fuses_srgb8(self, scene: BoxScene | PhotoScene, weather: Weather | None = None, snow_cover: SnowCover | None = None) -> bool:
+        """Whether :meth:`render_srgb8` of these takes the fused 8-bit path (an 8-bit photo on
+        the CPU backend, no windshield, no snow cover: full-frame stages that path does not
+        draw) rather than rendering the float frame and encoding it.
+
+        Parameters
+        ----------
+        scene : BoxScene or PhotoScene
+            The scene.
+        weather : Weather, optional
+            The weather (its ``windshield``).
+        snow_cover : SnowCover, optional
+            A cover to draw.
+
+        Returns
+        -------
+        bool
+        """
+        return (
+            self._device is None
+            and isinstance(scene, PhotoScene)
+            and scene.srgb8 is not None
+            and getattr(weather, "windshield", None) is None
+            and snow_cover is None
+        )
+
     def render_srgb8(
         self,
         scene: BoxScene | PhotoScene,
@@ -396,9 +422,9 @@ class Renderer:
         self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
-        # A windshield refracts the whole frame: its frames take the float path, then encode.
-        # A snow cover is not drawn by the fused 8-bit path: its frames take the float path too.
-        if self._device is None and isinstance(scene, PhotoScene) and scene.srgb8 is not None and getattr(weather, "windshield", None) is None and snow_cover is None:
+        # A windshield or a snow cover is a stage the fused path does not draw: float, then encode.
+        if self.fuses_srgb8(scene, weather, snow_cover):
+            assert isinstance(scene, PhotoScene) and scene.srgb8 is not None
             request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
             _core.render_photo8(
                 request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out, snow_alpha_out=snow_alpha_out
