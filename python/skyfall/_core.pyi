@@ -36,6 +36,8 @@ __all__ = [
     "render_frame",
     "render_photo8",
     "weather_optics",
+    "weather_sun",
+    "CloudField",
     "LAYERS",
     "LAYER_NEUTRAL",
     "MAX_DIAMETER_MM",
@@ -99,6 +101,7 @@ class _Request(TypedDict):
     cull_threshold: float | None
     ambient: AmbientLightMap
     snow_cover: NotRequired[SnowCoverGrid]
+    clouds: NotRequired[CloudField]
 
 LAYERS: dict[str, str]
 """The layers a frame can carry, name -> meaning, in the order frames list them."""
@@ -118,6 +121,7 @@ def render_photo8(
     snow_alpha_out: NDArray[np.float32] | None = None,
 ) -> dict[str, int]: ...
 def weather_optics(weather: Weather) -> tuple[float, float, float, float, float, float]: ...
+def weather_sun(weather: Weather) -> tuple[list[float], float] | None: ...
 
 def cloud_base_m(rain_rate_mm_h: float) -> float: ...
 @final
@@ -284,6 +288,23 @@ def sample_attenuation(
     gamma: NDArray[np.float32], world_from_volume: NDArray[np.float64], points_m: NDArray[np.float64]
 ) -> NDArray[np.float32]: ...
 def check_sun_direction(sun_direction: tuple[float, float, float]) -> list[float]: ...
+@final
+class CloudField:
+    def __new__(
+        cls,
+        positions_m: NDArray[np.float64],
+        radii_m: NDArray[np.float64],
+        optical_depths: NDArray[np.float64],
+        albedos: NDArray[np.float64],
+        asymmetry_g: float,
+        sun_direction: tuple[float, float, float] | None,
+        resolution: int,
+    ) -> CloudField: ...
+    @property
+    def n_particles(self) -> int: ...
+    @property
+    def has_sun(self) -> bool: ...
+    def sun_share(self, points_m: NDArray[np.float64]) -> NDArray[np.float32]: ...
 @final
 class Windshield:
     def __new__(

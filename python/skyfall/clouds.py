@@ -13,12 +13,17 @@ in tau, but never above 1.
   the reference and the speed baseline.
 - :func:`attenuation_volume`: the multiplicative attenuation volume Gamma of a light-aligned
   box, order-independent, with trilinear :meth:`AttenuationVolume.sample`.
+- In frames: ``Weather(clouds=...)`` (a :class:`Cloud` or a name of :data:`PRESETS`) draws the
+  clouds over the sky, lit per fragment from their volumes (:func:`frame_field`), and under a
+  sky with a sun shades the ground (``layers["sun_transmittance"]``).
 """
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
-from typing import Any, Final
+from functools import lru_cache
+from typing import Any, Final, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,7 +32,12 @@ from skyfall import _core
 from skyfall._validate import all_in_range, choice, float_array, in_range, integer_in_range
 
 __all__ = [
+    "FRAME_RESOLUTION",
     "KINDS",
+    "PRESETS",
+    "Preset",
+    "frame_field",
+    "preset",
     "AttenuationVolume",
     "Cloud",
     "attenuation_volume",
@@ -280,3 +290,81 @@ def attenuation_volume(cloud: Cloud, sun_direction: Any, *, resolution: int = 12
     direction = np.array(sun, dtype=np.float64)
     direction.flags.writeable = False
     return AttenuationVolume(gamma, world_from_volume, direction)
+
+
+class Preset(NamedTuple):
+    """A preset cloud: :func:`particles` arguments and where the cloud is moved to."""
+
+    kind: str
+    n_particles: int
+    extent_m: float
+    altitude_m: float
+    offset_m: tuple[float, float, float]
+
+
+PRESETS: Final = {
+    "broken": Preset("broken", 6000, 8000.0, 1200.0, (0.0, 0.0, -1000.0)),
+    "cumulus": Preset("cumulus", 6000, 1500.0, 1200.0, (0.0, 0.0, -5000.0)),
+    "stratocumulus": Preset("stratocumulus", 8000, 10000.0, 1000.0, (0.0, 0.0, -2000.0)),
+}
+"""The clouds ``Weather(clouds=name)`` draws: :func:`particles` of a kind (seed 0), moved by
+``offset_m`` so that a default camera (at the origin, looking along -Z) sees them: a broken
+field 8 km across over the camera and ahead of it (its shadows fall on a street below), one
+cumulus 1.5 km wide 5 km ahead, a stratocumulus deck 10 km across. Each base is at
+``altitude_m``."""
+
+FRAME_RESOLUTION: Final = 128
+"""Voxels per side of the attenuation volumes frames light their clouds from."""
+
+
+@lru_cache(maxsize=8)
+def preset(name: str) -> Cloud:
+    """The cloud of preset ``name`` (:data:`PRESETS`), made once per process.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`PRESETS`.
+
+    Returns
+    -------
+    Cloud
+    """
+    choice("clouds", name, tuple(PRESETS))
+    spec = PRESETS[name]
+    c = particles(spec.kind, n_particles=spec.n_particles, extent_m=spec.extent_m, altitude_m=spec.altitude_m)
+    offset = np.asarray(spec.offset_m, dtype=np.float64)
+    return Cloud(c.positions_m + offset, c.radii_m, c.optical_depths, c.albedos, c.asymmetry_g)
+
+
+_FIELDS: weakref.WeakKeyDictionary[Cloud, dict[tuple[Any, int], Any]] = weakref.WeakKeyDictionary()
+
+
+def frame_field(clouds: Cloud | str, sun_direction: tuple[float, float, float] | None, resolution: int = FRAME_RESOLUTION) -> Any:
+    """The clouds made ready for frames under a sun (``_core.CloudField``): their
+    attenuation volumes for the sun and for the zenith at ``resolution``^3, built once per
+    cloud, sun and resolution and cached while the cloud lives.
+
+    Parameters
+    ----------
+    clouds : Cloud or str
+        A cloud, or a name of :data:`PRESETS`.
+    sun_direction : tuple of 3 float or None
+        Towards the sun (``Weather.sun_direction``); None: no sun.
+    resolution : int
+        Voxels per side, in [2, 1024].
+
+    Returns
+    -------
+    skyfall._core.CloudField
+    """
+    cloud = preset(clouds) if isinstance(clouds, str) else _cloud(clouds)
+    n = integer_in_range("resolution", resolution)
+    key = (None if sun_direction is None else tuple(float(v) for v in sun_direction), n)
+    cache = _FIELDS.setdefault(cloud, {})
+    field = cache.get(key)
+    if field is None:
+        sun = None if key[0] is None else key[0]
+        field = _core.CloudField(*cloud._args(), sun, n)
+        cache[key] = field
+    return field

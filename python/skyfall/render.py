@@ -338,7 +338,7 @@ class Renderer:
 
     def fuses_srgb8(self, scene: BoxScene | PhotoScene, weather: Weather | None = None, snow_cover: SnowCover | None = None) -> bool:
         """Whether :meth:`render_srgb8` of these takes the fused 8-bit path (an 8-bit photo on
-        the CPU backend, no windshield, no snow cover: full-frame stages that path does not
+        the CPU backend, no windshield, no clouds, no snow cover: stages that path does not
         draw) rather than rendering the float frame and encoding it.
 
         Parameters
@@ -346,7 +346,7 @@ class Renderer:
         scene : BoxScene or PhotoScene
             The scene.
         weather : Weather, optional
-            The weather (its ``windshield``).
+            The weather (its ``windshield`` and ``clouds``).
         snow_cover : SnowCover, optional
             A cover to draw.
 
@@ -359,6 +359,7 @@ class Renderer:
             and isinstance(scene, PhotoScene)
             and scene.srgb8 is not None
             and getattr(weather, "windshield", None) is None
+            and getattr(weather, "clouds", None) is None
             and snow_cover is None
         )
 
@@ -518,6 +519,10 @@ class Renderer:
             "cull_threshold": cull,
             "ambient": self._ambient(scene, weather, cam, ambient_spacing_m, ambient_samples),
         }
+        if weather.clouds is not None:
+            from skyfall import clouds as _clouds
+
+            request["clouds"] = _clouds.frame_field(weather.clouds, weather.sun_direction)
         if snow_cover is not None:
             core_cover = getattr(snow_cover, "core", None)
             if not isinstance(core_cover, _core.SnowCoverGrid):

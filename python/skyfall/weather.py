@@ -85,6 +85,23 @@ class Weather:
         against (and the drops :func:`skyfall.rain.drops` lists). Billboards turn to face each
         camera, so two views of one seed share the voxels' streaks only approximately; stereo
         ground truth that must match drop for drop wants ``"drops"``.
+    sun_illuminance_lux : float, optional
+        The sun's direct illuminance on a surface facing it, at the ground, lux, in
+        [0, 150000]. None (default): a clear sky's (Navvab et al.'s turbidity model, about
+        87 klx for a sun 45 deg up) for the CIE types 7-15, whose skies show the sun, and no
+        direct sun for the others and the overcast sky. With a sun, E (``sky_illuminance_lux``)
+        is the sky's diffuse light alone: box scenes' surfaces facing the sun receive
+        ``sun_illuminance_lux / E * cos(incidence)`` more, shadowed by the boxes and by
+        ``clouds`` (``frame.layers["sun_transmittance"]``); the beam crosses the haze below the
+        cloud base. A photo is not relit: its clouds are lit by the sun, its surfaces keep
+        their own light.
+    clouds : skyfall.clouds.Cloud or str, optional
+        Clouds in the sky (:mod:`skyfall.clouds`, Shimada, Shinya, Shiraishi & Harada): a
+        ``Cloud`` in world metres, or a preset's name (:data:`skyfall.clouds.PRESETS`). They are
+        composited over the sky (and whatever lies behind them) before the haze, lit by the
+        sun through their attenuation volume and by the sky's light from above, and draw
+        ``layers["cloud_alpha"]``; under a sky with a sun they shade the ground. None
+        (default): no clouds, the frame's bits unchanged.
     windshield : skyfall.windshield.Windshield or str, optional
         Look through a windshield in the rain (:mod:`skyfall.windshield`): a ``Windshield``
         as it stands (the caller steps it), or a preset's name (:data:`skyfall.windshield.PRESETS`,
@@ -111,6 +128,8 @@ class Weather:
     snow_near_m: float = 8.0
     snow_opacity: str = "extinction"
     windshield: Any = None
+    sun_illuminance_lux: float | None = None
+    clouds: Any = None
 
     def __post_init__(self) -> None:
         r = in_range("rain_rate_mm_h", self.rain_rate_mm_h)
@@ -146,12 +165,22 @@ class Weather:
             object.__setattr__(self, "sky", int(self.sky))
         else:
             raise TypeError(f"sky must be \"overcast\" or an int 1-15, got {type(self.sky).__name__}")
-        for name in ("sun_elevation_deg", "sun_azimuth_deg", "cloud_base_m"):
+        for name in ("sun_elevation_deg", "sun_azimuth_deg", "cloud_base_m", "sun_illuminance_lux"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, in_range(name, getattr(self, name)))
         if (self.sun_elevation_deg is None) != (self.sun_azimuth_deg is None):
             raise ValueError("give both sun_elevation_deg and sun_azimuth_deg, or neither")
+        if self.sun_illuminance_lux is not None and self.sun_illuminance_lux > 0 and self.sun_elevation_deg is None:
+            raise ValueError("sun_illuminance_lux needs a sun position: give sun_elevation_deg and sun_azimuth_deg")
         self.sky_model()  # the sky's own checks (a sun for the types that need one)
+        if self.clouds is not None:
+            from skyfall import clouds as _clouds
+
+            if isinstance(self.clouds, str):
+                if self.clouds not in _clouds.PRESETS:
+                    raise ValueError(f"clouds = {self.clouds!r} is not a preset: use one of {', '.join(map(repr, _clouds.PRESETS))}")
+            elif not isinstance(self.clouds, _clouds.Cloud):
+                raise TypeError(f"clouds must be a skyfall.clouds.Cloud or a preset's name, got {type(self.clouds).__name__}")
         if self.windshield is not None:
             from skyfall import windshield as _ws
 
@@ -199,6 +228,24 @@ class Weather:
         clear overcast sky, 1 for the uniform sky, tending to 1 as the rain thickens: see
         :mod:`skyfall.sky`). A photo's frames scale it to the photo's own airlight."""
         return self._optics[4]
+
+    @cached_property
+    def _sun(self) -> tuple[tuple[float, float, float], float] | None:
+        r = _core.weather_sun(self)
+        return None if r is None else ((float(r[0][0]), float(r[0][1]), float(r[0][2])), float(r[1]))
+
+    @property
+    def sun_direction(self) -> tuple[float, float, float] | None:
+        """Unit vector towards the sun when the weather has direct sunlight (see
+        ``sun_illuminance_lux``), else None."""
+        return None if self._sun is None else self._sun[0]
+
+    @property
+    def sun_relative(self) -> float:
+        """The sun's normal illuminance at the ground over E, through the haze below the cloud
+        base (0 without a sun): a white surface facing the sun receives this much more light
+        than the open sky gives it."""
+        return 0.0 if self._sun is None else self._sun[1]
 
     def sky_model(self) -> _core.SkyModel:
         """The normalised sky with the rain's attenuation, as ``_core`` uses it (cached)."""

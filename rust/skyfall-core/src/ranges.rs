@@ -163,6 +163,12 @@ pub const SUN_ELEVATION_DEG: Limit = Limit::new(
     Range::closed(0.0, 90.0, "deg"),
     "the sun's elevation above the horizon",
 );
+/// The sun's direct normal illuminance.
+pub const SUN_ILLUMINANCE_LUX: Limit = Limit::new(
+    "sun_illuminance_lux",
+    Range::closed(0.0, 150_000.0, "lx"),
+    "the sun's direct illuminance on a surface facing it, at the ground",
+);
 /// The sun's azimuth.
 pub const SUN_AZIMUTH_DEG: Limit = Limit::new(
     "sun_azimuth_deg",
@@ -536,6 +542,7 @@ pub const ALL: &[Limit] = &[
     SKY,
     SUN_ELEVATION_DEG,
     SUN_AZIMUTH_DEG,
+    SUN_ILLUMINANCE_LUX,
     ELEVATION_DEG,
     AZIMUTH_DEG,
     CLOUD_BASE_M,

@@ -60,6 +60,10 @@ pub struct Weather {
     pub sun_deg: Option<(f64, f64)>,
     /// Cloud base height, m; None: [`cloud_base_m`] of the rain rate.
     pub cloud_base_m: Option<f64>,
+    /// The sun's direct normal illuminance at the ground, lux; None: the clear sky's
+    /// ([`crate::sky::sun::clear_sky_sun_lux`]) for the CIE types 7–15 (the skies with a
+    /// visible sun), none for the others.
+    pub sun_illuminance_lux: Option<f64>,
 }
 
 impl Weather {
@@ -82,6 +86,19 @@ impl Weather {
         }
         if let Some(h) = self.cloud_base_m {
             ranges::CLOUD_BASE_M.check(h)?;
+        }
+        if let Some(e) = self.sun_illuminance_lux {
+            ranges::SUN_ILLUMINANCE_LUX.check(e)?;
+            if e > 0.0 && self.sun_deg.is_none() {
+                return Err(crate::error::Error::Invalid {
+                    param: crate::error::Param {
+                        name: "sun_illuminance_lux",
+                        index: None,
+                    },
+                    message: "a sun needs a position: give sun_elevation_deg and sun_azimuth_deg"
+                        .into(),
+                });
+            }
         }
         if let SkySpec::General(t) = self.sky {
             ranges::SKY.check(t as f64)?;
@@ -142,6 +159,24 @@ impl Weather {
     pub fn cloud_base_height_m(&self) -> f64 {
         self.cloud_base_m
             .unwrap_or_else(|| cloud_base_m(self.rain_rate_mm_h))
+    }
+
+    /// The sun's direct light: its direction (unit, towards it) and its normal illuminance at
+    /// the ground over E, through the haze below the cloud base (e^(−σH/sin h)); None without
+    /// a sun.
+    pub fn sun(&self) -> Option<(glam::Vec3, f64)> {
+        let (el, az) = self.sun_deg?;
+        let lux = match (self.sun_illuminance_lux, self.sky) {
+            (Some(e), _) => e,
+            (None, SkySpec::General(t)) if t >= 7 => crate::sky::sun::clear_sky_sun_lux(el),
+            (None, _) => 0.0,
+        };
+        if lux <= 0.0 {
+            return None;
+        }
+        let sin_h = el.to_radians().sin().max(1e-3);
+        let beam = (-self.extinction_per_m() * self.cloud_base_height_m() / sin_h).exp();
+        Some((sun_direction(el, az), lux * beam / self.sky_illuminance_lux))
     }
 
     /// The sky's kind, with its sun.
@@ -252,6 +287,7 @@ mod tests {
             sky: SkySpec::Overcast,
             sun_deg: None,
             cloud_base_m: None,
+            sun_illuminance_lux: None,
         }
     }
 

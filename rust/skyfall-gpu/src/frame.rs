@@ -1,5 +1,6 @@
 //! The GPU frame: passes chained on the device, one readback per output.
 
+use crate::cloud::CloudPass;
 use crate::context::{AdapterChoice, GpuContext, GpuError};
 use crate::glow::GlowPass;
 use crate::haze::HazePass;
@@ -8,6 +9,7 @@ use crate::pool::BufferPool;
 use crate::pool::Pooled;
 use crate::rain::RainPass;
 use crate::scene_raycast::SceneRaycastPass;
+use skyfall_core::cloud::frame::CloudSplats;
 use skyfall_core::frame::layers::{Layer, Layers};
 use skyfall_core::frame::passes::Passes;
 use skyfall_core::frame::scene::SceneLight;
@@ -28,6 +30,7 @@ pub struct GpuRenderer {
     haze: HazePass,
     glow: GlowPass,
     rain: RainPass,
+    cloud: CloudPass,
     pool: BufferPool,
 }
 
@@ -35,12 +38,13 @@ impl GpuRenderer {
     /// Creates the device and compiles the passes.
     pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
         let ctx = GpuContext::new(choice)?;
-        let (raycast, haze, glow, rain) = ctx.scoped(|| {
+        let (raycast, haze, glow, rain, cloud) = ctx.scoped(|| {
             Ok((
                 SceneRaycastPass::new(&ctx),
                 HazePass::new(&ctx),
                 GlowPass::new(&ctx),
                 RainPass::new(&ctx),
+                CloudPass::new(&ctx),
             ))
         })?;
         Ok(GpuRenderer {
@@ -49,6 +53,7 @@ impl GpuRenderer {
             haze,
             glow,
             rain,
+            cloud,
             pool: BufferPool::default(),
         })
     }
@@ -64,13 +69,9 @@ impl GpuRenderer {
         rain: Option<&RainFrame<'_>>,
         snow: Option<&SnowFrame<'_>>,
     ) -> Result<FrameBuffers, GpuError> {
-        let cover = light.snow.is_some();
         FrameBuffers::filled(
             cam,
-            haze.is_some(),
-            rain.is_some(),
-            snow.is_some(),
-            cover,
+            light.drawn(haze.is_some(), rain.is_some(), snow.is_some()),
             |out| self.render_into(scene, cam, light, haze, rain, snow, out),
         )
     }
@@ -105,13 +106,8 @@ impl GpuRenderer {
         out: FrameOut<'_>,
     ) -> Result<(Option<RainReport>, Option<SnowStats>), GpuError> {
         check_frame_size(cam)?;
-        out.check(
-            cam,
-            haze.is_some(),
-            rain.is_some(),
-            snow.is_some(),
-            light.snow.is_some(),
-        )?;
+        let drawn = light.drawn(haze.is_some(), rain.is_some(), snow.is_some());
+        out.check(cam, drawn)?;
         let n = cam.pixels();
         self.ctx.check_buffer(
             &format!("a {}x{} RGB frame", cam.width, cam.height),
@@ -125,6 +121,11 @@ impl GpuRenderer {
                 SceneRef::Photo { .. } => None,
             };
             let passes = Passes::prepare(cam, lit, haze, rain, snow)?;
+            let clouds = light
+                .clouds
+                .as_ref()
+                .map(|c| CloudSplats::prepare(c, cam))
+                .transpose()?;
             let mut f = FrameEncoder::new(ctx, &self.pool, cam);
             let mut snow_photo = None;
             let (rgb, depth) = match scene {
@@ -152,11 +153,9 @@ impl GpuRenderer {
                 }
             };
             // The layers the passes draw, one buffer each.
-            let (haze_on, rain_on, snow_on) =
-                (passes.haze.is_some(), rain.is_some(), snow.is_some());
             let mut layers: Layers<Pooled> = Layers::default();
             for l in Layer::ALL {
-                if l.drawn(haze_on, rain_on, snow_on, light.snow.is_some()) {
+                if l.drawn(drawn) {
                     match (l, snow_photo.take()) {
                         (Layer::SnowDepth, Some(b)) => layers.set(l, b),
                         (_, taken) => {
@@ -174,6 +173,9 @@ impl GpuRenderer {
             // The passes in physical order: the scene, haze, the lights' glows, rain.
             if let SceneRef::Boxes(b) = scene {
                 self.raycast.encode(&mut f, &targets, (b, light))?;
+            }
+            if let Some(c) = &clouds {
+                self.cloud.encode(&mut f, &targets, c)?;
             }
             if let Some(h) = passes.haze {
                 self.haze.encode(&mut f, &targets, h)?;

@@ -5,7 +5,8 @@
 //! - [`pass`]: the [`pass::FramePass`] trait every pass implements and the
 //!   [`pass::FrameEncoder`] a frame records into; [`uniforms`]: the passes' uniform blocks as
 //!   Pod structs; [`pool`]: buffers pooled across frames; [`readback`]: one mapped copy back.
-//! - One pass per file, its WGSL in `shaders/`: [`scene_raycast`], [`haze`], [`glow`],
+//! - One pass per file, its WGSL in `shaders/`: [`scene_raycast`] (with the sun's direct
+//!   light through the clouds), [`cloud`] (the clouds' splats), [`haze`], [`glow`],
 //!   [`rain`]; [`windshield`] (the drops on the glass: drawn on request, not yet a stage of
 //!   [`frame`]).
 //! - [`frame`]: the passes in physical order on one encoder, one submission, one readback.
@@ -14,6 +15,7 @@
 //! buffer copy with no texture row padding.
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod cloud;
 pub mod context;
 pub mod frame;
 pub mod glow;

@@ -4,7 +4,7 @@ use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
 use crate::uniforms::{
     AmbientUniform, BoxElement, CameraUniform, LampUniform, LightElement, SceneUniform, SkyUniform,
-    SnowUniform,
+    SnowUniform, SunUniform, VolumeUniform,
 };
 use skyfall_core::frame::layers::Layer;
 use skyfall_core::frame::scene::SceneLight;
@@ -33,7 +33,7 @@ impl FramePass for SceneRaycastPass {
         use Binding::*;
         let bindings = [
             Uniform, Uniform, ReadOnly, ReadWrite, ReadWrite, Uniform, Uniform, ReadOnly, ReadOnly,
-            Uniform, ReadOnly, Uniform, ReadOnly, ReadWrite,
+            Uniform, ReadOnly, Uniform, ReadOnly, ReadWrite, Uniform, ReadOnly, ReadWrite,
         ];
         let pass = |lit: f64, snow: f64| {
             ComputePass::with_constants(
@@ -144,6 +144,34 @@ impl FramePass for SceneRaycastPass {
             Some(_) => t.layer(Layer::SnowDepth)?,
             None => &snow_dummy,
         };
+        // The sun (its code is in the lit pipelines, which a frame with a sun takes).
+        let sun_block = match &light.sun {
+            Some(s) => SunUniform {
+                dir: [s.direction.x, s.direction.y, s.direction.z, s.relative],
+                flags: [
+                    1,
+                    u32::from(s.clouds.is_some()),
+                    u32::from(t.layers.get(Layer::SunTransmittance).is_some()),
+                    0,
+                ],
+                volume: VolumeUniform::new(s.clouds.as_ref()),
+            },
+            None => SunUniform::default(),
+        };
+        let sun_gamma = match light.sun.as_ref().and_then(|s| s.clouds.as_ref()) {
+            Some(v) => {
+                f.ctx
+                    .check_buffer("the clouds' volume", (v.gamma.len() * 4) as u64)?;
+                f.upload("sun_gamma", v.gamma)
+            }
+            None => f.upload("sun_gamma", &[1.0f32]),
+        };
+        let sun_dummy = f.target("sun_dummy", 1);
+        let sun_out = match t.layers.get(Layer::SunTransmittance) {
+            Some(b) => b,
+            None => &sun_dummy,
+        };
+        let sun_info = f.uniform("sun", &sun_block);
         let buffers = [
             f.uniform("camera", &CameraUniform::new(f.cam)),
             f.uniform("scene", &info),
@@ -170,7 +198,8 @@ impl FramePass for SceneRaycastPass {
             snow,
             cells,
         ] = &buffers;
-        let pass = match (light.lights.is_empty(), light.snow.is_some()) {
+        let unlit = light.lights.is_empty() && light.sun.is_none();
+        let pass = match (unlit, light.snow.is_some()) {
             (true, false) => &self.unlit,
             (false, false) => &self.lit,
             (true, true) => &self.unlit_snow,
@@ -180,11 +209,11 @@ impl FramePass for SceneRaycastPass {
             pass,
             &[
                 cam, info, boxes, t.rgb, t.depth, sky, amb, values, solid, lamps, lights, snow,
-                cells, snow_out,
+                cells, snow_out, &sun_info, &sun_gamma, sun_out,
             ],
         );
         f.hold(buffers);
-        f.hold([snow_dummy]);
+        f.hold([snow_dummy, sun_info, sun_gamma, sun_dummy]);
         Ok(())
     }
 }

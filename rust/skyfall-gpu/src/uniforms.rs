@@ -220,3 +220,61 @@ mod tests {
         assert_eq!(size_of::<CameraUniform>(), 96);
     }
 }
+
+/// A volume's box relative to the camera (`VolumeBox` in `shaders/scene_raycast.wgsl` and
+/// `shaders/cloud.wgsl`): skyfall_core::cloud::frame::VolumeView.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct VolumeUniform {
+    /// The corner relative to the camera, m (xyz); resolution R (w, as f32).
+    pub origin: [f32; 4],
+    /// Each edge over its squared length, 1/m (xyz).
+    pub axes: [[f32; 4]; 3],
+}
+
+impl VolumeUniform {
+    /// The block of a volume view (zeros without one).
+    pub fn new(v: Option<&skyfall_core::cloud::frame::VolumeView<'_>>) -> Self {
+        match v {
+            Some(v) => {
+                let a = |x: glam::Vec3| [x.x, x.y, x.z, 0.0];
+                let o = v.origin_rel;
+                VolumeUniform {
+                    origin: [o.x, o.y, o.z, v.resolution as f32],
+                    axes: [a(v.axes[0]), a(v.axes[1]), a(v.axes[2])],
+                }
+            }
+            None => VolumeUniform::default(),
+        }
+    }
+}
+
+/// `SunInfo` in `shaders/scene_raycast.wgsl`: the sun's direct light on the surfaces.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct SunUniform {
+    /// Towards the sun (xyz), its normal illuminance over E (w).
+    pub dir: [f32; 4],
+    /// Sun on (x), clouds' volume present (y), sun_transmittance written (z).
+    pub flags: [u32; 4],
+    /// The clouds' Γ for the sun.
+    pub volume: VolumeUniform,
+}
+
+/// `CloudInfo` in `shaders/cloud.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct CloudUniform {
+    /// Tiles across (x), tile side px (y), sun present (z), cloud_alpha written (w).
+    pub counts: [u32; 4],
+    /// Towards the sun (xyz), Henyey–Greenstein g (w).
+    pub sun_g: [f32; 4],
+    /// The sun's normal illuminance over E per channel (xyz).
+    pub sun_light: [f32; 4],
+    /// The open sky's light per channel (xyz).
+    pub sky_light: [f32; 4],
+    /// The sun's Γ.
+    pub sun_volume: VolumeUniform,
+    /// The zenith's Γ.
+    pub zenith_volume: VolumeUniform,
+}

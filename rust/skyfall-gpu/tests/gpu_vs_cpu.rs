@@ -596,6 +596,7 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
         sky: skyfall_core::weather::SkySpec::Overcast,
         sun_deg: None,
         cloud_base_m: None,
+        sun_illuminance_lux: None,
     };
     let params = CoverParams {
         duration_s: 3600.0,

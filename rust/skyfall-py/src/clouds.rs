@@ -186,3 +186,86 @@ pub fn check_sun_direction(sun_direction: [f64; 3]) -> PyResult<[f64; 3]> {
         .map_err(CoreError)?
         .to_array())
 }
+
+/// A cloud made ready for frames under one sky (`skyfall_core::cloud::frame::CloudField`):
+/// its attenuation volumes for the sun (when there is one) and for the zenith, built once
+/// and shared by every frame that draws it.
+#[pyclass(frozen, module = "skyfall._core")]
+pub struct CloudField {
+    pub(crate) field: std::sync::Arc<skyfall_core::cloud::frame::CloudField>,
+}
+
+#[pymethods]
+impl CloudField {
+    /// Builds the field of a cloud's arrays under a sun towards `sun_direction` (None: no sun)
+    /// at `resolution`³ voxels, the GIL released.
+    #[new]
+    #[pyo3(signature = (positions_m, radii_m, optical_depths, albedos, asymmetry_g, sun_direction, resolution))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        positions_m: PyReadonlyArray2<'_, f64>,
+        radii_m: PyReadonlyArray1<'_, f64>,
+        optical_depths: PyReadonlyArray1<'_, f64>,
+        albedos: PyReadonlyArray1<'_, f64>,
+        asymmetry_g: f64,
+        sun_direction: Option<[f64; 3]>,
+        resolution: usize,
+    ) -> PyResult<Self> {
+        let cloud = cloud_of(
+            &positions_m,
+            &radii_m,
+            &optical_depths,
+            &albedos,
+            asymmetry_g,
+        )?;
+        let field = py
+            .detach(|| {
+                skyfall_core::cloud::frame::CloudField::new(cloud, sun_direction, resolution)
+            })
+            .map_err(CoreError)?;
+        Ok(CloudField {
+            field: std::sync::Arc::new(field),
+        })
+    }
+
+    /// Number of particles.
+    #[getter]
+    fn n_particles(&self) -> usize {
+        self.field.cloud.len()
+    }
+
+    /// Whether the field has a sun.
+    #[getter]
+    fn has_sun(&self) -> bool {
+        self.field.sun.is_some()
+    }
+
+    /// The clouds' share of the sun's light Γ at world points `points_m` (N, 3): 1 without a
+    /// sun.
+    fn sun_share<'py>(
+        &self,
+        py: Python<'py>,
+        points_m: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f32>>> {
+        let shape = points_m.shape();
+        if shape.len() != 2 || shape[1] != 3 {
+            return Err(invalid(
+                "points_m",
+                None,
+                format!("must have shape (N, 3), got {shape:?}"),
+            ));
+        }
+        let p = points_m.as_slice()?;
+        let out: Vec<f32> = p
+            .chunks_exact(3)
+            .map(|c| {
+                self.field
+                    .sun
+                    .as_ref()
+                    .map_or(1.0, |(_, v)| v.sample(glam::DVec3::new(c[0], c[1], c[2])))
+            })
+            .collect();
+        crate::alloc::from_slice::<f32, Ix1>(py, &[out.len()], &out)
+    }
+}

@@ -26,7 +26,7 @@ use pyo3::prelude::*;
 mod _core {
     #[pymodule_export]
     use super::clouds::{
-        attenuation_volume, check_sun_direction, cloud_particles, harris_illumination,
+        CloudField, attenuation_volume, check_sun_direction, cloud_particles, harris_illumination,
         sample_attenuation,
     };
     #[pymodule_export]
@@ -55,7 +55,7 @@ mod _core {
     #[pymodule_export]
     use super::snow_frame::snowflakes;
     #[pymodule_export]
-    use super::weather::weather_optics;
+    use super::weather::{weather_optics, weather_sun};
     #[pymodule_export]
     use super::windshield::{
         Windshield, furmidge_critical, metaball_height_map, metaball_normals,

@@ -102,12 +102,7 @@ pub fn render_frame<'py>(
     // The layers this frame draws, in the order they are declared.
     let mut layers: Vec<(Layer, F2<'py>)> = Vec::new();
     for layer in Layer::ALL {
-        if layer.drawn(
-            haze.is_some(),
-            rain.is_some(),
-            snow.is_some(),
-            light.snow.is_some(),
-        ) {
+        if layer.drawn(light.drawn(haze.is_some(), rain.is_some(), snow.is_some())) {
             layers.push((
                 layer,
                 out.take::<f32, Ix2>(layer.name())?.map_or_else(plane, Ok)?,
@@ -190,6 +185,13 @@ pub fn render_photo8<'py>(
             format!("must have 256 entries, got {}", decode_table.len()),
         )
     })?;
+    if req.clouds.is_some() {
+        return Err(invalid(
+            "clouds",
+            None,
+            "the 8-bit output stage draws no clouds: render the float frame (Renderer.render_srgb8 does)",
+        ));
+    }
     let depth_m = match req.scene_ref() {
         skyfall_core::frame::SceneRef::Photo { depth_m, .. } => depth_m,
         skyfall_core::frame::SceneRef::Boxes(_) => {

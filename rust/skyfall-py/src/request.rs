@@ -37,6 +37,8 @@ pub struct WeatherSpec {
     sun_elevation_deg: Option<f64>,
     sun_azimuth_deg: Option<f64>,
     cloud_base_m: Option<f64>,
+    #[pyo3(default)]
+    sun_illuminance_lux: Option<f64>,
 }
 
 /// `Weather.sky`: `"overcast"` or a CIE general sky type.
@@ -81,6 +83,7 @@ impl WeatherSpec {
             sky,
             sun_deg,
             cloud_base_m: self.cloud_base_m,
+            sun_illuminance_lux: self.sun_illuminance_lux,
         };
         w.validate().map_err(CoreError)?;
         Ok(w)
@@ -268,6 +271,9 @@ pub struct RequestArgs<'py> {
     /// The snow cover drawn on the scene (`skyfall.snow.SnowCover`'s core), when given.
     #[pyo3(default)]
     snow_cover: Option<Bound<'py, crate::snow::SnowCoverGrid>>,
+    /// The clouds in the sky (`skyfall.clouds`' `_core.CloudField`), when the weather has them.
+    #[pyo3(default)]
+    clouds: Option<Bound<'py, crate::clouds::CloudField>>,
 }
 
 /// A request's parts: the Python arrays it borrows, and the rest, owned.
@@ -282,6 +288,7 @@ pub struct ParsedRequest<'py> {
     cull_threshold: Option<f64>,
     ambient: Arc<skyfall_core::sky::ambient::AmbientMap>,
     snow_cover: Option<Arc<skyfall_core::snow::cover::SnowCover>>,
+    clouds: Option<Arc<skyfall_core::cloud::frame::CloudField>>,
 }
 
 impl<'py> RequestArgs<'py> {
@@ -326,6 +333,7 @@ impl<'py> RequestArgs<'py> {
             cull_threshold: self.cull_threshold,
             ambient: Arc::clone(&self.ambient.get().map),
             snow_cover: self.snow_cover.map(|c| Arc::clone(&c.get().cover)),
+            clouds: self.clouds.map(|c| Arc::clone(&c.get().field)),
         })
     }
 }
@@ -370,6 +378,7 @@ impl<'py> ParsedRequest<'py> {
             cull_threshold: self.cull_threshold,
             ambient: Arc::clone(&self.ambient),
             snow_cover: self.snow_cover.as_deref(),
+            clouds: self.clouds.as_ref(),
         })
     }
 }

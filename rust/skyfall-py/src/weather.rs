@@ -20,3 +20,12 @@ pub fn weather_optics(weather: WeatherSpec) -> PyResult<(f64, f64, f64, f64, f64
         w.snow_extinction_per_m(),
     ))
 }
+
+/// The sun's direct light of `weather`: (its unit direction, towards it; its normal
+/// illuminance at the ground over E, through the haze below the cloud base), or None when the
+/// weather has no sun.
+#[pyfunction]
+pub fn weather_sun(weather: WeatherSpec) -> PyResult<Option<([f32; 3], f64)>> {
+    let w = weather.core()?;
+    Ok(w.sun().map(|(d, r)| (d.to_array(), r)))
+}

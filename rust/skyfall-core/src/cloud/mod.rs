@@ -18,7 +18,10 @@
 //! - [`harris`]: Harris' sorted recurrence, the reference and the speed baseline.
 //! - [`volume`]: the attenuation volume Γ, order-independent, built by splatting log G and
 //!   a prefix sum along the light.
+//! - [`frame`]: clouds in frames: the cloud pass (camera-facing Gaussian splats composited
+//!   back to front) and the sun's share through the clouds.
 
+pub mod frame;
 pub mod generate;
 pub mod harris;
 pub mod light;

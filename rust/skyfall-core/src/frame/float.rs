@@ -3,8 +3,9 @@
 
 use super::layers::Layer;
 use super::passes::Passes;
-use super::scene::{SceneLight, shade_pixel};
+use super::scene::{SceneLight, shade_pixel_sun, sun_share_pixel};
 use super::{FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo};
+use crate::cloud::frame::CloudSplats;
 use crate::error::Result;
 use crate::haze::{Haze, ViewRays, apply_row};
 use crate::particles::composite::{BAND_ROWS, bin_by_bands, composite_band_colour};
@@ -23,13 +24,9 @@ pub fn render(
     rain: Option<&RainFrame<'_>>,
     snow: Option<&SnowFrame<'_>>,
 ) -> Result<FrameBuffers> {
-    let cover = light.snow.is_some();
     FrameBuffers::filled(
         cam,
-        haze.is_some(),
-        rain.is_some(),
-        snow.is_some(),
-        cover,
+        light.drawn(haze.is_some(), rain.is_some(), snow.is_some()),
         |out| render_into(scene, cam, light, haze, rain, snow, out),
     )
 }
@@ -61,8 +58,10 @@ pub fn render_into_reporting(
     if let SceneRef::Photo { rgb, depth_m } = scene {
         check_photo(cam, rgb, depth_m)?;
     }
-    let cover = light.snow.is_some();
-    out.check(cam, haze.is_some(), rain.is_some(), snow.is_some(), cover)?;
+    out.check(
+        cam,
+        light.drawn(haze.is_some(), rain.is_some(), snow.is_some()),
+    )?;
     let w = cam.width as usize;
     let FrameOut {
         rgb,
@@ -75,6 +74,14 @@ pub fn render_into_reporting(
         .take(Layer::RainAlpha)
         .zip(layers.take(Layer::RainDepth));
     let snow_layer = layers.take(Layer::SnowAlpha);
+    let cloud_alpha = layers.take(Layer::CloudAlpha);
+    let sun_t = layers.take(Layer::SunTransmittance);
+    // The clouds' splats, sorted and binned once.
+    let clouds = light
+        .clouds
+        .as_ref()
+        .map(|c| CloudSplats::prepare(c, cam))
+        .transpose()?;
     // The passes first (the particles do not depend on the scene), the particles binned to
     // the bands.
     let lit = match scene {
@@ -115,6 +122,8 @@ pub fn render_into_reporting(
         Some(t) => t.chunks_mut(band).map(Some).collect(),
         None => (0..bands).map(|_| None).collect(),
     };
+    let mut cloud_bands = split_bands(cloud_alpha, band, bands);
+    let mut sun_bands = split_bands(sun_t, band, bands);
     let rays = ViewRays::new(cam);
     let particles = binned.as_ref().map(|(streaks, bins)| (*streaks, bins));
     // The pipeline, band by band while the band is in cache: the scene stage, then the effect
@@ -124,9 +133,16 @@ pub fn render_into_reporting(
         .zip(t_bands.par_iter_mut())
         .zip(rain_bands.par_iter_mut())
         .zip(cover_bands.par_iter_mut())
+        .zip(cloud_bands.par_iter_mut().zip(sun_bands.par_iter_mut()))
         .enumerate()
         .for_each(
-            |(bi, ((((rgb_band, depth_band), t_band), rain_band), cover_band))| {
+            |(
+                bi,
+                (
+                    ((((rgb_band, depth_band), t_band), rain_band), cover_band),
+                    (cloud_band, sun_band),
+                ),
+            )| {
                 let y0 = bi * BAND_ROWS;
                 for (k, (rgb_row, depth_row)) in rgb_band
                     .chunks_mut(3 * w)
@@ -134,12 +150,23 @@ pub fn render_into_reporting(
                     .enumerate()
                 {
                     let y = y0 + k;
+                    let row = k * w..(k + 1) * w;
+                    let sun_row = sun_band.as_deref_mut().map(|b| &mut b[row.clone()]);
                     match (light.snow, cover_band.as_deref_mut()) {
                         (Some(snow), Some(s_band)) => {
-                            let s_row = &mut s_band[k * w..(k + 1) * w];
+                            let s_row = &mut s_band[row.clone()];
                             snow_scene_row(scene, cam, light, snow, y, rgb_row, depth_row, s_row);
+                            if let (Some(sun_row), SceneRef::Boxes(b)) = (sun_row, scene) {
+                                for (x, v) in sun_row.iter_mut().enumerate() {
+                                    *v = sun_share_pixel(b, cam, light, x as u32, y as u32);
+                                }
+                            }
                         }
-                        _ => scene_row(scene, cam, light, y, rgb_row, depth_row),
+                        _ => scene_row(scene, cam, light, y, rgb_row, depth_row, sun_row),
+                    }
+                    if let Some(c) = &clouds {
+                        let a_row = cloud_band.as_deref_mut().map(|b| &mut b[row.clone()]);
+                        c.apply_row(cam, y as u32, rgb_row, depth_row, a_row);
                     }
                     if let (Some(h), Some(t_band)) = (haze, t_band.as_deref_mut()) {
                         let t_row = &mut t_band[k * w..(k + 1) * w];
@@ -167,7 +194,16 @@ pub fn render_into_reporting(
     Ok((passes.rain_report(), passes.snow_report()))
 }
 
-/// The scene stage of one row: the box scene ray cast, or the photo's row copied.
+/// A layer's bands of `band` values (`bands` of them), or `bands` Nones without the layer.
+fn split_bands(layer: Option<&mut [f32]>, band: usize, bands: usize) -> Vec<Option<&mut [f32]>> {
+    match layer {
+        Some(t) => t.chunks_mut(band).map(Some).collect(),
+        None => (0..bands).map(|_| None).collect(),
+    }
+}
+
+/// The scene stage of one row: the box scene ray cast (with each pixel's share of the sun into
+/// `sun_row` when given), or the photo's row copied.
 fn scene_row(
     scene: SceneRef<'_>,
     cam: &Camera,
@@ -175,14 +211,18 @@ fn scene_row(
     y: usize,
     rgb_row: &mut [f32],
     depth_row: &mut [f32],
+    mut sun_row: Option<&mut [f32]>,
 ) {
     let w = depth_row.len();
     match scene {
         SceneRef::Boxes(b) => {
             for x in 0..w {
-                let (c, d) = shade_pixel(b, cam, light, x as u32, y as u32);
+                let (c, d, s) = shade_pixel_sun(b, cam, light, x as u32, y as u32);
                 rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
                 depth_row[x] = d;
+                if let Some(r) = sun_row.as_deref_mut() {
+                    r[x] = s;
+                }
             }
         }
         SceneRef::Photo { rgb, depth_m } => {
@@ -214,7 +254,7 @@ fn snow_scene_row(
             }
         }
         SceneRef::Photo { .. } => {
-            scene_row(scene, cam, light, y, rgb_row, depth_row);
+            scene_row(scene, cam, light, y, rgb_row, depth_row, None);
             snow.photo_row(cam, light.ambient, y, rgb_row, depth_row, Some(snow_row));
         }
     }

@@ -21,10 +21,33 @@ pub enum Layer {
     /// The windshield's metaball field above its 0.5 threshold, 0 off the drops (the
     /// windshield stage).
     DropHeight,
+    /// The clouds' coverage 1 − ∏(1 − αᵢ) over the sky (the cloud pass).
+    CloudAlpha,
+    /// The share of the sun's direct light reaching the visible surface: the boxes' shadow
+    /// times the clouds' attenuation Γ (the scene stage, under a sky with a sun).
+    SunTransmittance,
+}
+
+/// Which passes a frame runs, as far as its layers go: each layer is drawn by one of them
+/// ([`Layer::drawn`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Drawn {
+    /// The haze pass.
+    pub haze: bool,
+    /// The particle pass, rain.
+    pub rain: bool,
+    /// The particle pass, snowfall.
+    pub snow: bool,
+    /// A snow cover in the scene stage.
+    pub snow_cover: bool,
+    /// The cloud pass.
+    pub clouds: bool,
+    /// The sun's direct light in the scene stage.
+    pub sun: bool,
 }
 
 /// How many layers there are.
-pub const LAYER_COUNT: usize = 7;
+pub const LAYER_COUNT: usize = 9;
 
 impl Layer {
     /// Every layer, in the order frames list them.
@@ -36,6 +59,8 @@ impl Layer {
         Layer::SnowDepth,
         Layer::DropMask,
         Layer::DropHeight,
+        Layer::CloudAlpha,
+        Layer::SunTransmittance,
     ];
 
     /// The layer's name, as users see it (`frame.layers[name]`, EXR channel names).
@@ -48,6 +73,8 @@ impl Layer {
             Layer::SnowDepth => "snow_depth_m",
             Layer::DropMask => "drop_mask",
             Layer::DropHeight => "drop_height",
+            Layer::CloudAlpha => "cloud_alpha",
+            Layer::SunTransmittance => "sun_transmittance",
         }
     }
 
@@ -63,6 +90,10 @@ impl Layer {
             Layer::DropHeight => {
                 "the windshield's metaball field above its 0.5 threshold (0: no drop)"
             }
+            Layer::CloudAlpha => "cloud coverage 1 - prod(1 - alpha_i) along the pixel's ray",
+            Layer::SunTransmittance => {
+                "share of direct sunlight reaching the visible surface (boxes' and clouds' shadows)"
+            }
         }
     }
 
@@ -76,19 +107,23 @@ impl Layer {
             Layer::SnowAlpha => 0.0,
             Layer::SnowDepth => 0.0,
             Layer::DropMask | Layer::DropHeight => 0.0,
+            Layer::CloudAlpha => 0.0,
+            Layer::SunTransmittance => 1.0,
         }
     }
 
-    /// Whether a frame with these passes (haze, rain, snowfall, a snow cover) draws the layer.
-    /// The windshield's layers are drawn by its stage after the frame
-    /// (`skyfall.windshield.composite`, over either backend's frame), never by these passes.
-    pub const fn drawn(self, haze: bool, rain: bool, snow: bool, snow_cover: bool) -> bool {
+    /// Whether a frame with these passes draws the layer. The windshield's layers are drawn by
+    /// its stage after the frame (`skyfall.windshield.composite`, over either backend's
+    /// frame), never by these passes.
+    pub const fn drawn(self, d: Drawn) -> bool {
         match self {
-            Layer::Transmittance => haze,
-            Layer::RainAlpha | Layer::RainDepth => rain,
-            Layer::SnowAlpha => snow,
-            Layer::SnowDepth => snow_cover,
+            Layer::Transmittance => d.haze,
+            Layer::RainAlpha | Layer::RainDepth => d.rain,
+            Layer::SnowAlpha => d.snow,
+            Layer::SnowDepth => d.snow_cover,
             Layer::DropMask | Layer::DropHeight => false,
+            Layer::CloudAlpha => d.clouds,
+            Layer::SunTransmittance => d.sun,
         }
     }
 
@@ -137,15 +172,67 @@ mod tests {
         let mut names: Vec<_> = Layer::ALL.iter().map(|l| l.name()).collect();
         names.dedup();
         assert_eq!(names.len(), LAYER_COUNT);
-        assert!(
-            Layer::Transmittance.drawn(true, false, false, false)
-                && !Layer::RainAlpha.drawn(true, false, true, true)
-                && Layer::SnowAlpha.drawn(false, false, true, false)
-                && !Layer::SnowAlpha.drawn(true, true, false, true)
-                && Layer::SnowDepth.drawn(false, false, false, true)
-                && !Layer::SnowDepth.drawn(true, true, true, false)
-                && !Layer::DropMask.drawn(true, true, true, true)
-        );
+        let all = Drawn {
+            haze: true,
+            rain: true,
+            snow: true,
+            snow_cover: true,
+            clouds: true,
+            sun: true,
+        };
+        // Each layer is drawn by its own pass alone.
+        for (l, pass) in [
+            (
+                Layer::Transmittance,
+                Drawn {
+                    haze: true,
+                    ..Drawn::default()
+                },
+            ),
+            (
+                Layer::RainAlpha,
+                Drawn {
+                    rain: true,
+                    ..Drawn::default()
+                },
+            ),
+            (
+                Layer::SnowAlpha,
+                Drawn {
+                    snow: true,
+                    ..Drawn::default()
+                },
+            ),
+            (
+                Layer::SnowDepth,
+                Drawn {
+                    snow_cover: true,
+                    ..Drawn::default()
+                },
+            ),
+            (
+                Layer::CloudAlpha,
+                Drawn {
+                    clouds: true,
+                    ..Drawn::default()
+                },
+            ),
+            (
+                Layer::SunTransmittance,
+                Drawn {
+                    sun: true,
+                    ..Drawn::default()
+                },
+            ),
+        ] {
+            assert!(l.drawn(pass) && !l.drawn(Drawn::default()), "{l:?}");
+            for other in Layer::ALL {
+                if other != l && !(l == Layer::RainAlpha && other == Layer::RainDepth) {
+                    assert!(!other.drawn(pass), "{other:?} by {l:?}'s pass");
+                }
+            }
+        }
+        assert!(!Layer::DropMask.drawn(all));
     }
 
     #[test]

@@ -18,7 +18,7 @@ use crate::haze::check_depth;
 use crate::rain::streaks::RainStats;
 use crate::scene::boxes::BoxScene;
 use crate::scene::camera::Camera;
-use layers::{Layer, Layers};
+use layers::{Drawn, Layer, Layers};
 
 pub mod float;
 pub mod layers;
@@ -139,16 +139,9 @@ impl<'a> FrameOut<'a> {
         out
     }
 
-    /// Checks the buffers against a `cam` frame with or without haze, rain, snowfall and a snow
-    /// cover: every length, and the layers given exactly when they are drawn.
-    pub fn check(
-        &self,
-        cam: &Camera,
-        haze: bool,
-        rain: bool,
-        snow: bool,
-        snow_cover: bool,
-    ) -> Result<()> {
+    /// Checks the buffers against a `cam` frame running the passes `drawn`: every length, and
+    /// the layers given exactly when they are drawn.
+    pub fn check(&self, cam: &Camera, drawn: Drawn) -> Result<()> {
         let n = cam.pixels();
         let length = |name: &'static str, len: usize, expected: usize| Error::Length {
             param: Param { name, index: None },
@@ -162,7 +155,7 @@ impl<'a> FrameOut<'a> {
             return Err(length("depth_m", self.depth_m.len(), n));
         }
         for l in Layer::ALL {
-            let drawn = l.drawn(haze, rain, snow, snow_cover);
+            let drawn = l.drawn(drawn);
             let want = if drawn { n } else { 0 };
             let got = self.layers.get(l).map_or(0, |b| b.len());
             if got != want || self.layers.get(l).is_some() != drawn {
@@ -174,14 +167,11 @@ impl<'a> FrameOut<'a> {
 }
 
 impl FrameBuffers {
-    /// A `cam` frame's buffers (with each layer the passes draw, given `haze`, `rain` and
-    /// `snow`), sized after the frame is checked to fit, filled by a backend's `render_into`.
+    /// A `cam` frame's buffers (with each layer the passes `drawn` draw), sized after the frame
+    /// is checked to fit, filled by a backend's `render_into`.
     pub fn filled<E: From<Error>>(
         cam: &Camera,
-        haze: bool,
-        rain: bool,
-        snow: bool,
-        snow_cover: bool,
+        drawn: Drawn,
         render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
     ) -> std::result::Result<Self, E> {
         check_frame_size(cam)?;
@@ -193,7 +183,7 @@ impl FrameBuffers {
         );
         let mut layers: Layers<Vec<f32>> = Layers::default();
         for l in Layer::ALL {
-            if l.drawn(haze, rain, snow, snow_cover) {
+            if l.drawn(drawn) {
                 layers.set(l, try_filled_par(l.name(), n, 0.0f32)?);
             }
         }

@@ -3,8 +3,10 @@
 //! its airlight, the rain region, the drops' shading, what shelters them), in the core, once.
 
 use super::SceneRef;
-use super::scene::SceneLight;
+use super::scene::{SceneLight, SunLight};
+use crate::cloud::frame::{CloudField, CloudLight, CloudPass, VolumeView};
 use crate::error::Result;
+use crate::error::{Error, Param};
 use crate::haze::Haze;
 use crate::rain::drops::RainRegion;
 use crate::rain::streaks::{RainFrame, RainShading};
@@ -80,6 +82,8 @@ pub struct FrameRequest<'a> {
     pub ambient: Arc<AmbientMap>,
     /// The snow lying on the scene's surfaces ([`crate::snow::cover::accumulate`]); None: none.
     pub snow_cover: Option<&'a SnowCover>,
+    /// The clouds in the sky, made for this weather's sun; None: none.
+    pub clouds: Option<&'a Arc<CloudField>>,
 }
 
 /// What a frame's passes need, derived from its request.
@@ -100,6 +104,10 @@ pub struct FrameSetup {
     lens: Option<Defocus>,
     ground: bool,
     snow_cover: Option<SnowRender>,
+    clouds: Option<(Arc<CloudField>, CloudLight)>,
+    /// The sun on a box scene's surfaces: its direction and normal illuminance over E.
+    sun: Option<(Vec3, f32)>,
+    eye_m: glam::DVec3,
 }
 
 impl FrameRequest<'_> {
@@ -212,7 +220,44 @@ impl FrameSetup {
                 Some(SnowRender::photo(c, &req.camera, depth_m, units)?)
             }
         };
+        let sun = w.sun();
+        let clouds = match req.clouds {
+            Some(field) => {
+                let built_for = field.sun.as_ref().map(|(d, _)| d.as_vec3());
+                let wanted = sun.map(|(d, _)| d);
+                let same = match (built_for, wanted) {
+                    (None, None) => true,
+                    (Some(a), Some(b)) => (a - b).length() < 1e-4,
+                    _ => false,
+                };
+                if !same {
+                    return Err(Error::Invalid {
+                        param: Param {
+                            name: "clouds",
+                            index: None,
+                        },
+                        message: "the clouds' volumes were built for another sun than this \
+                                  weather's: build them for its sun (skyfall.clouds does)"
+                            .into(),
+                    });
+                }
+                let rel = sun.map_or(0.0, |(_, r)| r as f32);
+                let light = CloudLight {
+                    sun: units * rel,
+                    sky: units,
+                };
+                Some((Arc::clone(field), light))
+            }
+            None => None,
+        };
+        let sun = match req.scene {
+            SceneData::Boxes(_) => sun.map(|(d, r)| (d, r as f32)),
+            _ => None,
+        };
         Ok(FrameSetup {
+            clouds,
+            sun,
+            eye_m: req.camera.position_m,
             snow_cover,
             sky,
             haze,
@@ -229,11 +274,27 @@ impl FrameSetup {
         })
     }
 
-    /// How the scene is lit: the sky, the ambient-light map and the lights.
+    /// How the scene is lit: the sky, the ambient-light map, the lights, the sun and the
+    /// clouds.
     pub fn light(&self) -> SceneLight<'_> {
+        let clouds = self.clouds.as_ref().map(|(field, light)| CloudPass {
+            field,
+            light: *light,
+        });
+        let sun = self.sun.map(|(direction, relative)| SunLight {
+            direction,
+            relative,
+            clouds: self
+                .clouds
+                .as_ref()
+                .and_then(|(f, _)| f.sun.as_ref())
+                .map(|(_, v)| VolumeView::new(v, self.eye_m)),
+            eye: self.eye_m.as_vec3(),
+        });
         SceneLight::new(&self.sky, &self.ambient)
             .with_lights(&self.lights, self.sky_illuminance_lux)
             .with_snow(self.snow_cover.as_ref())
+            .with_sky_light(sun, clouds)
     }
 
     /// The rain the frame draws, when it draws streaks.

@@ -12,6 +12,7 @@
 //! [`SceneLight::lamp_light`]) are added unshadowed, so the skipped rays change a pixel by at
 //! most [`SHADOW_SKIP_RELATIVE`] of its radiance (and only where a skipped light is hidden).
 
+use crate::cloud::frame::{CloudPass, VolumeView, sun_share};
 use crate::scene::boxes::{BoxScene, surface_albedo, trace};
 use crate::scene::camera::Camera;
 use crate::scene::lights::Light;
@@ -41,7 +42,51 @@ pub struct SceneLight<'a> {
     pub sky_illuminance_lux: f32,
     /// The snow cover on the surfaces, when the frame has one.
     pub snow: Option<&'a crate::snow::cover::SnowRender>,
+    /// The sun's direct light on a box scene's surfaces, when the sky has a sun.
+    pub sun: Option<SunLight<'a>>,
+    /// The clouds in the sky, when the weather has them.
+    pub clouds: Option<CloudPass<'a>>,
 }
+
+/// The sun's direct light on the surfaces: a face of normal n at p receives
+/// (E_sun/E)·max(n·s, 0)·V·Γ relative to E, V = 0 where a box hides the sun, Γ the clouds'
+/// share of sunlight at p.
+#[derive(Debug, Clone, Copy)]
+pub struct SunLight<'a> {
+    /// Towards the sun, unit.
+    pub direction: Vec3,
+    /// The sun's normal illuminance over E.
+    pub relative: f32,
+    /// The clouds' Γ for the sun, seen from the camera, when there are clouds.
+    pub clouds: Option<VolumeView<'a>>,
+    /// The camera, for the clouds' camera-relative volume.
+    pub eye: Vec3,
+}
+
+impl SunLight<'_> {
+    /// The share of the sun's direct light reaching a face of normal `n` at `p`: 0 facing away
+    /// or behind a box, else the clouds' Γ there.
+    #[inline]
+    pub fn share(&self, boxes: &[crate::scene::boxes::SceneBox], p: Vec3, n: Vec3) -> f32 {
+        if n.dot(self.direction) <= 0.0 {
+            return 0.0;
+        }
+        let lifted = p + n * SHADOW_OFFSET_M;
+        if occluded_within(boxes, lifted, self.direction, SUN_RAY_M) {
+            return 0.0;
+        }
+        sun_share(self.clouds.as_ref(), p - self.eye)
+    }
+
+    /// The sun's illuminance relative to E on a face of normal `n` receiving `share` of it.
+    #[inline]
+    pub fn illuminance(&self, n: Vec3, share: f32) -> f32 {
+        self.relative * n.dot(self.direction).max(0.0) * share
+    }
+}
+
+/// How far a sun shadow ray looks for boxes, m (beyond every scene's boxes).
+const SUN_RAY_M: f32 = 1e5;
 
 impl<'a> SceneLight<'a> {
     /// The sky and its map, no lights.
@@ -52,6 +97,8 @@ impl<'a> SceneLight<'a> {
             lights: &[],
             sky_illuminance_lux: 1.0,
             snow: None,
+            sun: None,
+            clouds: None,
         }
     }
 
@@ -76,11 +123,35 @@ impl<'a> SceneLight<'a> {
         a: Vec3,
     ) -> Vec3 {
         let e = AmbientMap::channel(n).map_or(0.0, |c| self.ambient.sample(p)[c]);
-        let sky_lit = a * e;
+        let mut sky_lit = a * e;
+        if let Some(sun) = &self.sun {
+            sky_lit += a * sun.illuminance(n, sun.share(boxes, p, n));
+        }
         if self.lights.is_empty() {
             return sky_lit;
         }
         sky_lit + a * self.lamp_light(boxes, p, n, a, sky_lit)
+    }
+
+    /// The passes a frame lit so runs, with or without haze, rain and snowfall (its layers).
+    pub fn drawn(&self, haze: bool, rain: bool, snow: bool) -> crate::frame::layers::Drawn {
+        crate::frame::layers::Drawn {
+            haze,
+            rain,
+            snow,
+            snow_cover: self.snow.is_some(),
+            clouds: self.clouds.is_some(),
+            sun: self.sun.is_some(),
+        }
+    }
+
+    /// The same with the sun `sun` and the clouds `clouds`.
+    pub fn with_sky_light(self, sun: Option<SunLight<'a>>, clouds: Option<CloudPass<'a>>) -> Self {
+        SceneLight {
+            sun,
+            clouds,
+            ..self
+        }
     }
 
     /// The same with the snow cover `snow` on its surfaces.
@@ -179,25 +250,63 @@ pub fn shade_pixel(
     x: u32,
     y: u32,
 ) -> (Vec3, f32) {
+    let (c, d, _) = shade_pixel_sun(scene, cam, light, x, y);
+    (c, d)
+}
+
+/// [`shade_pixel`] with the share of the sun's direct light the pixel's surface receives
+/// (1 for sky pixels and without a sun).
+#[inline]
+pub fn shade_pixel_sun(
+    scene: &BoxScene,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    x: u32,
+    y: u32,
+) -> (Vec3, f32, f32) {
     let dir = cam.ray_direction(x, y);
     match trace(scene, cam.eye(), dir) {
         Some((t, n, albedo)) => {
             let p = cam.eye() + dir * t;
             let a = surface_albedo(albedo, n, p);
             let e = AmbientMap::channel(n).map_or(0.0, |c| light.ambient.sample(p)[c]);
-            let sky_lit = a * e;
+            let mut sky_lit = a * e;
+            let mut share = 1.0;
+            if let Some(sun) = &light.sun {
+                share = sun.share(&scene.boxes, p, n);
+                sky_lit += a * sun.illuminance(n, share);
+            }
             if light.lights.is_empty() {
-                return (sky_lit, t);
+                return (sky_lit, t, share);
             }
             (
                 sky_lit + a * light.lamp_light(&scene.boxes, p, n, a, sky_lit),
                 t,
+                share,
             )
         }
         None => (
             Vec3::splat(light.sky.sky_pixel(dir.normalize())),
             f32::INFINITY,
+            1.0,
         ),
+    }
+}
+
+/// The share of the sun's direct light on pixel (x, y)'s surface (1 for sky and without a
+/// sun), as [`shade_pixel_sun`] finds it, without its shading.
+pub fn sun_share_pixel(
+    scene: &BoxScene,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    x: u32,
+    y: u32,
+) -> f32 {
+    let Some(sun) = &light.sun else { return 1.0 };
+    let dir = cam.ray_direction(x, y);
+    match trace(scene, cam.eye(), dir) {
+        Some((t, n, _)) => sun.share(&scene.boxes, cam.eye() + dir * t, n),
+        None => 1.0,
     }
 }
 

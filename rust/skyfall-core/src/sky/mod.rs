@@ -13,10 +13,12 @@
 //!   sky's angular distribution (the low sky dims most), it does not change E.
 //! - [`illuminance`]: E on five axis-aligned normals (up, ±X, ±Z) at points among boxes.
 //! - [`ambient`]: those five values on a uniform 3D grid, interpolated trilinearly.
+//! - [`sun`]: the sun's direct normal illuminance under a clear sky.
 
 pub mod ambient;
 pub mod cie;
 pub mod illuminance;
 mod model;
+pub mod sun;
 
 pub use model::{Sky, cloud_base_m, sun_direction};

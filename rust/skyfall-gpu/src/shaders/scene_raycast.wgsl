@@ -33,6 +33,22 @@ override LIT: bool = true;
 @group(0) @binding(11) var<uniform> snow: SnowInfo;
 @group(0) @binding(12) var<storage, read> snow_cells: array<vec2<f32>>;
 @group(0) @binding(13) var<storage, read_write> snow_out: array<f32>;
+@group(0) @binding(14) var<uniform> sun: SunInfo;
+@group(0) @binding(15) var<storage, read> sun_gamma: array<f32>;
+@group(0) @binding(16) var<storage, read_write> sun_out: array<f32>;
+
+struct VolumeBox {
+    origin: vec4<f32>,   // corner relative to the camera (m), resolution R (w)
+    axes: array<vec4<f32>, 3>,
+}
+
+// The sun on the surfaces (skyfall_core::frame::scene::SunLight); its code runs in the LIT
+// pipelines only (a frame with a sun takes them).
+struct SunInfo {
+    dir: vec4<f32>,      // towards the sun, normal illuminance over E (w)
+    flags: vec4<u32>,    // sun on, clouds' volume present, sun_transmittance written
+    volume: VolumeBox,
+}
 
 // True in the pipelines for frames with a snow cover (skyfall_core::snow::cover::render).
 override SNOW: bool = false;
@@ -441,6 +457,55 @@ fn snow_coverage(dep: f32) -> f32 {
     return 0.0;
 }
 
+struct SunCell {
+    i: u32,
+    f: f32,
+}
+
+fn sun_cell(t: f32, n: u32) -> SunCell {
+    let x = clamp(t * f32(n) - 0.5, 0.0, f32(n - 1u));
+    let i = min(u32(floor(x)), n - 2u);
+    return SunCell(i, x - f32(i));
+}
+
+// skyfall_core::cloud::frame::VolumeView::sample over the clouds' Γ for the sun.
+fn sun_volume(p: vec3<f32>) -> f32 {
+    let v = sun.volume;
+    let n = u32(v.origin.w);
+    if n == 1u {
+        return sun_gamma[0];
+    }
+    let d = p - v.origin.xyz;
+    let a = sun_cell(dot(d, v.axes[0].xyz), n);
+    let b = sun_cell(dot(d, v.axes[1].xyz), n);
+    let c = sun_cell(dot(d, v.axes[2].xyz), n);
+    var pl: array<f32, 2>;
+    for (var u = 0u; u < 2u; u++) {
+        let r0 = ((a.i + u) * n + b.i) * n + c.i;
+        let r1 = ((a.i + u) * n + b.i + 1u) * n + c.i;
+        let lo = mix(sun_gamma[r0], sun_gamma[r0 + 1u], c.f);
+        let hi = mix(sun_gamma[r1], sun_gamma[r1 + 1u], c.f);
+        pl[u] = lo + (hi - lo) * b.f;
+    }
+    return pl[0] + (pl[1] - pl[0]) * a.f;
+}
+
+const SUN_RAY_M: f32 = 1e5;
+
+// SunLight::share: 0 facing away or behind a box, else the clouds' Γ at p.
+fn sun_share(p: vec3<f32>, n: vec3<f32>) -> f32 {
+    if dot(n, sun.dir.xyz) <= 0.0 {
+        return 0.0;
+    }
+    if occluded_within(p + n * SHADOW_OFFSET_M, sun.dir.xyz, SUN_RAY_M) {
+        return 0.0;
+    }
+    if sun.flags.y == 0u {
+        return 1.0;
+    }
+    return sun_volume(p - cam.pos.xyz);
+}
+
 // SceneLight::surface_radiance.
 fn surface_radiance(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> vec3<f32> {
     let ch = ambient_channel(n);
@@ -449,6 +514,9 @@ fn surface_radiance(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> vec3<f32> {
         e = ambient_sample(p, ch);
     }
     var c = a * e;
+    if LIT && sun.flags.x != 0u {
+        c = c + a * (sun.dir.w * max(dot(n, sun.dir.xyz), 0.0) * sun_share(p, n));
+    }
     if LIT && lamps.counts.x != 0u {
         c = c + a * lamp_light(p, n, a, c);
     }
@@ -525,6 +593,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             found = true;
         }
         snow_out[i] = sd;
+        if LIT && sun.flags.z != 0u {
+            // SceneLight's sun_share_pixel: the share on the surface under the cover.
+            var share = 1.0;
+            if hit {
+                share = sun_share(origin + dir * best_t, best_n);
+            }
+            sun_out[i] = share;
+        }
         if found {
             rgb[3u * i] = sc.x;
             rgb[3u * i + 1u] = sc.y;
@@ -544,6 +620,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             e = ambient_sample(p, ch);
         }
         c = a * e;
+        var share = 1.0;
+        if LIT && sun.flags.x != 0u {
+            share = sun_share(p, best_n);
+            c = c + a * (sun.dir.w * max(dot(best_n, sun.dir.xyz), 0.0) * share);
+        }
+        if LIT && sun.flags.z != 0u && !SNOW {
+            sun_out[i] = share;
+        }
         if LIT && lamps.counts.x != 0u {
             c = c + a * lamp_light(p, best_n, a, c);
         }
@@ -551,6 +635,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else {
         c = vec3<f32>(sky.e_scale.y * relative_to_zenith(normalize(dir)));
         d = infinity();
+        if LIT && sun.flags.z != 0u && !SNOW {
+            sun_out[i] = 1.0;
+        }
     }
     rgb[3u * i] = c.x;
     rgb[3u * i + 1u] = c.y;

@@ -24,6 +24,7 @@ fn weather(rate: f64, wind: [f64; 3]) -> Weather {
         sky: crate::weather::SkySpec::Overcast,
         sun_deg: None,
         cloud_base_m: None,
+        sun_illuminance_lux: None,
     }
 }
 

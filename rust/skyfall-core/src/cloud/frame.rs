@@ -1,0 +1,607 @@
+//! Clouds in a frame: the cloud pass and the sun's light through the clouds.
+//!
+//! [`CloudField`] is a cloud made ready for frames under one sky: its attenuation volume Γ for
+//! the sun (when the sky has one) and a second for the zenith, which stands for the sky's light
+//! from above. Each frame, [`CloudSplats::prepare`] turns the particles into camera-facing
+//! Gaussian splats, sorted far to near and binned to tiles; [`CloudSplats::apply_row`]
+//! composites them over a row, back to front, E_k = S_k + T_k·E_{k−1} (Harris' rendering
+//! recurrence, with T_k = e^(−τ_k(ρ)) for the column τ_k(ρ) = τ_k e^(−ρ²/r_k²) the ray passes
+//! through at distance ρ from particle k's centre), with
+//!
+//!   S_k = α_k a_k ((E_sun/E) (π Γ_sun(x) p_HG(cos θ) + D(Γ_sun(x)) − Γ_sun(x))
+//!                  + L_sky D(Γ_zenith(x))),   α_k = 1 − T_k,
+//!
+//! in the frame's relative units (a white surface under the open sky is 1): x the point of the
+//! ray nearest the centre, read trilinearly from the volumes per fragment, θ the scattering
+//! angle (cos θ = view direction · sun direction), p_HG the Henyey–Greenstein phase with the
+//! droplets' g, L_sky the open sky's light (1 in relative units, times a photo's units). The
+//! first term is the sun's single scattering (the paper's); D ([`diffuse_share`]) is the
+//! two-stream transmission of the column above x towards its light, which stands for the light
+//! that reaches x after scattering on the way: the sun's (less its direct beam) and the sky's,
+//! both scattered towards the viewer as from an isotropic field. That diffuse part is an
+//! approximation of multiple scattering that has not been measured against a multiple-scattering
+//! reference (a Monte Carlo path tracer); without it a cloud more than a few optical depths
+//! thick renders black.
+//!
+//! Everything per fragment is f32 relative to the camera, in the order the GPU pass
+//! (`skyfall-gpu`'s `cloud.wgsl`) computes it.
+
+use glam::{DVec3, Vec3};
+
+use super::optics::henyey_greenstein;
+use super::volume::{AttenuationVolume, VolumeBox};
+use super::{CUTOFF_RADII, Cloud};
+use crate::error::{Error, Result};
+use crate::haze::exp_neg;
+use crate::scene::camera::Camera;
+
+/// Side of the square tiles the splats are binned to, px.
+pub const TILE_PX: u32 = 16;
+
+/// Splats in one frame at most (binned entries): 64 M, 256 MB of indices.
+const MAX_ENTRIES: usize = 1 << 26;
+
+/// A cloud ready for frames under one sky.
+#[derive(Debug, Clone)]
+pub struct CloudField {
+    /// The particles.
+    pub cloud: Cloud,
+    /// Towards the sun (unit) and Γ for it, when the sky has a sun.
+    pub sun: Option<(DVec3, AttenuationVolume)>,
+    /// Γ for light from the zenith: the share of the sky's light from above.
+    pub zenith: AttenuationVolume,
+}
+
+impl CloudField {
+    /// `cloud` under a sky with the sun towards `sun` (None: no sun), its volumes at
+    /// `resolution`³.
+    pub fn new(cloud: Cloud, sun: Option<[f64; 3]>, resolution: usize) -> Result<Self> {
+        let sun = match sun {
+            Some(s) => {
+                let d = super::sun_direction(s)?;
+                let v = AttenuationVolume::build(&cloud, d.to_array(), resolution)?;
+                Some((d, v))
+            }
+            None => None,
+        };
+        let zenith = AttenuationVolume::build(&cloud, [0.0, 1.0, 0.0], resolution)?;
+        Ok(CloudField { cloud, sun, zenith })
+    }
+}
+
+/// A volume as a frame samples it: its values and its box relative to the camera, f32.
+#[derive(Debug, Clone, Copy)]
+pub struct VolumeView<'a> {
+    /// Γ, R³ ([`AttenuationVolume`]'s layout).
+    pub gamma: &'a [f32],
+    /// R.
+    pub resolution: usize,
+    /// The box's corner relative to the camera, m.
+    pub origin_rel: Vec3,
+    /// Each edge over its squared length, 1/m: t_k = (p − origin)·axes[k].
+    pub axes: [Vec3; 3],
+}
+
+impl<'a> VolumeView<'a> {
+    /// `v` seen from a camera at `eye_m`.
+    pub fn new(v: &'a AttenuationVolume, eye_m: DVec3) -> Self {
+        let VolumeBox { origin, edges } = v.grid;
+        VolumeView {
+            gamma: &v.gamma,
+            resolution: v.resolution,
+            origin_rel: (origin - eye_m).as_vec3(),
+            axes: edges.map(|e| (e / e.length_squared()).as_vec3()),
+        }
+    }
+
+    /// Trilinear Γ at `p` (relative to the camera), clamped to the box's faces (as
+    /// [`super::volume::sample`]).
+    #[inline]
+    pub fn sample(&self, p: Vec3) -> f32 {
+        let n = self.resolution;
+        if n == 1 {
+            return self.gamma[0];
+        }
+        let d = p - self.origin_rel;
+        let top = (n - 1) as f32;
+        let at = |t: f32| {
+            let x = (t * n as f32 - 0.5).clamp(0.0, top);
+            let i = (x.floor() as usize).min(n - 2);
+            (i, x - i as f32)
+        };
+        let (i, fu) = at(d.dot(self.axes[0]));
+        let (j, fv) = at(d.dot(self.axes[1]));
+        let (k, fw) = at(d.dot(self.axes[2]));
+        let g = |a: usize, b: usize, c: usize| self.gamma[((i + a) * n + j + b) * n + k + c];
+        let lerp = |a: f32, b: f32, f: f32| a + (b - a) * f;
+        let plane = |a: usize| {
+            lerp(
+                lerp(g(a, 0, 0), g(a, 0, 1), fw),
+                lerp(g(a, 1, 0), g(a, 1, 1), fw),
+                fv,
+            )
+        };
+        lerp(plane(0), plane(1), fu)
+    }
+}
+
+/// How a frame lights its clouds, relative units (a white surface under the open sky is 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CloudLight {
+    /// The sun's normal illuminance over E, per channel (a photo's units included); zero
+    /// without a sun.
+    pub sun: Vec3,
+    /// The open sky's light L_sky, per channel.
+    pub sky: Vec3,
+}
+
+/// The clouds as one frame draws them: the pass's inputs.
+#[derive(Debug, Clone, Copy)]
+pub struct CloudPass<'a> {
+    /// The cloud and its volumes.
+    pub field: &'a CloudField,
+    /// Their light.
+    pub light: CloudLight,
+}
+
+/// One particle as the frame draws it (f32, relative to the camera).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Splat {
+    /// Centre relative to the camera, m.
+    pub centre: Vec3,
+    /// 1/e radius, m.
+    pub radius_m: f32,
+    /// Optical depth through the centre.
+    pub tau: f32,
+    /// Single-scattering albedo.
+    pub albedo: f32,
+}
+
+impl Splat {
+    /// The GPU's packing: centre, radius, τ, albedo, two pads.
+    pub fn packed(&self) -> [f32; 8] {
+        let c = self.centre;
+        [
+            c.x,
+            c.y,
+            c.z,
+            self.radius_m,
+            self.tau,
+            self.albedo,
+            0.0,
+            0.0,
+        ]
+    }
+}
+
+/// A frame's splats: far to near, binned to [`TILE_PX`] tiles.
+#[derive(Debug, Clone)]
+pub struct CloudSplats<'a> {
+    /// Far to near.
+    pub splats: Vec<Splat>,
+    /// Tiles across.
+    pub tiles_x: u32,
+    /// Per tile (row-major), the start of its run in `indices`; one more at the end.
+    pub offsets: Vec<u32>,
+    /// Splat indices per tile, far to near within each.
+    pub indices: Vec<u32>,
+    /// The sun's Γ, seen from the camera.
+    pub sun: Option<(Vec3, VolumeView<'a>)>,
+    /// The zenith's Γ, seen from the camera.
+    pub zenith: VolumeView<'a>,
+    /// The light.
+    pub light: CloudLight,
+    /// Henyey–Greenstein asymmetry.
+    pub g: f32,
+}
+
+/// A splat's pixel box in `cam` (inclusive), or None when it lies wholly behind the camera or
+/// off the frame. A cube around the support is projected (its image holds the sphere's, as
+/// long as it lies in front); a cube reaching behind the camera takes the whole frame.
+fn pixel_box(cam: &Camera, centre: Vec3, support: f32) -> Option<[u32; 4]> {
+    let (w, h) = (cam.width as f32, cam.height as f32);
+    let to_cam = cam.rotation.transpose();
+    let c = to_cam * centre;
+    if c.z - support * 3f32.sqrt() >= 0.0 {
+        return None; // wholly behind (camera space looks down −z)
+    }
+    let full = [0, 0, cam.width - 1, cam.height - 1];
+    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+    for k in 0..8 {
+        let o = Vec3::new(
+            if k & 1 == 0 { -support } else { support },
+            if k & 2 == 0 { -support } else { support },
+            if k & 4 == 0 { -support } else { support },
+        );
+        let p = c + to_cam * o;
+        if p.z > -1e-3 {
+            return Some(full);
+        }
+        let x = cam.cx + cam.fx * p.x / -p.z;
+        let y = cam.cy - cam.fy * p.y / -p.z;
+        (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
+    }
+    if x1 < 0.0 || y1 < 0.0 || x0 >= w || y0 >= h {
+        return None;
+    }
+    let clampx = |v: f32| v.clamp(0.0, w - 1.0) as u32;
+    let clampy = |v: f32| v.clamp(0.0, h - 1.0) as u32;
+    Some([clampx(x0), clampy(y0), clampx(x1), clampy(y1)])
+}
+
+impl<'a> CloudSplats<'a> {
+    /// The splats of `pass` in `cam`'s frame.
+    pub fn prepare(pass: &CloudPass<'a>, cam: &Camera) -> Result<Self> {
+        let cloud = &pass.field.cloud;
+        let eye = cam.position_m;
+        let mut order: Vec<(f32, u32, Splat)> = Vec::with_capacity(cloud.len());
+        for i in 0..cloud.len() {
+            let centre = (DVec3::from_array(cloud.positions_m[i]) - eye).as_vec3();
+            order.push((
+                centre.length(),
+                i as u32,
+                Splat {
+                    centre,
+                    radius_m: cloud.radii_m[i] as f32,
+                    tau: cloud.optical_depths[i] as f32,
+                    albedo: cloud.albedos[i] as f32,
+                },
+            ));
+        }
+        // Far to near; ties by index, so the order is the same whatever the platform.
+        order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let tiles_x = cam.width.div_ceil(TILE_PX);
+        let tiles_y = cam.height.div_ceil(TILE_PX);
+        let n_tiles = (tiles_x * tiles_y) as usize;
+        let mut boxes = Vec::with_capacity(order.len());
+        let mut splats = Vec::with_capacity(order.len());
+        let mut counts = vec![0usize; n_tiles + 1];
+        for (_, _, s) in &order {
+            if let Some(b) = pixel_box(cam, s.centre, s.radius_m * CUTOFF_RADII as f32) {
+                let [tx0, ty0, tx1, ty1] = b.map(|v| v / TILE_PX);
+                for ty in ty0..=ty1 {
+                    for tx in tx0..=tx1 {
+                        counts[(ty * tiles_x + tx) as usize + 1] += 1;
+                    }
+                }
+                boxes.push([tx0, ty0, tx1, ty1]);
+                splats.push(*s);
+            }
+        }
+        for t in 0..n_tiles {
+            counts[t + 1] += counts[t];
+        }
+        if counts[n_tiles] > MAX_ENTRIES {
+            return Err(Error::too_large(
+                "the clouds' tile lists".to_string(),
+                counts[n_tiles] as u128 * 4,
+                MAX_ENTRIES as u64 * 4,
+            ));
+        }
+        let mut fill = counts.clone();
+        let mut indices = vec![0u32; counts[n_tiles]];
+        for (k, [tx0, ty0, tx1, ty1]) in boxes.iter().enumerate() {
+            for ty in *ty0..=*ty1 {
+                for tx in *tx0..=*tx1 {
+                    let t = (ty * tiles_x + tx) as usize;
+                    indices[fill[t]] = k as u32;
+                    fill[t] += 1;
+                }
+            }
+        }
+        let field = pass.field;
+        Ok(CloudSplats {
+            splats,
+            tiles_x,
+            offsets: counts.iter().map(|&c| c as u32).collect(),
+            indices,
+            sun: field
+                .sun
+                .as_ref()
+                .map(|(d, v)| (d.as_vec3(), VolumeView::new(v, eye))),
+            zenith: VolumeView::new(&field.zenith, eye),
+            light: pass.light,
+            g: cloud.asymmetry_g as f32,
+        })
+    }
+
+    /// The sun's and the sky's radiance scattered at `x` (relative to the camera) towards a
+    /// viewer looking along `d` (unit), per unit of a_k α_k (see the module's notes).
+    #[inline]
+    fn source(&self, x: Vec3, d: Vec3) -> Vec3 {
+        let sky = self.light.sky * diffuse_share(self.zenith.sample(x), self.g);
+        match &self.sun {
+            Some((s, v)) => {
+                let direct = v.sample(x);
+                let phase = henyey_greenstein(f64::from(d.dot(*s)), f64::from(self.g)) as f32;
+                let diffuse = (diffuse_share(direct, self.g) - direct).max(0.0);
+                self.light.sun * (std::f32::consts::PI * phase * direct + diffuse) + sky
+            }
+            None => sky,
+        }
+    }
+
+    /// Composites the clouds over row `y` of `cam`'s frame: `rgb_row` (W·3) in place, behind
+    /// what `depth_row` (W, m along the axis) puts nearer; `alpha_row` (W) gets the clouds'
+    /// coverage when given.
+    pub fn apply_row(
+        &self,
+        cam: &Camera,
+        y: u32,
+        rgb_row: &mut [f32],
+        depth_row: &[f32],
+        mut alpha_row: Option<&mut [f32]>,
+    ) {
+        let ty = y / TILE_PX;
+        let back = cam.rotation.z_axis;
+        for (tx, cols) in
+            (0..self.tiles_x).map(|tx| (tx, tx * TILE_PX..((tx + 1) * TILE_PX).min(cam.width)))
+        {
+            let t = (ty * self.tiles_x + tx) as usize;
+            let list = &self.indices[self.offsets[t] as usize..self.offsets[t + 1] as usize];
+            if list.is_empty() {
+                if let Some(a) = alpha_row.as_deref_mut() {
+                    a[cols.start as usize..cols.end as usize].fill(0.0);
+                }
+                continue;
+            }
+            for x in cols {
+                let xi = x as usize;
+                let ray = cam.ray_direction(x, y);
+                let d = ray.normalize();
+                // Depth along the axis per metre along the ray.
+                let axial = -d.dot(back);
+                let depth = depth_row[xi];
+                let px = &mut rgb_row[3 * xi..3 * xi + 3];
+                let mut e = Vec3::from_slice(px);
+                let mut trans = 1.0f32;
+                for &k in list {
+                    let s = &self.splats[k as usize];
+                    let along = s.centre.dot(d);
+                    if along <= 0.0 || along * axial >= depth {
+                        continue;
+                    }
+                    let x_near = d * along;
+                    let rho2 = (s.centre - x_near).length_squared();
+                    let r2 = s.radius_m * s.radius_m;
+                    let cut = CUTOFF_RADII as f32;
+                    if rho2 >= cut * cut * r2 {
+                        continue;
+                    }
+                    let t_k = exp_neg(-s.tau * exp_neg(-rho2 / r2));
+                    let alpha = 1.0 - t_k;
+                    e = self.source(x_near, d) * (alpha * s.albedo) + e * t_k;
+                    trans *= t_k;
+                }
+                px.copy_from_slice(&e.to_array());
+                if let Some(a) = alpha_row.as_deref_mut() {
+                    a[xi] = 1.0 - trans;
+                }
+            }
+        }
+    }
+}
+
+/// The share of a diffuse field's flux that reaches a point below the column whose direct
+/// beam keeps `gamma`: the two-stream (Eddington) transmission of a conservative layer,
+/// 1/(1 + ¾(1 − g)τ), with τ = −ln Γ / (1 − g²) the column's optical depth (Γ keeps the share
+/// e^(−(1 − g²)τ), the δ-M direct beam).
+#[inline]
+pub fn diffuse_share(gamma: f32, g: f32) -> f32 {
+    let tau = -gamma.max(1e-30).ln() / (1.0 - g * g);
+    1.0 / (1.0 + 0.75 * (1.0 - g) * tau)
+}
+
+/// Γ of the sun at `p_rel` (relative to the camera), or 1 without a cloud: the clouds' share of
+/// the sun's light there.
+#[inline]
+pub fn sun_share(sun: Option<&VolumeView<'_>>, p_rel: Vec3) -> f32 {
+    sun.map_or(1.0, |v| v.sample(p_rel))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Mat3;
+
+    fn cam(w: u32, h: u32) -> Camera {
+        // Looking straight up from the origin.
+        let rot = Mat3::from_cols(Vec3::X, Vec3::Z, -Vec3::Y);
+        Camera::new(
+            w,
+            h,
+            [w as f32, w as f32, w as f32 / 2.0, h as f32 / 2.0],
+            DVec3::ZERO,
+            rot,
+        )
+        .unwrap()
+    }
+
+    fn one(tau: f64) -> Cloud {
+        Cloud::new(
+            vec![[0.0, 1000.0, 0.0]],
+            vec![50.0],
+            vec![tau],
+            vec![1.0],
+            0.86,
+        )
+        .unwrap()
+    }
+
+    fn render(
+        field: &CloudField,
+        light: CloudLight,
+        cam: &Camera,
+        bg: f32,
+    ) -> (Vec<f32>, Vec<f32>) {
+        let pass = CloudPass { field, light };
+        let s = CloudSplats::prepare(&pass, cam).unwrap();
+        let (w, h) = (cam.width as usize, cam.height as usize);
+        let mut rgb = vec![bg; 3 * w * h];
+        let depth = vec![f32::INFINITY; w * h];
+        let mut alpha = vec![-1.0; w * h];
+        for y in 0..h {
+            s.apply_row(
+                cam,
+                y as u32,
+                &mut rgb[3 * w * y..3 * w * (y + 1)],
+                &depth[w * y..w * (y + 1)],
+                Some(&mut alpha[w * y..w * (y + 1)]),
+            );
+        }
+        (rgb, alpha)
+    }
+
+    #[test]
+    fn one_particle_has_its_analytic_transmittance() {
+        // The column through the centre is τ: the centre pixel keeps e^(−τ) of the background,
+        // and with no light the cloud only dims it.
+        let c = cam(33, 33);
+        let field = CloudField::new(one(2.0), None, 16).unwrap();
+        let dark = CloudLight {
+            sun: Vec3::ZERO,
+            sky: Vec3::ZERO,
+        };
+        let (rgb, alpha) = render(&field, dark, &c, 1.0);
+        let mid = 16 * 33 + 16;
+        assert!(
+            (rgb[3 * mid] - (-2.0f32).exp()).abs() < 1e-3,
+            "{}",
+            rgb[3 * mid]
+        );
+        assert!((alpha[mid] - (1.0 - (-2.0f32).exp())).abs() < 1e-3);
+        // Off the centre by ρ the column is τ e^(−ρ²/r²): the pixel 5 columns right looks 5/33
+        // of the focal length off the axis.
+        let x = 21usize;
+        let u = (x as f32 + 0.5 - 16.5) / 33.0;
+        let d = Vec3::new(u, 1.0, 0.0).normalize();
+        let along = 1000.0 * d.y;
+        let rho2 = (Vec3::new(0.0, 1000.0, 0.0) - d * along).length_squared();
+        let want = (-2.0 * (-rho2 / 2500.0).exp()).exp();
+        let got = rgb[3 * (16 * 33 + x)];
+        assert!((got - want).abs() < 1e-3, "{got} vs {want}");
+        // Far off the particle: untouched, coverage 0.
+        assert_eq!(rgb[0], 1.0);
+        assert_eq!(alpha[0], 0.0);
+    }
+
+    #[test]
+    fn a_particle_above_shades_the_sky_light_of_one_below() {
+        // Lit by the sky alone (L = 1) over a black background, looking up through a particle
+        // at 1000 m and another at 1300 m: the lower one's direct light from above is cut by
+        // the upper one's G = e^(−(1 − a f) τ) (a particle reads none of its own G, as in
+        // Harris' recurrence), and the centre pixel is α_l D(Γ_l) + T_l α_u D(Γ_u).
+        let c = cam(17, 17);
+        let (tau_l, tau_u) = (1.5, 2.0);
+        let two = Cloud::new(
+            vec![[0.0, 1000.0, 0.0], [0.0, 1300.0, 0.0]],
+            vec![50.0, 50.0],
+            vec![tau_l, tau_u],
+            vec![1.0, 1.0],
+            0.86,
+        )
+        .unwrap();
+        let field = CloudField::new(two, None, 64).unwrap();
+        let g_l = field.zenith.sample(DVec3::new(0.0, 1000.0, 0.0));
+        let g_u = field.zenith.sample(DVec3::new(0.0, 1300.0, 0.0));
+        let (d_l, d_u) = (diffuse_share(g_l, 0.86), diffuse_share(g_u, 0.86));
+        let shade = (-(1.0 - 0.86 * 0.86) * tau_u).exp() as f32;
+        // Between Harris' value (none of its own G) and all of its own G too: the volume's
+        // slices blur the step at the centre over one slice.
+        let own = (-(1.0 - 0.86 * 0.86) * tau_l).exp() as f32;
+        assert!(g_l <= shade * 1.001 && g_l >= shade * own, "{g_l} vs {shade}");
+        assert!(g_u > 0.98, "{g_u}");
+        let sky = CloudLight {
+            sun: Vec3::ZERO,
+            sky: Vec3::ONE,
+        };
+        let (rgb, _) = render(&field, sky, &c, 0.0);
+        let mid = 8 * 17 + 8;
+        let (t_l, t_u) = ((-tau_l as f32).exp(), (-tau_u as f32).exp());
+        let want = (1.0 - t_l) * d_l + t_l * (1.0 - t_u) * d_u;
+        assert!(
+            (rgb[3 * mid] - want).abs() < 2e-3,
+            "{} vs {want}",
+            rgb[3 * mid]
+        );
+    }
+
+    #[test]
+    fn the_sun_lights_by_the_phase_function() {
+        // Sun at 90° to the view: S = α a (E_sun/E) (π Γ p_HG(0) + D(Γ) − Γ).
+        let c = cam(17, 17);
+        let tau = 0.5;
+        let field = CloudField::new(one(tau), Some([1.0, 0.0, 0.0]), 64).unwrap();
+        let light = CloudLight {
+            sun: Vec3::splat(10.0),
+            sky: Vec3::ZERO,
+        };
+        let (rgb, _) = render(&field, light, &c, 0.0);
+        let mid = 8 * 17 + 8;
+        let gamma = field
+            .sun
+            .as_ref()
+            .unwrap()
+            .1
+            .sample(DVec3::new(0.0, 1000.0, 0.0));
+        let p = henyey_greenstein(0.0, 0.86) as f32;
+        let diffuse = diffuse_share(gamma, 0.86) - gamma;
+        let want =
+            (1.0 - (-tau as f32).exp()) * 10.0 * (std::f32::consts::PI * p * gamma + diffuse);
+        assert!(
+            (rgb[3 * mid] - want).abs() < 1e-3 * want.max(1.0),
+            "{} vs {want}",
+            rgb[3 * mid]
+        );
+    }
+
+    #[test]
+    fn the_diffuse_share_is_the_two_stream_transmission() {
+        // Γ = 1 (no cloud above): all of it; τ = 10 at g = 0.86: 1/(1 + 0.75·0.14·10).
+        assert!((diffuse_share(1.0, 0.86) - 1.0).abs() < 1e-6);
+        let gamma = (-(1.0f32 - 0.86 * 0.86) * 10.0).exp();
+        assert!((diffuse_share(gamma, 0.86) - 1.0 / 2.05).abs() < 1e-4);
+        assert!(diffuse_share(0.0, 0.86) > 0.0 && diffuse_share(0.0, 0.86) < 0.05);
+    }
+
+    #[test]
+    fn nearer_surfaces_hide_the_clouds() {
+        let c = cam(9, 9);
+        let field = CloudField::new(one(3.0), None, 8).unwrap();
+        let pass = CloudPass {
+            field: &field,
+            light: CloudLight {
+                sun: Vec3::ZERO,
+                sky: Vec3::ONE,
+            },
+        };
+        let s = CloudSplats::prepare(&pass, &c).unwrap();
+        let mut rgb = vec![0.25f32; 27];
+        let mut alpha = vec![0.0f32; 9];
+        s.apply_row(&c, 4, &mut rgb, &[10.0; 9], Some(&mut alpha));
+        assert!(rgb.iter().all(|&v| v == 0.25) && alpha.iter().all(|&a| a == 0.0));
+    }
+
+    #[test]
+    fn splats_behind_the_camera_are_dropped() {
+        let c = cam(9, 9);
+        let below = Cloud::new(
+            vec![[0.0, -1000.0, 0.0]],
+            vec![50.0],
+            vec![1.0],
+            vec![1.0],
+            0.86,
+        )
+        .unwrap();
+        let field = CloudField::new(below, None, 8).unwrap();
+        let pass = CloudPass {
+            field: &field,
+            light: CloudLight {
+                sun: Vec3::ZERO,
+                sky: Vec3::ONE,
+            },
+        };
+        let s = CloudSplats::prepare(&pass, &c).unwrap();
+        assert!(s.splats.is_empty() && s.indices.is_empty());
+    }
+}

@@ -1,0 +1,99 @@
+//! The cloud pass: the clouds' splats composited over the frame (`shaders/cloud.wgsl`), after
+//! the scene and before the haze. The splats are sorted and binned on the CPU
+//! ([`CloudSplats::prepare`], as the particles are), the volumes uploaded as they are.
+
+use crate::context::{GpuContext, GpuError};
+use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
+use crate::uniforms::{CameraUniform, CloudUniform, VolumeUniform};
+use skyfall_core::cloud::frame::{CloudSplats, TILE_PX};
+use skyfall_core::frame::layers::Layer;
+
+const SOURCE: &str = include_str!("shaders/cloud.wgsl");
+
+/// The compiled pass.
+#[derive(Debug)]
+pub struct CloudPass(ComputePass);
+
+impl FramePass for CloudPass {
+    /// The frame's splats.
+    type Input<'i> = &'i CloudSplats<'i>;
+
+    fn new(ctx: &GpuContext) -> Self {
+        use Binding::*;
+        CloudPass(ComputePass::new(
+            ctx,
+            "cloud",
+            SOURCE,
+            &[
+                Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite,
+                ReadOnly, ReadWrite,
+            ],
+        ))
+    }
+
+    /// rgb in place, `cloud_alpha` written when the frame has the layer.
+    fn encode(
+        &self,
+        f: &mut FrameEncoder<'_>,
+        t: &FrameTargets<'_>,
+        s: &CloudSplats<'_>,
+    ) -> Result<(), GpuError> {
+        f.ctx
+            .check_buffer("the clouds' tile lists", (s.indices.len() * 4) as u64)?;
+        f.ctx
+            .check_buffer("the clouds' volume", (s.zenith.gamma.len() * 4) as u64)?;
+        let mut packed: Vec<[f32; 8]> = s.splats.iter().map(|p| p.packed()).collect();
+        if packed.is_empty() {
+            packed.push([0.0; 8]); // a binding may not be empty; the tile lists are empty
+        }
+        let mut indices = s.indices.clone();
+        if indices.is_empty() {
+            indices.push(0);
+        }
+        let (sun_dir, sun_view) = match &s.sun {
+            Some((d, v)) => ([d.x, d.y, d.z, s.g], Some(v)),
+            None => ([0.0, 1.0, 0.0, s.g], None),
+        };
+        let l = s.light;
+        let block = CloudUniform {
+            counts: [
+                s.tiles_x,
+                TILE_PX,
+                u32::from(sun_view.is_some()),
+                u32::from(t.layers.get(Layer::CloudAlpha).is_some()),
+            ],
+            sun_g: sun_dir,
+            sun_light: [l.sun.x, l.sun.y, l.sun.z, 0.0],
+            sky_light: [l.sky.x, l.sky.y, l.sky.z, 0.0],
+            sun_volume: VolumeUniform::new(sun_view),
+            zenith_volume: VolumeUniform::new(Some(&s.zenith)),
+        };
+        let dummy = f.target("cloud_dummy", 1);
+        let alpha = match t.layers.get(Layer::CloudAlpha) {
+            Some(a) => a,
+            None => &dummy,
+        };
+        let buffers = [
+            f.uniform("camera", &CameraUniform::new(f.cam)),
+            f.uniform("cloud", &block),
+            f.upload("cloud_splats", &packed),
+            f.upload("cloud_offsets", &s.offsets),
+            f.upload("cloud_indices", &indices),
+            match sun_view {
+                Some(v) => f.upload("cloud_sun_gamma", v.gamma),
+                None => f.upload("cloud_sun_gamma", &[1.0f32]),
+            },
+            f.upload("cloud_zenith_gamma", s.zenith.gamma),
+        ];
+        let [cam, info, splats, offsets, idx, sun_g, zen_g] = &buffers;
+        f.dispatch(
+            &self.0,
+            &[
+                cam, info, splats, offsets, idx, sun_g, zen_g, t.rgb, t.depth, alpha,
+            ],
+        );
+        f.hold(buffers);
+        f.hold([dummy]);
+        Ok(())
+    }
+}

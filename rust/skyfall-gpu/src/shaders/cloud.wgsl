@@ -1,0 +1,159 @@
+// The cloud pass: camera-facing Gaussian splats composited back to front over the frame,
+// E_k = S_k + T_k E_{k-1}, each fragment lit from the attenuation volumes (trilinear).
+// CPU reference: skyfall_core::cloud::frame (CloudSplats::apply_row, VolumeView::sample),
+// kept line-for-line comparable. Prepended with common.wgsl.
+
+struct VolumeBox {
+    origin: vec4<f32>,   // corner relative to the camera (m), resolution R (w)
+    axes: array<vec4<f32>, 3>,
+}
+
+struct CloudInfo {
+    counts: vec4<u32>,   // tiles across, tile side (px), sun present, cloud_alpha written
+    sun_g: vec4<f32>,    // towards the sun, g
+    sun_light: vec4<f32>,
+    sky_light: vec4<f32>,
+    sun_volume: VolumeBox,
+    zenith_volume: VolumeBox,
+}
+
+@group(0) @binding(0) var<uniform> cam: Camera;
+@group(0) @binding(1) var<uniform> info: CloudInfo;
+@group(0) @binding(2) var<storage, read> splats: array<vec4<f32>>;   // 2 per splat
+@group(0) @binding(3) var<storage, read> offsets: array<u32>;
+@group(0) @binding(4) var<storage, read> indices: array<u32>;
+@group(0) @binding(5) var<storage, read> sun_gamma: array<f32>;
+@group(0) @binding(6) var<storage, read> zenith_gamma: array<f32>;
+@group(0) @binding(7) var<storage, read_write> rgb: array<f32>;
+@group(0) @binding(8) var<storage, read> depth: array<f32>;
+@group(0) @binding(9) var<storage, read_write> alpha_out: array<f32>;
+
+const CUTOFF_RADII: f32 = 2.5;
+const PI: f32 = 3.141592653589793;
+
+struct Cell {
+    i: u32,
+    f: f32,
+}
+
+fn cell(t: f32, n: u32) -> Cell {
+    let x = clamp(t * f32(n) - 0.5, 0.0, f32(n - 1u));
+    let i = min(u32(floor(x)), n - 2u);
+    return Cell(i, x - f32(i));
+}
+
+// VolumeView::sample over the sun's volume.
+fn sample_sun(p: vec3<f32>) -> f32 {
+    let v = info.sun_volume;
+    let n = u32(v.origin.w);
+    if n == 1u {
+        return sun_gamma[0];
+    }
+    let d = p - v.origin.xyz;
+    let a = cell(dot(d, v.axes[0].xyz), n);
+    let b = cell(dot(d, v.axes[1].xyz), n);
+    let c = cell(dot(d, v.axes[2].xyz), n);
+    var pl: array<f32, 2>;
+    for (var u = 0u; u < 2u; u++) {
+        let r0 = ((a.i + u) * n + b.i) * n + c.i;
+        let r1 = ((a.i + u) * n + b.i + 1u) * n + c.i;
+        let lo = mix(sun_gamma[r0], sun_gamma[r0 + 1u], c.f);
+        let hi = mix(sun_gamma[r1], sun_gamma[r1 + 1u], c.f);
+        pl[u] = lo + (hi - lo) * b.f;
+    }
+    return pl[0] + (pl[1] - pl[0]) * a.f;
+}
+
+// The same over the zenith's volume.
+fn sample_zenith(p: vec3<f32>) -> f32 {
+    let v = info.zenith_volume;
+    let n = u32(v.origin.w);
+    if n == 1u {
+        return zenith_gamma[0];
+    }
+    let d = p - v.origin.xyz;
+    let a = cell(dot(d, v.axes[0].xyz), n);
+    let b = cell(dot(d, v.axes[1].xyz), n);
+    let c = cell(dot(d, v.axes[2].xyz), n);
+    var pl: array<f32, 2>;
+    for (var u = 0u; u < 2u; u++) {
+        let r0 = ((a.i + u) * n + b.i) * n + c.i;
+        let r1 = ((a.i + u) * n + b.i + 1u) * n + c.i;
+        let lo = mix(zenith_gamma[r0], zenith_gamma[r0 + 1u], c.f);
+        let hi = mix(zenith_gamma[r1], zenith_gamma[r1 + 1u], c.f);
+        pl[u] = lo + (hi - lo) * b.f;
+    }
+    return pl[0] + (pl[1] - pl[0]) * a.f;
+}
+
+fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
+    let d = 1.0 + g * g - 2.0 * g * cos_theta;
+    return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
+}
+
+// skyfall_core::cloud::frame::diffuse_share: the two-stream transmission of the column.
+fn diffuse_share(gamma: f32, g: f32) -> f32 {
+    let tau = -log(max(gamma, 1e-30)) / (1.0 - g * g);
+    return 1.0 / (1.0 + 0.75 * (1.0 - g) * tau);
+}
+
+// CloudSplats::source.
+fn source(x: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    let g = info.sun_g.w;
+    let sky = info.sky_light.xyz * diffuse_share(sample_zenith(x), g);
+    if info.counts.z == 0u {
+        return sky;
+    }
+    let direct = sample_sun(x);
+    let phase = henyey_greenstein(dot(d, info.sun_g.xyz), g);
+    let diffuse = max(diffuse_share(direct, g) - direct, 0.0);
+    return info.sun_light.xyz * (PI * phase * direct + diffuse) + sky;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = cam.size.x;
+    if gid.x >= w || gid.y >= cam.size.y {
+        return;
+    }
+    let i = gid.y * w + gid.x;
+    let tile = (gid.y / info.counts.y) * info.counts.x + gid.x / info.counts.y;
+    let start = offsets[tile];
+    let end = offsets[tile + 1u];
+    var alpha = 0.0;
+    if end > start {
+        let d = normalize(ray_direction(cam, gid.x, gid.y));
+        let axial = -dot(d, cam.back.xyz);
+        let dep = depth[i];
+        var e = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);
+        var trans = 1.0;
+        for (var j = start; j < end; j++) {
+            let k = indices[j];
+            let s0 = splats[2u * k];
+            let s1 = splats[2u * k + 1u];
+            let centre = s0.xyz;
+            let along = dot(centre, d);
+            if along <= 0.0 || along * axial >= dep {
+                continue;
+            }
+            let x_near = d * along;
+            let off = centre - x_near;
+            let rho2 = dot(off, off);
+            let r2 = s0.w * s0.w;
+            if rho2 >= CUTOFF_RADII * CUTOFF_RADII * r2 {
+                continue;
+            }
+            let t_k = exp(-s1.x * exp(-rho2 / r2));
+            let a = 1.0 - t_k;
+            e = source(x_near, d) * (a * s1.y) + e * t_k;
+            trans = trans * t_k;
+        }
+        rgb[3u * i] = e.x;
+        rgb[3u * i + 1u] = e.y;
+        rgb[3u * i + 2u] = e.z;
+        alpha = 1.0 - trans;
+    }
+    if info.counts.w != 0u {
+        alpha_out[i] = alpha;
+    }
+}
