@@ -37,7 +37,11 @@ mod tests {
         // Kasten & Young's table: 1.0 at the zenith, 38.09 at the horizon (their formula is
         // within 0.5 % of it), within 0.5 % of the secant above 30°.
         assert!((air_mass(90.0) - 1.0).abs() < 1e-3);
-        assert!((air_mass(0.0) / 38.09 - 1.0).abs() < 5e-3, "{}", air_mass(0.0));
+        assert!(
+            (air_mass(0.0) / 38.09 - 1.0).abs() < 5e-3,
+            "{}",
+            air_mass(0.0)
+        );
         for h in [30.0f64, 45.0, 60.0] {
             let sec = 1.0 / h.to_radians().sin();
             assert!((air_mass(h) / sec - 1.0).abs() < 5e-3, "{h}");
