@@ -5,6 +5,8 @@ test_render.py, and the frame hashes of the demo held by test_golden.py)."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import math
 from collections import Counter
 from collections.abc import Iterator
@@ -96,8 +98,10 @@ def test_layers_are_the_cores() -> None:
     glass = windshield.Windshield(5.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
     snowy = Weather(rain_rate_mm_h=5.0, snow_rate_mm_h=0.5, visibility_m=500.0, windshield=glass)
     cover = snow.accumulate(scenes.street(), snowy, duration_s=600.0, dt_s=600.0, resolution_m=4.0)
-    f = r.render(scenes.street(), snowy, snow_cover=cover)
+    sunny = dataclasses.replace(snowy, sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=200.0, clouds="cumulus")
+    f = r.render(scenes.street(), sunny, snow_cover=cover)
     assert list(f.layers) == list(_core.LAYERS)
+    assert "cloud_alpha" not in r.render(scenes.street(), snowy, snow_cover=cover).layers
     rain_only = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, visibility_m=500.0))
     assert list(rain_only.layers) == ["transmittance", "rain_alpha", "rain_depth_m"]
     snow_only = r.render(scenes.street(), Weather(snow_rate_mm_h=0.5))

@@ -45,7 +45,17 @@ def test_drawn_layers_are_the_frames_own_arrays(renderer):
     glass = Windshield(20.0, glass_width_mm=200.0, glass_height_mm=150.0, wipers=0)
     glass.step(0.5)
     cover = snow.accumulate(scenes.street(), Weather(snow_rate_mm_h=2.0), duration_s=600.0, dt_s=600.0, resolution_m=4.0)
-    frame = renderer.render(scenes.street(), Weather(rain_rate_mm_h=25.0, snow_rate_mm_h=0.5, visibility_m=300.0, windshield=glass), snow_cover=cover)
+    weather = Weather(
+        rain_rate_mm_h=25.0,
+        snow_rate_mm_h=0.5,
+        visibility_m=300.0,
+        windshield=glass,
+        sky=12,
+        sun_elevation_deg=30.0,
+        sun_azimuth_deg=200.0,
+        clouds="cumulus",
+    )
+    frame = renderer.render(scenes.street(), weather, snow_cover=cover)
     assert set(frame.layers) == set(_core.LAYERS)
     for name in _core.LAYERS:
         assert frame.layer(name) is frame.layers[name]
@@ -70,6 +80,12 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
     assert empty.any() and (~empty).any()
     clear_of_flakes = snowy.layers["snow_alpha"] == 0.0
     assert clear_of_flakes.any() and (~clear_of_flakes).any()
+    # A cumulus 5 km ahead under a sun: sky pixels off the cloud are the cloud pass's and the
+    # sun's untouched values.
+    sunny = renderer.render(scenes.street(), Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=200.0, clouds="cumulus"))
+    cloudless = sunny.layers["cloud_alpha"] == 0.0
+    sky_px = np.isinf(sunny.depth_m)
+    assert cloudless.any() and (~cloudless).any() and sky_px.any()
     for name in _core.LAYERS:
         layer = clear.layer(name)
         assert layer.shape == (H, W) and layer.dtype == np.float32 and not layer.flags.writeable
@@ -79,6 +95,10 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
             untouched = snowy.layers[name][clear_of_flakes]
         elif name == "snow_depth_m":
             untouched = cover
+        elif name == "cloud_alpha":
+            untouched = sunny.layers[name][cloudless]
+        elif name == "sun_transmittance":
+            untouched = sunny.layers[name][sky_px]
         else:
             untouched = rain.layers[name][empty]
         assert len(np.unique(layer)) == 1

@@ -20,6 +20,7 @@ in tau, but never above 1.
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import dataclass
 from functools import lru_cache
@@ -35,7 +36,7 @@ __all__ = [
     "FRAME_RESOLUTION",
     "KINDS",
     "PRESETS",
-    "Preset",
+    "Part",
     "frame_field",
     "preset",
     "AttenuationVolume",
@@ -292,28 +293,39 @@ def attenuation_volume(cloud: Cloud, sun_direction: Any, *, resolution: int = 12
     return AttenuationVolume(gamma, world_from_volume, direction)
 
 
-class Preset(NamedTuple):
-    """A preset cloud: :func:`particles` arguments and where the cloud is moved to."""
+class Part(NamedTuple):
+    """One part of a preset cloud: :func:`particles` arguments, where the cloud is moved to and
+    the half-space it is kept in (particles with z below ``keep_z_below_m``)."""
 
     kind: str
     n_particles: int
     extent_m: float
     altitude_m: float
     offset_m: tuple[float, float, float]
+    seed: int
+    keep_z_below_m: float = math.inf
 
 
 PRESETS: Final = {
-    "broken": Preset("broken", 6000, 8000.0, 1200.0, (0.0, 0.0, -1000.0)),
-    "cumulus": Preset("cumulus", 6000, 1500.0, 1200.0, (0.0, 0.0, -5000.0)),
-    "stratocumulus": Preset("stratocumulus", 8000, 10000.0, 1000.0, (0.0, 0.0, -2000.0)),
+    "broken": (
+        Part("broken", 24000, 2000.0, 1000.0, (-200.0, 0.0, 300.0), 5),
+        Part("cumulus", 3000, 1400.0, 1000.0, (-1200.0, 0.0, -3500.0), 10),
+        Part("cumulus", 3000, 1600.0, 1000.0, (900.0, 0.0, -5000.0), 11),
+        Part("cumulus", 3000, 2000.0, 1000.0, (-300.0, 0.0, -7500.0), 12),
+        Part("cumulus", 3000, 1000.0, 1000.0, (2500.0, 0.0, -3000.0), 13),
+    ),
+    "cumulus": (Part("cumulus", 6000, 1500.0, 1200.0, (0.0, 0.0, -5000.0), 0),),
+    "stratocumulus": (Part("stratocumulus", 8000, 10000.0, 1000.0, (0.0, 0.0, -2000.0), 0),),
 }
-"""The clouds ``Weather(clouds=name)`` draws: :func:`particles` of a kind (seed 0), moved by
-``offset_m`` so that a default camera (at the origin, looking along -Z) sees them: a broken
-field 8 km across over the camera and ahead of it (its shadows fall on a street below), one
-cumulus 1.5 km wide 5 km ahead, a stratocumulus deck 10 km across. Each base is at
-``altitude_m``."""
+"""The clouds ``Weather(clouds=name)`` draws: the parts' :func:`particles`, each of its kind and
+seed, moved by ``offset_m`` so that a default camera (at the origin, looking along -Z) sees
+them, bases at ``altitude_m``. ``"broken"``: a broken field 2 km across over the camera (its
+shadows: under a sun 50 deg up in the south, azimuth 185, a cloud's shadow covers the near
+half of the bundled street, :func:`skyfall.scenes.street`, and the far half lies in the sun) and four cumulus 1-2 km wide, 3-7.5 km ahead
+(the clouds a camera looking along the street sees); ``"cumulus"``: one cumulus 1.5 km wide
+5 km ahead; ``"stratocumulus"``: a deck 10 km across."""
 
-FRAME_RESOLUTION: Final = 128
+FRAME_RESOLUTION: Final = 256
 """Voxels per side of the attenuation volumes frames light their clouds from."""
 
 
@@ -331,10 +343,16 @@ def preset(name: str) -> Cloud:
     Cloud
     """
     choice("clouds", name, tuple(PRESETS))
-    spec = PRESETS[name]
-    c = particles(spec.kind, n_particles=spec.n_particles, extent_m=spec.extent_m, altitude_m=spec.altitude_m)
-    offset = np.asarray(spec.offset_m, dtype=np.float64)
-    return Cloud(c.positions_m + offset, c.radii_m, c.optical_depths, c.albedos, c.asymmetry_g)
+    arrays: list[tuple[NDArray[np.float64], ...]] = []
+    g = _DEFAULT_G
+    for part in PRESETS[name]:
+        c = particles(part.kind, n_particles=part.n_particles, extent_m=part.extent_m, altitude_m=part.altitude_m, seed=part.seed)
+        p = c.positions_m + np.asarray(part.offset_m, dtype=np.float64)
+        keep = p[:, 2] < part.keep_z_below_m
+        arrays.append((p[keep], c.radii_m[keep], c.optical_depths[keep], c.albedos[keep]))
+        g = c.asymmetry_g
+    p, r, t, a = (np.concatenate([x[i] for x in arrays]) for i in range(4))
+    return Cloud(p, r, t, a, g)
 
 
 _FIELDS: weakref.WeakKeyDictionary[Cloud, dict[tuple[Any, int], Any]] = weakref.WeakKeyDictionary()

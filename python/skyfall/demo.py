@@ -33,6 +33,11 @@ photo_rain.png, photo_rain_portrait.png
     Real photos through the 8-bit path, before and after (:mod:`skyfall.demo_photo`):
     scikit-image's rocket at dusk in 15 mm/h rain with a made depth map (the sky keeps its
     dusk, the towers fade into the photo's own airlight), its astronaut in 25 mm/h.
+street_clouds.exr, street_clouds.png
+    The street under a broken cloud field (:mod:`skyfall.clouds`, Shimada, Shinya, Shiraishi &
+    Harada) in a clear sky with the sun behind the camera: the clouds lit through their
+    attenuation volume, and their shadow on the sunlit facade and the far street
+    (``sun_transmittance``).
 street_snow.png, photo_snow.png
     The street after an hour of snow in a light wind along it (bare in the lee of the
     buildings), and a photo with a measured depth map under snow, before and after
@@ -70,9 +75,12 @@ class DemoFrame:
     seed: int = 0
     exposure: float = 1.0
     """Multiplier of the linear frame before the PNG's sRGB encoding."""
+    camera: Callable[[], Camera] | None = None
+    """The camera, when not the scene's own."""
 
     def render(self, renderer: Renderer) -> Frame:
-        return renderer.render(self.scene(), self.weather, seed=self.seed)
+        cam = None if self.camera is None else self.camera()
+        return renderer.render(self.scene(), self.weather, seed=self.seed, camera=cam)
 
     def png8(self, frame: Frame) -> NDArray[np.uint8]:
         """The frame's 8-bit sRGB PNG pixels, as :meth:`skyfall.Frame.save` writes them."""
@@ -90,7 +98,18 @@ STREET_RAIN_DUSK = DemoFrame(
     exposure=0.1,
 )
 """The street at dusk (30 lx of sky) in 20 mm/h rain, lamps lit and a car's headlights on."""
-DEMO_FRAMES = (STREET, STREET_RAIN_DAY, STREET_RAIN_DUSK)
+STREET_CLOUDS = DemoFrame(
+    "street_clouds",
+    scenes.street,
+    Weather(sky=12, sun_elevation_deg=50.0, sun_azimuth_deg=185.0, clouds="broken", visibility_m=20_000.0),
+    exposure=0.2,
+    camera=partial(Camera, (1.5, 1.6, 0.0), pitch_deg=8.0),
+)
+"""The street under a broken cloud field (:data:`skyfall.clouds.PRESETS`) in a clear sky, the
+sun 50 deg up in the south behind the camera: a cloud's shadow lies over the near street, the
+far street and the buildings at its end are in the sun (the PNG saved at exposure 0.2: the
+sun's light is about nine times the sky's)."""
+DEMO_FRAMES = (STREET, STREET_RAIN_DAY, STREET_RAIN_DUSK, STREET_CLOUDS)
 """The demo's street frames (rendered at 1280 x 720; tests/test_golden.py at 320 x 180)."""
 
 

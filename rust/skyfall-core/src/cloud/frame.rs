@@ -8,20 +8,23 @@
 //! recurrence, with T_k = e^(−τ_k(ρ)) for the column τ_k(ρ) = τ_k e^(−ρ²/r_k²) the ray passes
 //! through at distance ρ from particle k's centre), with
 //!
-//!   S_k = α_k a_k ((E_sun/E) (π Γ_sun(x) p_HG(cos θ) + D(Γ_sun(x)) − Γ_sun(x))
-//!                  + L_sky D(Γ_zenith(x))),   α_k = 1 − T_k,
+//!   S_k = α_k a_k ((E_sun/E) (π Γ_sun(x) p_HG(cos θ) + F_sun(x)) + L_sky F_sky(x)),
+//!   α_k = 1 − T_k,
 //!
 //! in the frame's relative units (a white surface under the open sky is 1): x the point of the
 //! ray nearest the centre, read trilinearly from the volumes per fragment, θ the scattering
 //! angle (cos θ = view direction · sun direction), p_HG the Henyey–Greenstein phase with the
 //! droplets' g, L_sky the open sky's light (1 in relative units, times a photo's units). The
-//! first term is the sun's single scattering (the paper's); D ([`diffuse_share`]) is the
-//! two-stream transmission of the column above x towards its light, which stands for the light
-//! that reaches x after scattering on the way: the sun's (less its direct beam) and the sky's,
-//! both scattered towards the viewer as from an isotropic field. That diffuse part is an
-//! approximation of multiple scattering that has not been measured against a multiple-scattering
-//! reference (a Monte Carlo path tracer); without it a cloud more than a few optical depths
-//! thick renders black.
+//! first term is the sun's single scattering (the paper's); F ([`diffuse_light`]) the diffuse
+//! light at x, scattered towards the viewer as from an isotropic field: the two-stream
+//! transmission D of the column above x towards its light (the sun's less its direct beam; the
+//! sky's whole), plus D times the two-stream reflection of the column below x (the light that
+//! comes back out of the cloud beneath). Both columns are read from the volume: Γ at x, and at
+//! the far face, where the light leaves the cloud. That diffuse part is an approximation of
+//! multiple scattering that has not been measured against a multiple-scattering reference (a
+//! Monte Carlo path tracer); without it a cloud more than a few optical depths thick renders
+//! black, and its sunlit face, which real clouds make their brightest, would be as dark as its
+//! base.
 //!
 //! Everything per fragment is f32 relative to the camera, in the order the GPU pass
 //! (`skyfall-gpu`'s `cloud.wgsl`) computes it.
@@ -98,9 +101,16 @@ impl<'a> VolumeView<'a> {
     /// [`super::volume::sample`]).
     #[inline]
     pub fn sample(&self, p: Vec3) -> f32 {
+        self.sample_with_exit(p).0
+    }
+
+    /// Γ at `p` and where the light leaves the box along its ray through `p` (the far face:
+    /// the whole column's share), both as [`VolumeView::sample`] reads them.
+    #[inline]
+    pub fn sample_with_exit(&self, p: Vec3) -> (f32, f32) {
         let n = self.resolution;
         if n == 1 {
-            return self.gamma[0];
+            return (self.gamma[0], self.gamma[0]);
         }
         let d = p - self.origin_rel;
         let top = (n - 1) as f32;
@@ -121,7 +131,13 @@ impl<'a> VolumeView<'a> {
                 fv,
             )
         };
-        lerp(plane(0), plane(1), fu)
+        let last = |a: usize, b: usize| self.gamma[((i + a) * n + j + b) * n + n - 1];
+        let exit = lerp(
+            lerp(last(0, 0), last(0, 1), fv),
+            lerp(last(1, 0), last(1, 1), fv),
+            fu,
+        );
+        (lerp(plane(0), plane(1), fu), exit)
     }
 }
 
@@ -309,12 +325,13 @@ impl<'a> CloudSplats<'a> {
     /// viewer looking along `d` (unit), per unit of a_k α_k (see the module's notes).
     #[inline]
     fn source(&self, x: Vec3, d: Vec3) -> Vec3 {
-        let sky = self.light.sky * diffuse_share(self.zenith.sample(x), self.g);
+        let (gz, gz_exit) = self.zenith.sample_with_exit(x);
+        let sky = self.light.sky * diffuse_light(gz, gz_exit, self.g, true);
         match &self.sun {
             Some((s, v)) => {
-                let direct = v.sample(x);
+                let (direct, exit) = v.sample_with_exit(x);
                 let phase = henyey_greenstein(f64::from(d.dot(*s)), f64::from(self.g)) as f32;
-                let diffuse = (diffuse_share(direct, self.g) - direct).max(0.0);
+                let diffuse = diffuse_light(direct, exit, self.g, false);
                 self.light.sun * (std::f32::consts::PI * phase * direct + diffuse) + sky
             }
             None => sky,
@@ -390,6 +407,21 @@ impl<'a> CloudSplats<'a> {
 pub fn diffuse_share(gamma: f32, g: f32) -> f32 {
     let tau = -gamma.max(1e-30).ln() / (1.0 - g * g);
     1.0 / (1.0 + 0.75 * (1.0 - g) * tau)
+}
+
+/// The diffuse light at a point, per unit of its light's flux, from Γ there (`gamma`) and
+/// where the light leaves the cloud (`exit`): D(τ_a) (1 + R(τ_b)), D the two-stream
+/// transmission of the column above ([`diffuse_share`]; less the direct beam Γ unless
+/// `with_direct`), R(τ_b) = 1 − D(τ_b) the two-stream reflection of the column below, τ_b =
+/// ln(Γ/Γ_exit) / (1 − g²). At the lit face of a thick cloud this is about 1 (its light comes
+/// back out), deep under it about D.
+#[inline]
+pub fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
+    let d = diffuse_share(gamma, g);
+    let below = (gamma.max(1e-30).ln() - exit.max(1e-30).ln()).max(0.0) / (1.0 - g * g);
+    let r = 1.0 - 1.0 / (1.0 + 0.75 * (1.0 - g) * below);
+    let reaching = if with_direct { d } else { (d - gamma).max(0.0) };
+    reaching + d * r
 }
 
 /// Γ of the sun at `p_rel` (relative to the camera), or 1 without a cloud: the clouds' share of
@@ -504,7 +536,15 @@ mod tests {
         let field = CloudField::new(two, None, 64).unwrap();
         let g_l = field.zenith.sample(DVec3::new(0.0, 1000.0, 0.0));
         let g_u = field.zenith.sample(DVec3::new(0.0, 1300.0, 0.0));
-        let (d_l, d_u) = (diffuse_share(g_l, 0.86), diffuse_share(g_u, 0.86));
+        let view = VolumeView::new(&field.zenith, DVec3::ZERO);
+        let f = |p: Vec3| {
+            let (a, b) = view.sample_with_exit(p);
+            diffuse_light(a, b, 0.86, true)
+        };
+        let (d_l, d_u) = (
+            f(Vec3::new(0.0, 1000.0, 0.0)),
+            f(Vec3::new(0.0, 1300.0, 0.0)),
+        );
         let shade = (-(1.0 - 0.86 * 0.86) * tau_u).exp() as f32;
         // Between Harris' value (none of its own G) and all of its own G too: the volume's
         // slices blur the step at the centre over one slice.
@@ -549,7 +589,10 @@ mod tests {
             .1
             .sample(DVec3::new(0.0, 1000.0, 0.0));
         let p = henyey_greenstein(0.0, 0.86) as f32;
-        let diffuse = diffuse_share(gamma, 0.86) - gamma;
+        let view = VolumeView::new(&field.sun.as_ref().unwrap().1, DVec3::ZERO);
+        let (direct, exit) = view.sample_with_exit(Vec3::new(0.0, 1000.0, 0.0));
+        assert!((direct - gamma).abs() < 1e-5);
+        let diffuse = diffuse_light(direct, exit, 0.86, false);
         let want =
             (1.0 - (-tau as f32).exp()) * 10.0 * (std::f32::consts::PI * p * gamma + diffuse);
         assert!(
@@ -566,6 +609,14 @@ mod tests {
         let gamma = (-(1.0f32 - 0.86 * 0.86) * 10.0).exp();
         assert!((diffuse_share(gamma, 0.86) - 1.0 / 2.05).abs() < 1e-4);
         assert!(diffuse_share(0.0, 0.86) > 0.0 && diffuse_share(0.0, 0.86) < 0.05);
+        // The diffuse light: none in open air; at the lit face of a thick cloud (τ_b = 50 below)
+        // its reflection, 1 − 1/(1 + 0.75·0.14·50); deep under it the transmission alone.
+        assert_eq!(diffuse_light(1.0, 1.0, 0.86, false), 0.0);
+        let thick = (-(1.0f32 - 0.86 * 0.86) * 50.0).exp();
+        let r = 1.0 - 1.0 / (1.0 + 0.75 * 0.14 * 50.0);
+        assert!((diffuse_light(1.0, thick, 0.86, false) - r).abs() < 1e-4);
+        let under = diffuse_light(thick, thick, 0.86, true);
+        assert!((under - diffuse_share(thick, 0.86)).abs() < 1e-6);
     }
 
     #[test]

@@ -16,16 +16,16 @@ pub enum Layer {
     /// The depth of snow lying on the visible surface, m; 0 where none (the scene stage, with
     /// a snow cover).
     SnowDepth,
-    /// The windshield's drops' coverage, 0–1 (the windshield stage).
-    DropMask,
-    /// The windshield's metaball field above its 0.5 threshold, 0 off the drops (the
-    /// windshield stage).
-    DropHeight,
     /// The clouds' coverage 1 − ∏(1 − αᵢ) over the sky (the cloud pass).
     CloudAlpha,
     /// The share of the sun's direct light reaching the visible surface: the boxes' shadow
     /// times the clouds' attenuation Γ (the scene stage, under a sky with a sun).
     SunTransmittance,
+    /// The windshield's drops' coverage, 0–1 (the windshield stage).
+    DropMask,
+    /// The windshield's metaball field above its 0.5 threshold, 0 off the drops (the
+    /// windshield stage).
+    DropHeight,
 }
 
 /// Which passes a frame runs, as far as its layers go: each layer is drawn by one of them
@@ -57,10 +57,10 @@ impl Layer {
         Layer::RainDepth,
         Layer::SnowAlpha,
         Layer::SnowDepth,
-        Layer::DropMask,
-        Layer::DropHeight,
         Layer::CloudAlpha,
         Layer::SunTransmittance,
+        Layer::DropMask,
+        Layer::DropHeight,
     ];
 
     /// The layer's name, as users see it (`frame.layers[name]`, EXR channel names).

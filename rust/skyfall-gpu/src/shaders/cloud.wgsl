@@ -42,48 +42,56 @@ fn cell(t: f32, n: u32) -> Cell {
     return Cell(i, x - f32(i));
 }
 
-// VolumeView::sample over the sun's volume.
-fn sample_sun(p: vec3<f32>) -> f32 {
+// VolumeView::sample_with_exit over the sun's volume: (Γ at p, Γ where the light leaves).
+fn sample_sun(p: vec3<f32>) -> vec2<f32> {
     let v = info.sun_volume;
     let n = u32(v.origin.w);
     if n == 1u {
-        return sun_gamma[0];
+        return vec2<f32>(sun_gamma[0], sun_gamma[0]);
     }
     let d = p - v.origin.xyz;
     let a = cell(dot(d, v.axes[0].xyz), n);
     let b = cell(dot(d, v.axes[1].xyz), n);
     let c = cell(dot(d, v.axes[2].xyz), n);
     var pl: array<f32, 2>;
+    var ex: array<f32, 2>;
     for (var u = 0u; u < 2u; u++) {
         let r0 = ((a.i + u) * n + b.i) * n + c.i;
         let r1 = ((a.i + u) * n + b.i + 1u) * n + c.i;
         let lo = mix(sun_gamma[r0], sun_gamma[r0 + 1u], c.f);
         let hi = mix(sun_gamma[r1], sun_gamma[r1 + 1u], c.f);
         pl[u] = lo + (hi - lo) * b.f;
+        let e0 = sun_gamma[((a.i + u) * n + b.i) * n + n - 1u];
+        let e1 = sun_gamma[((a.i + u) * n + b.i + 1u) * n + n - 1u];
+        ex[u] = e0 + (e1 - e0) * b.f;
     }
-    return pl[0] + (pl[1] - pl[0]) * a.f;
+    return vec2<f32>(pl[0] + (pl[1] - pl[0]) * a.f, ex[0] + (ex[1] - ex[0]) * a.f);
 }
 
 // The same over the zenith's volume.
-fn sample_zenith(p: vec3<f32>) -> f32 {
+fn sample_zenith(p: vec3<f32>) -> vec2<f32> {
     let v = info.zenith_volume;
     let n = u32(v.origin.w);
     if n == 1u {
-        return zenith_gamma[0];
+        return vec2<f32>(zenith_gamma[0], zenith_gamma[0]);
     }
     let d = p - v.origin.xyz;
     let a = cell(dot(d, v.axes[0].xyz), n);
     let b = cell(dot(d, v.axes[1].xyz), n);
     let c = cell(dot(d, v.axes[2].xyz), n);
     var pl: array<f32, 2>;
+    var ex: array<f32, 2>;
     for (var u = 0u; u < 2u; u++) {
         let r0 = ((a.i + u) * n + b.i) * n + c.i;
         let r1 = ((a.i + u) * n + b.i + 1u) * n + c.i;
         let lo = mix(zenith_gamma[r0], zenith_gamma[r0 + 1u], c.f);
         let hi = mix(zenith_gamma[r1], zenith_gamma[r1 + 1u], c.f);
         pl[u] = lo + (hi - lo) * b.f;
+        let e0 = zenith_gamma[((a.i + u) * n + b.i) * n + n - 1u];
+        let e1 = zenith_gamma[((a.i + u) * n + b.i + 1u) * n + n - 1u];
+        ex[u] = e0 + (e1 - e0) * b.f;
     }
-    return pl[0] + (pl[1] - pl[0]) * a.f;
+    return vec2<f32>(pl[0] + (pl[1] - pl[0]) * a.f, ex[0] + (ex[1] - ex[0]) * a.f);
 }
 
 fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
@@ -97,17 +105,29 @@ fn diffuse_share(gamma: f32, g: f32) -> f32 {
     return 1.0 / (1.0 + 0.75 * (1.0 - g) * tau);
 }
 
+// skyfall_core::cloud::frame::diffuse_light.
+fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
+    let d = diffuse_share(gamma, g);
+    let below = max(log(max(gamma, 1e-30)) - log(max(exit, 1e-30)), 0.0) / (1.0 - g * g);
+    let r = 1.0 - 1.0 / (1.0 + 0.75 * (1.0 - g) * below);
+    var reaching = max(d - gamma, 0.0);
+    if with_direct {
+        reaching = d;
+    }
+    return reaching + d * r;
+}
+
 // CloudSplats::source.
 fn source(x: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     let g = info.sun_g.w;
-    let sky = info.sky_light.xyz * diffuse_share(sample_zenith(x), g);
+    let z = sample_zenith(x);
+    let sky = info.sky_light.xyz * diffuse_light(z.x, z.y, g, true);
     if info.counts.z == 0u {
         return sky;
     }
-    let direct = sample_sun(x);
+    let s = sample_sun(x);
     let phase = henyey_greenstein(dot(d, info.sun_g.xyz), g);
-    let diffuse = max(diffuse_share(direct, g) - direct, 0.0);
-    return info.sun_light.xyz * (PI * phase * direct + diffuse) + sky;
+    return info.sun_light.xyz * (PI * phase * s.x + diffuse_light(s.x, s.y, g, false)) + sky;
 }
 
 @compute @workgroup_size(8, 8)

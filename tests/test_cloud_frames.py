@@ -1,0 +1,191 @@
+"""Clouds in frames (``Weather(clouds=...)``) and the sun's direct light through them.
+
+References: the clouds' own attenuation volume sampled in float64 by the core
+(``_core.CloudField.sun_share``, an independent code path from the frames' float32 one), the
+clear-sky direct illuminance written out here from its published constants (Navvab et al.
+1984 as given by Tregenza & Sharples, Kasten & Young's air mass), the CPU backend for the GPU.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from skimage.metrics import structural_similarity
+
+from skyfall import Camera, PhotoScene, Renderer, Weather, clouds, scenes
+
+W, H = 64, 40
+SUNNY = {"sky": 12, "sun_elevation_deg": 35.0, "sun_azimuth_deg": 160.0}
+
+
+def _points(cam: Camera, depth: np.ndarray) -> np.ndarray:
+    """World points of each pixel's surface (depth along the axis), (H, W, 3)."""
+    fx, fy, cx, cy = cam.intrinsics()
+    h, w = depth.shape
+    u = (np.arange(w) + 0.5 - cx) / fx
+    v = (np.arange(h) + 0.5 - cy) / fy
+    uu, vv = np.meshgrid(u, v)
+    d_cam = np.stack([uu, -vv, -np.ones_like(uu)], axis=-1)
+    d_world = d_cam @ np.asarray(cam.world_from_camera)[:3, :3].T
+    return cam.position_m + d_world * depth[..., None]
+
+
+def _clear_sky_sun_lux(elevation_deg: float) -> float:
+    h = elevation_deg
+    m = 1.0 / (math.sin(math.radians(h)) + 0.50572 * (h + 6.07995) ** -1.6364)
+    return 133_800.0 * math.exp(-m * 3.0 / (9.9 + 0.043 * m))
+
+
+def test_the_sun_lights_open_ground_by_the_clear_sky_model() -> None:
+    # No clouds: open ground of albedo a receives a (E_amb + E_sun/E sin h); the sky's share
+    # is the frame without a sun (the same sky, sun_illuminance_lux=0).
+    scene = scenes.empty(ground_albedo=(0.3, 0.3, 0.3), camera=Camera(pitch_deg=-30.0))
+    r = Renderer(W, H, backend="cpu")
+    lit = r.render(scene, Weather(**SUNNY))
+    dark = r.render(scene, Weather(**SUNNY, sun_illuminance_lux=0.0))
+    assert "sun_transmittance" in lit.layers and "sun_transmittance" not in dark.layers
+    ground = np.isfinite(lit.depth_m)
+    assert ground.mean() > 0.5
+    rel = _clear_sky_sun_lux(35.0) / 10_000.0
+    want = dark.rgb[ground] + 0.3 * rel * math.sin(math.radians(35.0))
+    np.testing.assert_allclose(lit.rgb[ground], want, rtol=2e-5)
+    assert Weather(**SUNNY).sun_relative == pytest.approx(rel, rel=1e-6)
+    np.testing.assert_array_equal(lit.layers["sun_transmittance"][ground], 1.0)
+    # The overcast sky and the overcast-like CIE types have no direct sun; a given value wins.
+    assert Weather().sun_direction is None and Weather(sky=5).sun_relative == 0.0
+    w = Weather(sky=3, sun_elevation_deg=35.0, sun_azimuth_deg=0.0, sun_illuminance_lux=50_000.0)
+    assert w.sun_relative == pytest.approx(5.0, rel=1e-6)
+
+
+def test_cloud_shadow_on_open_ground_is_the_volume_along_the_sun_ray() -> None:
+    # A broken field over open ground: the ground's sun_transmittance is the clouds' Γ at each
+    # ground point, as the core's float64 volume sampler gives it, and the ground's radiance
+    # follows it (a E_amb + a (E_sun/E) sin h Γ).
+    cam = Camera(position_m=(0.0, 1.6, 0.0), pitch_deg=-40.0, vertical_fov_deg=70.0)
+    scene = scenes.empty(ground_albedo=(0.3, 0.3, 0.3), camera=cam)
+    sun_at = {"sky": 12, "sun_elevation_deg": 60.0, "sun_azimuth_deg": 0.0}
+    # Three particles placed so that their shadows (the sun north, 60 deg up) fall on the
+    # ground the camera sees: each 150 m above its shadow and 150 / tan 60 m towards the sun.
+    feet = np.array([[-3.0, 0.0, -5.0], [4.0, 0.0, -9.0], [0.5, 0.0, -3.5]])
+    up = np.array([0.0, 150.0, -150.0 / math.tan(math.radians(60.0))])
+    cloud = clouds.Cloud(feet + up, np.array([2.0, 3.0, 1.0]), np.array([4.0, 2.0, 6.0]), np.ones(3))
+    r = Renderer(96, 64, backend="cpu")
+    f = r.render(scene, Weather(**sun_at, clouds=cloud))
+    clear = r.render(scene, Weather(**sun_at, sun_illuminance_lux=0.0))
+    ground = np.isfinite(f.depth_m)
+    pts = _points(cam.with_resolution(96, 64), f.depth_m)[ground]
+    field = clouds.frame_field(cloud, Weather(**sun_at).sun_direction)
+    want = field.sun_share(np.ascontiguousarray(pts, dtype=np.float64))
+    got = f.layers["sun_transmittance"][ground]
+    assert want.min() < 0.5 and want.max() > 0.99, "the test should see shadow and sun"
+    np.testing.assert_allclose(got, want, atol=2e-3)
+    rel = Weather(**sun_at).sun_relative
+    np.testing.assert_allclose(f.rgb[ground][:, 0], clear.rgb[ground][:, 0] + 0.3 * rel * math.sin(math.radians(60.0)) * got, rtol=1e-4)
+
+
+def test_one_particle_in_front_of_a_dark_sky_dims_it_by_its_column() -> None:
+    # A photo of a black sky (depth inf) with no sun and no light reaching the cloud would show
+    # only the cloud's extinction; with the sky's light, the centre pixel is a α D plus T of the
+    # background: between the background's e^(-τ) and 1.
+    cam = Camera(position_m=(0.0, 0.0, 0.0), pitch_deg=89.0, vertical_fov_deg=20.0, width=33, height=33)
+    tau = 2.0
+    axis = np.array([0.0, math.sin(math.radians(89.0)), -math.cos(math.radians(89.0))])
+    one = clouds.Cloud(1000.0 * axis[None, :], np.array([60.0]), np.array([tau]), np.array([1.0]))
+    sky = np.full((33, 33, 3), 0.5, np.float32)
+    photo = PhotoScene(sky, np.full((33, 33), np.inf, np.float32), camera=cam, encoding="linear")
+    r = Renderer(33, 33, backend="cpu")
+    f = r.render(photo, Weather(clouds=one))
+    a = f.layers["cloud_alpha"]
+    assert a[16, 16] == pytest.approx(1.0 - math.exp(-tau), abs=1e-3)
+    assert a[0, 0] == 0.0 and f.rgb[0, 0, 0] == pytest.approx(0.5, abs=1e-6)
+    # The centre pixel: the sky behind dimmed by e^(-τ), plus the particle's own light.
+    assert f.rgb[16, 16, 0] > 0.5 * math.exp(-tau)
+
+
+def test_clouds_leave_what_they_do_not_cover_bit_for_bit() -> None:
+    # Clouds behind the camera: the frame's rgb and layers are those without clouds, plus a
+    # cloud_alpha of zeros.
+    scene = scenes.street()
+    behind = clouds.particles("cumulus", n_particles=300, extent_m=500.0, altitude_m=800.0)
+    behind = clouds.Cloud(behind.positions_m + np.array([0.0, 0.0, 8000.0]), behind.radii_m, behind.optical_depths, behind.albedos)
+    r = Renderer(W, H, backend="cpu")
+    base = r.render(scene, Weather(rain_rate_mm_h=5.0))
+    with_c = r.render(scene, Weather(rain_rate_mm_h=5.0, clouds=behind))
+    np.testing.assert_array_equal(with_c.rgb, base.rgb)
+    for k, v in base.layers.items():
+        np.testing.assert_array_equal(with_c.layers[k], v)
+    np.testing.assert_array_equal(with_c.layers["cloud_alpha"], 0.0)
+    assert "cloud_alpha" not in base.layers
+
+
+def test_clouds_are_deterministic_and_render_srgb8_draws_them() -> None:
+    scene = scenes.street()
+    w = Weather(clouds="broken", **SUNNY)
+    r = Renderer(W, H, backend="cpu")
+    a, b = r.render(scene, w), r.render(scene, w)
+    np.testing.assert_array_equal(a.rgb, b.rgb)
+    assert a.layers["cloud_alpha"].max() > 0.5
+    photo = PhotoScene(np.full((H, W, 3), 128, np.uint8), np.full((H, W), np.inf, np.float32), camera=Camera(pitch_deg=20.0))
+    assert not r.fuses_srgb8(photo, w)
+    out = r.render_srgb8(photo, w)
+    plain = r.render_srgb8(photo, Weather(**SUNNY))
+    assert out.shape == (H, W, 3) and np.abs(out.astype(int) - plain.astype(int)).max() > 20
+
+
+def test_bad_clouds_are_refused_by_name() -> None:
+    with pytest.raises(ValueError, match="clouds = 'nimbus' is not a preset"):
+        Weather(clouds="nimbus")
+    with pytest.raises(TypeError, match="clouds must be a skyfall.clouds.Cloud"):
+        Weather(clouds=3)
+    with pytest.raises(ValueError, match="sun_illuminance_lux needs a sun position"):
+        Weather(sun_illuminance_lux=1000.0)
+    with pytest.raises(ValueError, match="sun_illuminance_lux"):
+        Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=0.0, sun_illuminance_lux=-1.0)
+    # A field built for another sun than the weather's is refused by the core.
+    from skyfall import _core
+
+    scene = scenes.street()
+    r = Renderer(W, H, backend="cpu")
+    req = r._request(scene, Weather(**SUNNY), None, 0.0, 0, None, 1.0, 64)
+    req["clouds"] = clouds.frame_field("cumulus", None)
+    with pytest.raises(ValueError, match="built for another sun"):
+        _core.render_frame(req)
+
+
+@pytest.mark.parametrize("weather", [{"clouds": "broken", **SUNNY}, {"clouds": "stratocumulus", "rain_rate_mm_h": 2.0}])
+def test_gpu_draws_the_clouds_as_the_cpu(weather: dict) -> None:
+    scene = scenes.street()
+    cam = Camera(position_m=(1.5, 1.6, 0.0), pitch_deg=15.0)
+    w = Weather(**weather)
+    cpu = Renderer(96, 54, backend="cpu").render(scene, w, camera=cam)
+    gpu = Renderer(96, 54, backend="gpu").render(scene, w, camera=cam)
+    assert set(cpu.layers) == set(gpu.layers)
+    for k in ("cloud_alpha", "sun_transmittance"):
+        if k in cpu.layers:
+            assert structural_similarity(cpu.layers[k], gpu.layers[k], data_range=1.0) >= 0.99
+            np.testing.assert_allclose(gpu.layers[k], cpu.layers[k], atol=2e-3)
+    scale = 1.0 / max(float(np.percentile(cpu.rgb, 99)), 1e-6)
+    x, y = np.clip(cpu.rgb * scale, 0, 1), np.clip(gpu.rgb * scale, 0, 1)
+    assert structural_similarity(x, y, channel_axis=2, data_range=1.0) >= 0.99
+    assert cpu.layers["cloud_alpha"].max() > 0.3
+
+
+def test_the_demo_shows_clouds_and_their_shadow_on_the_street() -> None:
+    # What out/street_clouds.png is for: clouds in the sky, and a cloud's shadow over the
+    # near street while the far street lies in the sun (the sun reaches both without clouds).
+    import dataclasses
+
+    from skyfall.demo import STREET_CLOUDS
+
+    r = Renderer(320, 180, backend="cpu")
+    f = STREET_CLOUDS.render(r)
+    clear = r.render(STREET_CLOUDS.scene(), dataclasses.replace(STREET_CLOUDS.weather, clouds=None), camera=STREET_CLOUDS.camera())
+    sky_px = np.isinf(f.depth_m)
+    assert (f.layers["cloud_alpha"][sky_px] > 0.9).mean() > 0.1
+    lit = (clear.layers["sun_transmittance"] > 0.99) & np.isfinite(f.depth_m)
+    st = f.layers["sun_transmittance"]
+    near, far = lit & (f.depth_m < 25.0), lit & (f.depth_m > 60.0)
+    assert near.sum() > 500 and far.sum() > 50
+    assert st[near].mean() < 0.3 and st[far].mean() > 0.6
