@@ -194,3 +194,17 @@ def test_a_windshield_preset_per_item(tmp_path):
     assert all(m.max() > 0.0 for m in masks) and not np.array_equal(masks[0], masks[1])  # drops, a time each
     with pytest.raises(ValueError, match="windshield = 'hail' must be one of"):
         config(tmp_path, windshield="hail")
+
+
+def test_clouds_in_every_items_sky(tmp_path):
+    cfg = config(tmp_path / "clouds", variants=2, rain_rate_mm_h="0:2", clouds="cumulus", layers=("cloud_alpha", "rain_alpha"))
+    s = generate(cfg, progress=False)
+    assert (s.generated, s.errors) == (2, 0), s.error_messages
+    alphas = [np.load(cfg.out / "items" / f"{i:06d}.cloud_alpha.npy") for i in range(2)]
+    assert all(a.max() > 0.3 for a in alphas)  # the cumulus 5 km down the street, above its end
+    # the same items without clouds: the same checksum as before the option, no cloud layer
+    plain = config(tmp_path / "plain", variants=2, rain_rate_mm_h="0:2", layers=("rain_alpha",))
+    assert plain.sha256() != cfg.sha256()
+    assert "clouds" not in json.dumps(plain.to_json()) or plain.to_json()["clouds"] is None
+    with pytest.raises(ValueError, match="clouds = 'nimbus' must be one of"):
+        config(tmp_path, clouds="nimbus")

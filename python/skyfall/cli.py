@@ -40,6 +40,7 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("snow_rate_mm_h", ("--snow-rate", "--snow-rate-mm-h"), {"metavar": "LO:HI", "help": "snowfall rate as liquid-water equivalent, mm/h, in [0, 100], uniform; default 0 (no snow)"}),
     ("snow_hours", ("--snow-hours",), {"metavar": "LO:HI", "help": "hours the snow has lain, in [0, 2777], uniform: each item's snow cover (needs --snow-rate); default 0 (no cover)"}),
     ("snow_resolution_m", ("--snow-resolution-m",), {"type": float, "metavar": "M", "help": "cell side of the snow cover, m, in [0.01, 100]; default 0.25"}),
+    ("clouds", ("--clouds",), {"metavar": "PRESET", "help": "clouds in every item's sky: broken, cumulus or stratocumulus (skyfall.clouds.PRESETS); writes cloud_alpha when asked"}),
     ("windshield", ("--windshield",), {"nargs": "?", "const": "rain", "metavar": "PRESET", "help": "see each item through a windshield with wipers: drizzle, rain (the default with no PRESET), downpour or parked; writes drop_mask and drop_height when asked"}),
     ("rain_near_m", ("--rain-near-m",), {"type": float, "metavar": "M", "help": "radius of the streak region, m, in (0, 50]; default 5"}),
     ("camera_height_m", ("--camera-height-m",), {"type": float, "metavar": "M", "help": "ground-plane fallback: camera height, m; default 1.6"}),

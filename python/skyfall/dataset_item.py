@@ -133,6 +133,7 @@ def _weather(config: DatasetConfig, p: ItemParams) -> Weather:
         wind_m_s=(p.wind_m_s, 0.0, 0.0),
         rain_near_m=config.rain_near_m,
         windshield=glass,
+        clouds=config.clouds,
     )
 
 

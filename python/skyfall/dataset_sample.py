@@ -21,7 +21,7 @@ from skyfall._validate import in_range, integer, real
 
 __all__ = ["DatasetConfig", "EXR_COMPRESSIONS", "PNG_STRATEGIES", "ItemParams", "parse_range", "sample_item", "LAYER_NAMES", "RANGE_OPTIONS"]
 
-LAYER_NAMES = ("rain_alpha", "rain_depth_m", "transmittance", "snow_alpha", "snow_depth_m", "drop_mask", "drop_height")
+LAYER_NAMES = ("rain_alpha", "rain_depth_m", "transmittance", "snow_alpha", "snow_depth_m", "drop_mask", "drop_height", "cloud_alpha")
 """The ground-truth layers an item can write (``layers=``)."""
 
 # option -> (the parameter whose valid range its ends must lie in, how it is sampled)
@@ -153,6 +153,10 @@ class DatasetConfig:
         [0, 60) s from one warmed-up state per worker (:func:`skyfall.windshield.warm`, the
         run's seed; the first item of a worker pays the warm-up, several seconds), with the
         ``drop_mask`` and ``drop_height`` layers.
+    clouds : str, optional
+        A :data:`skyfall.clouds.PRESETS` name: clouds in every item's sky (over a photo's sky
+        pixels, before the haze), lit by the overcast sky's light, with the ``cloud_alpha``
+        layer when asked. The preset's volumes are built once per worker.
     rain_near_m : float
         Radius of the streak region, m (:class:`skyfall.Weather`).
     depth_scale_m : float, optional
@@ -230,6 +234,7 @@ class DatasetConfig:
     snow_hours: Range = (0.0, 0.0)
     snow_resolution_m: float = 0.25
     windshield: str | None = None
+    clouds: str | None = None
     rain_near_m: float = 5.0
     depth_scale_m: float | None = None
     camera_height_m: float = 1.6
@@ -280,6 +285,11 @@ class DatasetConfig:
 
             if self.windshield not in PRESETS:
                 raise ValueError(f"windshield = {self.windshield!r} must be one of {', '.join(PRESETS)}")
+        if self.clouds is not None:
+            from skyfall.clouds import PRESETS as CLOUDS
+
+            if self.clouds not in CLOUDS:
+                raise ValueError(f"clouds = {self.clouds!r} must be one of {', '.join(CLOUDS)}")
         if self.depth_scale_m is not None:
             s = float(self.depth_scale_m)
             if not (math.isfinite(s) and s > 0.0):
@@ -336,7 +346,7 @@ class DatasetConfig:
                 d.pop(name)
         if d["exr_compression"] == "zip":  # the checksum of the options before it was one
             d.pop("exr_compression")
-        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None)):
+        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None), ("clouds", None)):
             if d[name] == plain:  # not used: the checksum of before it was an option
                 d.pop(name)
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()
