@@ -41,6 +41,11 @@ use crate::scene::camera::Camera;
 /// Side of the square tiles the splats are binned to, px.
 pub const TILE_PX: u32 = 16;
 
+/// A pixel's splats are composited near to far until less than this share of the light from
+/// behind gets through: what lies behind then changes the pixel by at most this share of its
+/// radiance (and `cloud_alpha` by at most this much).
+pub const MIN_TRANSMITTANCE: f32 = 1.0 / 1024.0;
+
 /// Splats in one frame at most (binned entries): 64 M, 256 MB of indices.
 const MAX_ENTRIES: usize = 1 << 26;
 
@@ -370,9 +375,11 @@ impl<'a> CloudSplats<'a> {
                 let axial = -d.dot(back);
                 let depth = depth_row[xi];
                 let px = &mut rgb_row[3 * xi..3 * xi + 3];
-                let mut e = Vec3::from_slice(px);
+                let mut acc = Vec3::ZERO;
                 let mut trans = 1.0f32;
-                for &k in list {
+                // Near to far: the recurrence's sum, Σ_k (∏_{j nearer} T_j) S_k + (∏ T) E_0,
+                // stopped once the light from behind is below MIN_TRANSMITTANCE.
+                for &k in list.iter().rev() {
                     let s = &self.splats[k as usize];
                     let along = s.centre.dot(d);
                     if along <= 0.0 || along * axial >= depth {
@@ -387,9 +394,13 @@ impl<'a> CloudSplats<'a> {
                     }
                     let t_k = exp_neg(-s.tau * exp_neg(-rho2 / r2));
                     let alpha = 1.0 - t_k;
-                    e = self.source(x_near, d) * (alpha * s.albedo) + e * t_k;
+                    acc += self.source(x_near, d) * (trans * alpha * s.albedo);
                     trans *= t_k;
+                    if trans < MIN_TRANSMITTANCE {
+                        break;
+                    }
                 }
+                let e = acc + Vec3::from_slice(px) * trans;
                 px.copy_from_slice(&e.to_array());
                 if let Some(a) = alpha_row.as_deref_mut() {
                     a[xi] = 1.0 - trans;

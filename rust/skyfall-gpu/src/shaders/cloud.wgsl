@@ -29,6 +29,7 @@ struct CloudInfo {
 @group(0) @binding(9) var<storage, read_write> alpha_out: array<f32>;
 
 const CUTOFF_RADII: f32 = 2.5;
+const MIN_TRANSMITTANCE: f32 = 1.0 / 1024.0;
 const PI: f32 = 3.141592653589793;
 
 struct Cell {
@@ -145,10 +146,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let d = normalize(ray_direction(cam, gid.x, gid.y));
         let axial = -dot(d, cam.back.xyz);
         let dep = depth[i];
-        var e = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);
+        var acc = vec3<f32>(0.0);
         var trans = 1.0;
-        for (var j = start; j < end; j++) {
-            let k = indices[j];
+        // Near to far (the lists are far to near), stopped once the light from behind is
+        // below MIN_TRANSMITTANCE (CloudSplats::apply_row).
+        for (var j = end; j > start; j--) {
+            let k = indices[j - 1u];
             let s0 = splats[2u * k];
             let s1 = splats[2u * k + 1u];
             let centre = s0.xyz;
@@ -165,9 +168,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             let t_k = exp(-s1.x * exp(-rho2 / r2));
             let a = 1.0 - t_k;
-            e = source(x_near, d) * (a * s1.y) + e * t_k;
+            acc = acc + source(x_near, d) * (trans * a * s1.y);
             trans = trans * t_k;
+            if trans < MIN_TRANSMITTANCE {
+                break;
+            }
         }
+        let e = acc + vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]) * trans;
         rgb[3u * i] = e.x;
         rgb[3u * i + 1u] = e.y;
         rgb[3u * i + 2u] = e.z;
