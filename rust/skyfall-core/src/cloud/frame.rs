@@ -250,6 +250,48 @@ fn pixel_box(cam: &Camera, centre: Vec3, support: f32) -> Option<[u32; 4]> {
     Some([clampx(x0), clampy(y0), clampx(x1), clampy(y1)])
 }
 
+/// The side planes of each tile's view pyramid (camera space, through the eye), so that a
+/// splat is listed only in the tiles whose pyramid its support sphere reaches: no ray of
+/// another tile can pass within its support, so the lists lose nothing.
+struct TilePlanes {
+    /// Per tile column, the camera-space slopes u = x/(−z) of its left and right edges.
+    u: Vec<(f32, f32)>,
+    /// Per tile row, the slopes v = y/z of its top and bottom edges.
+    v: Vec<(f32, f32)>,
+}
+
+impl TilePlanes {
+    fn new(cam: &Camera) -> Self {
+        let edge = |lo: u32, hi: u32, size: u32, c: f32, f: f32| {
+            let a = (lo * TILE_PX) as f32;
+            let b = ((hi * TILE_PX).min(size)) as f32;
+            ((a - c) / f, (b - c) / f)
+        };
+        TilePlanes {
+            u: (0..cam.width.div_ceil(TILE_PX))
+                .map(|t| edge(t, t + 1, cam.width, cam.cx, cam.fx))
+                .collect(),
+            v: (0..cam.height.div_ceil(TILE_PX))
+                .map(|t| edge(t, t + 1, cam.height, cam.cy, cam.fy))
+                .collect(),
+        }
+    }
+
+    /// Whether a sphere of radius `r` at camera-space `c` reaches tile (tx, ty)'s pyramid.
+    #[inline]
+    fn reaches(&self, tx: u32, ty: u32, c: Vec3, r: f32) -> bool {
+        let (u0, u1) = self.u[tx as usize];
+        let (v0, v1) = self.v[ty as usize];
+        // Signed distances to the four planes, positive inside: u ≥ u0 ⟺ x + u0 z ≥ 0, u ≤ u1
+        // ⟺ −x − u1 z ≥ 0, v ≥ v0 ⟺ v0 z − y ≥ 0, v ≤ v1 ⟺ y − v1 z ≥ 0 (z < 0 in front).
+        let d = |a: f32, b: f32, k: f32| a / (1.0 + k * k).sqrt() + b;
+        d(c.x + u0 * c.z, 0.0, u0) >= -r
+            && d(-c.x - u1 * c.z, 0.0, u1) >= -r
+            && d(v0 * c.z - c.y, 0.0, v0) >= -r
+            && d(c.y - v1 * c.z, 0.0, v1) >= -r
+    }
+}
+
 impl<'a> CloudSplats<'a> {
     /// The splats of `pass` in `cam`'s frame.
     pub fn prepare(pass: &CloudPass<'a>, cam: &Camera) -> Result<Self> {
@@ -275,17 +317,23 @@ impl<'a> CloudSplats<'a> {
         let tiles_y = cam.height.div_ceil(TILE_PX);
         let n_tiles = (tiles_x * tiles_y) as usize;
         let mut boxes = Vec::with_capacity(order.len());
+        let to_cam = cam.rotation.transpose();
+        let tiles = TilePlanes::new(cam);
         let mut splats = Vec::with_capacity(order.len());
         let mut counts = vec![0usize; n_tiles + 1];
         for (_, _, s) in &order {
-            if let Some(b) = pixel_box(cam, s.centre, s.radius_m * CUTOFF_RADII as f32) {
+            let support = s.radius_m * CUTOFF_RADII as f32;
+            if let Some(b) = pixel_box(cam, s.centre, support) {
                 let [tx0, ty0, tx1, ty1] = b.map(|v| v / TILE_PX);
+                let c = to_cam * s.centre;
                 for ty in ty0..=ty1 {
                     for tx in tx0..=tx1 {
-                        counts[(ty * tiles_x + tx) as usize + 1] += 1;
+                        if tiles.reaches(tx, ty, c, support) {
+                            counts[(ty * tiles_x + tx) as usize + 1] += 1;
+                        }
                     }
                 }
-                boxes.push([tx0, ty0, tx1, ty1]);
+                boxes.push(([tx0, ty0, tx1, ty1], c, support));
                 splats.push(*s);
             }
         }
@@ -301,12 +349,14 @@ impl<'a> CloudSplats<'a> {
         }
         let mut fill = counts.clone();
         let mut indices = vec![0u32; counts[n_tiles]];
-        for (k, [tx0, ty0, tx1, ty1]) in boxes.iter().enumerate() {
+        for (k, ([tx0, ty0, tx1, ty1], c, support)) in boxes.iter().enumerate() {
             for ty in *ty0..=*ty1 {
                 for tx in *tx0..=*tx1 {
-                    let t = (ty * tiles_x + tx) as usize;
-                    indices[fill[t]] = k as u32;
-                    fill[t] += 1;
+                    if tiles.reaches(tx, ty, *c, *support) {
+                        let t = (ty * tiles_x + tx) as usize;
+                        indices[fill[t]] = k as u32;
+                        fill[t] += 1;
+                    }
                 }
             }
         }
