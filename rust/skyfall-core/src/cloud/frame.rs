@@ -111,7 +111,7 @@ impl<'a> VolumeView<'a> {
 
     /// Γ at `p` and where the light leaves the box along its ray through `p` (the far face:
     /// the whole column's share), both as [`VolumeView::sample`] reads them.
-    #[inline]
+    #[inline(always)]
     pub fn sample_with_exit(&self, p: Vec3) -> (f32, f32) {
         let n = self.resolution;
         if n == 1 {
@@ -121,7 +121,9 @@ impl<'a> VolumeView<'a> {
         let top = (n - 1) as f32;
         let at = |t: f32| {
             let x = (t * n as f32 - 0.5).clamp(0.0, top);
-            let i = (x.floor() as usize).min(n - 2);
+            // x ≥ 0: truncation is the floor (an instruction; `floor` is a libm call on
+            // baseline x86-64).
+            let i = (x as usize).min(n - 2);
             (i, x - i as f32)
         };
         let (i, fu) = at(d.dot(self.axes[0]));
@@ -254,18 +256,20 @@ fn pixel_box(cam: &Camera, centre: Vec3, support: f32) -> Option<[u32; 4]> {
 /// splat is listed only in the tiles whose pyramid its support sphere reaches: no ray of
 /// another tile can pass within its support, so the lists lose nothing.
 struct TilePlanes {
-    /// Per tile column, the camera-space slopes u = x/(−z) of its left and right edges.
-    u: Vec<(f32, f32)>,
-    /// Per tile row, the slopes v = y/z of its top and bottom edges.
-    v: Vec<(f32, f32)>,
+    /// Per tile column, the camera-space slopes u = x/(−z) of its left and right edges, and
+    /// 1/√(1 + u²) of each (the planes' normals' lengths).
+    u: Vec<[f32; 4]>,
+    /// Per tile row, the slopes v = y/z of its top and bottom edges, and their 1/√(1 + v²).
+    v: Vec<[f32; 4]>,
 }
 
 impl TilePlanes {
     fn new(cam: &Camera) -> Self {
         let edge = |lo: u32, hi: u32, size: u32, c: f32, f: f32| {
-            let a = (lo * TILE_PX) as f32;
-            let b = ((hi * TILE_PX).min(size)) as f32;
-            ((a - c) / f, (b - c) / f)
+            let a = ((lo * TILE_PX) as f32 - c) / f;
+            let b = (((hi * TILE_PX).min(size)) as f32 - c) / f;
+            let inv = |k: f32| 1.0 / (1.0 + k * k).sqrt();
+            [a, b, inv(a), inv(b)]
         };
         TilePlanes {
             u: (0..cam.width.div_ceil(TILE_PX))
@@ -280,15 +284,14 @@ impl TilePlanes {
     /// Whether a sphere of radius `r` at camera-space `c` reaches tile (tx, ty)'s pyramid.
     #[inline]
     fn reaches(&self, tx: u32, ty: u32, c: Vec3, r: f32) -> bool {
-        let (u0, u1) = self.u[tx as usize];
-        let (v0, v1) = self.v[ty as usize];
+        let [u0, u1, nu0, nu1] = self.u[tx as usize];
+        let [v0, v1, nv0, nv1] = self.v[ty as usize];
         // Signed distances to the four planes, positive inside: u ≥ u0 ⟺ x + u0 z ≥ 0, u ≤ u1
         // ⟺ −x − u1 z ≥ 0, v ≥ v0 ⟺ v0 z − y ≥ 0, v ≤ v1 ⟺ y − v1 z ≥ 0 (z < 0 in front).
-        let d = |a: f32, b: f32, k: f32| a / (1.0 + k * k).sqrt() + b;
-        d(c.x + u0 * c.z, 0.0, u0) >= -r
-            && d(-c.x - u1 * c.z, 0.0, u1) >= -r
-            && d(v0 * c.z - c.y, 0.0, v0) >= -r
-            && d(c.y - v1 * c.z, 0.0, v1) >= -r
+        (c.x + u0 * c.z) * nu0 >= -r
+            && (-c.x - u1 * c.z) * nu1 >= -r
+            && (v0 * c.z - c.y) * nv0 >= -r
+            && (c.y - v1 * c.z) * nv1 >= -r
     }
 }
 

@@ -39,7 +39,7 @@ struct Cell {
 
 fn cell(t: f32, n: u32) -> Cell {
     let x = clamp(t * f32(n) - 0.5, 0.0, f32(n - 1u));
-    let i = min(u32(floor(x)), n - 2u);
+    let i = min(u32(x), n - 2u);
     return Cell(i, x - f32(i));
 }
 
