@@ -111,6 +111,24 @@ class Cloud:
         """Number of particles N."""
         return int(self.positions_m.shape[0])
 
+    def translated(self, offset_m: Any) -> Cloud:
+        """The same cloud moved by ``offset_m`` (3 floats, m): wind carrying it, or placing
+        it in a scene. Its frames' volumes are built anew (a new cloud).
+
+        Parameters
+        ----------
+        offset_m : sequence of 3 float
+            The displacement, world metres.
+
+        Returns
+        -------
+        Cloud
+        """
+        v = float_array("offset_m", offset_m).reshape(-1)
+        if v.shape != (3,):
+            raise ValueError(f"offset_m must have 3 components, got shape {v.shape}")
+        return Cloud(self.positions_m + v, self.radii_m, self.optical_depths, self.albedos, self.asymmetry_g)
+
     def _args(
         self,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]:
