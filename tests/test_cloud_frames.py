@@ -189,3 +189,46 @@ def test_the_demo_shows_clouds_and_their_shadow_on_the_street() -> None:
     near, far = lit & (f.depth_m < 25.0), lit & (f.depth_m > 60.0)
     assert near.sum() > 500 and far.sum() > 50
     assert st[near].mean() < 0.3 and st[far].mean() > 0.6
+
+
+def _sun_light(r: Renderer, scene, w: Weather, cloud: clouds.Cloud, diffuse: bool) -> np.ndarray:
+    """The frame's light from the sun alone: the frame under the sun less the one without it."""
+    from skyfall import _core
+
+    out = []
+    for weather in (w, Weather(sky=w.sky, sun_elevation_deg=w.sun_elevation_deg, sun_azimuth_deg=w.sun_azimuth_deg, sun_illuminance_lux=0.0)):
+        req = r._request(scene, weather, None, 0.0, 0, None, 1.0, 64)
+        req["clouds"] = clouds.frame_field(cloud, weather.sun_direction, diffuse=diffuse)
+        out.append(_core.render_frame(req)[0][..., 1].astype(np.float64))
+    return out[0] - out[1]
+
+
+def test_thin_clouds_single_scattering_matches_the_path_tracer() -> None:
+    # Optically thin particles: the splat's alpha * source is the volume's single scattering,
+    # and the Monte Carlo reference's first order gives it independently (analytic optical
+    # depths along its rays, the exact phase function and transmittance).
+    n = 9
+    cam = Camera((0.0, 1000.0, 600.0), vertical_fov_deg=8.0, width=n, height=n)
+    thin = clouds.Cloud(
+        np.array([[0.0, 1000.0, 0.0], [15.0, 1010.0, -20.0]]), np.array([20.0, 15.0]), np.array([0.05, 0.08]), np.array([1.0, 1.0])
+    )
+    w = Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=120.0)
+    r = Renderer(n, n, backend="cpu")
+    got = _sun_light(r, scenes.boxes([], ground=False, camera=cam), w, thin, diffuse=False).reshape(-1)
+    c = cam.with_resolution(n, n)
+    fx, fy, cx, cy = c.intrinsics()
+    uu, vv = np.meshgrid((np.arange(n) + 0.5 - cx) / fx, (np.arange(n) + 0.5 - cy) / fy)
+    d = np.stack([uu, -vv, -np.ones_like(uu)], axis=-1).reshape(-1, 3) @ np.asarray(c.world_from_camera)[:3, :3].T
+    mc, single, err = clouds.path_traced(thin, w.sun_direction, sun_relative=w.sun_relative, eye_m=c.position_m, directions=d, paths=4000, max_orders=3, seed=2)
+    lit = single > 0.2 * single.max()
+    assert lit.sum() >= 9
+    # Pixel by pixel within the reference's noise (its standard error, all orders: about the
+    # first order's here), and the summed light within 3 %.
+    assert (np.abs(got[lit] - single[lit]) < 4.0 * err[lit] + 0.03 * single[lit]).all()
+    assert got[lit].sum() / single[lit].sum() == pytest.approx(1.0, abs=0.03)
+    assert (mc >= single).all() and np.median((mc - single)[lit] / single[lit]) < 0.1  # thin: little beyond first order
+    # seeded
+    again = clouds.path_traced(thin, w.sun_direction, sun_relative=w.sun_relative, eye_m=c.position_m, directions=d[:3], paths=50, max_orders=3, seed=2)
+    np.testing.assert_array_equal(again[0], clouds.path_traced(thin, w.sun_direction, sun_relative=w.sun_relative, eye_m=c.position_m, directions=d[:3], paths=50, max_orders=3, seed=2)[0])
+    with pytest.raises(ValueError, match="paths"):
+        clouds.path_traced(thin, w.sun_direction, sun_relative=1.0, eye_m=c.position_m, directions=d, paths=0)

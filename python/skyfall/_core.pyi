@@ -38,6 +38,7 @@ __all__ = [
     "weather_optics",
     "weather_sun",
     "CloudField",
+    "cloud_path_traced",
     "LAYERS",
     "LAYER_NEUTRAL",
     "MAX_DIAMETER_MM",
@@ -299,12 +300,29 @@ class CloudField:
         asymmetry_g: float,
         sun_direction: tuple[float, float, float] | None,
         resolution: int,
+        *,
+        diffuse: bool = True,
     ) -> CloudField: ...
     @property
     def n_particles(self) -> int: ...
     @property
     def has_sun(self) -> bool: ...
     def sun_share(self, points_m: NDArray[np.float64]) -> NDArray[np.float32]: ...
+
+def cloud_path_traced(
+    positions_m: NDArray[np.float64],
+    radii_m: NDArray[np.float64],
+    optical_depths: NDArray[np.float64],
+    albedos: NDArray[np.float64],
+    asymmetry_g: float,
+    sun_direction: tuple[float, float, float],
+    sun_relative: float,
+    eye_m: tuple[float, float, float],
+    directions: NDArray[np.float64],
+    paths: int,
+    max_orders: int,
+    seed: int,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
 @final
 class Windshield:
     def __new__(

@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core
-from skyfall._validate import all_in_range, choice, float_array, in_range, integer_in_range
+from skyfall._validate import all_in_range, choice, float_array, in_range, integer, integer_in_range
 
 __all__ = [
     "FRAME_RESOLUTION",
@@ -44,6 +44,7 @@ __all__ = [
     "attenuation_volume",
     "harris_illumination",
     "particles",
+    "path_traced",
 ]
 
 KINDS: Final = ("cumulus", "stratocumulus", "broken")
@@ -373,10 +374,10 @@ def preset(name: str) -> Cloud:
     return Cloud(p, r, t, a, g)
 
 
-_FIELDS: weakref.WeakKeyDictionary[Cloud, dict[tuple[Any, int], Any]] = weakref.WeakKeyDictionary()
+_FIELDS: weakref.WeakKeyDictionary[Cloud, dict[tuple[Any, int, bool], Any]] = weakref.WeakKeyDictionary()
 
 
-def frame_field(clouds: Cloud | str, sun_direction: tuple[float, float, float] | None, resolution: int = FRAME_RESOLUTION) -> Any:
+def frame_field(clouds: Cloud | str, sun_direction: tuple[float, float, float] | None, resolution: int = FRAME_RESOLUTION, *, diffuse: bool = True) -> Any:
     """The clouds made ready for frames under a sun (``_core.CloudField``): their
     attenuation volumes for the sun and for the zenith at ``resolution``^3, built once per
     cloud, sun and resolution and cached while the cloud lives.
@@ -389,6 +390,10 @@ def frame_field(clouds: Cloud | str, sun_direction: tuple[float, float, float] |
         Towards the sun (``Weather.sun_direction``); None: no sun.
     resolution : int
         Voxels per side, in [2, 1024].
+    diffuse : bool
+        Light the fragments with the diffuse term (the approximation of multiple scattering,
+        see the README) besides the sun's single scattering: True in frames; False measures
+        single scattering alone.
 
     Returns
     -------
@@ -396,11 +401,70 @@ def frame_field(clouds: Cloud | str, sun_direction: tuple[float, float, float] |
     """
     cloud = preset(clouds) if isinstance(clouds, str) else _cloud(clouds)
     n = integer_in_range("resolution", resolution)
-    key = (None if sun_direction is None else tuple(float(v) for v in sun_direction), n)
+    sun3 = None if sun_direction is None else (float(sun_direction[0]), float(sun_direction[1]), float(sun_direction[2]))
+    key = (sun3, n, bool(diffuse))
     cache = _FIELDS.setdefault(cloud, {})
     field = cache.get(key)
     if field is None:
-        sun = None if key[0] is None else key[0]
-        field = _core.CloudField(*cloud._args(), sun, n)
+        field = _core.CloudField(*cloud._args(), sun3, n, diffuse=bool(diffuse))
         cache[key] = field
     return field
+
+
+def path_traced(
+    cloud: Cloud,
+    sun_direction: Any,
+    *,
+    sun_relative: float,
+    eye_m: Any,
+    directions: Any,
+    paths: int = 256,
+    max_orders: int = 256,
+    seed: int = 0,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The reference for clouds' light: a brute-force Monte Carlo path tracer of ``cloud``
+    under the sun, every order of scattering, a black sky.
+
+    The medium is the cloud's own Gaussian density (each particle's column through its centre
+    is its optical depth, its albedo weighs its share, Henyey-Greenstein with the cloud's g);
+    free flights are sampled exactly by inverting the analytic optical depth along each ray,
+    and each vertex adds the sun's light through the exact transmittance (next-event
+    estimation). Results are in frames' relative units (pi L / E, the sun's normal
+    illuminance ``sun_relative`` times E).
+
+    Parameters
+    ----------
+    cloud : Cloud
+        The cloud.
+    sun_direction : sequence of 3 float
+        Towards the sun.
+    sun_relative : float
+        The sun's normal illuminance over E, at least 0 (``Weather.sun_relative``).
+    eye_m : sequence of 3 float
+        Where the paths start, world metres.
+    directions : array_like, shape (N, 3)
+        The view directions (normalised here).
+    paths : int
+        Paths per direction, at least 1.
+    max_orders : int
+        Scattering vertices per path at most, at least 1.
+    seed : int
+        Seed, in [0, 2^64): direction k's paths are seeded by (seed, k).
+
+    Returns
+    -------
+    radiance, single, std_err : ndarray, shape (N,)
+        Every order; single scattering alone; one standard error of ``radiance``.
+    """
+    c = _cloud(cloud)
+    sun = _sun(sun_direction)
+    eye = float_array("eye_m", eye_m).reshape(-1)
+    if eye.shape != (3,):
+        raise ValueError(f"eye_m must have 3 components, got shape {eye.shape}")
+    d = np.ascontiguousarray(float_array("directions", directions), dtype=np.float64)
+    if d.ndim != 2 or d.shape[1] != 3:
+        raise ValueError(f"directions must have shape (N, 3), got {d.shape}")
+    n_paths = integer("paths", paths, 1, 1 << 24)
+    orders = integer("max_orders", max_orders, 1, 1 << 16)
+    s = integer_in_range("seed", seed)
+    return _core.cloud_path_traced(*c._args(), sun, float(sun_relative), (float(eye[0]), float(eye[1]), float(eye[2])), d, n_paths, orders, s)

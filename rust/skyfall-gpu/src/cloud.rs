@@ -63,7 +63,7 @@ impl FramePass for CloudPass {
                 u32::from(t.layers.get(Layer::CloudAlpha).is_some()),
             ],
             sun_g: sun_dir,
-            sun_light: [l.sun.x, l.sun.y, l.sun.z, 0.0],
+            sun_light: [l.sun.x, l.sun.y, l.sun.z, if s.diffuse { 1.0 } else { 0.0 }],
             sky_light: [l.sky.x, l.sky.y, l.sky.z, 0.0],
             sun_volume: VolumeUniform::new(sun_view),
             zenith_volume: VolumeUniform::new(Some(&s.zenith)),

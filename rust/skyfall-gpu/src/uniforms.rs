@@ -269,7 +269,7 @@ pub struct CloudUniform {
     pub counts: [u32; 4],
     /// Towards the sun (xyz), Henyey–Greenstein g (w).
     pub sun_g: [f32; 4],
-    /// The sun's normal illuminance over E per channel (xyz).
+    /// The sun's normal illuminance over E per channel (xyz); the diffuse light on (w = 1).
     pub sun_light: [f32; 4],
     /// The open sky's light per channel (xyz).
     pub sky_light: [f32; 4],

@@ -200,7 +200,7 @@ impl CloudField {
     /// Builds the field of a cloud's arrays under a sun towards `sun_direction` (None: no sun)
     /// at `resolution`³ voxels, the GIL released.
     #[new]
-    #[pyo3(signature = (positions_m, radii_m, optical_depths, albedos, asymmetry_g, sun_direction, resolution))]
+    #[pyo3(signature = (positions_m, radii_m, optical_depths, albedos, asymmetry_g, sun_direction, resolution, *, diffuse=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -211,6 +211,7 @@ impl CloudField {
         asymmetry_g: f64,
         sun_direction: Option<[f64; 3]>,
         resolution: usize,
+        diffuse: bool,
     ) -> PyResult<Self> {
         let cloud = cloud_of(
             &positions_m,
@@ -219,11 +220,12 @@ impl CloudField {
             &albedos,
             asymmetry_g,
         )?;
-        let field = py
+        let mut field = py
             .detach(|| {
                 skyfall_core::cloud::frame::CloudField::new(cloud, sun_direction, resolution)
             })
             .map_err(CoreError)?;
+        field.diffuse = diffuse;
         Ok(CloudField {
             field: std::sync::Arc::new(field),
         })
@@ -268,4 +270,87 @@ impl CloudField {
             .collect();
         crate::alloc::from_slice::<f32, Ix1>(py, &[out.len()], &out)
     }
+}
+
+/// Three per-direction arrays.
+type Three<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
+/// The Monte Carlo reference (`skyfall_core::cloud::reference::path_trace`): (radiance of
+/// every order, single scattering alone, one standard error) per direction, relative units.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+pub fn cloud_path_traced<'py>(
+    py: Python<'py>,
+    positions_m: PyReadonlyArray2<'py, f64>,
+    radii_m: PyReadonlyArray1<'py, f64>,
+    optical_depths: PyReadonlyArray1<'py, f64>,
+    albedos: PyReadonlyArray1<'py, f64>,
+    asymmetry_g: f64,
+    sun_direction: [f64; 3],
+    sun_relative: f64,
+    eye_m: [f64; 3],
+    directions: PyReadonlyArray2<'py, f64>,
+    paths: usize,
+    max_orders: usize,
+    seed: u64,
+) -> PyResult<Three<'py>> {
+    let cloud = cloud_of(
+        &positions_m,
+        &radii_m,
+        &optical_depths,
+        &albedos,
+        asymmetry_g,
+    )?;
+    let shape = directions.shape();
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(invalid(
+            "directions",
+            None,
+            format!("must have shape (N, 3), got {shape:?}"),
+        ));
+    }
+    if !(sun_relative.is_finite() && sun_relative >= 0.0) {
+        return Err(invalid(
+            "sun_relative",
+            None,
+            format!("= {sun_relative} must be finite and at least 0"),
+        ));
+    }
+    let dirs: Vec<glam::DVec3> = directions
+        .as_slice()?
+        .chunks_exact(3)
+        .map(|c| glam::DVec3::new(c[0], c[1], c[2]))
+        .collect();
+    if dirs.iter().any(|d| !d.is_finite() || d.length() < 1e-12) {
+        return Err(invalid(
+            "directions",
+            None,
+            "each must be finite and non-zero",
+        ));
+    }
+    let eye = glam::DVec3::from_array(eye_m);
+    let r = py
+        .detach(|| {
+            skyfall_core::cloud::reference::path_trace(
+                &cloud,
+                sun_direction,
+                sun_relative,
+                eye,
+                &dirs,
+                paths,
+                max_orders,
+                seed,
+            )
+        })
+        .map_err(CoreError)?;
+    let n = dirs.len();
+    Ok((
+        crate::alloc::from_slice::<f64, Ix1>(py, &[n], &r.radiance)?,
+        crate::alloc::from_slice::<f64, Ix1>(py, &[n], &r.single)?,
+        crate::alloc::from_slice::<f64, Ix1>(py, &[n], &r.std_err)?,
+    ))
 }

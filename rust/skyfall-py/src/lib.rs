@@ -26,8 +26,8 @@ use pyo3::prelude::*;
 mod _core {
     #[pymodule_export]
     use super::clouds::{
-        CloudField, attenuation_volume, check_sun_direction, cloud_particles, harris_illumination,
-        sample_attenuation,
+        CloudField, attenuation_volume, check_sun_direction, cloud_particles, cloud_path_traced,
+        harris_illumination, sample_attenuation,
     };
     #[pymodule_export]
     use super::color::{apply_lut8, encode_srgb8};

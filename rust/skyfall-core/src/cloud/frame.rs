@@ -58,6 +58,9 @@ pub struct CloudField {
     pub sun: Option<(DVec3, AttenuationVolume)>,
     /// Γ for light from the zenith: the share of the sky's light from above.
     pub zenith: AttenuationVolume,
+    /// Whether fragments get the diffuse light ([`diffuse_light`]) besides the sun's single
+    /// scattering (true in frames; false measures single scattering alone).
+    pub diffuse: bool,
 }
 
 impl CloudField {
@@ -73,7 +76,12 @@ impl CloudField {
             None => None,
         };
         let zenith = AttenuationVolume::build(&cloud, [0.0, 1.0, 0.0], resolution)?;
-        Ok(CloudField { cloud, sun, zenith })
+        Ok(CloudField {
+            cloud,
+            sun,
+            zenith,
+            diffuse: true,
+        })
     }
 }
 
@@ -216,6 +224,8 @@ pub struct CloudSplats<'a> {
     pub light: CloudLight,
     /// Henyey–Greenstein asymmetry.
     pub g: f32,
+    /// The field's [`CloudField::diffuse`].
+    pub diffuse: bool,
 }
 
 /// A splat's pixel box in `cam` (inclusive), or None when it lies wholly behind the camera or
@@ -376,6 +386,7 @@ impl<'a> CloudSplats<'a> {
             zenith: VolumeView::new(&field.zenith, eye),
             light: pass.light,
             g: cloud.asymmetry_g as f32,
+            diffuse: field.diffuse,
         })
     }
 
@@ -384,12 +395,20 @@ impl<'a> CloudSplats<'a> {
     #[inline]
     fn source(&self, x: Vec3, d: Vec3) -> Vec3 {
         let (gz, gz_exit) = self.zenith.sample_with_exit(x);
-        let sky = self.light.sky * diffuse_light(gz, gz_exit, self.g, true);
+        let sky = if self.diffuse {
+            self.light.sky * diffuse_light(gz, gz_exit, self.g, true)
+        } else {
+            self.light.sky * gz
+        };
         match &self.sun {
             Some((s, v)) => {
                 let (direct, exit) = v.sample_with_exit(x);
                 let phase = henyey_greenstein(f64::from(d.dot(*s)), f64::from(self.g)) as f32;
-                let diffuse = diffuse_light(direct, exit, self.g, false);
+                let diffuse = if self.diffuse {
+                    diffuse_light(direct, exit, self.g, false)
+                } else {
+                    0.0
+                };
                 self.light.sun * (std::f32::consts::PI * phase * direct + diffuse) + sky
             }
             None => sky,

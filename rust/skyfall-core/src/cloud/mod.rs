@@ -18,6 +18,8 @@
 //! - [`harris`]: Harris' sorted recurrence, the reference and the speed baseline.
 //! - [`volume`]: the attenuation volume Γ, order-independent, built by splatting log G and
 //!   a prefix sum along the light.
+//! - [`reference`]: a brute-force Monte Carlo path tracer of a cloud under the sun, every
+//!   order of scattering: what the frames' lighting is measured against.
 //! - [`frame`]: clouds in frames: the cloud pass (camera-facing Gaussian splats composited
 //!   back to front) and the sun's share through the clouds.
 
@@ -26,6 +28,7 @@ pub mod generate;
 pub mod harris;
 pub mod light;
 pub mod optics;
+pub mod reference;
 pub mod volume;
 
 use crate::error::{Error, Param, Result};

@@ -11,7 +11,7 @@ struct VolumeBox {
 struct CloudInfo {
     counts: vec4<u32>,   // tiles across, tile side (px), sun present, cloud_alpha written
     sun_g: vec4<f32>,    // towards the sun, g
-    sun_light: vec4<f32>,
+    sun_light: vec4<f32>,   // the sun's light (xyz), diffuse light on (w != 0)
     sky_light: vec4<f32>,
     sun_volume: VolumeBox,
     zenith_volume: VolumeBox,
@@ -121,14 +121,22 @@ fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
 // CloudSplats::source.
 fn source(x: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     let g = info.sun_g.w;
+    let diffuse_on = info.sun_light.w != 0.0;
     let z = sample_zenith(x);
-    let sky = info.sky_light.xyz * diffuse_light(z.x, z.y, g, true);
+    var sky = info.sky_light.xyz * z.x;
+    if diffuse_on {
+        sky = info.sky_light.xyz * diffuse_light(z.x, z.y, g, true);
+    }
     if info.counts.z == 0u {
         return sky;
     }
     let s = sample_sun(x);
     let phase = henyey_greenstein(dot(d, info.sun_g.xyz), g);
-    return info.sun_light.xyz * (PI * phase * s.x + diffuse_light(s.x, s.y, g, false)) + sky;
+    var diffuse = 0.0;
+    if diffuse_on {
+        diffuse = diffuse_light(s.x, s.y, g, false);
+    }
+    return info.sun_light.xyz * (PI * phase * s.x + diffuse) + sky;
 }
 
 @compute @workgroup_size(8, 8)
