@@ -18,8 +18,9 @@
 //! first term is the sun's single scattering (the paper's); F ([`diffuse_light`]) the diffuse
 //! light at x, scattered towards the viewer as from an isotropic field: the two-stream
 //! transmission D of the column above x towards its light (the sun's less its direct beam; the
-//! sky's whole), plus D times the two-stream reflection of the column below x (the light that
-//! comes back out of the cloud beneath). Both columns are read from the volume: Γ at x, and at
+//! sky's whole), plus D times half the two-stream reflection of the column below x (the light
+//! that comes back out of the cloud beneath; half, the mean cosine of incidence over a sphere's
+//! lit half). Both columns are read from the volume: Γ at x, and at
 //! the far face, where the light leaves the cloud. That diffuse part is an approximation of
 //! multiple scattering that has not been measured against a multiple-scattering reference (a
 //! Monte Carlo path tracer); without it a cloud more than a few optical depths thick renders
@@ -493,18 +494,20 @@ pub fn diffuse_share(gamma: f32, g: f32) -> f32 {
 }
 
 /// The diffuse light at a point, per unit of its light's flux, from Γ there (`gamma`) and
-/// where the light leaves the cloud (`exit`): D(τ_a) (1 + R(τ_b)), D the two-stream
+/// where the light leaves the cloud (`exit`): D(τ_a) + D(τ_a) R(τ_b)/2, D the two-stream
 /// transmission of the column above ([`diffuse_share`]; less the direct beam Γ unless
 /// `with_direct`), R(τ_b) = 1 − D(τ_b) the two-stream reflection of the column below, τ_b =
-/// ln(Γ/Γ_exit) / (1 − g²). At the lit face of a thick cloud this is about 1 (its light comes
-/// back out), deep under it about D.
+/// ln(Γ/Γ_exit) / (1 − g²), halved as the mean cosine of incidence over a sphere's sunlit
+/// half is ½ (the two-stream slab faces its light). At the lit face of a thick cloud this is
+/// about R/2, deep under it about D. Measured against the path tracer
+/// (`benches/results/clouds_reference.md`) it still makes a thick cumulus too bright.
 #[inline]
 pub fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
     let d = diffuse_share(gamma, g);
     let below = (gamma.max(1e-30).ln() - exit.max(1e-30).ln()).max(0.0) / (1.0 - g * g);
     let r = 1.0 - 1.0 / (1.0 + 0.75 * (1.0 - g) * below);
     let reaching = if with_direct { d } else { (d - gamma).max(0.0) };
-    reaching + d * r
+    reaching + 0.5 * d * r
 }
 
 /// Γ of the sun at `p_rel` (relative to the camera), or 1 without a cloud: the clouds' share of
@@ -693,11 +696,11 @@ mod tests {
         assert!((diffuse_share(gamma, 0.86) - 1.0 / 2.05).abs() < 1e-4);
         assert!(diffuse_share(0.0, 0.86) > 0.0 && diffuse_share(0.0, 0.86) < 0.05);
         // The diffuse light: none in open air; at the lit face of a thick cloud (τ_b = 50 below)
-        // its reflection, 1 − 1/(1 + 0.75·0.14·50); deep under it the transmission alone.
+        // half its reflection, 1 − 1/(1 + 0.75·0.14·50); deep under it the transmission alone.
         assert_eq!(diffuse_light(1.0, 1.0, 0.86, false), 0.0);
         let thick = (-(1.0f32 - 0.86 * 0.86) * 50.0).exp();
         let r = 1.0 - 1.0 / (1.0 + 0.75 * 0.14 * 50.0);
-        assert!((diffuse_light(1.0, thick, 0.86, false) - r).abs() < 1e-4);
+        assert!((diffuse_light(1.0, thick, 0.86, false) - 0.5 * r).abs() < 1e-4);
         let under = diffuse_light(thick, thick, 0.86, true);
         assert!((under - diffuse_share(thick, 0.86)).abs() < 1e-6);
     }

@@ -115,7 +115,7 @@ fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
     if with_direct {
         reaching = d;
     }
-    return reaching + d * r;
+    return reaching + 0.5 * d * r;
 }
 
 // CloudSplats::source.
