@@ -217,8 +217,14 @@ pub fn transmittance_row(
         // SAFETY: a `Level::Avx512` comes only from `best_level`, which found AVX-512F (and
         // AVX2 and FMA).
         Level::Avx512 => unsafe { avx512::transmittance_row(haze, rays, depth, t) },
-        _ => haze.transmittance_row(rays, depth, t),
+        _ => transmittance_row_scalar(haze, rays, depth, t),
     }
+}
+
+/// The scalar twin, not inlined into its caller, so a profile names it.
+#[inline(never)]
+fn transmittance_row_scalar(haze: &Haze, rays: &RowRays<'_>, depth: &[f32], t: &mut [f32]) {
+    haze.transmittance_row(rays, depth, t)
 }
 
 /// Linear values to 8-bit sRGB as [`crate::color::Srgb8Encoder::encode`] does, whole groups
