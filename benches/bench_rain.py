@@ -126,7 +126,8 @@ def profile_lines(prof: dict[str, object]) -> list[str]:
     lines += [
         "Instructions per frame (callgrind, one rayon thread, the mean of two frames after a first). Valgrind has",
         "no AVX-512, so these are the AVX2 kernels' counts beside the scalar twins'; a stage is a function's",
-        "inclusive count (`rest` is the frame's instructions outside them: Python, numpy and the binding).",
+        "inclusive count on its thread (`rest`: the rest of the frame: Python, numpy, the binding, and the drops' generation",
+        "and lighting, which run as rayon jobs outside `Passes::prepare`'s own stack).",
         "",
         "| stage | rain + haze, avx2 | rain + haze, scalar | haze alone, avx2 | haze alone, scalar |",
         "|---|---|---|---|---|",
