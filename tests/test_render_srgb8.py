@@ -183,3 +183,26 @@ def test_fuses_srgb8_says_which_path_render_srgb8_takes():
     assert not r.fuses_srgb8(photo8, Weather(windshield=glass))
     cover = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0), duration_s=600.0, dt_s=600.0, resolution_m=10.0)
     assert not r.fuses_srgb8(photo8, Weather(), cover)
+
+
+@pytest.mark.parametrize("level", ["scalar", "avx2"])
+def test_every_simd_level_gives_the_same_bytes(cpu, monkeypatch, level):
+    # The fused path's kernels at the best level the CPU has against a capped one (the scalar
+    # twins, or AVX2 below AVX-512): identical bytes and masks; a level above the CPU's is
+    # capped at it, so this runs everywhere. And io.to_srgb8's encoder alike.
+    scene = photo8(4)
+    weather = Weather(rain_rate_mm_h=40.0, visibility_m=300.0, wind_m_s=(2.0, 0.0, 0.0))
+    alpha_best = np.empty((H, W), np.float32)
+    best = cpu.render_srgb8(scene, weather, seed=5, rain_alpha_out=alpha_best)
+    linear = np.linspace(-0.1, 1.1, 3 * W * H, dtype=np.float32).reshape(H, W, 3)
+    encoded = io.to_srgb8(linear)
+    monkeypatch.setenv("SKYFALL_SIMD", level)
+    alpha = np.empty((H, W), np.float32)
+    capped = cpu.render_srgb8(scene, weather, seed=5, rain_alpha_out=alpha)
+    np.testing.assert_array_equal(capped, best)
+    np.testing.assert_array_equal(alpha, alpha_best)
+    np.testing.assert_array_equal(io.to_srgb8(linear), encoded)
+    assert (best != scene.srgb8).mean() > 0.5 and alpha_best.max() > 0.005
+    monkeypatch.setenv("SKYFALL_SIMD", "")
+    monkeypatch.setenv("SKYFALL_SCALAR_KERNELS", "shade,transmittance")
+    np.testing.assert_array_equal(cpu.render_srgb8(scene, weather, seed=5), best)

@@ -14,6 +14,8 @@
 //! - [`particles`]: the particle toolkit shared by rain and (next) snow.
 //! - [`cloud`]: particle clouds, Harris' illumination and the attenuation volume (Shimada,
 //!   Shinya, Shiraishi & Harada).
+//! - [`simd`]: the 8-bit output stage's kernels vectorised (AVX2), chosen at run time; the
+//!   one module allowed `unsafe`.
 //! - [`windshield`]: drops on a windshield, wipers, and their refraction (Gotou, Tanaka & Sagawa).
 
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
@@ -30,6 +32,7 @@ pub mod rain;
 pub mod ranges;
 pub mod scene;
 mod seed;
+pub mod simd;
 pub mod sky;
 pub mod snow;
 pub mod weather;

@@ -85,6 +85,12 @@ impl Srgb8Encoder {
         self.encode_unit(if x > 0.0 { x.min(1.0) } else { 0.0 })
     }
 
+    /// The smallest input of each code from 1 to 255 at index code − 1 (+inf at 255): the
+    /// table [`Self::encode_unit`] finishes with, for the vectorised twins in [`crate::simd`].
+    pub(crate) fn thresholds(self) -> &'static [f32; 256] {
+        &self.0.thresholds
+    }
+
     /// [`Self::encode`] of a value already in [0, 1] (clamped by the caller, NaN as 0).
     #[inline]
     pub fn encode_unit(self, x: f32) -> u8 {
@@ -103,11 +109,17 @@ impl Default for Srgb8Encoder {
 /// Encodes linear values to 8-bit sRGB (rounded to nearest, clipped, NaN as 0), in parallel;
 /// the same bits as [`encode_srgb8_formula`], through [`Srgb8Encoder`].
 pub fn encode_srgb8(linear: &[f32], out: &mut [u8]) {
+    encode_srgb8_at(crate::simd::Dispatch::detect().encode(), linear, out)
+}
+
+/// [`encode_srgb8`] with its kernel at `level` (the same bits at every level).
+pub fn encode_srgb8_at(level: crate::simd::Level, linear: &[f32], out: &mut [u8]) {
     let e = Srgb8Encoder::new();
     out.par_chunks_mut(1 << 16)
         .zip(linear.par_chunks(1 << 16))
         .for_each(|(o, l)| {
-            for (b, &x) in o.iter_mut().zip(l) {
+            let done = crate::simd::encode_row(level, e.thresholds(), l, o);
+            for (b, &x) in o[done..].iter_mut().zip(&l[done..]) {
                 *b = e.encode(x);
             }
         });

@@ -22,6 +22,7 @@ use crate::particles::composite::{Accumulator, composite_band};
 use crate::particles::streak::{LAYER_SNOW, ScreenStreak};
 use crate::rain::streaks::{RainFrame, RainStats};
 use crate::scene::camera::Camera;
+use crate::simd::{self, Dispatch, Level};
 use crate::snow::streaks::{SnowFrame, SnowStats};
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
@@ -95,7 +96,8 @@ thread_local! {
 }
 
 /// Renders haze, rain and snow over an 8-bit photo into `out` (same size), on the CPU.
-/// Returns the particles' counts when `rain` or `snow` is given.
+/// Returns the particles' counts when `rain` or `snow` is given. The per-pixel kernels run at
+/// the best SIMD level of the CPU ([`Dispatch::detect`]); the bytes are the scalar code's.
 pub fn render_photo8(
     cam: &Camera,
     photo: &Photo8<'_>,
@@ -103,6 +105,20 @@ pub fn render_photo8(
     rain: Option<&RainFrame<'_>>,
     snow: Option<&SnowFrame<'_>>,
     out: Photo8Out<'_>,
+) -> Result<Option<Photo8Stats>> {
+    render_photo8_with(cam, photo, haze, rain, snow, out, Dispatch::detect())
+}
+
+/// [`render_photo8`] with its per-pixel kernels at the levels of `dispatch` (the same bytes
+/// at every level: [`Dispatch::scalar`] is the reference).
+pub fn render_photo8_with(
+    cam: &Camera,
+    photo: &Photo8<'_>,
+    haze: Option<&Haze>,
+    rain: Option<&RainFrame<'_>>,
+    snow: Option<&SnowFrame<'_>>,
+    out: Photo8Out<'_>,
+    dispatch: Dispatch,
 ) -> Result<Option<Photo8Stats>> {
     check_frame_size(cam)?;
     let (w, n) = (cam.width as usize, cam.pixels());
@@ -245,7 +261,9 @@ pub fn render_photo8(
                     for row in 0..rows {
                         let seg = row * w + cols.start..row * w + cols.end;
                         if let Some(h) = haze {
-                            h.transmittance_row(
+                            simd::transmittance_row(
+                                dispatch.transmittance(),
+                                h,
                                 &rays.row((y0 + row) as u32, cols.clone()),
                                 &depth[seg.clone()],
                                 t_seg,
@@ -257,7 +275,8 @@ pub fn render_photo8(
                         );
                         let maps = || Some((&p[seg.clone()], &q[seg.start..], px));
                         match (rained, grey) {
-                            (false, _) => shade_row::<1>(
+                            (false, _) => shade_row_at::<1>(
+                                dispatch.shade(),
                                 photo.decode,
                                 enc,
                                 air,
@@ -266,7 +285,8 @@ pub fn render_photo8(
                                 src_row,
                                 out_row,
                             ),
-                            (true, true) => shade_row::<1>(
+                            (true, true) => shade_row_at::<1>(
+                                dispatch.shade(),
                                 photo.decode,
                                 enc,
                                 air,
@@ -275,7 +295,8 @@ pub fn render_photo8(
                                 src_row,
                                 out_row,
                             ),
-                            (true, false) => shade_row::<3>(
+                            (true, false) => shade_row_at::<3>(
+                                dispatch.shade(),
                                 photo.decode,
                                 enc,
                                 air,
@@ -403,6 +424,36 @@ fn raster_tile<const K: usize>(
 #[inline(always)]
 fn load4(s: &[f32]) -> Vec4 {
     s.first_chunk::<4>().map_or(Vec4::ZERO, |a| Vec4::from(*a))
+}
+
+/// [`shade_row`] with its whole groups of pixels at `level` ([`simd`]'s twin, the same bits),
+/// the rest by [`shade_row`] itself.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn shade_row_at<const K: usize>(
+    level: Level,
+    decode: &[f32; 256],
+    enc: Srgb8Encoder,
+    air: [f32; 3],
+    t: &[f32],
+    pq: Option<(&[f32], &[f32], usize)>,
+    src: &[u8],
+    out: &mut [u8],
+) {
+    let done = simd::shade_row::<K>(level, decode, enc.thresholds(), air, t, pq, src, out);
+    if done == 0 {
+        return shade_row::<K>(decode, enc, air, t, pq, src, out);
+    }
+    let rest = pq.map(|(p, q, stride)| (&p[done..], &q[done..], stride));
+    shade_row::<K>(
+        decode,
+        enc,
+        air,
+        &t[done..],
+        rest,
+        &src[3 * done..],
+        &mut out[3 * done..],
+    );
 }
 
 /// A row's bytes: decoded, hazed (eq. 2; t = 1 without haze), mapped by the rain's P·C + Q
@@ -557,6 +608,20 @@ mod tests {
     use crate::sky::ambient::AmbientMap;
     use crate::sky::{Sky, cie::SkyKind};
     use glam::{Mat3, Vec3};
+
+    /// The SIMD levels this CPU has; AVX2 at least wherever it has AVX2 and FMA (asserted, so
+    /// the comparisons are not the scalar code against itself on such a CPU).
+    fn simd_levels() -> Vec<Level> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            assert!(simd::best_level() >= Level::Avx2);
+        }
+        simd::levels()
+            .into_iter()
+            .filter(|&l| l != Level::Scalar)
+            .collect()
+    }
 
     fn decode_table() -> [f32; 256] {
         std::array::from_fn(|k| {
@@ -751,6 +816,229 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_simd_shading_gives_the_scalar_bits_on_every_code() {
+        // Every code in every channel over a grid of transmittances and maps, each row length
+        // past whole groups (every lane remainder 0..16) and unaligned starts, for one Q plane
+        // and three, at every SIMD level the CPU has, against the one-by-one reference.
+        let levels = simd_levels();
+        let dec = decode_table();
+        let enc = Srgb8Encoder::new();
+        let ts = [0.0, 1e-7, 0.003, 0.1, 0.37, 0.5, 0.81, 0.999_999, 1.0];
+        let pqs: [Option<(f32, [f32; 3])>; 6] = [
+            None,
+            Some((1.0, [0.0; 3])),
+            Some((0.0, [0.2, 0.5, 1.2])),
+            Some((0.62, [0.013, 0.0, 0.4])),
+            Some((0.97, [0.05, 0.9, 0.002])),
+            Some((0.3, [1.0, 2.0, 0.7])),
+        ];
+        let mut rows = 0;
+        for air in [[0.4, 0.42, 0.45], [0.3, 1.5, 0.0]] {
+            for (j, &tj) in ts.iter().enumerate() {
+                for pq in pqs {
+                    for rem in 0..16 {
+                        for start in [0usize, 1, 3, 6] {
+                            let n = 256 + rem;
+                            let total = start + n;
+                            // pixel i: codes i, 255 − i and i + 85 (mod 256), so each channel
+                            // sees all 256; t varies along the row around the grid's value
+                            let src: Vec<u8> = (0..total)
+                                .flat_map(|i| {
+                                    let k = (i - start.min(i)) % 256;
+                                    [k as u8, (255 - k) as u8, ((k + 85) % 256) as u8]
+                                })
+                                .collect();
+                            let t: Vec<f32> = (0..total)
+                                .map(|i| {
+                                    if i % 3 == 0 {
+                                        tj
+                                    } else {
+                                        ts[(i + j) % ts.len()]
+                                    }
+                                })
+                                .collect();
+                            let stride = total + 5;
+                            let (p0, q0) = pq.unwrap_or((1.0, [0.0; 3]));
+                            let p: Vec<f32> = (0..total)
+                                .map(|i| if i % 2 == 0 { p0 } else { p0 * 0.5 })
+                                .collect();
+                            let q: Vec<f32> = (0..3 * stride)
+                                .map(|i| q0[i / stride] * (1.0 + (i % 7) as f32 * 0.01))
+                                .collect();
+                            let maps = pq.map(|_| (&p[start..], &q[start..], stride));
+                            for (k, &level) in [1, 3]
+                                .iter()
+                                .flat_map(|k| levels.iter().map(move |l| (*k, l)))
+                            {
+                                let (mut a, mut b) = (vec![0u8; 3 * n], vec![0u8; 3 * n]);
+                                let (s, tt) = (&src[3 * start..], &t[start..]);
+                                if k == 1 {
+                                    shade_row_at::<1>(level, &dec, enc, air, tt, maps, s, &mut a);
+                                    shade_row_x1::<1>(&dec, enc, air, tt, maps, s, &mut b);
+                                } else {
+                                    shade_row_at::<3>(level, &dec, enc, air, tt, maps, s, &mut a);
+                                    shade_row_x1::<3>(&dec, enc, air, tt, maps, s, &mut b);
+                                }
+                                assert_eq!(
+                                    a, b,
+                                    "{level:?} K {k} t {tj} maps {pq:?} n {n} start {start}"
+                                );
+                                rows += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(rows, 2 * 9 * 6 * 16 * 4 * 2 * levels.len());
+    }
+
+    #[test]
+    fn the_simd_shading_rounds_as_the_scalar_code_at_the_thresholds() {
+        // Values that land within a few ulp of the encoder's thresholds, where one rounding
+        // done otherwise (a fused multiply-add, another order) changes the byte: t chosen so
+        // the hazed value meets a threshold (no maps), or Q so the mapped one does.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
+        let dec = decode_table();
+        let enc = Srgb8Encoder::new();
+        let thr = enc.thresholds();
+        let air = [0.4f32, 0.42, 0.45];
+        let near = |x: f32, rng: &mut rand_pcg::Pcg64Mcg| {
+            f32::from_bits((x.to_bits() as i64 + rng.random_range(-3..=3)).max(0) as u32)
+        };
+        for k in [1usize, 3] {
+            for mapped in [false, true] {
+                let n = 40_000;
+                let src: Vec<u8> = (0..3 * n).map(|_| rng.random()).collect();
+                let code = |rng: &mut rand_pcg::Pcg64Mcg| thr[rng.random_range(1..255)];
+                let mut t = vec![0.0f32; n];
+                let p: Vec<f32> = (0..n).map(|_| rng.random_range(0.05..1.0)).collect();
+                let mut q = vec![0.0f32; 3 * n];
+                for i in 0..n {
+                    let ch = i % 3; // the channel aimed at
+                    let v = dec[usize::from(src[3 * i + ch])];
+                    if mapped {
+                        t[i] = rng.random();
+                        let hv = v * t[i] + air[ch] * (1.0 - t[i]);
+                        for c in 0..3 {
+                            let aim = if c == ch || k == 1 { ch } else { c };
+                            let hc =
+                                dec[usize::from(src[3 * i + aim])] * t[i] + air[aim] * (1.0 - t[i]);
+                            let target = code(&mut rng);
+                            let qv = near(
+                                (target - if c == ch { hv } else { hc } * p[i]).max(0.0),
+                                &mut rng,
+                            );
+                            q[c * n + i] = qv;
+                        }
+                    } else {
+                        let target = code(&mut rng);
+                        let d = v - air[ch];
+                        t[i] = if d.abs() > 1e-3 {
+                            near(((target - air[ch]) / d).clamp(0.0, 1.0), &mut rng)
+                        } else {
+                            rng.random()
+                        };
+                    }
+                }
+                let maps = mapped.then_some((&p[..], &q[..], n));
+                for level in simd_levels() {
+                    let (mut a, mut b) = (vec![0u8; 3 * n], vec![0u8; 3 * n]);
+                    if k == 1 {
+                        shade_row_at::<1>(level, &dec, enc, air, &t, maps, &src, &mut a);
+                        shade_row_x1::<1>(&dec, enc, air, &t, maps, &src, &mut b);
+                    } else {
+                        shade_row_at::<3>(level, &dec, enc, air, &t, maps, &src, &mut a);
+                        shade_row_x1::<3>(&dec, enc, air, &t, maps, &src, &mut b);
+                    }
+                    let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+                    assert_eq!(differ, 0, "{level:?} K {k} mapped {mapped}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_whole_fused_frame_is_the_same_bytes_at_every_simd_level() {
+        // render_photo8 with every kernel scalar against each SIMD level the CPU has: haze
+        // alone, and haze with rain in grey and in coloured light, on widths whose tiles end
+        // past whole groups of eight (300 = 2·128 + 44, 301) and a short last band.
+        let lamp = Light {
+            position_m: Vec3::new(0.5, 1.8, -1.5),
+            intensity_cd: 3e4,
+            color: Vec3::new(1.0, 0.7, 0.4),
+            spot: None,
+        };
+        let lit = RainShading {
+            lights: vec![lamp],
+            ..RainShading::open_sky()
+        };
+        let dec = decode_table();
+        let haze = Haze::new(0.03, [0.4, 0.42, 0.45], 600.0).unwrap();
+        let region =
+            RainRegion::new(60.0, &[1.0, 1.5, 2.0, 3.0], 4.0, [1.5, 0.0, 0.0], 0.3, 5).unwrap();
+        let mut drawn = 0;
+        for w in [300usize, 301] {
+            let h = 61usize;
+            let cam = Camera::new(
+                w as u32,
+                h as u32,
+                [60.0, 60.0, w as f32 / 2.0, 30.5],
+                Vec3::new(0.0, 1.6, 0.0),
+                Mat3::IDENTITY,
+            )
+            .unwrap();
+            let (srgb, depth) = photo(w, h);
+            let photo = Photo8 {
+                srgb: &srgb,
+                depth_m: &depth,
+                decode: &dec,
+            };
+            for shading in [None, Some(RainShading::open_sky()), Some(lit.clone())] {
+                let rf = shading.as_ref().map(|shading| RainFrame {
+                    region: &region,
+                    exposure_s: 1.0 / 30.0,
+                    camera_velocity_m_s: Vec3::ZERO,
+                    lens: None,
+                    ground: false,
+                    shelter: &[],
+                    shading,
+                });
+                let run = |d: Dispatch| {
+                    let mut out = vec![0u8; srgb.len()];
+                    let mut alpha = vec![0.0f32; w * h];
+                    let stats = render_photo8_with(
+                        &cam,
+                        &photo,
+                        Some(&haze),
+                        rf.as_ref(),
+                        None,
+                        Photo8Out {
+                            srgb: &mut out,
+                            rain_alpha: Some(&mut alpha),
+                            snow_alpha: None,
+                        },
+                        d,
+                    )
+                    .unwrap();
+                    (out, alpha, stats)
+                };
+                let scalar = run(Dispatch::scalar());
+                assert_ne!(scalar.0, srgb);
+                for level in simd_levels() {
+                    let simd = run(Dispatch::best().capped(level));
+                    assert!(scalar.0 == simd.0, "{level:?} w {w}: the bytes differ");
+                    assert_eq!(scalar.1, simd.1);
+                    assert_eq!(scalar.2, simd.2);
+                }
+                drawn += scalar.2.map_or(0, |s| s.rain.streaks);
+            }
+        }
+        assert!(drawn > 100, "{drawn}");
     }
 
     #[test]

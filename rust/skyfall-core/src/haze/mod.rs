@@ -60,7 +60,7 @@ impl Haze {
 
     /// Transmittance e^(−σ d) along `distance_m` (1 when σ = 0, 0 for d = ∞ when σ > 0),
     /// through [`exp_neg`].
-    #[inline]
+    #[inline(always)]
     pub fn transmittance(&self, distance_m: f32) -> f32 {
         if self.extinction_per_m <= 0.0 {
             1.0
@@ -71,8 +71,9 @@ impl Haze {
 
     /// A row's transmittances into `t`: every pixel along depth·|ray| first (branch-free: the
     /// loop vectorises; a sky pixel's ∞ gives 0), then the sky pixels again along their path to
-    /// the cloud base, when the ceiling is finite.
-    #[inline]
+    /// the cloud base, when the ceiling is finite. Always inlined, so `crate::simd` compiles
+    /// it a second time for AVX2.
+    #[inline(always)]
     pub fn transmittance_row(&self, rays: &RowRays<'_>, depth: &[f32], t: &mut [f32]) {
         for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
             *t = self.transmittance(d * (u2 + rays.v2 + 1.0).sqrt());
@@ -85,12 +86,13 @@ impl Haze {
         if !has_sky || self.sky_ceiling_m == f32::INFINITY || self.extinction_per_m <= 0.0 {
             return;
         }
-        for (x, (t, &d)) in t.iter_mut().zip(depth).enumerate() {
-            if d == f32::INFINITY {
-                let len = (rays.u2[x] + rays.v2 + 1.0).sqrt();
-                let sin_elevation = (rays.rise[x] + rays.rise_row) / len;
-                *t = self.transmittance(path_to_ceiling_m(sin_elevation, self.sky_ceiling_m));
-            }
+        // Every pixel's sky value computed and kept where the pixel is sky: a select, not a
+        // branch, so the loop vectorises (the sky pixels' values are the same either way).
+        for (((t, &d), &u2), &rise) in t.iter_mut().zip(depth).zip(rays.u2).zip(rays.rise) {
+            let len = (u2 + rays.v2 + 1.0).sqrt();
+            let sin_elevation = (rise + rays.rise_row) / len;
+            let sky = self.transmittance(path_to_ceiling_m(sin_elevation, self.sky_ceiling_m));
+            *t = if d == f32::INFINITY { sky } else { *t };
         }
     }
 }
@@ -180,7 +182,7 @@ impl ViewRays {
 /// nearest (|r| ≤ ln 2 / 2, ln 2 split in two for an exact reduction), e^r by its Taylor
 /// polynomial to r⁷ (truncation < 6e-9), 2ⁿ from the exponent bits. Below −87.3 (where f32
 /// would turn subnormal) it returns 0.
-#[inline]
+#[inline(always)]
 pub fn exp_neg(x: f32) -> f32 {
     const LOG2_E: f32 = std::f32::consts::LOG2_E;
     const LN2_HI: f32 = 0.693_145_75; // ln 2 with its low 12 bits zero: n·LN2_HI is exact
