@@ -275,8 +275,9 @@ def main(argv: list[str] | None = None) -> int:
     from skyfall import demo_snow
 
     photos += demo_snow.write(out)
-    names = ("rain_textures.exr", "rain_textures.png", "terminal_velocity.png", "street.exr", "street.png")
-    for name in (*names, "street_rain_day.exr", "street_rain_day.png", "street_rain_day_alpha.png", "ambient_light.png", "street_rain.exr", "street_rain.png"):
+    names = ["rain_textures.exr", "rain_textures.png", "terminal_velocity.png", "street_rain_day_alpha.png", "ambient_light.png"]
+    names += [f"{d.name}.{ext}" for d in DEMO_FRAMES for ext in ("exr", "png")]
+    for name in names:
         print(f"wrote {out / name}")
     for name in windshield_files:
         print(f"wrote {out / name}")
