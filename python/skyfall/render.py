@@ -94,8 +94,11 @@ class Frame:
         Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d)); rain adds
         ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
         nearest visible streak, inf where none); a snow cover (``snow_cover=``) adds
-        ``snow_depth_m`` (the depth of snow on each pixel's surface, 0 where none): only the
-        layers this frame's passes drew.
+        ``snow_depth_m`` (the depth of snow on each pixel's surface, 0 where none); clouds
+        (``Weather(clouds=...)``) add ``cloud_alpha`` (their coverage 1 - prod(1 - alpha_i)); a
+        sky with a sun adds ``sun_transmittance`` on box scenes (the share of the sun's direct
+        light reaching each pixel's surface: 0 behind a box, the clouds' Gamma elsewhere, 1 for
+        sky): only the layers this frame's passes drew.
         :meth:`layer` gives any layer, with its neutral value where it was not drawn. The
         clean frame is the same render without rain.
     backend : str
