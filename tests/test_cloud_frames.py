@@ -232,3 +232,29 @@ def test_thin_clouds_single_scattering_matches_the_path_tracer() -> None:
     np.testing.assert_array_equal(again[0], clouds.path_traced(thin, w.sun_direction, sun_relative=w.sun_relative, eye_m=c.position_m, directions=d[:3], paths=50, max_orders=3, seed=2)[0])
     with pytest.raises(ValueError, match="paths"):
         clouds.path_traced(thin, w.sun_direction, sun_relative=1.0, eye_m=c.position_m, directions=d, paths=0)
+
+
+def test_a_photos_clouds_take_its_skys_colour_but_the_suns_light_stays_white() -> None:
+    # A photo under a blue sky (its airlight bluish): the clouds' sky-lit light is blue like it,
+    # their sunlit light (the frame with the sun less the frame without) grey, at the photo's
+    # luminance.
+    n = 24
+    cam = Camera((0.0, 1000.0, 600.0), vertical_fov_deg=10.0, width=n, height=n)
+    blue = (0.2, 0.3, 0.6)
+    photo = PhotoScene(np.tile(np.array(blue, np.float32), (n, n, 1)), np.full((n, n), np.inf, np.float32), camera=cam, encoding="linear", airlight=blue)
+    one = clouds.Cloud(np.array([[0.0, 1000.0, 0.0]]), np.array([25.0]), np.array([3.0]), np.array([1.0]))
+    w = Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=120.0)
+    r = Renderer(n, n, backend="cpu")
+    from skyfall import _core
+
+    rgb = []
+    for weather in (w, Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=120.0, sun_illuminance_lux=0.0)):
+        req = r._request(photo, weather, None, 0.0, 0, None, 1.0, 64)
+        req["clouds"] = clouds.frame_field(one, weather.sun_direction)
+        rgb.append(_core.render_frame(req)[0].astype(np.float64))
+    sun = rgb[0] - rgb[1]
+    c = n // 2
+    assert sun[c, c].min() > 0.0
+    np.testing.assert_allclose(sun[c, c] / sun[c, c].mean(), 1.0, rtol=1e-4)  # grey
+    sky_lit = rgb[1][c, c]
+    assert sky_lit[2] > 1.5 * sky_lit[0]  # the sky's light on the cloud is blue like the sky

@@ -242,8 +242,16 @@ impl FrameSetup {
                     });
                 }
                 let rel = sun.map_or(0.0, |(_, r)| r as f32);
+                // A photo's units carry its horizon sky's colour, which the sky's light on the
+                // clouds takes; the sun's light keeps only their luminance (Rec. 709 weights):
+                // sunlit clouds stay white under a blue sky.
+                let grey = if units == Vec3::splat(units.x) {
+                    units.x
+                } else {
+                    units.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+                };
                 let light = CloudLight {
-                    sun: units * rel,
+                    sun: Vec3::splat(grey * rel),
                     sky: units,
                 };
                 Some((Arc::clone(field), light))
