@@ -258,3 +258,28 @@ def test_a_photos_clouds_take_its_skys_colour_but_the_suns_light_stays_white() -
     np.testing.assert_allclose(sun[c, c] / sun[c, c].mean(), 1.0, rtol=1e-4)  # grey
     sky_lit = rgb[1][c, c]
     assert sky_lit[2] > 1.5 * sky_lit[0]  # the sky's light on the cloud is blue like the sky
+
+
+def test_the_sun_on_a_snow_cover_is_its_surfaces_share_on_both_backends() -> None:
+    # Under a snow cover the visible surface is the snow's: sun_transmittance is the share the
+    # cover's surface receives (lit ground 1, a building's shadow 0, a cloud's Gamma), the
+    # same on both backends, and the shaded frame follows it.
+    from skyfall import snow
+
+    scene = scenes.street()
+    sunny = {"sky": 12, "sun_elevation_deg": 50.0, "sun_azimuth_deg": 185.0}
+    cover = snow.accumulate(scene, Weather(snow_rate_mm_h=3.0), duration_s=1800.0, dt_s=900.0, resolution_m=2.0)
+    cam = Camera(position_m=(1.5, 1.6, 0.0), pitch_deg=8.0)
+    cpu_r, gpu_r = Renderer(96, 54, backend="cpu"), Renderer(96, 54, backend="gpu")
+    for weather in (Weather(**sunny), Weather(**sunny, clouds="broken")):
+        cpu = cpu_r.render(scene, weather, camera=cam, snow_cover=cover)
+        gpu = gpu_r.render(scene, weather, camera=cam, snow_cover=cover)
+        np.testing.assert_allclose(gpu.layers["sun_transmittance"], cpu.layers["sun_transmittance"], atol=2e-3)
+    clear = cpu_r.render(scene, Weather(**sunny), camera=cam, snow_cover=cover)
+    st = clear.layers["sun_transmittance"]
+    covered = clear.layers["snow_depth_m"] > 0.0
+    assert covered.any() and st[covered].min() < 0.5 and st[covered].max() > 0.9
+    dark = cpu_r.render(scene, Weather(**sunny, sun_illuminance_lux=0.0), camera=cam, snow_cover=cover)
+    lit, shaded = covered & (st > 0.9), covered & (st == 0.0)
+    assert (clear.rgb[lit][:, 1] > dark.rgb[lit][:, 1] + 1.0).all()  # the sun on the snow
+    np.testing.assert_array_equal(clear.rgb[shaded], dark.rgb[shaded])  # none in the shadow

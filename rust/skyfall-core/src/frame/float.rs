@@ -3,7 +3,7 @@
 
 use super::layers::Layer;
 use super::passes::Passes;
-use super::scene::{SceneLight, shade_pixel_sun, sun_share_pixel};
+use super::scene::{SceneLight, shade_pixel_sun};
 use super::{FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo};
 use crate::cloud::frame::CloudSplats;
 use crate::error::Result;
@@ -155,12 +155,8 @@ pub fn render_into_reporting(
                     match (light.snow, cover_band.as_deref_mut()) {
                         (Some(snow), Some(s_band)) => {
                             let s_row = &mut s_band[row.clone()];
-                            snow_scene_row(scene, cam, light, snow, y, rgb_row, depth_row, s_row);
-                            if let (Some(sun_row), SceneRef::Boxes(b)) = (sun_row, scene) {
-                                for (x, v) in sun_row.iter_mut().enumerate() {
-                                    *v = sun_share_pixel(b, cam, light, x as u32, y as u32);
-                                }
-                            }
+                            let rows = (&mut *rgb_row, &mut *depth_row, s_row, sun_row);
+                            snow_scene_row(scene, cam, light, snow, y, rows);
                         }
                         _ => scene_row(scene, cam, light, y, rgb_row, depth_row, sun_row),
                     }
@@ -232,25 +228,34 @@ fn scene_row(
     }
 }
 
-/// [`scene_row`] with a snow cover on the surfaces, its depth into `snow_row`.
-#[allow(clippy::too_many_arguments)]
+/// A row's buffers: rgb, depth, the snow's depth, and the sun's share when the frame has it.
+type SnowRows<'r> = (
+    &'r mut [f32],
+    &'r mut [f32],
+    &'r mut [f32],
+    Option<&'r mut [f32]>,
+);
+
+/// [`scene_row`] with a snow cover on the surfaces, its depth into `snow_row` (and the share of
+/// the sun on the visible surface, the cover's or the one beneath, into `sun_row`).
 fn snow_scene_row(
     scene: SceneRef<'_>,
     cam: &Camera,
     light: &SceneLight<'_>,
     snow: &crate::snow::cover::SnowRender,
     y: usize,
-    rgb_row: &mut [f32],
-    depth_row: &mut [f32],
-    snow_row: &mut [f32],
+    (rgb_row, depth_row, snow_row, mut sun_row): SnowRows<'_>,
 ) {
     match scene {
         SceneRef::Boxes(b) => {
             for x in 0..depth_row.len() {
-                let (c, d, s) = snow.shade_pixel(b, cam, light, x as u32, y as u32);
+                let (c, d, s, sun) = snow.shade_pixel(b, cam, light, x as u32, y as u32);
                 rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
                 depth_row[x] = d;
                 snow_row[x] = s;
+                if let Some(r) = sun_row.as_deref_mut() {
+                    r[x] = sun;
+                }
             }
         }
         SceneRef::Photo { .. } => {

@@ -112,8 +112,8 @@ impl<'a> SceneLight<'a> {
     }
 
     /// Radiance (relative) of a Lambertian face of albedo `a` and normal `n` at `p`: the sky
-    /// light of the map on its normal and the lights, with the shadows of `boxes` (as
-    /// [`shade_pixel`] lights the boxes; the snow cover's surfaces use it).
+    /// light of the map on its normal, the sun and the lights, with the shadows of `boxes`
+    /// (how [`shade_pixel`] lights the boxes and the snow cover lights its surfaces).
     #[inline]
     pub fn surface_radiance(
         &self,
@@ -122,15 +122,33 @@ impl<'a> SceneLight<'a> {
         n: Vec3,
         a: Vec3,
     ) -> Vec3 {
+        self.surface_radiance_sun(boxes, p, n, a).0
+    }
+
+    /// [`SceneLight::surface_radiance`] with the share of the sun's direct light the face
+    /// receives (1 without a sun: `sun_transmittance`).
+    #[inline]
+    pub fn surface_radiance_sun(
+        &self,
+        boxes: &[crate::scene::boxes::SceneBox],
+        p: Vec3,
+        n: Vec3,
+        a: Vec3,
+    ) -> (Vec3, f32) {
         let e = AmbientMap::channel(n).map_or(0.0, |c| self.ambient.sample(p)[c]);
         let mut sky_lit = a * e;
+        let mut share = 1.0;
         if let Some(sun) = &self.sun {
-            sky_lit += a * sun.illuminance(n, sun.share(boxes, p, n));
+            share = sun.share(boxes, p, n);
+            sky_lit += a * sun.illuminance(n, share);
         }
         if self.lights.is_empty() {
-            return sky_lit;
+            return (sky_lit, share);
         }
-        sky_lit + a * self.lamp_light(boxes, p, n, a, sky_lit)
+        (
+            sky_lit + a * self.lamp_light(boxes, p, n, a, sky_lit),
+            share,
+        )
     }
 
     /// The passes a frame lit so runs, with or without haze, rain and snowfall (its layers).
@@ -269,44 +287,14 @@ pub fn shade_pixel_sun(
         Some((t, n, albedo)) => {
             let p = cam.eye() + dir * t;
             let a = surface_albedo(albedo, n, p);
-            let e = AmbientMap::channel(n).map_or(0.0, |c| light.ambient.sample(p)[c]);
-            let mut sky_lit = a * e;
-            let mut share = 1.0;
-            if let Some(sun) = &light.sun {
-                share = sun.share(&scene.boxes, p, n);
-                sky_lit += a * sun.illuminance(n, share);
-            }
-            if light.lights.is_empty() {
-                return (sky_lit, t, share);
-            }
-            (
-                sky_lit + a * light.lamp_light(&scene.boxes, p, n, a, sky_lit),
-                t,
-                share,
-            )
+            let (c, share) = light.surface_radiance_sun(&scene.boxes, p, n, a);
+            (c, t, share)
         }
         None => (
             Vec3::splat(light.sky.sky_pixel(dir.normalize())),
             f32::INFINITY,
             1.0,
         ),
-    }
-}
-
-/// The share of the sun's direct light on pixel (x, y)'s surface (1 for sky and without a
-/// sun), as [`shade_pixel_sun`] finds it, without its shading.
-pub fn sun_share_pixel(
-    scene: &BoxScene,
-    cam: &Camera,
-    light: &SceneLight<'_>,
-    x: u32,
-    y: u32,
-) -> f32 {
-    let Some(sun) = &light.sun else { return 1.0 };
-    let dir = cam.ray_direction(x, y);
-    match trace(scene, cam.eye(), dir) {
-        Some((t, n, _)) => sun.share(&scene.boxes, cam.eye() + dir * t, n),
-        None => 1.0,
     }
 }
 

@@ -506,21 +506,28 @@ fn sun_share(p: vec3<f32>, n: vec3<f32>) -> f32 {
     return sun_volume(p - cam.pos.xyz);
 }
 
-// SceneLight::surface_radiance.
-fn surface_radiance(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> vec3<f32> {
+struct Shaded {
+    c: vec3<f32>,
+    share: f32,   // of the sun's direct light (1 without a sun)
+}
+
+// SceneLight::surface_radiance_sun.
+fn surface_radiance(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> Shaded {
     let ch = ambient_channel(n);
     var e = 0.0;
     if ch < CHANNELS {
         e = ambient_sample(p, ch);
     }
     var c = a * e;
+    var share = 1.0;
     if LIT && sun.flags.x != 0u {
-        c = c + a * (sun.dir.w * max(dot(n, sun.dir.xyz), 0.0) * sun_share(p, n));
+        share = sun_share(p, n);
+        c = c + a * (sun.dir.w * max(dot(n, sun.dir.xyz), 0.0) * share);
     }
     if LIT && lamps.counts.x != 0u {
         c = c + a * lamp_light(p, n, a, c);
     }
-    return c;
+    return Shaded(c, share);
 }
 
 @compute @workgroup_size(8, 8)
@@ -569,7 +576,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         // SnowRender::shade_pixel.
         let sh = snow_trace(origin, dir, select(3.4e38, best_t, hit));
         var found = false;
-        var sc = vec3<f32>(0.0);
+        var sc = Shaded(vec3<f32>(0.0), 1.0);
         var st = 0.0;
         var sd = 0.0;
         let albedo = snow.range.z;
@@ -593,51 +600,32 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             found = true;
         }
         snow_out[i] = sd;
-        if LIT && sun.flags.z != 0u {
-            // SceneLight's sun_share_pixel: the share on the surface under the cover.
-            var share = 1.0;
-            if hit {
-                share = sun_share(origin + dir * best_t, best_n);
-            }
-            sun_out[i] = share;
-        }
         if found {
-            rgb[3u * i] = sc.x;
-            rgb[3u * i + 1u] = sc.y;
-            rgb[3u * i + 2u] = sc.z;
+            rgb[3u * i] = sc.c.x;
+            rgb[3u * i + 1u] = sc.c.y;
+            rgb[3u * i + 2u] = sc.c.z;
             depth[i] = st;
+            if LIT && sun.flags.z != 0u {
+                sun_out[i] = sc.share;
+            }
             return;
         }
     }
     var c: vec3<f32>;
     var d: f32;
+    var share = 1.0;
     if hit {
         let p = origin + dir * best_t;
-        let a = surface_albedo(best_a, best_n, p);
-        let ch = ambient_channel(best_n);
-        var e = 0.0;
-        if ch < CHANNELS {
-            e = ambient_sample(p, ch);
-        }
-        c = a * e;
-        var share = 1.0;
-        if LIT && sun.flags.x != 0u {
-            share = sun_share(p, best_n);
-            c = c + a * (sun.dir.w * max(dot(best_n, sun.dir.xyz), 0.0) * share);
-        }
-        if LIT && sun.flags.z != 0u && !SNOW {
-            sun_out[i] = share;
-        }
-        if LIT && lamps.counts.x != 0u {
-            c = c + a * lamp_light(p, best_n, a, c);
-        }
+        let s = surface_radiance(p, best_n, surface_albedo(best_a, best_n, p));
+        c = s.c;
+        share = s.share;
         d = best_t;
     } else {
         c = vec3<f32>(sky.e_scale.y * relative_to_zenith(normalize(dir)));
         d = infinity();
-        if LIT && sun.flags.z != 0u && !SNOW {
-            sun_out[i] = 1.0;
-        }
+    }
+    if LIT && sun.flags.z != 0u {
+        sun_out[i] = share;
     }
     rgb[3u * i] = c.x;
     rgb[3u * i + 1u] = c.y;

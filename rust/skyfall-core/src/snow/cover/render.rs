@@ -351,7 +351,8 @@ impl SnowRender {
     }
 
     /// One pixel of a box scene with the cover: (radiance, depth along the axis, depth of snow
-    /// seen there), lit as [`crate::frame::scene::shade_pixel`] lights the surfaces.
+    /// seen there, the sun's share on the surface seen), lit as
+    /// [`crate::frame::scene::shade_pixel`] lights the surfaces.
     #[inline]
     pub fn shade_pixel(
         &self,
@@ -360,7 +361,7 @@ impl SnowRender {
         light: &crate::frame::scene::SceneLight<'_>,
         x: u32,
         y: u32,
-    ) -> (Vec3, f32, f32) {
+    ) -> (Vec3, f32, f32, f32) {
         let dir = cam.ray_direction(x, y);
         let hit = trace(scene, cam.eye(), dir);
         let t_max = hit.map_or(f32::INFINITY, |h| h.0);
@@ -374,7 +375,8 @@ impl SnowRender {
                 };
                 let c = coverage(dep);
                 let a = under * (1.0 - c) + Vec3::splat(SNOW_ALBEDO * c);
-                (light.surface_radiance(&scene.boxes, p, n, a), t, dep)
+                let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
+                (rad, t, dep, sun)
             }
             None => match hit {
                 // Beyond the grid, upward faces carry the open ground's snow (not lifted).
@@ -384,23 +386,22 @@ impl SnowRender {
                     let p = cam.eye() + dir * t;
                     let c = coverage(self.open_depth);
                     let a = ha * (1.0 - c) + Vec3::splat(SNOW_ALBEDO * c);
-                    (
-                        light.surface_radiance(&scene.boxes, p, n, a),
-                        t,
-                        self.open_depth,
-                    )
+                    let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
+                    (rad, t, self.open_depth, sun)
                 }
                 // No snow: the surface as the scene stage shades it (`shade_pixel`, from the
                 // same hit).
                 Some((t, n, ha)) => {
                     let p = cam.eye() + dir * t;
                     let a = surface_albedo(ha, n, p);
-                    (light.surface_radiance(&scene.boxes, p, n, a), t, 0.0)
+                    let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
+                    (rad, t, 0.0, sun)
                 }
                 None => (
                     Vec3::splat(light.sky.sky_pixel(dir.normalize())),
                     f32::INFINITY,
                     0.0,
+                    1.0,
                 ),
             },
         }
