@@ -25,8 +25,8 @@ impl FramePass for CloudPass {
             "cloud",
             SOURCE,
             &[
-                Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite,
-                ReadOnly, ReadWrite,
+                Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadOnly,
+                ReadWrite,
             ],
         ))
     }
@@ -40,8 +40,18 @@ impl FramePass for CloudPass {
     ) -> Result<(), GpuError> {
         f.ctx
             .check_buffer("the clouds' tile lists", (s.indices.len() * 4) as u64)?;
-        f.ctx
-            .check_buffer("the clouds' volume", (s.zenith.gamma.len() * 4) as u64)?;
+        // Both volumes in one buffer, the zenith's first (the shader reads each from its offset).
+        let sun_gamma = s.sun.as_ref().map_or(&[][..], |(_, v)| v.gamma);
+        let zenith_len = s.zenith.gamma.len();
+        f.ctx.check_buffer(
+            "the clouds' volumes",
+            ((zenith_len + sun_gamma.len()) * 4) as u64,
+        )?;
+        let sun_offset = u32::try_from(zenith_len).map_err(|_| GpuError::TooLarge {
+            what: "the clouds' zenith volume, as a u32 offset".to_string(),
+            bytes: (zenith_len * 4) as u64,
+            limit: u64::from(u32::MAX) * 4,
+        })?;
         let mut packed: Vec<[f32; 8]> = s.splats.iter().map(|p| p.packed()).collect();
         if packed.is_empty() {
             packed.push([0.0; 8]); // a binding may not be empty; the tile lists are empty
@@ -65,8 +75,8 @@ impl FramePass for CloudPass {
             sun_g: sun_dir,
             sun_light: [l.sun.x, l.sun.y, l.sun.z, if s.diffuse { 1.0 } else { 0.0 }],
             sky_light: [l.sky.x, l.sky.y, l.sky.z, 0.0],
-            sun_volume: VolumeUniform::new(sun_view),
-            zenith_volume: VolumeUniform::new(Some(&s.zenith)),
+            sun_volume: VolumeUniform::new(sun_view, sun_offset),
+            zenith_volume: VolumeUniform::new(Some(&s.zenith), 0),
         };
         let dummy = f.target("cloud_dummy", 1);
         let alpha = match t.layers.get(Layer::CloudAlpha) {
@@ -79,17 +89,13 @@ impl FramePass for CloudPass {
             f.upload("cloud_splats", &packed),
             f.upload("cloud_offsets", &s.offsets),
             f.upload("cloud_indices", &indices),
-            match sun_view {
-                Some(v) => f.upload("cloud_sun_gamma", v.gamma),
-                None => f.upload("cloud_sun_gamma", &[1.0f32]),
-            },
-            f.upload("cloud_zenith_gamma", s.zenith.gamma),
+            f.upload_parts("cloud_gammas", &[s.zenith.gamma, sun_gamma]),
         ];
-        let [cam, info, splats, offsets, idx, sun_g, zen_g] = &buffers;
+        let [cam, info, splats, offsets, idx, gammas] = &buffers;
         f.dispatch(
             &self.0,
             &[
-                cam, info, splats, offsets, idx, sun_g, zen_g, t.rgb, t.depth, alpha,
+                cam, info, splats, offsets, idx, gammas, t.rgb, t.depth, alpha,
             ],
         );
         f.hold(buffers);

@@ -222,6 +222,24 @@ impl<'a> FrameEncoder<'a> {
         b
     }
 
+    /// One storage buffer holding `parts` one after another (a shader reads each from its
+    /// offset: the sum of the lengths before it).
+    pub fn upload_parts(&self, label: &str, parts: &[&[f32]]) -> Pooled {
+        let len: usize = parts.iter().map(|p| p.len()).sum();
+        let b = self
+            .pool
+            .take(self.ctx, label, (len.max(1) * 4) as u64, TARGET);
+        let mut at = 0u64;
+        for part in parts {
+            let bytes: &[u8] = bytemuck::cast_slice(part);
+            if !bytes.is_empty() {
+                self.ctx.queue.write_buffer(&b.buffer, at, bytes);
+            }
+            at += bytes.len() as u64;
+        }
+        b
+    }
+
     /// A storage buffer of `len` f32 values that a pass writes in full.
     pub fn target(&self, label: &str, len: usize) -> Pooled {
         self.pool

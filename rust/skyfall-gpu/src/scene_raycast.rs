@@ -154,7 +154,7 @@ impl FramePass for SceneRaycastPass {
                     u32::from(t.layers.get(Layer::SunTransmittance).is_some()),
                     0,
                 ],
-                volume: VolumeUniform::new(s.clouds.as_ref()),
+                volume: VolumeUniform::new(s.clouds.as_ref(), 0),
             },
             None => SunUniform::default(),
         };

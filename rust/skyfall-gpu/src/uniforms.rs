@@ -228,20 +228,26 @@ mod tests {
 pub struct VolumeUniform {
     /// The corner relative to the camera, m (xyz); resolution R (w, as f32).
     pub origin: [f32; 4],
-    /// Each edge over its squared length, 1/m (xyz).
+    /// Each edge over its squared length, 1/m (xyz); the first's w holds, as u32 bits, where
+    /// the volume starts in its storage buffer.
     pub axes: [[f32; 4]; 3],
 }
 
 impl VolumeUniform {
-    /// The block of a volume view (zeros without one).
-    pub fn new(v: Option<&skyfall_core::cloud::frame::VolumeView<'_>>) -> Self {
+    /// The block of a volume view starting at `offset` values into its buffer (zeros without
+    /// one).
+    pub fn new(v: Option<&skyfall_core::cloud::frame::VolumeView<'_>>, offset: u32) -> Self {
         match v {
             Some(v) => {
-                let a = |x: glam::Vec3| [x.x, x.y, x.z, 0.0];
+                let a = |x: glam::Vec3, w: f32| [x.x, x.y, x.z, w];
                 let o = v.origin_rel;
                 VolumeUniform {
                     origin: [o.x, o.y, o.z, v.resolution as f32],
-                    axes: [a(v.axes[0]), a(v.axes[1]), a(v.axes[2])],
+                    axes: [
+                        a(v.axes[0], f32::from_bits(offset)),
+                        a(v.axes[1], 0.0),
+                        a(v.axes[2], 0.0),
+                    ],
                 }
             }
             None => VolumeUniform::default(),

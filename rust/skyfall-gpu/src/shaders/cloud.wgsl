@@ -3,11 +3,6 @@
 // CPU reference: skyfall_core::cloud::frame (CloudSplats::apply_row, VolumeView::sample),
 // kept line-for-line comparable. Prepended with common.wgsl.
 
-struct VolumeBox {
-    origin: vec4<f32>,   // corner relative to the camera (m), resolution R (w)
-    axes: array<vec4<f32>, 3>,
-}
-
 struct CloudInfo {
     counts: vec4<u32>,   // tiles across, tile side (px), sun present, cloud_alpha written
     sun_g: vec4<f32>,    // towards the sun, g
@@ -22,74 +17,36 @@ struct CloudInfo {
 @group(0) @binding(2) var<storage, read> splats: array<vec4<f32>>;   // 2 per splat
 @group(0) @binding(3) var<storage, read> offsets: array<u32>;
 @group(0) @binding(4) var<storage, read> indices: array<u32>;
-@group(0) @binding(5) var<storage, read> sun_gamma: array<f32>;
-@group(0) @binding(6) var<storage, read> zenith_gamma: array<f32>;
-@group(0) @binding(7) var<storage, read_write> rgb: array<f32>;
-@group(0) @binding(8) var<storage, read> depth: array<f32>;
-@group(0) @binding(9) var<storage, read_write> alpha_out: array<f32>;
+@group(0) @binding(5) var<storage, read> gammas: array<f32>;   // the zenith's volume, then the sun's
+@group(0) @binding(6) var<storage, read_write> rgb: array<f32>;
+@group(0) @binding(7) var<storage, read> depth: array<f32>;
+@group(0) @binding(8) var<storage, read_write> alpha_out: array<f32>;
 
 const CUTOFF_RADII: f32 = 2.5;
 const MIN_TRANSMITTANCE: f32 = 1.0 / 1024.0;
 const PI: f32 = 3.141592653589793;
 
-struct Cell {
-    i: u32,
-    f: f32,
-}
-
-fn cell(t: f32, n: u32) -> Cell {
-    let x = clamp(t * f32(n) - 0.5, 0.0, f32(n - 1u));
-    let i = min(u32(x), n - 2u);
-    return Cell(i, x - f32(i));
-}
-
-// VolumeView::sample_with_exit over the sun's volume: (Γ at p, Γ where the light leaves).
-fn sample_sun(p: vec3<f32>) -> vec2<f32> {
-    let v = info.sun_volume;
+// VolumeView::sample_with_exit: (Γ at p, Γ where the light leaves) of volume `v`.
+fn sample_volume(v: VolumeBox, p: vec3<f32>) -> vec2<f32> {
     let n = u32(v.origin.w);
+    let base = bitcast<u32>(v.axes[0].w);
     if n == 1u {
-        return vec2<f32>(sun_gamma[0], sun_gamma[0]);
+        return vec2<f32>(gammas[base], gammas[base]);
     }
     let d = p - v.origin.xyz;
-    let a = cell(dot(d, v.axes[0].xyz), n);
-    let b = cell(dot(d, v.axes[1].xyz), n);
-    let c = cell(dot(d, v.axes[2].xyz), n);
+    let a = volume_cell(dot(d, v.axes[0].xyz), n);
+    let b = volume_cell(dot(d, v.axes[1].xyz), n);
+    let c = volume_cell(dot(d, v.axes[2].xyz), n);
     var pl: array<f32, 2>;
     var ex: array<f32, 2>;
     for (var u = 0u; u < 2u; u++) {
-        let r0 = ((a.i + u) * n + b.i) * n + c.i;
-        let r1 = ((a.i + u) * n + b.i + 1u) * n + c.i;
-        let lo = mix(sun_gamma[r0], sun_gamma[r0 + 1u], c.f);
-        let hi = mix(sun_gamma[r1], sun_gamma[r1 + 1u], c.f);
+        let r0 = base + ((a.i + u) * n + b.i) * n + c.i;
+        let r1 = base + ((a.i + u) * n + b.i + 1u) * n + c.i;
+        let lo = mix(gammas[r0], gammas[r0 + 1u], c.f);
+        let hi = mix(gammas[r1], gammas[r1 + 1u], c.f);
         pl[u] = lo + (hi - lo) * b.f;
-        let e0 = sun_gamma[((a.i + u) * n + b.i) * n + n - 1u];
-        let e1 = sun_gamma[((a.i + u) * n + b.i + 1u) * n + n - 1u];
-        ex[u] = e0 + (e1 - e0) * b.f;
-    }
-    return vec2<f32>(pl[0] + (pl[1] - pl[0]) * a.f, ex[0] + (ex[1] - ex[0]) * a.f);
-}
-
-// The same over the zenith's volume.
-fn sample_zenith(p: vec3<f32>) -> vec2<f32> {
-    let v = info.zenith_volume;
-    let n = u32(v.origin.w);
-    if n == 1u {
-        return vec2<f32>(zenith_gamma[0], zenith_gamma[0]);
-    }
-    let d = p - v.origin.xyz;
-    let a = cell(dot(d, v.axes[0].xyz), n);
-    let b = cell(dot(d, v.axes[1].xyz), n);
-    let c = cell(dot(d, v.axes[2].xyz), n);
-    var pl: array<f32, 2>;
-    var ex: array<f32, 2>;
-    for (var u = 0u; u < 2u; u++) {
-        let r0 = ((a.i + u) * n + b.i) * n + c.i;
-        let r1 = ((a.i + u) * n + b.i + 1u) * n + c.i;
-        let lo = mix(zenith_gamma[r0], zenith_gamma[r0 + 1u], c.f);
-        let hi = mix(zenith_gamma[r1], zenith_gamma[r1 + 1u], c.f);
-        pl[u] = lo + (hi - lo) * b.f;
-        let e0 = zenith_gamma[((a.i + u) * n + b.i) * n + n - 1u];
-        let e1 = zenith_gamma[((a.i + u) * n + b.i + 1u) * n + n - 1u];
+        let e0 = gammas[base + ((a.i + u) * n + b.i) * n + n - 1u];
+        let e1 = gammas[base + ((a.i + u) * n + b.i + 1u) * n + n - 1u];
         ex[u] = e0 + (e1 - e0) * b.f;
     }
     return vec2<f32>(pl[0] + (pl[1] - pl[0]) * a.f, ex[0] + (ex[1] - ex[0]) * a.f);
@@ -122,7 +79,7 @@ fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
 fn source(x: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     let g = info.sun_g.w;
     let diffuse_on = info.sun_light.w != 0.0;
-    let z = sample_zenith(x);
+    let z = sample_volume(info.zenith_volume, x);
     var sky = info.sky_light.xyz * z.x;
     if diffuse_on {
         sky = info.sky_light.xyz * diffuse_light(z.x, z.y, g, true);
@@ -130,7 +87,7 @@ fn source(x: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     if info.counts.z == 0u {
         return sky;
     }
-    let s = sample_sun(x);
+    let s = sample_volume(info.sun_volume, x);
     let phase = henyey_greenstein(dot(d, info.sun_g.xyz), g);
     var diffuse = 0.0;
     if diffuse_on {

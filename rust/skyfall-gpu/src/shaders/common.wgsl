@@ -26,3 +26,21 @@ fn distance_per_depth(cam: Camera, x: u32, y: u32) -> f32 {
 fn infinity() -> f32 {
     return bitcast<f32>(0x7f800000u);
 }
+
+// A light-aligned volume's box relative to the camera (skyfall_core::cloud::frame::VolumeView),
+// and one axis's cell and fraction as its trilinear sampler takes them (clamped to the faces).
+struct VolumeBox {
+    origin: vec4<f32>,   // corner relative to the camera (m), resolution R (w)
+    axes: array<vec4<f32>, 3>,   // each edge over its squared length; axes[0].w: the volume's offset in its buffer, as u32 bits
+}
+
+struct VolumeCell {
+    i: u32,
+    f: f32,
+}
+
+fn volume_cell(t: f32, n: u32) -> VolumeCell {
+    let x = clamp(t * f32(n) - 0.5, 0.0, f32(n - 1u));
+    let i = min(u32(x), n - 2u);
+    return VolumeCell(i, x - f32(i));
+}

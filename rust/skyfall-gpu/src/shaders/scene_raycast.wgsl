@@ -37,11 +37,6 @@ override LIT: bool = true;
 @group(0) @binding(15) var<storage, read> sun_gamma: array<f32>;
 @group(0) @binding(16) var<storage, read_write> sun_out: array<f32>;
 
-struct VolumeBox {
-    origin: vec4<f32>,   // corner relative to the camera (m), resolution R (w)
-    axes: array<vec4<f32>, 3>,
-}
-
 // The sun on the surfaces (skyfall_core::frame::scene::SunLight); its code runs in the LIT
 // pipelines only (a frame with a sun takes them).
 struct SunInfo {
@@ -457,17 +452,6 @@ fn snow_coverage(dep: f32) -> f32 {
     return 0.0;
 }
 
-struct SunCell {
-    i: u32,
-    f: f32,
-}
-
-fn sun_cell(t: f32, n: u32) -> SunCell {
-    let x = clamp(t * f32(n) - 0.5, 0.0, f32(n - 1u));
-    let i = min(u32(floor(x)), n - 2u);
-    return SunCell(i, x - f32(i));
-}
-
 // skyfall_core::cloud::frame::VolumeView::sample over the clouds' Γ for the sun.
 fn sun_volume(p: vec3<f32>) -> f32 {
     let v = sun.volume;
@@ -476,9 +460,9 @@ fn sun_volume(p: vec3<f32>) -> f32 {
         return sun_gamma[0];
     }
     let d = p - v.origin.xyz;
-    let a = sun_cell(dot(d, v.axes[0].xyz), n);
-    let b = sun_cell(dot(d, v.axes[1].xyz), n);
-    let c = sun_cell(dot(d, v.axes[2].xyz), n);
+    let a = volume_cell(dot(d, v.axes[0].xyz), n);
+    let b = volume_cell(dot(d, v.axes[1].xyz), n);
+    let c = volume_cell(dot(d, v.axes[2].xyz), n);
     var pl: array<f32, 2>;
     for (var u = 0u; u < 2u; u++) {
         let r0 = ((a.i + u) * n + b.i) * n + c.i;
