@@ -27,11 +27,8 @@ SUNS = {"front-lit (sun behind the camera, 35 deg up)": (35.0, 160.0), "side-lit
 
 
 def directions(cam: Camera) -> np.ndarray:
-    fx, fy, cx, cy = cam.intrinsics()
-    u = (np.arange(SIZE) + 0.5 - cx) / fx
-    v = (np.arange(SIZE) + 0.5 - cy) / fy
-    uu, vv = np.meshgrid(u, v)
-    d = np.stack([uu, -vv, -np.ones_like(uu)], axis=-1).reshape(-1, 3) @ np.asarray(cam.world_from_camera)[:3, :3].T
+    """Unit view directions of the pixels, (N, 3)."""
+    d = cam.ray_directions().reshape(-1, 3)
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 

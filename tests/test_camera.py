@@ -91,3 +91,21 @@ def test_explicit_intrinsics_must_match_the_frame():
     with pytest.raises(ValueError, match="64x48"):
         skyfall.Renderer(32, 24, backend="cpu").render(scenes.empty(), camera=cam)
     assert math.isclose(Camera(vertical_fov_deg=90, width=10, height=10).intrinsics()[1], 5.0)
+
+
+def test_ray_directions_meet_the_ground_where_the_frame_says() -> None:
+    # A frame of open ground: each ground pixel's ray, scaled by its depth, ends on y = 0 (the
+    # renderer's own ray cast), and an unscaled ray has camera-space z = -1.
+    import numpy as np
+
+    from skyfall import Camera, Renderer, scenes
+
+    cam = Camera((0.3, 1.7, 0.0), pitch_deg=-25.0, yaw_deg=20.0, width=40, height=30)
+    frame = Renderer(40, 30, backend="cpu").render(scenes.empty(camera=cam))
+    ground = np.isfinite(frame.depth_m)
+    assert ground.mean() > 0.3
+    d = cam.ray_directions()
+    pts = cam.position_m + d * frame.depth_m[..., None]
+    np.testing.assert_allclose(pts[ground][:, 1], 0.0, atol=1e-4)
+    back = np.asarray(cam.rotation)[:, 2]
+    np.testing.assert_allclose(d @ back, -1.0, atol=1e-12)  # camera-space z = -1

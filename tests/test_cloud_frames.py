@@ -22,14 +22,13 @@ SUNNY = {"sky": 12, "sun_elevation_deg": 35.0, "sun_azimuth_deg": 160.0}
 
 def _points(cam: Camera, depth: np.ndarray) -> np.ndarray:
     """World points of each pixel's surface (depth along the axis), (H, W, 3)."""
-    fx, fy, cx, cy = cam.intrinsics()
-    h, w = depth.shape
-    u = (np.arange(w) + 0.5 - cx) / fx
-    v = (np.arange(h) + 0.5 - cy) / fy
-    uu, vv = np.meshgrid(u, v)
-    d_cam = np.stack([uu, -vv, -np.ones_like(uu)], axis=-1)
-    d_world = d_cam @ np.asarray(cam.world_from_camera)[:3, :3].T
-    return cam.position_m + d_world * depth[..., None]
+    return cam.position_m + cam.ray_directions() * depth[..., None]
+
+
+def _unit_rays(cam: Camera) -> np.ndarray:
+    """Unit view directions of each pixel, (H * W, 3)."""
+    d = cam.ray_directions().reshape(-1, 3)
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
 def _clear_sky_sun_lux(elevation_deg: float) -> float:
@@ -191,16 +190,17 @@ def test_the_demo_shows_clouds_and_their_shadow_on_the_street() -> None:
     assert st[near].mean() < 0.3 and st[far].mean() > 0.6
 
 
-def _sun_light(r: Renderer, scene, w: Weather, cloud: clouds.Cloud, diffuse: bool) -> np.ndarray:
-    """The frame's light from the sun alone: the frame under the sun less the one without it."""
+def _sun_light(r: Renderer, scene, w: Weather, cloud: clouds.Cloud, diffuse: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """(the frame's light from the sun alone: the frame under the sun less the one without it;
+    the frame without it), rgb (H, W, 3)."""
     from skyfall import _core
 
     out = []
     for weather in (w, Weather(sky=w.sky, sun_elevation_deg=w.sun_elevation_deg, sun_azimuth_deg=w.sun_azimuth_deg, sun_illuminance_lux=0.0)):
         req = r._request(scene, weather, None, 0.0, 0, None, 1.0, 64)
         req["clouds"] = clouds.frame_field(cloud, weather.sun_direction, diffuse=diffuse)
-        out.append(_core.render_frame(req)[0][..., 1].astype(np.float64))
-    return out[0] - out[1]
+        out.append(_core.render_frame(req)[0].astype(np.float64))
+    return out[0] - out[1], out[1]
 
 
 def test_thin_clouds_single_scattering_matches_the_path_tracer() -> None:
@@ -214,11 +214,9 @@ def test_thin_clouds_single_scattering_matches_the_path_tracer() -> None:
     )
     w = Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=120.0)
     r = Renderer(n, n, backend="cpu")
-    got = _sun_light(r, scenes.boxes([], ground=False, camera=cam), w, thin, diffuse=False).reshape(-1)
+    got = _sun_light(r, scenes.boxes([], ground=False, camera=cam), w, thin, diffuse=False)[0][..., 1].reshape(-1)
     c = cam.with_resolution(n, n)
-    fx, fy, cx, cy = c.intrinsics()
-    uu, vv = np.meshgrid((np.arange(n) + 0.5 - cx) / fx, (np.arange(n) + 0.5 - cy) / fy)
-    d = np.stack([uu, -vv, -np.ones_like(uu)], axis=-1).reshape(-1, 3) @ np.asarray(c.world_from_camera)[:3, :3].T
+    d = _unit_rays(c)
     mc, single, err = clouds.path_traced(thin, w.sun_direction, sun_relative=w.sun_relative, eye_m=c.position_m, directions=d, paths=4000, max_orders=3, seed=2)
     lit = single > 0.2 * single.max()
     assert lit.sum() >= 9
@@ -244,19 +242,11 @@ def test_a_photos_clouds_take_its_skys_colour_but_the_suns_light_stays_white() -
     photo = PhotoScene(np.tile(np.array(blue, np.float32), (n, n, 1)), np.full((n, n), np.inf, np.float32), camera=cam, encoding="linear", airlight=blue)
     one = clouds.Cloud(np.array([[0.0, 1000.0, 0.0]]), np.array([25.0]), np.array([3.0]), np.array([1.0]))
     w = Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=120.0)
-    r = Renderer(n, n, backend="cpu")
-    from skyfall import _core
-
-    rgb = []
-    for weather in (w, Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=120.0, sun_illuminance_lux=0.0)):
-        req = r._request(photo, weather, None, 0.0, 0, None, 1.0, 64)
-        req["clouds"] = clouds.frame_field(one, weather.sun_direction)
-        rgb.append(_core.render_frame(req)[0].astype(np.float64))
-    sun = rgb[0] - rgb[1]
+    sun, without = _sun_light(Renderer(n, n, backend="cpu"), photo, w, one)
     c = n // 2
     assert sun[c, c].min() > 0.0
     np.testing.assert_allclose(sun[c, c] / sun[c, c].mean(), 1.0, rtol=1e-4)  # grey
-    sky_lit = rgb[1][c, c]
+    sky_lit = without[c, c]
     assert sky_lit[2] > 1.5 * sky_lit[0]  # the sky's light on the cloud is blue like the sky
 
 

@@ -191,6 +191,24 @@ class Camera:
         m[:3, 3] = self.position_m
         return m
 
+    def ray_directions(self) -> NDArray[np.float64]:
+        """World-space directions of the rays through the pixel centres, as the renderer casts
+        them: scaled so that their camera-space z is -1, so ``position_m + d * depth_m`` is a
+        pixel's surface point for a frame's ``depth_m`` (normalise them for unit directions).
+        Needs the resolution.
+
+        Returns
+        -------
+        ndarray of float64, shape (height, width, 3)
+        """
+        fx, fy, cx, cy = self.intrinsics()  # refuses a camera without its resolution
+        width, height = self.width or 0, self.height or 0
+        u = (np.arange(width) + 0.5 - cx) / fx
+        v = (np.arange(height) + 0.5 - cy) / fy
+        uu, vv = np.meshgrid(u, v)
+        d_cam = np.stack([uu, -vv, -np.ones_like(uu)], axis=-1)
+        return np.asarray(d_cam @ np.asarray(self.rotation).T, dtype=np.float64)
+
     def project(self, points_m: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Project world points to pixels.
 

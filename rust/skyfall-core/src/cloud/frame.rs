@@ -510,13 +510,6 @@ pub fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
     reaching + 0.5 * d * r
 }
 
-/// Γ of the sun at `p_rel` (relative to the camera), or 1 without a cloud: the clouds' share of
-/// the sun's light there.
-#[inline]
-pub fn sun_share(sun: Option<&VolumeView<'_>>, p_rel: Vec3) -> f32 {
-    sun.map_or(1.0, |v| v.sample(p_rel))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

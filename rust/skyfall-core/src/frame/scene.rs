@@ -12,7 +12,7 @@
 //! [`SceneLight::lamp_light`]) are added unshadowed, so the skipped rays change a pixel by at
 //! most [`SHADOW_SKIP_RELATIVE`] of its radiance (and only where a skipped light is hidden).
 
-use crate::cloud::frame::{CloudPass, VolumeView, sun_share};
+use crate::cloud::frame::{CloudPass, VolumeView};
 use crate::scene::boxes::{BoxScene, surface_albedo, trace};
 use crate::scene::camera::Camera;
 use crate::scene::lights::Light;
@@ -75,7 +75,8 @@ impl SunLight<'_> {
         if occluded_within(boxes, lifted, self.direction, SUN_RAY_M) {
             return 0.0;
         }
-        sun_share(self.clouds.as_ref(), p - self.eye)
+        // The clouds' Γ there (1 without clouds).
+        self.clouds.as_ref().map_or(1.0, |v| v.sample(p - self.eye))
     }
 
     /// The sun's illuminance relative to E on a face of normal `n` receiving `share` of it.
