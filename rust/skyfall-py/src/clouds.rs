@@ -10,6 +10,27 @@ use skyfall_core::cloud::harris::harris_illumination as harris;
 use skyfall_core::cloud::volume::{AttenuationVolume, VolumeBox, sample};
 use skyfall_core::cloud::{Cloud, sun_direction as sun_direction_of};
 
+/// The rows of an (N, 3) float64 array `a` (named `name` in errors) as points, each finite.
+fn points3(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<Vec<glam::DVec3>> {
+    let shape = a.shape();
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(invalid(
+            name,
+            None,
+            format!("must have shape (N, 3), got {shape:?}"),
+        ));
+    }
+    let p: Vec<glam::DVec3> = a
+        .as_slice()?
+        .chunks_exact(3)
+        .map(|c| glam::DVec3::new(c[0], c[1], c[2]))
+        .collect();
+    if let Some(i) = p.iter().position(|v| !v.is_finite()) {
+        return Err(invalid(name, Some(i), "must be finite"));
+    }
+    Ok(p)
+}
+
 /// A cloud's four arrays as the core's checked [`Cloud`].
 fn cloud_of(
     positions_m: &PyReadonlyArray2<'_, f64>,
@@ -18,16 +39,10 @@ fn cloud_of(
     albedos: &PyReadonlyArray1<'_, f64>,
     asymmetry_g: f64,
 ) -> PyResult<Cloud> {
-    let shape = positions_m.shape();
-    if shape.len() != 2 || shape[1] != 3 {
-        return Err(invalid(
-            "positions_m",
-            None,
-            format!("must have shape (N, 3), got {shape:?}"),
-        ));
-    }
-    let p = positions_m.as_slice()?;
-    let positions = p.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let positions = points3(positions_m, "positions_m")?
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
     Ok(Cloud::new(
         positions,
         radii_m.as_slice()?.to_vec(),
@@ -158,24 +173,9 @@ pub fn sample_attenuation<'py>(
     }
     let n = s[0];
     let grid = VolumeBox::from_matrix(world_from_volume.as_slice()?).map_err(CoreError)?;
-    let ps = points_m.shape();
-    if ps[1] != 3 {
-        return Err(invalid(
-            "points_m",
-            None,
-            format!("must have shape (M, 3), got {ps:?}"),
-        ));
-    }
     let g = gamma.as_slice()?;
-    let p = points_m.as_slice()?;
-    if let Some(i) = p.iter().position(|x| !x.is_finite()) {
-        return Err(invalid("points_m", Some(i / 3), "must be finite"));
-    }
-    let out: Vec<f32> = py.detach(|| {
-        p.chunks_exact(3)
-            .map(|c| sample(g, n, &grid, glam::DVec3::new(c[0], c[1], c[2])))
-            .collect()
-    });
+    let p = points3(&points_m, "points_m")?;
+    let out: Vec<f32> = py.detach(|| p.iter().map(|&q| sample(g, n, &grid, q)).collect());
     crate::alloc::from_slice::<f32, Ix1>(py, &[out.len()], &out)
 }
 
@@ -250,23 +250,9 @@ impl CloudField {
         py: Python<'py>,
         points_m: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
-        let shape = points_m.shape();
-        if shape.len() != 2 || shape[1] != 3 {
-            return Err(invalid(
-                "points_m",
-                None,
-                format!("must have shape (N, 3), got {shape:?}"),
-            ));
-        }
-        let p = points_m.as_slice()?;
-        let out: Vec<f32> = p
-            .chunks_exact(3)
-            .map(|c| {
-                self.field
-                    .sun
-                    .as_ref()
-                    .map_or(1.0, |(_, v)| v.sample(glam::DVec3::new(c[0], c[1], c[2])))
-            })
+        let out: Vec<f32> = points3(&points_m, "points_m")?
+            .iter()
+            .map(|&q| self.field.sun.as_ref().map_or(1.0, |(_, v)| v.sample(q)))
             .collect();
         crate::alloc::from_slice::<f32, Ix1>(py, &[out.len()], &out)
     }
@@ -305,14 +291,7 @@ pub fn cloud_path_traced<'py>(
         &albedos,
         asymmetry_g,
     )?;
-    let shape = directions.shape();
-    if shape.len() != 2 || shape[1] != 3 {
-        return Err(invalid(
-            "directions",
-            None,
-            format!("must have shape (N, 3), got {shape:?}"),
-        ));
-    }
+    let dirs = points3(&directions, "directions")?;
     if !(sun_relative.is_finite() && sun_relative >= 0.0) {
         return Err(invalid(
             "sun_relative",
@@ -320,17 +299,8 @@ pub fn cloud_path_traced<'py>(
             format!("= {sun_relative} must be finite and at least 0"),
         ));
     }
-    let dirs: Vec<glam::DVec3> = directions
-        .as_slice()?
-        .chunks_exact(3)
-        .map(|c| glam::DVec3::new(c[0], c[1], c[2]))
-        .collect();
-    if dirs.iter().any(|d| !d.is_finite() || d.length() < 1e-12) {
-        return Err(invalid(
-            "directions",
-            None,
-            "each must be finite and non-zero",
-        ));
+    if let Some(i) = dirs.iter().position(|d| d.length() < 1e-12) {
+        return Err(invalid("directions", Some(i), "must be non-zero"));
     }
     let eye = glam::DVec3::from_array(eye_m);
     let r = py

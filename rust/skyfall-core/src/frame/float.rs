@@ -97,10 +97,7 @@ pub fn render_into_reporting(
         .transpose()?;
     let band = BAND_ROWS * w;
     let bands = cam.pixels().div_ceil(band);
-    let mut t_bands: Vec<Option<&mut [f32]>> = match trans {
-        Some(t) => t.chunks_mut(band).map(Some).collect(),
-        None => (0..bands).map(|_| None).collect(),
-    };
+    let mut t_bands = split_bands(trans, band, bands);
     // Each band's particle layers: [rain_alpha, rain_depth_m, snow_alpha], empty where the
     // frame does not draw one (no particle of that effect is in the list then).
     let mut rain_bands: Vec<[&mut [f32]; 3]> = (0..bands).map(|_| Default::default()).collect();
@@ -118,10 +115,7 @@ pub fn render_into_reporting(
         }
     }
     // The snow cover's depth per band (a frame with a cover only).
-    let mut cover_bands: Vec<Option<&mut [f32]>> = match snow_depth {
-        Some(t) => t.chunks_mut(band).map(Some).collect(),
-        None => (0..bands).map(|_| None).collect(),
-    };
+    let mut cover_bands = split_bands(snow_depth, band, bands);
     let mut cloud_bands = split_bands(cloud_alpha, band, bands);
     let mut sun_bands = split_bands(sun_t, band, bands);
     let rays = ViewRays::new(cam);
