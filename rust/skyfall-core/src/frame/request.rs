@@ -23,6 +23,10 @@ use crate::weather::Weather;
 use glam::Vec3;
 use std::sync::Arc;
 
+/// Rec. 709 luminance weights of linear RGB. They sum to exactly 1 in f32 (tested), so a box
+/// scene's units of 1 keep a luminance of 1.
+const LUMINANCE_WEIGHTS: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
+
 /// What a frame shows.
 #[derive(Debug, Clone)]
 pub enum SceneData<'a> {
@@ -245,11 +249,7 @@ impl FrameSetup {
                 // A photo's units carry its horizon sky's colour, which the sky's light on the
                 // clouds takes; the sun's light keeps only their luminance (Rec. 709 weights):
                 // sunlit clouds stay white under a blue sky.
-                let grey = if units == Vec3::splat(units.x) {
-                    units.x
-                } else {
-                    units.dot(Vec3::new(0.2126, 0.7152, 0.0722))
-                };
+                let grey = units.dot(LUMINANCE_WEIGHTS);
                 let light = CloudLight {
                     sun: Vec3::splat(grey * rel),
                     sky: units,
@@ -333,5 +333,17 @@ impl FrameSetup {
                 opacity: *opacity,
                 extinction_per_m: self.haze.as_ref().map_or(0.0, |h| h.extinction_per_m),
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn luminance_weights_keep_grey_units_exact() {
+        assert_eq!(Vec3::ONE.dot(LUMINANCE_WEIGHTS), 1.0);
+        let w = LUMINANCE_WEIGHTS;
+        assert_eq!((w.z + w.y) + w.x, 1.0);
     }
 }
