@@ -137,6 +137,9 @@ def test_sampling_depends_on_the_seed_and_index_only():
         ({"png_compression": 12}, ["png_compression", "[0, 9]"]),
         ({"layers": ("rain_alpha", "snow")}, ["layers", "snow"]),
         ({"focus_distance_m": "2:10"}, ["focus_distance_m needs f_number"]),
+        ({"rain_far_m": 6.0}, ["rain_far_m", "rain_near_m"]),
+        ({"rain_far_m": 2.0, "f_number": "2:4"}, ["rain_far_m", "f_number"]),
+        ({"rain_far_m": 2.0, "backend": "gpu"}, ["rain_far_m", "cpu"]),
     ],
 )
 def test_bad_options_name_the_parameter_and_its_range(options, words):
@@ -193,6 +196,19 @@ def test_resume_regenerates_only_what_is_missing_or_corrupt(tmp_path):
     # other options: every item is made again
     s = dataset.generate(resume=True, **{**opts, "seed": 1})
     assert (s.generated, s.skipped) == (5, 0)
+
+
+def test_the_far_level_of_detail_draws_a_dataset_and_keeps_the_old_checksum(tmp_path):
+    opts = dict(scene="street", variants=2, width=W, height=H, ambient_spacing_m=8.0, progress=False, rain_rate_mm_h="20:40")
+    plain = DatasetConfig(out="x", scene="street")
+    assert DatasetConfig(out="x", scene="street", rain_far_m=None).sha256() == plain.sha256()
+    assert DatasetConfig(out="x", scene="street", rain_far_m=2.0).sha256() != plain.sha256()
+    a = dataset.generate(out=tmp_path / "far", rain_far_m=2.0, **opts)
+    b = dataset.generate(out=tmp_path / "near", **opts)
+    assert a.generated == b.generated == 2
+    fa = np.load(tmp_path / "far" / "items" / "000000.rain_alpha.npy")
+    fb = np.load(tmp_path / "near" / "items" / "000000.rain_alpha.npy")
+    assert fa.mean() > 0 and not np.array_equal(fa, fb)
 
 
 def _cli(*args: str) -> list[str]:

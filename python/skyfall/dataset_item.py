@@ -132,6 +132,7 @@ def _weather(config: DatasetConfig, p: ItemParams) -> Weather:
         visibility_m=p.visibility_m,
         wind_m_s=(p.wind_m_s, 0.0, 0.0),
         rain_near_m=config.rain_near_m,
+        rain_far_m=config.rain_far_m,
         windshield=glass,
         clouds=config.clouds,
     )

@@ -159,6 +159,10 @@ class DatasetConfig:
         layer when asked. The preset's volumes are built once per worker.
     rain_near_m : float
         Radius of the streak region, m (:class:`skyfall.Weather`).
+    rain_far_m : float, optional
+        The rain's far level of detail (:class:`skyfall.Weather`): drops beyond this
+        horizontal distance, m, drawn as layers; below ``rain_near_m``, CPU backend and
+        pinhole cameras only. None (default): every drop one by one.
     depth_scale_m : float, optional
         Metres per unit of integer depth maps (16-bit PNG, integer NPY).
     camera_height_m, horizon_row, vertical_fov_deg : float
@@ -236,6 +240,7 @@ class DatasetConfig:
     windshield: str | None = None
     clouds: str | None = None
     rain_near_m: float = 5.0
+    rain_far_m: float | None = None
     depth_scale_m: float | None = None
     camera_height_m: float = 1.6
     horizon_row: float | None = None
@@ -276,6 +281,14 @@ class DatasetConfig:
         if self.focus_distance_m is not None and self.f_number is None:
             raise ValueError("focus_distance_m needs f_number (a pinhole is in focus at every distance)")
         set_(self, "rain_near_m", in_range("rain_near_m", self.rain_near_m))
+        if self.rain_far_m is not None:
+            set_(self, "rain_far_m", in_range("rain_far_m", self.rain_far_m))
+            if self.rain_far_m >= self.rain_near_m:
+                raise ValueError(f"rain_far_m = {self.rain_far_m} m must be less than rain_near_m = {self.rain_near_m} m")
+            if self.f_number is not None:
+                raise ValueError("rain_far_m draws its layers in focus: it cannot be used with f_number (a thin lens)")
+            if self.backend != "cpu":
+                raise ValueError(f"rain_far_m needs backend='cpu' (the GPU backend draws every drop one by one), got {self.backend!r}")
         set_(self, "snow_hours", _hours(self.snow_hours))
         if self.snow_hours[1] > 0.0 and self.snow_rate_mm_h[1] <= 0.0:
             raise ValueError("snow_hours needs snow_rate_mm_h (a cover is the snow that fell)")
@@ -346,7 +359,7 @@ class DatasetConfig:
                 d.pop(name)
         if d["exr_compression"] == "zip":  # the checksum of the options before it was one
             d.pop("exr_compression")
-        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None), ("clouds", None)):
+        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None), ("clouds", None), ("rain_far_m", None)):
             if d[name] == plain:  # not used: the checksum of before it was an option
                 d.pop(name)
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()

@@ -243,7 +243,9 @@ def drops(
     the same seed gives the same drops for any camera, frame or process: ground truth for
     stereo and video. With ``ground`` no drops lie below y = 0. These are always the
     individual drops: the default billboards draw each voxel's rain texture instead, facing the
-    camera, with the same counts and sizes per voxel.
+    camera, with the same counts and sizes per voxel. With ``weather.rain_far_m`` a frame draws
+    only the drops within it (horizontally) one by one and the rest as layers, whose streaks
+    are other, random drops: these are still all of the region's drops.
 
     Parameters
     ----------

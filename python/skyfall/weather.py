@@ -72,6 +72,17 @@ class Weather:
     rain_near_m : float
         Radius of the rain region around the camera in which drops are drawn as streaks, m,
         in (0, 50] (5 m as in Yoshida, Dobashi & Yamamoto); beyond it rain shows only as haze.
+    rain_far_m : float, optional
+        The rain's far level of detail: drops farther than this horizontally, m, in
+        (0, 50] and below ``rain_near_m``, are drawn as one pre-rasterised, world-anchored
+        cylindrical layer per metre of the rest of the region (in the spirit of Yoshida,
+        Dobashi & Yamamoto's rain textures) instead of one streak each; the nearer drops stay
+        streaks. Its cost is per pixel and layer: faster than drop by drop in heavy rain and
+        deep regions, slower in light rain in a 5 m region; the frame's mean opacity is the
+        per-drop reference's (``benches/results/rain.md`` measures both). The layers' textures
+        are cached per rain rate, diameters, exposure and focal length. Pinhole cameras and the
+        CPU backend only (a camera with ``f_number`` and the GPU backend refuse it). None
+        (default): every drop one by one, the frame's bits unchanged.
     rain_diameters_mm : sequence of float
         Strictly increasing drop diameters, mm, each in (0, 8], whose bins are drawn (see
         :func:`skyfall.rain.diameter_bins`); Yoshida, Dobashi & Yamamoto's 1.0-2.0 mm by default.
@@ -117,6 +128,7 @@ class Weather:
     sky_illuminance_lux: float = 10000.0
     wind_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rain_near_m: float = 5.0
+    rain_far_m: float | None = None
     rain_diameters_mm: tuple[float, ...] = field(default=(1.0, 1.2, 1.4, 1.6, 1.8, 2.0))
     rain_streaks: bool = True
     rain_method: str = "billboards"
@@ -147,6 +159,14 @@ class Weather:
             raise ValueError(f"rain_diameters_mm = {self.rain_diameters_mm!r} must be strictly increasing (and not empty)")
         object.__setattr__(self, "wind_m_s", (float(wind[0]), float(wind[1]), float(wind[2])))
         object.__setattr__(self, "rain_near_m", near)
+        if self.rain_far_m is not None:
+            far = in_range("rain_far_m", self.rain_far_m)
+            if far >= near:
+                raise ValueError(
+                    f"rain_far_m = {far} m must be less than rain_near_m = {near} m "
+                    "(the far level of detail draws the drops between them)"
+                )
+            object.__setattr__(self, "rain_far_m", far)
         object.__setattr__(self, "rain_diameters_mm", diams)
         choice("rain_method", self.rain_method, ("drops", "billboards"))
         object.__setattr__(self, "snow_near_m", in_range("snow_near_m", self.snow_near_m))

@@ -133,6 +133,12 @@ pub const RAIN_NEAR_M: Limit = Limit::new(
     Range::open_closed(0.0, 50.0, "m"),
     "radius of the rain region around the camera drawn as streaks",
 );
+/// Where the rain's far level of detail begins (below `rain_near_m`, checked with it).
+pub const RAIN_FAR_M: Limit = Limit::new(
+    "rain_far_m",
+    Range::open_closed(0.0, 50.0, "m"),
+    "horizontal distance beyond which the rain's drops are drawn as pre-rasterised layers",
+);
 /// Radius of the snow region drawn as flakes.
 pub const SNOW_NEAR_M: Limit = Limit::new(
     "snow_near_m",
@@ -536,6 +542,7 @@ pub const ALL: &[Limit] = &[
     SKY_ILLUMINANCE_LUX,
     WIND_M_S,
     RAIN_NEAR_M,
+    RAIN_FAR_M,
     SNOW_NEAR_M,
     RAIN_DIAMETERS_MM,
     DIAMETERS_MM,

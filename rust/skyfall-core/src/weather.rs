@@ -46,6 +46,9 @@ pub struct Weather {
     pub wind_m_s: [f64; 3],
     /// Radius of the rain region drawn as streaks, m.
     pub rain_near_m: f64,
+    /// Drops farther than this horizontally, m (below `rain_near_m`), are drawn as the far
+    /// level of detail's layers ([`crate::rain::far`]); None: every drop one by one.
+    pub rain_far_m: Option<f64>,
     /// Diameters whose bins are drawn, mm.
     pub rain_diameters_mm: Vec<f64>,
     /// Whether drops near the camera are drawn as streaks.
@@ -78,6 +81,22 @@ impl Weather {
             ranges::WIND_M_S.check_at(Some(i), w)?;
         }
         ranges::RAIN_NEAR_M.check(self.rain_near_m)?;
+        if let Some(far) = self.rain_far_m {
+            ranges::RAIN_FAR_M.check(far)?;
+            if far >= self.rain_near_m {
+                return Err(crate::error::Error::Invalid {
+                    param: crate::error::Param {
+                        name: "rain_far_m",
+                        index: None,
+                    },
+                    message: format!(
+                        "rain_far_m = {far} m must be less than rain_near_m = {} m (the far \
+                         level of detail draws the drops between them)",
+                        self.rain_near_m
+                    ),
+                });
+            }
+        }
         ranges::SNOW_NEAR_M.check(self.snow_near_m)?;
         ranges::RAIN_DIAMETERS_MM.check_all(&self.rain_diameters_mm)?;
         if let Some((el, az)) = self.sun_deg {
@@ -236,6 +255,7 @@ impl Weather {
             seed,
         )?;
         region.method = self.rain_method;
+        region.far_m = self.rain_far_m;
         Ok(region)
     }
 }
@@ -280,6 +300,7 @@ mod tests {
             sky_illuminance_lux: 10_000.0,
             wind_m_s: [0.0; 3],
             rain_near_m: 5.0,
+            rain_far_m: None,
             rain_diameters_mm: vec![1.0, 1.5, 2.0],
             rain_streaks: true,
             rain_method: RainMethod::Billboards,

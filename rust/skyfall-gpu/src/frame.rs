@@ -106,6 +106,19 @@ impl GpuRenderer {
         out: FrameOut<'_>,
     ) -> Result<(Option<RainReport>, Option<SnowStats>), GpuError> {
         check_frame_size(cam)?;
+        if rain.is_some_and(|r| r.region.far_m.is_some()) {
+            // The far level of detail is the CPU's (its layers' lookups have no pass here).
+            return Err(skyfall_core::Error::Invalid {
+                param: skyfall_core::error::Param {
+                    name: "rain_far_m",
+                    index: None,
+                },
+                message: "the GPU backend draws every drop one by one: use rain_far_m = None \
+                          with it, or backend=\"cpu\" for the far level of detail"
+                    .into(),
+            }
+            .into());
+        }
         let drawn = light.drawn(haze.is_some(), rain.is_some(), snow.is_some());
         out.check(cam, drawn)?;
         let n = cam.pixels();

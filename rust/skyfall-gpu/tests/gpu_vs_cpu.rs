@@ -589,6 +589,7 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
         sky_illuminance_lux: 10_000.0,
         wind_m_s: [0.3, 0.0, 0.2],
         rain_near_m: 5.0,
+        rain_far_m: None,
         rain_diameters_mm: vec![1.0],
         rain_streaks: true,
         rain_method: skyfall_core::rain::drops::RainMethod::Billboards,

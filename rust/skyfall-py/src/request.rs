@@ -29,6 +29,8 @@ pub struct WeatherSpec {
     sky_illuminance_lux: f64,
     wind_m_s: [f64; 3],
     rain_near_m: f64,
+    #[pyo3(default)]
+    rain_far_m: Option<f64>,
     rain_diameters_mm: Vec<f64>,
     rain_streaks: bool,
     rain_method: String,
@@ -76,6 +78,7 @@ impl WeatherSpec {
             sky_illuminance_lux: self.sky_illuminance_lux,
             wind_m_s: self.wind_m_s,
             rain_near_m: self.rain_near_m,
+            rain_far_m: self.rain_far_m,
             rain_diameters_mm: self.rain_diameters_mm,
             rain_streaks: self.rain_streaks,
             rain_method: RainMethod::parse(&self.rain_method).map_err(CoreError)?,

@@ -120,6 +120,7 @@ pub fn render_into_reporting(
     let mut sun_bands = split_bands(sun_t, band, bands);
     let rays = ViewRays::new(cam);
     let particles = binned.as_ref().map(|(streaks, bins)| (*streaks, bins));
+    let far = passes.far();
     // The pipeline, band by band while the band is in cache: the scene stage, then the effect
     // passes in physical order (haze, the lights' glows, the particles).
     rgb.par_chunks_mut(3 * band)
@@ -172,6 +173,7 @@ pub fn render_into_reporting(
                     composite_band_colour(
                         streaks,
                         list,
+                        far,
                         y0,
                         w,
                         depth_band,

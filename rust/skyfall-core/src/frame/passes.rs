@@ -6,6 +6,7 @@ use crate::glow::Glow;
 use crate::haze::Haze;
 use crate::particles::order::far_to_near;
 use crate::particles::streak::ScreenStreak;
+use crate::rain::far::FarRain;
 use crate::rain::streaks::{RainFrame, RainStats};
 use crate::scene::boxes::BoxScene;
 use crate::scene::camera::Camera;
@@ -26,6 +27,8 @@ pub struct Particles {
     pub raining: bool,
     /// The snow's flakes and streaks, when it snows.
     pub snow: Option<SnowStats>,
+    /// The rain's far level of detail, when the rain has one: composited before `streaks`.
+    pub far: Option<FarRain>,
 }
 
 /// The effect passes of a frame, in physical order.
@@ -61,6 +64,7 @@ impl<'a> Passes<'a> {
                     rain_drops,
                     raining: true,
                     snow: None,
+                    far: rf.far(cam)?,
                 })
             }
             None => None,
@@ -73,6 +77,7 @@ impl<'a> Passes<'a> {
                 rain_drops: 0,
                 raining: false,
                 snow: None,
+                far: None,
             });
             // One list: the rain's (sorted) then the flakes, sorted together far to near
             // (ties in that order).
@@ -100,6 +105,11 @@ impl<'a> Passes<'a> {
             .as_ref()
             .filter(|p| p.raining)
             .map(|p| (p.rain, p.rain_drops))
+    }
+
+    /// The rain's far layers, when the frame draws them.
+    pub fn far(&self) -> Option<&FarRain> {
+        self.particles.as_ref().and_then(|p| p.far.as_ref())
     }
 
     /// What the snow reports: flakes generated and streaks drawn (when it snows).

@@ -153,7 +153,8 @@ pub fn render_photo8_with(
         }
     });
     let streaks: &[ScreenStreak] = passes.particles.as_ref().map_or(&[], |p| &p.streaks);
-    if haze.is_none() && streaks.is_empty() {
+    let far = passes.far();
+    if haze.is_none() && streaks.is_empty() && far.is_none() {
         // Nothing to draw: encode(decode(b)) = b for every byte (tested), so the bytes as they are.
         out.srgb.copy_from_slice(photo.srgb);
         if let Some(a) = out.rain_alpha {
@@ -190,7 +191,7 @@ pub fn render_photo8_with(
     let grey = streaks.iter().all(|s| {
         let l = s.light();
         l.x == l.y && l.y == l.z
-    });
+    }) && far.is_none_or(|f| f.grey());
     let k = if grey { 1 } else { 3 };
     out.srgb
         .par_chunks_mut(3 * band)
@@ -225,7 +226,7 @@ pub fn render_photo8_with(
                     let t = bi * tiles_x + tx;
                     let mine = &indices[offsets[t] as usize..offsets[t + 1] as usize];
                     let cols = tx * TILE_W..((tx + 1) * TILE_W).min(w);
-                    let rained = !mine.is_empty();
+                    let rained = !mine.is_empty() || far.is_some();
                     if rained {
                         for row in 0..rows {
                             let seg = row * w + cols.start..row * w + cols.end;
@@ -249,6 +250,7 @@ pub fn render_photo8_with(
                         raster(
                             streaks,
                             mine,
+                            far,
                             (y0, rows, w),
                             cols.clone(),
                             depth,
@@ -388,8 +390,9 @@ impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
     }
 }
 
-/// Composites a tile's streaks (`mine`, indices into `streaks`, far to near; the tile: the
-/// band's rows, columns `cols`) into the band's affine maps (see [`AffineAccumulator`]: P in
+/// Composites a tile's streaks (`mine`, indices into `streaks`, far to near, after the rain's
+/// far layers `far` when given; the tile: the band's rows, columns `cols`) into the band's
+/// affine maps (see [`AffineAccumulator`]: P in
 /// `p`, Q in `q`'s `K` planes, the rain's and the snow's coverage products in `cover` and
 /// `snow_cover` when they are not empty).
 #[allow(clippy::too_many_arguments)]
@@ -397,6 +400,7 @@ impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
 fn raster_tile<const K: usize>(
     streaks: &[ScreenStreak],
     mine: &[u32],
+    far: Option<&crate::rain::far::FarRain>,
     (y0, rows, w): (usize, usize, usize),
     cols: std::ops::Range<usize>,
     depth: &[f32],
@@ -416,6 +420,9 @@ fn raster_tile<const K: usize>(
         cover,
         snow_cover,
     };
+    if let Some(far) = far {
+        far.composite(y0, rows, w, cols.clone(), depth, &mut acc);
+    }
     composite_band(streaks, mine, y0, rows, w, cols, depth, &mut acc);
 }
 

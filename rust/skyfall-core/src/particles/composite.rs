@@ -236,6 +236,7 @@ pub fn composite_streaks_with_snow(
             composite_band_colour(
                 streaks,
                 list,
+                None,
                 bi * BAND_ROWS,
                 w,
                 depth,
@@ -247,12 +248,15 @@ pub fn composite_streaks_with_snow(
 }
 
 /// One band of the float frame: rows from `y0` (as many as `depth` holds), every column, the
-/// colour `rgb` composited in place, the layers `[rain_alpha, rain_depth_m, snow_alpha]`
-/// overwritten (a layer's buffer empty when no particle of its effect is in the list).
+/// colour `rgb` composited in place (the rain's far layers `far` first, when given), the
+/// layers `[rain_alpha, rain_depth_m, snow_alpha]` overwritten (a layer's buffer empty when
+/// no particle of its effect is in the list).
+#[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub fn composite_band_colour(
     streaks: &[ScreenStreak],
     list: &[u32],
+    far: Option<&crate::rain::far::FarRain>,
     y0: usize,
     w: usize,
     depth: &[f32],
@@ -268,6 +272,9 @@ pub fn composite_band_colour(
         &mut rain_depth_m[..nd],
         &mut snow_alpha[..ns],
     );
+    if let Some(far) = far {
+        far.composite(y0, px / w, w, 0..w, depth, &mut acc);
+    }
     composite_band(streaks, list, y0, px / w, w, 0..w, depth, &mut acc);
     acc.finish();
 }

@@ -99,11 +99,7 @@ fn probe_area(
     lens: Option<&Defocus>,
 ) -> (impl Fn(Vec3) -> f32 + Sync, f32) {
     let law = *FallSpeed::beard_standard();
-    let d_mid = region
-        .bins
-        .first()
-        .zip(region.bins.last())
-        .map_or(1.5, |(a, b)| 0.5 * (a.0 + b.1));
+    let d_mid = region.middle_diameter_mm();
     let velocity = Vec3::new(
         region.wind_m_s.x as f32,
         -law.m_s(d_mid) as f32,

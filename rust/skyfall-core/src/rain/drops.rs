@@ -41,6 +41,9 @@ pub struct RainRegion {
     pub seed: u64,
     /// Drops or billboards.
     pub method: RainMethod,
+    /// Drops farther than this horizontally, m, are drawn by the far level of detail
+    /// ([`super::far`]) instead of one by one; None: every drop one by one.
+    pub far_m: Option<f64>,
 }
 
 impl RainRegion {
@@ -67,6 +70,7 @@ impl RainRegion {
             time_s,
             seed,
             method: RainMethod::Drops,
+            far_m: None,
         })
     }
 }
@@ -76,6 +80,15 @@ impl RainRegion {
 pub const DROP_BUDGET_BYTES: u64 = 2 << 30;
 
 impl RainRegion {
+    /// The middle of the region's diameters, mm (1.5 without bins): the diameter whose fall
+    /// speed stands for all of them where one speed is needed.
+    pub fn middle_diameter_mm(&self) -> f64 {
+        self.bins
+            .first()
+            .zip(self.bins.last())
+            .map_or(1.5, |(a, b)| 0.5 * (a.0 + b.1))
+    }
+
     /// The drops expected in `fraction` of the region's sphere (grown by a voxel's diagonal,
     /// for the voxels its surface cuts).
     pub fn expected_drops(&self, fraction: f64) -> f64 {

@@ -145,7 +145,8 @@ pub struct RainFrame<'a> {
 
 impl RainFrame<'_> {
     /// The frame's streaks (see [`prepare`]), its stats, and how many drops there were (those
-    /// of the voxels that can reach the view, less the sheltered ones).
+    /// of the voxels that can reach the view, less the sheltered ones, and less those beyond
+    /// the region's `far_m` when it has one).
     pub fn streaks(&self, cam: &Camera) -> Result<(Vec<ScreenStreak>, RainStats, usize)> {
         self.region
             .check_budget(cam.view_solid_angle_sr() / (4.0 * std::f64::consts::PI))?;
@@ -166,6 +167,13 @@ impl RainFrame<'_> {
                 self.ground,
             ),
         };
+        if let Some(far) = self.region.far_m {
+            // The far level of detail draws the rest ([`Self::far`]).
+            let far2 = (far * far) as f32;
+            drops.retain(|d| {
+                d.position_m.x * d.position_m.x + d.position_m.z * d.position_m.z < far2
+            });
+        }
         super::shelter::remove_sheltered(
             &mut drops,
             self.shelter,
@@ -181,6 +189,22 @@ impl RainFrame<'_> {
             self.shading,
         );
         Ok((streaks, stats, drops.len()))
+    }
+
+    /// The far level of detail's layers for `cam` (see [`super::far`]), when the region has a
+    /// `far_m`.
+    pub fn far(&self, cam: &Camera) -> Result<Option<super::far::FarRain>> {
+        super::far::FarRain::prepare(
+            cam,
+            &super::far::FarRequest {
+                region: self.region,
+                exposure_s: self.exposure_s,
+                camera_velocity_m_s: self.camera_velocity_m_s,
+                lens: self.lens.is_some(),
+                shelter: self.shelter,
+                shading: self.shading,
+            },
+        )
     }
 }
 

@@ -17,6 +17,7 @@ fn weather(rate: f64, wind: [f64; 3]) -> Weather {
         sky_illuminance_lux: 10_000.0,
         wind_m_s: wind,
         rain_near_m: 5.0,
+        rain_far_m: None,
         rain_diameters_mm: vec![1.0],
         rain_streaks: true,
         rain_method: crate::rain::drops::RainMethod::Billboards,

@@ -1,0 +1,601 @@
+//! The rain's far level of detail: the drops beyond `far_m` (horizontally) of the camera drawn
+//! as a few pre-rasterised, world-anchored layers instead of one streak each, in the spirit of
+//! Yoshida, Dobashi & Yamamoto's rain textures (fast rendering of rain streaks).
+//!
+//! The far part of the rain region, horizontal distances ρ in [far_m, near_m + …) within
+//! `near_m` of the eye, is cut into K cylindrical shells about the camera's vertical, ρ in
+//! [R_k − Δ/2, R_k + Δ/2] (Δ ≈ [`LAYER_SPACING_M`]). A shell's drops are drawn, once, into a
+//! tileable opacity texture in the shell's own coordinates: a = azimuth / δ and b = height on
+//! the shell / (R_k·δ), δ the angle of one texel (close to one pixel's, and an integer fraction
+//! of the full turn, so the texture wraps seamlessly around the camera). Each drop is the
+//! per-drop path's streak ([`crate::particles::streak`]) of a drop at distance R_k straight
+//! ahead: width D/(R_k δ), length v·T/(R_k δ) texels, α = (π/4)·w/L. A shell holds n·Δ drops
+//! per m² (n the Marshall–Palmer number density of the bins), as the shell's volume,
+//! R_k·Δ per m² of it, holds exactly.
+//!
+//! A pixel looks up each shell's texture where its ray meets the shell: a = azimuth/δ and
+//! b = tan(elevation)/δ for every shell (the same texel for all of them, up to each shell's
+//! offset); that is exact on a cylinder, whatever the camera's pitch and roll, and vertical
+//! streaks stay vertical in the world, converging as the per-drop path's do. Per pixel the
+//! texture's α is scaled by sec(elevation)/|r| = 1/h (an oblique ray crosses a shell Δ/cos
+//! wide; the per-drop path draws a drop D·f/z wide, z its depth, so its opacity-area per pixel
+//! falls as 1/|r| away from the axis, r the ray with camera z = −1 and h its horizontal length)
+//! and by the share of the shell's depth span in front of both the scene and the region's
+//! sphere (drops' opacity per pixel is uniform in their distance for streaks under a pixel wide), and
+//! composited far to near like a streak fragment, before the near streaks. Wind and the camera's
+//! motion slant the streaks: the lookup is sheared by the relative horizontal velocity's
+//! component across the ray over the fall speed, which makes a vertical texture streak the
+//! slanted path a drop draws; the component along the ray (streaks shortening towards the
+//! camera) is left out. Time scrolls each shell down at the middle diameter's fall speed, and
+//! the camera's height shifts the shells too: they stay anchored to the world as the camera
+//! turns or rises, but are centred on it, so a camera moving horizontally carries its far
+//! rain along (no parallax beyond `far_m`).
+//!
+//! Textures depend only on the rain, the exposure, δ and the shells, not on the seed (a seed
+//! draws each shell's offset), and are cached ([`CACHE_ENTRIES`] sets). Light is sampled per
+//! [`BLOCK_PX`]-pixel block and shell (the sky's share from the ambient map, the lamps, the
+//! cull threshold and the shelter of boxes at the shell's point on the block's centre ray).
+//! The measured error against the per-drop reference, and the speed, are in
+//! `benches/results/rain.md`.
+
+use super::drops::{BinSpeeds, RainRegion};
+use super::streaks::RainShading;
+use crate::error::{Error, Param, Result};
+use crate::particles::composite::Accumulator;
+use crate::particles::streak::{LAYER_RAIN, screen_streak_through};
+use crate::particles::voxels::voxel_seed;
+use crate::physics::dsd::BinSampler;
+use crate::physics::fall_speed::FallSpeed;
+use crate::scene::boxes::SceneBox;
+use crate::scene::camera::Camera;
+use glam::{DVec3, IVec4, Mat3, Vec2, Vec3, Vec4};
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+use std::sync::{Arc, Mutex};
+
+/// Side of a shell's texture, texels (a power of two: lookups wrap by a mask).
+pub const TEXTURE_SIZE: usize = 1024;
+/// The shells' target spacing, m: K = ⌈(near_m − far_m) / this⌉ shells, at most [`MAX_LAYERS`].
+pub const LAYER_SPACING_M: f64 = 1.0;
+/// The most shells a frame draws.
+pub const MAX_LAYERS: usize = 8;
+/// Side of the blocks the shells' light is sampled on, px.
+pub const BLOCK_PX: usize = 16;
+/// Texture sets kept for reuse, at most (each K·[`TEXTURE_SIZE`]² f32: 12 MiB for three
+/// shells; the oldest go first).
+pub const CACHE_ENTRIES: usize = 4;
+/// The most memory the cached texture sets may hold together, bytes (the newest is kept
+/// whatever its size).
+pub const CACHE_BYTES: usize = 64 << 20;
+/// The most drops a frame's shells' textures may hold: more is refused before any is drawn
+/// (a small frame's texel is a large angle, so its textures span much of the region; at
+/// 1080p, 10 mm/h and 5 m they hold about 10 000).
+pub const TEXTURE_DROP_BUDGET: f64 = 4.0e6;
+/// The textures' own seed (a frame's seed draws the shells' offsets).
+const TEXTURE_SEED: u64 = 0x00FA_2F1E_1D5E_ED00;
+/// tan(elevation) is clamped to this (a ray straight up or down meets no shell).
+/// (87°, where the shells' cylinders are all but edge-on)
+const MAX_TAN: f32 = 20.0;
+
+/// Which textures: everything they depend on, as bits.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct TextureKey(Vec<u64>);
+
+/// The textures of a frame's shells, K·S² opacities (far shell first).
+#[derive(Clone, PartialEq)]
+struct Textures(Arc<Vec<f32>>);
+
+impl std::fmt::Debug for Textures {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Textures({} texels)", self.0.len())
+    }
+}
+
+static CACHE: Mutex<Vec<(TextureKey, Textures)>> = Mutex::new(Vec::new());
+
+/// A frame's far rain, ready to composite.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FarRain {
+    /// The shells' radii R_k, m, far to near.
+    radii: Vec<f32>,
+    /// Δ, m.
+    spacing_m: f32,
+    /// The region's radius, m.
+    near_m: f32,
+    /// Per shell: the texture offsets (a, b), texels, in [0, S) (b plus whole textures enough
+    /// to keep every lookup positive).
+    offsets: Vec<[f32; 2]>,
+    textures: Textures,
+    /// 1/δ, texels per radian.
+    inv_delta: f32,
+    /// Camera to world.
+    rotation: Mat3,
+    /// fx, fy, cx, cy.
+    intrinsics: [f32; 4],
+    /// The relative horizontal velocity (wind − camera) over the fall speed, (x, z).
+    shear: Vec2,
+    /// r.
+    reflectance: f32,
+    /// Blocks per row.
+    blocks_x: usize,
+    /// Per block and shell (block-major): the shell's light there, None where culled or
+    /// sheltered.
+    lights: Vec<Option<Vec3>>,
+}
+
+fn invalid(name: &'static str, message: impl Into<String>) -> Error {
+    Error::Invalid {
+        param: Param { name, index: None },
+        message: message.into(),
+    }
+}
+
+/// The shells for the region `[far_m, near_m]`: (radii far to near, spacing), m.
+pub fn shells(far_m: f64, near_m: f64) -> (Vec<f64>, f64) {
+    let k = ((near_m - far_m) / LAYER_SPACING_M)
+        .ceil()
+        .clamp(1.0, MAX_LAYERS as f64) as usize;
+    let dr = (near_m - far_m) / k as f64;
+    let radii = (0..k)
+        .rev()
+        .map(|i| far_m + (i as f64 + 0.5) * dr)
+        .collect();
+    (radii, dr)
+}
+
+/// δ for a camera of vertical focal length `fy`: the full turn over an integer number of
+/// texture widths, the nearest to one pixel's angle.
+pub fn texel_angle(fy: f32) -> f64 {
+    let turn = std::f64::consts::TAU;
+    let m = (turn * f64::from(fy) / TEXTURE_SIZE as f64)
+        .round()
+        .max(1.0);
+    turn / (m * TEXTURE_SIZE as f64)
+}
+
+/// Draws one shell's texture: its drops' streaks, wrapped, as opacities 1 − ∏(1 − a).
+fn shell_texture(
+    region: &RainRegion,
+    exposure_s: f64,
+    radius_m: f64,
+    spacing_m: f64,
+    delta: f64,
+    stream: u64,
+) -> Result<Vec<f32>> {
+    let s = TEXTURE_SIZE;
+    let f = (1.0 / delta) as f32;
+    let half = 0.5 * s as f32;
+    let cam = Camera::new(
+        s as u32,
+        s as u32,
+        [f, f, half, half],
+        DVec3::ZERO,
+        Mat3::IDENTITY,
+    )?;
+    let mut keep = crate::error::try_filled("a far-rain shell's texture", s * s, 1.0f32)?;
+    let speeds = BinSpeeds::new(&region.bins);
+    let side_m = s as f64 * delta * radius_m;
+    let volume_m3 = side_m * side_m * spacing_m;
+    let mut rng = Pcg64Mcg::seed_from_u64(voxel_seed(TEXTURE_SEED, [stream as i64, 0, 0], &[]));
+    let (r, texel_m) = (radius_m as f32, (delta * radius_m) as f32);
+    for (bin, &(lo, hi)) in region.bins.iter().enumerate() {
+        let sampler = BinSampler::new(region.rain_rate_mm_h, lo, hi);
+        let expected = sampler.expected_per_m3() * volume_m3;
+        let whole = expected.floor();
+        let n = whole as usize + usize::from(rng.random::<f64>() < expected - whole);
+        for _ in 0..n {
+            let d_mm = sampler.diameter_mm(rng.random());
+            let (a, b): (f32, f32) = (
+                rng.random::<f32>() * s as f32,
+                rng.random::<f32>() * s as f32,
+            );
+            let drop = crate::particles::Particle {
+                position_m: Vec3::new((a - half) * texel_m, (half - b) * texel_m, -r),
+                velocity_m_s: Vec3::new(0.0, -speeds.m_s(bin, d_mm) as f32, 0.0),
+                diameter_m: (d_mm * 1e-3) as f32,
+                id: [0; 5],
+            };
+            let Some(st) = screen_streak_through(&cam, None, &drop, exposure_s as f32, Vec3::ZERO)
+            else {
+                continue;
+            };
+            let (x0, x1) = (st.min.x.floor() as i64, st.max.x.ceil() as i64);
+            let (y0, y1) = (st.min.y.floor() as i64, st.max.y.ceil() as i64);
+            for y in y0..y1 {
+                let row = y.rem_euclid(s as i64) as usize * s;
+                for x in x0..x1 {
+                    if let Some((alpha, _)) = st.fragment(Vec2::new(x as f32 + 0.5, y as f32 + 0.5))
+                    {
+                        keep[row + x.rem_euclid(s as i64) as usize] *= 1.0 - alpha;
+                    }
+                }
+            }
+        }
+    }
+    for k in &mut keep {
+        *k = 1.0 - *k;
+    }
+    Ok(keep)
+}
+
+/// The textures of the shells `radii` (cached; see the module docs).
+fn textures(
+    region: &RainRegion,
+    exposure_s: f64,
+    radii: &[f64],
+    spacing_m: f64,
+    delta: f64,
+) -> Result<Textures> {
+    let mut key = vec![
+        region.rain_rate_mm_h.to_bits(),
+        exposure_s.to_bits(),
+        spacing_m.to_bits(),
+        delta.to_bits(),
+    ];
+    key.extend(
+        region
+            .bins
+            .iter()
+            .flat_map(|b| [b.0.to_bits(), b.1.to_bits()]),
+    );
+    key.extend(radii.iter().map(|r| r.to_bits()));
+    let key = TextureKey(key);
+    let drops: f64 = radii
+        .iter()
+        .map(|&r| {
+            let side_m = TEXTURE_SIZE as f64 * delta * r;
+            side_m * side_m * spacing_m
+        })
+        .sum::<f64>()
+        * region
+            .bins
+            .iter()
+            .map(|&(lo, hi)| BinSampler::new(region.rain_rate_mm_h, lo, hi).expected_per_m3())
+            .sum::<f64>();
+    if drops > TEXTURE_DROP_BUDGET {
+        return Err(invalid(
+            "rain_far_m",
+            format!(
+                "the far layers' textures would hold {drops:.3e} drops (at most \
+                 {TEXTURE_DROP_BUDGET:.0e}: a frame this small at {} mm/h out to \
+                 rain_near_m = {} m): raise rain_far_m, lower rain_near_m or use rain_far_m = None",
+                region.rain_rate_mm_h, region.near_m
+            ),
+        ));
+    }
+    if let Ok(cache) = CACHE.lock()
+        && let Some((_, t)) = cache.iter().find(|(k, _)| *k == key)
+    {
+        return Ok(t.clone());
+    }
+    use rayon::prelude::*;
+    let layers: Vec<Vec<f32>> = radii
+        .par_iter()
+        .enumerate()
+        .map(|(k, &r)| shell_texture(region, exposure_s, r, spacing_m, delta, k as u64))
+        .collect::<Result<_>>()?;
+    let texels = TEXTURE_SIZE * TEXTURE_SIZE * radii.len();
+    let mut all: Vec<f32> = Vec::new();
+    all.try_reserve_exact(texels)
+        .map_err(|_| Error::out_of_memory::<f32>("the far rain's textures", texels))?;
+    all.extend(layers.iter().flatten());
+    let t = Textures(Arc::new(all));
+    if let Ok(mut cache) = CACHE.lock() {
+        cache.push((key, t.clone()));
+        let bytes =
+            |c: &[(TextureKey, Textures)]| -> usize { c.iter().map(|(_, t)| 4 * t.0.len()).sum() };
+        while cache.len() > 1 && (cache.len() > CACHE_ENTRIES || bytes(&cache) > CACHE_BYTES) {
+            cache.remove(0);
+        }
+    }
+    Ok(t)
+}
+
+/// The camera's world ray through pixel centre (x, y), unnormalised (camera z = −1).
+fn world_ray(cam: &Camera, x: f32, y: f32) -> Vec3 {
+    let u = (x - cam.cx) / cam.fx;
+    let v = -(y - cam.cy) / cam.fy;
+    cam.rotation * Vec3::new(u, v, -1.0)
+}
+
+/// What prepares a frame's far rain.
+pub struct FarRequest<'a> {
+    /// The rain (its `far_m` set).
+    pub region: &'a RainRegion,
+    /// The exposure, s.
+    pub exposure_s: f32,
+    /// The camera's velocity, m/s.
+    pub camera_velocity_m_s: Vec3,
+    /// Whether the camera has a thin lens (refused: the shells are drawn in focus).
+    pub lens: bool,
+    /// The boxes that shelter the rain.
+    pub shelter: &'a [SceneBox],
+    /// How drops are lit.
+    pub shading: &'a RainShading,
+}
+
+impl FarRain {
+    /// The far rain of `req` for `cam`; None when the region has no `far_m`.
+    pub fn prepare(cam: &Camera, req: &FarRequest<'_>) -> Result<Option<Self>> {
+        let region = req.region;
+        let Some(far_m) = region.far_m else {
+            return Ok(None);
+        };
+        if req.lens {
+            return Err(invalid(
+                "rain_far_m",
+                "the far level of detail draws its layers in focus: use a pinhole camera \
+                 (f_number = None) or rain_far_m = None",
+            ));
+        }
+        let (radii, dr) = shells(far_m, region.near_m);
+        let delta = texel_angle(cam.fy);
+        let exposure = f64::from(req.exposure_s);
+        let textures = textures(region, exposure, &radii, dr, delta)?;
+        let law = *FallSpeed::beard_standard();
+        let d_mid = region.middle_diameter_mm();
+        let fall = law.m_s(d_mid).max(1e-3);
+        let rel = DVec3::new(
+            region.wind_m_s.x - f64::from(req.camera_velocity_m_s.x),
+            0.0,
+            region.wind_m_s.z - f64::from(req.camera_velocity_m_s.z),
+        );
+        let shear = Vec2::new((rel.x / fall) as f32, (rel.z / fall) as f32);
+        let eye = cam.position_m;
+        let s = TEXTURE_SIZE as f64;
+        let offsets = radii
+            .iter()
+            .enumerate()
+            .map(|(k, &r)| {
+                let mut rng =
+                    Pcg64Mcg::seed_from_u64(voxel_seed(region.seed, [k as i64, 0, 0], &[0xFA2]));
+                let (ou, ov): (f64, f64) = (rng.random(), rng.random());
+                let texel_m = r * delta;
+                // b grows downwards in the texture (a pixel looks up b = offset − tan/δ): a
+                // drop falling, or the eye rising, lowers the offset.
+                let b = ov * s - (fall * region.time_s + eye.y) / texel_m;
+                // (plus the least whole number of textures that keeps every lookup's b ≥ 0)
+                let bias = (f64::from(MAX_TAN) / delta / s).ceil() * s;
+                [(ou * s) as f32, (b.rem_euclid(s) + bias) as f32]
+            })
+            .collect();
+        // The light per block and shell.
+        let (bw, bh) = (
+            (cam.width as usize).div_ceil(BLOCK_PX),
+            (cam.height as usize).div_ceil(BLOCK_PX),
+        );
+        let sh = req.shading;
+        let velocity = Vec3::new(
+            region.wind_m_s.x as f32,
+            -fall as f32,
+            region.wind_m_s.z as f32,
+        );
+        use rayon::prelude::*;
+        let lights: Vec<Option<Vec3>> = (0..bw * bh)
+            .into_par_iter()
+            .with_min_len(64)
+            .flat_map_iter(|blk| {
+                let (bx, by) = (blk % bw, blk / bw);
+                let cx = ((bx * BLOCK_PX) as f32 + 0.5 * BLOCK_PX as f32).min(cam.width as f32);
+                let cy = ((by * BLOCK_PX) as f32 + 0.5 * BLOCK_PX as f32).min(cam.height as f32);
+                let ray = world_ray(cam, cx, cy);
+                let h = Vec2::new(ray.x, ray.z).length().max(1e-6);
+                radii.iter().map(move |&r| {
+                    let p = ray * (r as f32 / h);
+                    let probe = crate::particles::Particle {
+                        position_m: p,
+                        velocity_m_s: velocity,
+                        diameter_m: 0.0,
+                        id: [0; 5],
+                    };
+                    if super::shelter::sheltered(req.shelter, cam.eye(), &probe) {
+                        return None;
+                    }
+                    let light = sh.drop_light(cam.eye() + p);
+                    if sh.cull_threshold.is_some_and(|t| light.max_element() < t) {
+                        return None;
+                    }
+                    Some(light * sh.radiance_scale)
+                })
+            })
+            .collect();
+        Ok(Some(FarRain {
+            radii: radii.iter().map(|&r| r as f32).collect(),
+            spacing_m: dr as f32,
+            near_m: region.near_m as f32,
+            offsets,
+            textures,
+            inv_delta: (1.0 / delta) as f32,
+            rotation: cam.rotation,
+            intrinsics: [cam.fx, cam.fy, cam.cx, cam.cy],
+            shear,
+            reflectance: sh.reflectance,
+            blocks_x: bw,
+            lights,
+        }))
+    }
+
+    /// The shells drawn.
+    pub fn layers(&self) -> usize {
+        self.radii.len()
+    }
+
+    /// Whether every light the shells carry is grey (the 8-bit output then keeps one Q plane).
+    pub fn grey(&self) -> bool {
+        self.lights
+            .iter()
+            .flatten()
+            .all(|l| l.x == l.y && l.y == l.z)
+    }
+
+    /// Composites the shells over a band: rows `y0..y0 + rows` of a `w`-wide frame, columns
+    /// `cols`, `depth` the band's scene depth (z, m), into `acc` (indexed as the band), far to
+    /// near. Call before the band's streaks.
+    pub fn composite<A: Accumulator>(
+        &self,
+        y0: usize,
+        rows: usize,
+        w: usize,
+        cols: std::ops::Range<usize>,
+        depth: &[f32],
+        acc: &mut A,
+    ) {
+        let k_n = self.radii.len();
+        let size = TEXTURE_SIZE;
+        let mask = IVec4::splat(size as i32 - 1);
+        let tex = &self.textures.0[..];
+        let [fx, fy, cx, cy] = self.intrinsics;
+        let m = self.rotation;
+        let px = rows * w;
+        let mut sts: Vec<Option<A::Streak>> = Vec::with_capacity(k_n);
+        let turn = std::f32::consts::TAU * self.inv_delta;
+        for row in 0..rows {
+            let y = y0 + row;
+            let v = -((y as f32 + 0.5 - cy) / fy);
+            // The ray's world components, linear in u: c0 + u·c1.
+            let base = m * Vec3::new(0.0, v, -1.0);
+            let (du, dy_row) = (m.x_axis, v * v + 1.0);
+            let by = y / BLOCK_PX;
+            // [A, V, h, near/sec] at four pixel centres xs of the row (lanes).
+            let terms = |xs: Vec4| -> [Vec4; 4] {
+                let u = (xs - Vec4::splat(cx)) / Vec4::splat(fx);
+                let rx = Vec4::splat(base.x) + u * du.x;
+                let ry = Vec4::splat(base.y) + u * du.y;
+                let rz = Vec4::splat(base.z) + u * du.z;
+                let h = (rx * rx + rz * rz).max(Vec4::splat(1e-12)).sqrt();
+                let inv_h = Vec4::ONE / h;
+                let norm = (u * u + Vec4::splat(dy_row)).sqrt();
+                let tan = (ry * inv_h).clamp(Vec4::splat(-MAX_TAN), Vec4::splat(MAX_TAN));
+                let vv = tan * self.inv_delta;
+                // across the ray: (−z, 0, x)/h; the shear per texel of V.
+                let s = (Vec4::splat(self.shear.x) * -rz + Vec4::splat(self.shear.y) * rx) * inv_h;
+                // (a whole turn added: a whole number of textures, and A stays positive)
+                let a = atan2_x4(rx, -rz) * self.inv_delta + s * vv + Vec4::splat(turn);
+                [a, vv, h, Vec4::splat(self.near_m) * h / norm]
+            };
+            let mut xb = cols.start;
+            while xb < cols.end {
+                let bx = xb / BLOCK_PX;
+                let xe = ((bx + 1) * BLOCK_PX).min(cols.end);
+                let blk = (by * self.blocks_x + bx) * k_n;
+                sts.clear();
+                sts.extend(
+                    self.lights[blk..blk + k_n]
+                        .iter()
+                        .map(|l| l.map(|l| acc.streak(l, self.reflectance, LAYER_RAIN))),
+                );
+                if sts.iter().all(Option::is_none) {
+                    xb = xe;
+                    continue;
+                }
+                // The lookups' terms, exact at the segment's first and last pixel centres and
+                // linear between (their curvature over a block moves a lookup by well under a
+                // texel): A = azimuth/δ + shear·V, V = tan(elevation)/δ, h (the ray's
+                // horizontal length, camera z = −1), the sphere's radius as a horizontal
+                // distance.
+                let ends = Vec4::new(xb as f32 + 0.5, (xe - 1) as f32 + 0.5, 0.0, 0.0);
+                let tm = terms(ends);
+                let a0: [f32; 4] = std::array::from_fn(|j| tm[j].x);
+                let mut a1: [f32; 4] = std::array::from_fn(|j| tm[j].y);
+                // (across the azimuth's seam, behind +Z, A jumps by a whole turn: a whole
+                // number of textures, the same texels)
+                if a1[0] - a0[0] > 0.5 * turn {
+                    a1[0] -= turn;
+                } else if a0[0] - a1[0] > 0.5 * turn {
+                    a1[0] += turn;
+                }
+                let span = ((xe - xb - 1) as f32).max(1.0);
+                let slope: [f32; 4] = std::array::from_fn(|j| (a1[j] - a0[j]) / span);
+                let mut x = xb;
+                while x < xe {
+                    let lanes = (xe - x).min(4);
+                    let t = Vec4::new(0.0, 1.0, 2.0, 3.0) + Vec4::splat((x - xb) as f32);
+                    let at = |j: usize| Vec4::splat(a0[j]) + t * slope[j];
+                    let (az, vv, h, near_h) = (at(0), at(1), at(2), at(3));
+                    // sec(elevation) for the oblique crossing, over |ray| for the drops' own
+                    // projection (w = D·f/z with z the depth: a drop's opacity-area per pixel
+                    // falls as 1/|ray| off the axis in the per-drop path): 1/h.
+                    let scale = Vec4::ONE / h;
+                    let i = row * w + x;
+                    let mut d = [f32::INFINITY; 4];
+                    d[..lanes].copy_from_slice(&depth[i..i + lanes]);
+                    let d = Vec4::from_array(d);
+                    // The visible end, as a horizontal distance: the scene or the sphere.
+                    let end_h = (d * h).min(near_h);
+                    // Shell k's α·coverage at the four pixels (None: hidden or not drawn).
+                    let lookup = |k: usize| -> Option<Vec4> {
+                        sts[k].as_ref()?;
+                        let lo = self.radii[k] - 0.5 * self.spacing_m;
+                        let wgt = ((end_h - Vec4::splat(lo)) / self.spacing_m)
+                            .clamp(Vec4::ZERO, Vec4::ONE);
+                        if wgt.cmple(Vec4::ZERO).all() {
+                            return None;
+                        }
+                        let [oa, ob] = self.offsets[k];
+                        // (both positive: truncation is the floor)
+                        let ia = (az + Vec4::splat(oa)).as_ivec4() & mask;
+                        let ib = (Vec4::splat(ob) - vv).as_ivec4() & mask;
+                        let idx = ib * size as i32 + ia + IVec4::splat((k * size * size) as i32);
+                        let t = Vec4::new(
+                            tex[idx.x as usize],
+                            tex[idx.y as usize],
+                            tex[idx.z as usize],
+                            tex[idx.w as usize],
+                        );
+                        Some((t * scale).min(Vec4::ONE) * wgt)
+                    };
+                    let mut add = |st: &A::Streak, a: Vec4, inv_z: Vec4| {
+                        if lanes == 4 && i + 4 <= px {
+                            acc.add_x4(st, i, a, inv_z);
+                        } else {
+                            for l in 0..lanes {
+                                acc.add(st, i + l, a[l], inv_z[l]);
+                            }
+                        }
+                    };
+                    for (k, st) in sts.iter().enumerate() {
+                        if let (Some(st), Some(a)) = (st, lookup(k)) {
+                            add(st, a, h / self.radii[k]);
+                        }
+                    }
+                    x += lanes;
+                }
+                xb = xe;
+            }
+        }
+    }
+}
+
+/// atan2(y, x) for four values (|error| < 2e-5 rad, tested), in pure f32 arithmetic: the same bits on
+/// every CPU.
+#[inline(always)]
+fn atan2_x4(y: Vec4, x: Vec4) -> Vec4 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let (mx, mn) = (ax.max(ay), ax.min(ay));
+    let a = mn / mx.max(Vec4::splat(f32::MIN_POSITIVE));
+    let s = a * a;
+    // Minimax odd polynomial of degree 11 on [0, 1].
+    let p = ((((Vec4::splat(-0.011_721_2) * s + Vec4::splat(0.052_653_32)) * s
+        - Vec4::splat(0.116_432_87))
+        * s
+        + Vec4::splat(0.193_543_46))
+        * s
+        - Vec4::splat(0.332_623_47))
+        * s
+        + Vec4::splat(0.999_977_26);
+    let p = p * a;
+    let p = Vec4::select(
+        ay.cmpgt(ax),
+        Vec4::splat(std::f32::consts::FRAC_PI_2) - p,
+        p,
+    );
+    let p = Vec4::select(
+        x.cmplt(Vec4::ZERO),
+        Vec4::splat(std::f32::consts::PI) - p,
+        p,
+    );
+    Vec4::select(y.cmplt(Vec4::ZERO), -p, p)
+}
+
+#[cfg(test)]
+mod tests;
