@@ -417,6 +417,7 @@ def main() -> None:
             f"| {th} | {float(c['s']) * 1e3:.0f} ms | {c['drawn']} | {c['culled']} | "  # type: ignore[arg-type]
             f"{float(c['mean_abs_error']):.2e} | {float(c['rain_signal']):.2e} |"  # type: ignore[arg-type]
         )
+    lines += far_lines(far_rows)
     (RESULTS / "rain.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -291,12 +291,25 @@ pub fn drops_in_view(
     camera_speed_m_s: f64,
     ground: bool,
 ) -> Vec<Drop> {
+    drops_in_view_where(region, cam, exposure_s, camera_speed_m_s, ground, |_| true)
+}
+
+/// [`drops_in_view`] in the voxels `also` accepts too (by their centre relative to the camera).
+pub fn drops_in_view_where(
+    region: &RainRegion,
+    cam: &Camera,
+    exposure_s: f64,
+    camera_speed_m_s: f64,
+    ground: bool,
+    also: impl Fn(Vec3) -> bool + Sync,
+) -> Vec<Drop> {
     let speeds = BinSpeeds::new(&region.bins);
+    let in_view = voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0);
     voxels_where(
         cam.position_m,
         region.near_m,
         ground,
-        voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0),
+        |c| also(c) && in_view(c),
         |voxel, out| {
             for bin in 0..region.bins.len() {
                 voxel_drops(region, &speeds, voxel, bin, cam.position_m, out);

@@ -154,11 +154,28 @@ impl RainFrame<'_> {
             f64::from(self.exposure_s),
             f64::from(self.camera_velocity_m_s.length()),
         );
-        let mut drops = match self.region.method {
-            super::drops::RainMethod::Drops => {
+        let mut drops = match (self.region.far_m, self.region.method) {
+            // With the far level of detail the drops within far_m are drawn one by one,
+            // whatever the method: the billboards balance whole voxels' opacity, and cut at
+            // far_m they came out 7 % over the reference (benches/results/rain.md, 2026-12-02).
+            // Voxels wholly beyond far_m horizontally make no drops.
+            (Some(far), _) => {
+                let reach = far + std::f64::consts::FRAC_1_SQRT_2;
+                let mut d =
+                    super::drops::drops_in_view_where(self.region, cam, t, v, self.ground, |c| {
+                        f64::from(c.x).hypot(f64::from(c.z)) < reach
+                    });
+                // The far level of detail draws the rest ([`Self::far`]).
+                let far2 = (far * far) as f32;
+                d.retain(|d| {
+                    d.position_m.x * d.position_m.x + d.position_m.z * d.position_m.z < far2
+                });
+                d
+            }
+            (None, super::drops::RainMethod::Drops) => {
                 super::drops::drops_in_view(self.region, cam, t, v, self.ground)
             }
-            super::drops::RainMethod::Billboards => super::billboards::billboards_in_view(
+            (None, super::drops::RainMethod::Billboards) => super::billboards::billboards_in_view(
                 self.region,
                 cam,
                 t,
@@ -167,13 +184,6 @@ impl RainFrame<'_> {
                 self.ground,
             ),
         };
-        if let Some(far) = self.region.far_m {
-            // The far level of detail draws the rest ([`Self::far`]).
-            let far2 = (far * far) as f32;
-            drops.retain(|d| {
-                d.position_m.x * d.position_m.x + d.position_m.z * d.position_m.z < far2
-            });
-        }
         super::shelter::remove_sheltered(
             &mut drops,
             self.shelter,

@@ -245,3 +245,30 @@ fn textures_beyond_the_drop_budget_are_refused_by_name() {
         "{text}"
     );
 }
+
+#[test]
+fn the_voxels_skipped_beyond_far_m_hold_none_of_the_near_drops() {
+    // RainFrame::streaks makes the near drops only in voxels that reach within far_m
+    // horizontally: after the cut at far_m they are exactly the reference's drops within it.
+    use crate::rain::drops::{drops_in_view, drops_in_view_where};
+    let r = region(30.0, 6.0, 2.2, 7);
+    let cam = camera(200, 120, -10.0);
+    let reach = 2.2 + std::f64::consts::FRAC_1_SQRT_2;
+    let within = |d: &crate::particles::Particle| {
+        d.position_m.x * d.position_m.x + d.position_m.z * d.position_m.z < (2.2f32 * 2.2)
+    };
+    let all: Vec<_> = drops_in_view(&r, &cam, 1.0 / 60.0, 0.0, true)
+        .into_iter()
+        .filter(within)
+        .map(|d| d.id)
+        .collect();
+    let fewer: Vec<_> = drops_in_view_where(&r, &cam, 1.0 / 60.0, 0.0, true, |c| {
+        f64::from(c.x).hypot(f64::from(c.z)) < reach
+    })
+    .into_iter()
+    .filter(within)
+    .map(|d| d.id)
+    .collect();
+    assert!(!all.is_empty());
+    assert_eq!(all, fewer);
+}
