@@ -26,7 +26,7 @@ SEEDS = 8
 
 CASES: list[dict[str, Any]] = [
     {"case": "10 mm/h, 5 m region (the bench's frame)", "rate": 10.0, "near": 5.0, "far": 2.0},
-    {"case": "10 mm/h, 5 m region, rain_method="billboards" (within 2 m drawn drop by drop all the same)", "rate": 10.0, "near": 5.0, "far": 2.0, "near_method": "billboards"},
+    {"case": "10 mm/h, 5 m region, rain_method='billboards' (within 2 m drawn drop by drop all the same)", "rate": 10.0, "near": 5.0, "far": 2.0, "near_method": "billboards"},
     {"case": "10 mm/h, 5 m region, wind 6 m/s across", "rate": 10.0, "near": 5.0, "far": 2.0, "wind": (6.0, 0.0, 0.0)},
     {"case": "10 mm/h, 5 m region, camera moving 10 m/s forward", "rate": 10.0, "near": 5.0, "far": 2.0, "velocity": (0.0, 0.0, -10.0)},
     {"case": "25 mm/h, 10 m region", "rate": 25.0, "near": 10.0, "far": 3.0},
@@ -108,7 +108,7 @@ def far_lines(rows: list[dict[str, Any]]) -> list[str]:
         "",
         "The 1920x1080 street photo, fused 8-bit path; per-drop streaks (billboards where the case says so) within `rain_far_m` of the camera",
         "(horizontally), the rest of the region as one pre-rasterised, world-anchored cylindrical layer per",
-        "metre (`skyfall-core/src/rain/far.rs`). Error against the per-drop reference (`rain_method=\"drops\"`,",
+        "1.5 m (`skyfall-core/src/rain/far.rs`). Error against the per-drop reference (`rain_method=\"drops\"`,",
         f"no far level) over {SEEDS} seeds: the mean of `rain_alpha` (± one standard error of the ratio), and",
         "the SSIM of `rain_alpha` blurred to 8 px (Gaussian σ = 8 px), beside the reference against itself",
         f"at {SEEDS} other seeds (what two independent draws of the same rain score). Times: medians of 5",

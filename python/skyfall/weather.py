@@ -75,11 +75,11 @@ class Weather:
     rain_far_m : float, optional
         The rain's far level of detail: drops farther than this horizontally, m, in
         (0, 50] and below ``rain_near_m``, are drawn as one pre-rasterised, world-anchored
-        cylindrical layer per metre of the rest of the region (in the spirit of Yoshida,
+        cylindrical layer per 1.5 m of the rest of the region (in the spirit of Yoshida,
         Dobashi & Yamamoto's rain textures) instead of one streak each; the nearer drops stay
         streaks, drawn one by one whatever ``rain_method`` (billboards balance whole voxels'
         opacity, which a cut there breaks). Its cost is per pixel and layer: faster than drop
-        by drop in heavy rain and deep regions, slower in light rain in a 5 m region; the
+        by drop in heavy rain and deep regions, no faster in light rain in a 5 m region; the
         frame's mean opacity is the per-drop reference's (``benches/results/rain.md`` measures
         both). The layers' textures
         are cached per rain rate, diameters, exposure and focal length. Pinhole cameras and the

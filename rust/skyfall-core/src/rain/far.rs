@@ -1,10 +1,11 @@
 //! The rain's far level of detail: the drops beyond `far_m` (horizontally) of the camera drawn
 //! as a few pre-rasterised, world-anchored layers instead of one streak each, in the spirit of
-//! Yoshida, Dobashi & Yamamoto's rain textures (fast rendering of rain streaks).
+//! Yoshida, Dobashi & Yamamoto's rain textures (*A fast method of drawing rain streaks for rainy
+//! scenery*).
 //!
 //! The far part of the rain region, horizontal distances ρ in [far_m, near_m + …) within
 //! `near_m` of the eye, is cut into K cylindrical shells about the camera's vertical, ρ in
-//! [R_k − Δ/2, R_k + Δ/2] (Δ ≈ [`LAYER_SPACING_M`]). A shell's drops are drawn, once, into a
+//! [R_k − Δ/2, R_k + Δ/2] (Δ ≈ [`LAYER_SPACING_M`], 1.5 m). A shell's drops are drawn, once, into a
 //! tileable opacity texture in the shell's own coordinates: a = azimuth / δ and b = height on
 //! the shell / (R_k·δ), δ the angle of one texel (close to one pixel's, and an integer fraction
 //! of the full turn, so the texture wraps seamlessly around the camera). Each drop is the
@@ -55,8 +56,10 @@ use std::sync::{Arc, Mutex};
 
 /// Side of a shell's texture, texels (a power of two: lookups wrap by a mask).
 pub const TEXTURE_SIZE: usize = 1024;
-/// The shells' target spacing, m: K = ⌈(near_m − far_m) / this⌉ shells, at most [`MAX_LAYERS`].
-pub const LAYER_SPACING_M: f64 = 1.0;
+/// The shells' target spacing, m: K = ⌈(near_m − far_m) / this⌉ shells, at most [`MAX_LAYERS`]
+/// (1.5 m against 1 m: a third fewer lookups, the same mean opacity and blurred SSIM against
+/// the per-drop reference, measured on the 1080p bench frame, 2026-12-02).
+pub const LAYER_SPACING_M: f64 = 1.5;
 /// The most shells a frame draws.
 pub const MAX_LAYERS: usize = 8;
 /// Side of the blocks the shells' light is sampled on, px.

@@ -9,10 +9,13 @@ fn region(rate: f64, near: f64, far: f64, seed: u64) -> RainRegion {
 
 #[test]
 fn shells_tile_the_far_region() {
+    // 3 m at 1.5 m a shell: two, far first
     let (radii, dr) = shells(2.0, 5.0);
-    assert_eq!(radii.len(), 3);
-    assert!((dr - 1.0).abs() < 1e-12);
-    assert_eq!(radii, vec![4.5, 3.5, 2.5]);
+    assert_eq!(radii.len(), 2);
+    assert!((dr - 1.5).abs() < 1e-12);
+    assert_eq!(radii, vec![4.25, 2.75]);
+    let (radii, dr) = shells(2.0, 6.0);
+    assert_eq!((radii.len(), dr), (3, 4.0 / 3.0));
     let (radii, dr) = shells(1.0, 40.0);
     assert_eq!(radii.len(), MAX_LAYERS);
     assert!((radii[MAX_LAYERS - 1] - 0.5 * dr - 1.0).abs() < 1e-12);
@@ -139,7 +142,7 @@ fn the_scene_hides_the_shells_behind_it_in_proportion() {
     let r = region(20.0, 5.0, 2.0, 5);
     let cam = camera(160, 90, 0.0);
     let far = far_of(&r, &cam, false).unwrap().unwrap();
-    assert_eq!(far.layers(), 3);
+    assert_eq!(far.layers(), 2);
     let (w, h) = (cam.width as usize, cam.height as usize);
     let mean = |d: f32| {
         let a = coverage(&far, &cam, d);
@@ -159,8 +162,8 @@ fn the_scene_hides_the_shells_behind_it_in_proportion() {
                 let horiz = ray.x.hypot(ray.z);
                 let sec = ray.length() / horiz;
                 let end = (d * horiz).min(5.0 / sec);
-                for lo in [2.0, 3.0, 4.0] {
-                    sum += (end - lo).clamp(0.0, 1.0) / horiz;
+                for lo in [2.0, 3.5] {
+                    sum += ((end - lo) / 1.5).clamp(0.0, 1.0) / horiz;
                 }
             }
         }
