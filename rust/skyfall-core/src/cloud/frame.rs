@@ -138,22 +138,15 @@ impl<'a> VolumeView<'a> {
         let (i, fu) = at(d.dot(self.axes[0]));
         let (j, fv) = at(d.dot(self.axes[1]));
         let (k, fw) = at(d.dot(self.axes[2]));
-        let g = |a: usize, b: usize, c: usize| self.gamma[((i + a) * n + j + b) * n + k + c];
         let lerp = |a: f32, b: f32, f: f32| a + (b - a) * f;
-        let plane = |a: usize| {
-            lerp(
-                lerp(g(a, 0, 0), g(a, 0, 1), fw),
-                lerp(g(a, 1, 0), g(a, 1, 1), fw),
-                fv,
-            )
-        };
         let last = |a: usize, b: usize| self.gamma[((i + a) * n + j + b) * n + n - 1];
         let exit = lerp(
             lerp(last(0, 0), last(0, 1), fv),
             lerp(last(1, 0), last(1, 1), fv),
             fu,
         );
-        (lerp(plane(0), plane(1), fu), exit)
+        let inside = super::volume::trilinear(self.gamma, n, (i, fu), (j, fv), (k, fw));
+        (inside, exit)
     }
 }
 
@@ -563,6 +556,12 @@ mod tests {
         (rgb, alpha)
     }
 
+    /// The open sky's light alone, no sun.
+    const SKY_ONLY: CloudLight = CloudLight {
+        sun: Vec3::ZERO,
+        sky: Vec3::ONE,
+    };
+
     #[test]
     fn one_particle_has_its_analytic_transmittance() {
         // The column through the centre is τ: the centre pixel keeps e^(−τ) of the background,
@@ -634,11 +633,7 @@ mod tests {
         );
         let own_u = (-(1.0 - 0.86 * 0.86) * tau_u).exp() as f32;
         assert!(g_u <= 1.0 && g_u >= own_u, "{g_u}");
-        let sky = CloudLight {
-            sun: Vec3::ZERO,
-            sky: Vec3::ONE,
-        };
-        let (rgb, _) = render(&field, sky, &c, 0.0);
+        let (rgb, _) = render(&field, SKY_ONLY, &c, 0.0);
         let mid = 8 * 17 + 8;
         let (t_l, t_u) = ((-tau_l as f32).exp(), (-tau_u as f32).exp());
         let want = (1.0 - t_l) * d_l + t_l * (1.0 - t_u) * d_u;
@@ -704,10 +699,7 @@ mod tests {
         let field = CloudField::new(one(3.0), None, 8).unwrap();
         let pass = CloudPass {
             field: &field,
-            light: CloudLight {
-                sun: Vec3::ZERO,
-                sky: Vec3::ONE,
-            },
+            light: SKY_ONLY,
         };
         let s = CloudSplats::prepare(&pass, &c).unwrap();
         let mut rgb = vec![0.25f32; 27];
@@ -730,10 +722,7 @@ mod tests {
         let field = CloudField::new(below, None, 8).unwrap();
         let pass = CloudPass {
             field: &field,
-            light: CloudLight {
-                sun: Vec3::ZERO,
-                sky: Vec3::ONE,
-            },
+            light: SKY_ONLY,
         };
         let s = CloudSplats::prepare(&pass, &c).unwrap();
         assert!(s.splats.is_empty() && s.indices.is_empty());

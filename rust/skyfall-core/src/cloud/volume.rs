@@ -133,7 +133,20 @@ pub fn sample(gamma: &[f32], resolution: usize, grid: &VolumeBox, p: DVec3) -> f
     if n == 1 {
         return gamma[0];
     }
-    let ((i, fu), (j, fv), (k, fw)) = (at(t.x), at(t.y), at(t.z));
+    trilinear(gamma, n, at(t.x), at(t.y), at(t.z))
+}
+
+/// The trilinear blend of an n³ grid (`gamma`, x slowest) in the cell at (i, j, k) with
+/// fractions (fu, fv, fw): what [`sample`] and the frame's
+/// [`super::frame::VolumeView::sample`] share once each has found its cell.
+#[inline(always)]
+pub(crate) fn trilinear(
+    gamma: &[f32],
+    n: usize,
+    (i, fu): (usize, f32),
+    (j, fv): (usize, f32),
+    (k, fw): (usize, f32),
+) -> f32 {
     let g = |a: usize, b: usize, c: usize| gamma[((i + a) * n + j + b) * n + k + c];
     let lerp = |a: f32, b: f32, f: f32| a + (b - a) * f;
     let plane = |a: usize| {

@@ -98,8 +98,15 @@ impl BinSampler {
 
     /// The number of drops in 1 m³: one uniform draw from `rng`.
     pub fn count(&self, rng: &mut impl rand::Rng) -> usize {
-        let whole = self.expected.floor();
-        whole as usize + usize::from(rng.random::<f64>() < self.expected - whole)
+        self.count_in(1.0, rng)
+    }
+
+    /// The number of drops in `volume_m3`: ⌊λ⌋ plus one with probability λ − ⌊λ⌋ (λ the
+    /// expected number), one uniform draw from `rng`.
+    pub fn count_in(&self, volume_m3: f64, rng: &mut impl rand::Rng) -> usize {
+        let expected = self.expected * volume_m3;
+        let whole = expected.floor();
+        whole as usize + usize::from(rng.random::<f64>() < expected - whole)
     }
 
     /// The diameter, mm, of a drop drawn at the uniform `u` in [0, 1).

@@ -183,10 +183,7 @@ fn shell_texture(
     let (r, texel_m) = (radius_m as f32, (delta * radius_m) as f32);
     for (bin, &(lo, hi)) in region.bins.iter().enumerate() {
         let sampler = BinSampler::new(region.rain_rate_mm_h, lo, hi);
-        let expected = sampler.expected_per_m3() * volume_m3;
-        let whole = expected.floor();
-        let n = whole as usize + usize::from(rng.random::<f64>() < expected - whole);
-        for _ in 0..n {
+        for _ in 0..sampler.count_in(volume_m3, &mut rng) {
             let d_mm = sampler.diameter_mm(rng.random());
             let (a, b): (f32, f32) = (
                 rng.random::<f32>() * s as f32,
@@ -294,13 +291,6 @@ fn textures(
     Ok(t)
 }
 
-/// The camera's world ray through pixel centre (x, y), unnormalised (camera z = −1).
-fn world_ray(cam: &Camera, x: f32, y: f32) -> Vec3 {
-    let u = (x - cam.cx) / cam.fx;
-    let v = -(y - cam.cy) / cam.fy;
-    cam.rotation * Vec3::new(u, v, -1.0)
-}
-
 /// What prepares a frame's far rain.
 pub struct FarRequest<'a> {
     /// The rain (its `far_m` set).
@@ -379,9 +369,11 @@ impl FarRain {
             .with_min_len(64)
             .flat_map_iter(|blk| {
                 let (bx, by) = (blk % bw, blk / bw);
-                let cx = ((bx * BLOCK_PX) as f32 + 0.5 * BLOCK_PX as f32).min(cam.width as f32);
-                let cy = ((by * BLOCK_PX) as f32 + 0.5 * BLOCK_PX as f32).min(cam.height as f32);
-                let ray = world_ray(cam, cx, cy);
+                // (the block's middle pixel, or the frame's last)
+                let ray = cam.ray_direction(
+                    (bx * BLOCK_PX + BLOCK_PX / 2).min(cam.width as usize - 1) as u32,
+                    (by * BLOCK_PX + BLOCK_PX / 2).min(cam.height as usize - 1) as u32,
+                );
                 let h = Vec2::new(ray.x, ray.z).length().max(1e-6);
                 radii.iter().map(move |&r| {
                     let p = ray * (r as f32 / h);
@@ -525,9 +517,8 @@ impl FarRain {
                     let d = Vec4::from_array(d);
                     // The visible end, as a horizontal distance: the scene or the sphere.
                     let end_h = (d * h).min(near_h);
-                    // Shell k's α·coverage at the four pixels (None: hidden or not drawn).
+                    // Shell k's α·coverage at the four pixels (None: hidden there).
                     let lookup = |k: usize| -> Option<Vec4> {
-                        sts[k].as_ref()?;
                         let lo = self.radii[k] - 0.5 * self.spacing_m;
                         let wgt = ((end_h - Vec4::splat(lo)) / self.spacing_m)
                             .clamp(Vec4::ZERO, Vec4::ONE);
@@ -557,7 +548,10 @@ impl FarRain {
                         }
                     };
                     for (k, st) in sts.iter().enumerate() {
-                        if let (Some(st), Some(a)) = (st, lookup(k)) {
+                        // (a culled or sheltered shell is not looked up)
+                        if let Some(st) = st
+                            && let Some(a) = lookup(k)
+                        {
                             add(st, a, h / self.radii[k]);
                         }
                     }
