@@ -66,34 +66,46 @@ def test_a_folder_of_photos_with_depth_maps_in_every_format(photos, tmp_path):
         out=out, input=img, depth=dep, depth_scale_m=0.001, variants=2, seed=5, visibility_m="300:3000",
         layers=("rain_alpha", "rain_depth_m", "transmittance"), progress=False,
     )
-    assert (s.items, s.generated, s.errors) == (12, 12, 6)
+    assert (s.items, s.generated, s.errors) == (12, 12, 10)
     rows = dataset.read_manifest(out)
     assert [r["index"] for r in rows] == list(range(12))
     by_image = {r["image"]: r for r in rows if r["index"] % 2 == 0}
-    assert {k for k, r in by_image.items() if r["status"] == "ok"} == {"a.png", "b.png", "c.png"}
+    # a scale applies to integer depth only: the float maps (EXR, float NPY) refuse it by name
+    assert {k for k, r in by_image.items() if r["status"] == "ok"} == {"c.png"}
+    for name in ("a.png", "b.png"):
+        assert "depth_scale_m applies to integer depth only" in by_image[name]["error"]
+    unscaled = dataset.generate(
+        out=tmp_path / "unscaled", input=img, depth=dep, variants=2, seed=5, visibility_m="300:3000",
+        layers=("rain_alpha", "rain_depth_m", "transmittance"), progress=False,
+    )
+    assert unscaled.errors == 8
+    plain = {r["image"]: r for r in dataset.read_manifest(tmp_path / "unscaled") if r["index"] % 2 == 0}
+    assert {k for k, r in plain.items() if r["status"] == "ok"} == {"a.png", "b.png"}
+    assert "depth_scale_m" in plain["c.png"]["error"]
     assert "no depth map for d.png" in by_image["d.png"]["error"]
     assert by_image["e.png"]["error"].startswith("OSError")
-    assert "shape" in by_image["f.png"]["error"]
-    check_checksums(out, rows)
-    for row in rows:
-        if row["status"] != "ok":
-            assert not any((out / "items").glob(f"{row['index']:06d}.*.png"))  # nothing for a failed item
-            continue
-        assert row["depth_source"] == "file" and row["path"] == "float"
-        p = row["params"]
-        assert 1.0 <= p["rain_rate_mm_h"] <= 50.0 and 300.0 <= p["visibility_m"] <= 3000.0
-        stem = out / "items" / f"{row['index']:06d}"
-        rain = io.read_image(f"{stem}.rain.png")
-        assert rain.shape == (H, W, 3)
-        # the clean image is the photo itself
-        clean = io.read_image(f"{stem}.clean.png")
-        np.testing.assert_array_equal(clean, io.read_image(img / row["image"]))
-        alpha = np.load(f"{stem}.rain_alpha.npy")
-        t = np.load(f"{stem}.transmittance.npy")
-        assert alpha.shape == t.shape == (H, W) and alpha.dtype == np.float32
-        assert 0.0 <= alpha.min() and alpha.max() <= 1.0
-        assert 0.0 < t.min() and t.max() < 1.0  # finite visibility hazes every pixel
-        assert abs(row["mean_rain_alpha"] - float(alpha.mean(dtype=np.float64))) < 1e-12
+    assert "shape" in plain["f.png"]["error"]
+    for out, rows in ((out, rows), (tmp_path / "unscaled", dataset.read_manifest(tmp_path / "unscaled"))):
+        check_checksums(out, rows)
+        for row in rows:
+            if row["status"] != "ok":
+                assert not any((out / "items").glob(f"{row['index']:06d}.*.png"))  # nothing for a failed item
+                continue
+            assert row["depth_source"] == "file" and row["path"] == "float"
+            p = row["params"]
+            assert 1.0 <= p["rain_rate_mm_h"] <= 50.0 and 300.0 <= p["visibility_m"] <= 3000.0
+            stem = out / "items" / f"{row['index']:06d}"
+            rain = io.read_image(f"{stem}.rain.png")
+            assert rain.shape == (H, W, 3)
+            # the clean image is the photo itself
+            clean = io.read_image(f"{stem}.clean.png")
+            np.testing.assert_array_equal(clean, io.read_image(img / row["image"]))
+            alpha = np.load(f"{stem}.rain_alpha.npy")
+            t = np.load(f"{stem}.transmittance.npy")
+            assert alpha.shape == t.shape == (H, W) and alpha.dtype == np.float32
+            assert 0.0 <= alpha.min() and alpha.max() <= 1.0
+            assert 0.0 < t.min() and t.max() < 1.0  # finite visibility hazes every pixel
+            assert abs(row["mean_rain_alpha"] - float(alpha.mean(dtype=np.float64))) < 1e-12
 
 
 def test_without_depth_the_ground_plane_and_the_fast_8bit_path(photos, tmp_path):
@@ -151,10 +163,10 @@ def test_bad_options_name_the_parameter_and_its_range(options, words):
 
 def test_bytes_do_not_depend_on_workers_and_an_item_regenerates_alone(photos, tmp_path):
     img, dep = photos
-    opts = dict(input=img, depth=dep, depth_scale_m=0.001, variants=3, seed=2, rain_rate_mm_h="5:80", wind_m_s="-4:4", f_number="2:11", parquet=True, progress=False)
+    opts = dict(input=img, depth=dep, variants=3, seed=2, rain_rate_mm_h="5:80", wind_m_s="-4:4", f_number="2:11", parquet=True, progress=False)
     one = dataset.generate(out=tmp_path / "one", **opts)
     two = dataset.generate(out=tmp_path / "two", workers=2, **opts)
-    assert one.generated == two.generated == 18 and one.errors == two.errors == 9
+    assert one.generated == two.generated == 18 and one.errors == two.errors == 12  # c.png needs depth_scale_m
     a = tree(tmp_path / "one")
     assert a == tree(tmp_path / "two")
     # the parquet manifest holds the JSON rows' values
@@ -169,13 +181,13 @@ def test_bytes_do_not_depend_on_workers_and_an_item_regenerates_alone(photos, tm
             assert dict(t["files"]) == r["files"]
             assert t["params.rain_rate_mm_h"] == r["params"]["rain_rate_mm_h"] and t["params.f_number"] == r["params"]["f_number"]
             assert t["params.visibility_m"] == math.inf
-    alone = dataset.generate(out=tmp_path / "alone", indices=[7], **opts)
+    alone = dataset.generate(out=tmp_path / "alone", indices=[4], **opts)
     assert alone.generated == 1
     b = tree(tmp_path / "alone")
-    assert {k for k in b if k.startswith("items/")} == {k for k in a if k.startswith("items/000007.")}
+    assert {k for k in b if k.startswith("items/")} == {k for k in a if k.startswith("items/000004.")}
     assert all(b[k] == a[k] for k in b if k.startswith("items/"))
-    row = json.loads(b["items/000007.json"])
-    assert row["image"] == "c.png" and row["status"] == "ok" and row["depth"] == "c.png"
+    row = json.loads(b["items/000004.json"])
+    assert row["image"] == "b.png" and row["status"] == "ok" and row["depth"] == "b.npy"
 
 
 def test_resume_regenerates_only_what_is_missing_or_corrupt(tmp_path):
@@ -346,16 +358,16 @@ def test_a_dask_local_cluster_writes_the_bytes_of_a_local_run(photos, tmp_path):
     from dask.distributed import Client, LocalCluster
 
     img, dep = photos
-    opts = dict(input=img, depth=dep, depth_scale_m=0.001, variants=2, seed=11, rain_rate_mm_h="5:60", visibility_m="300:3000",
+    opts = dict(input=img, depth=dep, variants=2, seed=11, rain_rate_mm_h="5:60", visibility_m="300:3000",
                 layers=("rain_alpha", "transmittance"), progress=False)
     local = dataset.generate(out=tmp_path / "local", **opts)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster, Client(cluster) as client:
         s = dataset.generate(out=tmp_path / "dask", scheduler=client, **opts)
-        assert (s.generated, s.errors) == (local.generated, local.errors) == (12, 6)
+        assert (s.generated, s.errors) == (local.generated, local.errors) == (12, 8)  # c.png needs depth_scale_m
         assert tree(tmp_path / "dask") == tree(tmp_path / "local")
         # by address, and resumed: nothing left to do
         s = dataset.generate(out=tmp_path / "dask", scheduler=cluster.scheduler_address, resume=True, **opts)
-        assert (s.generated, s.skipped) == (6, 6)  # the error items are tried again
+        assert (s.generated, s.skipped) == (8, 4)  # the error items are tried again
     assert tree(tmp_path / "dask") == tree(tmp_path / "local")
 
 

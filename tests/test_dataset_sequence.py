@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, dataset, io, scenes
-from skyfall.photo import level_camera
+from skyfall.photo import estimate_sky_mask, sky_level_camera
 from skyfall.video import read_video
 
 W, H, N, FPS = 32, 24, 4, 12.0
@@ -60,8 +60,10 @@ def test_photo_clips_are_the_photo_with_rain_rendered_at_k_over_fps(photos, tmp_
         check_row(out, row, ("rain_alpha",))
         assert row["path"] == "srgb8" and row["video_lossless"] is True
         stem = out / "items" / f"{row['index']:06d}"
-        level = level_camera(W, H, camera_height_m=1.6, horizon_row=None, vertical_fov_deg=60.0)
-        cam = Camera(tuple(level.position_m), pitch_deg=level.pitch_deg, vertical_fov_deg=60.0, width=W, height=H, exposure_s=row["params"]["exposure_s"])
+        # the photo scene model without depth: the sky estimated, the camera level or pitched up
+        # to it, everything else at 10 m
+        level = sky_level_camera(W, H, estimate_sky_mask(pixels[row["image"]]), vertical_fov_deg=60.0)
+        cam = Camera((0.0, 0.0, 0.0), pitch_deg=level.pitch_deg, vertical_fov_deg=60.0, width=W, height=H, exposure_s=row["params"]["exposure_s"])
         scene = PhotoScene(pixels[row["image"]], camera=cam)
         rainy = list(read_video(f"{stem}.rain.mp4"))
         clean = list(read_video(f"{stem}.clean.mp4"))

@@ -81,9 +81,14 @@ def test_integer_depth_maps_state_their_unit() -> None:
     for bad in (0.0, -1.0, float("inf"), float("nan")):
         with pytest.raises(ValueError, match="depth_scale_m"):
             PhotoScene(img, mm, depth_scale_m=bad, encoding="linear")
-    # a float map is metres, scaled only when asked
+    # a float map is metres: a scale with it is refused by name (it once turned metres into mm)
     np.testing.assert_allclose(PhotoScene(img, np.full((12, 16), 2.5, np.float32), encoding="linear").depth_m, 2.5)
-    np.testing.assert_allclose(PhotoScene(img, np.full((12, 16), 250.0), depth_scale_m=0.01, encoding="linear").depth_m, 2.5)
+    with pytest.raises(ValueError, match="depth_scale_m applies to integer depth only"):
+        PhotoScene(img, np.full((12, 16), 250.0), depth_scale_m=0.01, encoding="linear")
+    # a sensor's 0 is no reading: filled from its neighbours, not put at the lens
+    holes = mm.copy()
+    holes[5, 5] = 0
+    np.testing.assert_allclose(PhotoScene(img, holes, depth_scale_m=0.001, encoding="linear").depth_m, 2.5)
 
 
 def test_float_photos_state_their_encoding() -> None:

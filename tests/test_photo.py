@@ -102,18 +102,25 @@ def test_the_ground_plane_is_where_the_camera_says():
 
 
 def test_a_photo_without_depth_gets_its_horizon_where_it_is_told():
-    img = np.full((60, 80, 3), 100, np.uint8)
+    img = np.full((60, 80, 3), 100, np.uint8)  # no sky in it: a flat mid grey
     scene = PhotoScene(img, camera_height_m=2.0, horizon_row=21.0)
-    finite = np.isfinite(scene.depth_m[:, 0])
-    # rows whose centre (k + 0.5) lies below row 21 see the ground
-    assert finite.argmax() == 21 and not finite[:21].any() and finite[21:].all()
+    assert scene.depth_source == "ground_plane" and not scene.sky_mask.any()
+    ground = ground_plane_depth(scene.camera)
+    below = np.isfinite(ground[:, 0])
+    # rows whose centre (k + 0.5) lies below row 21 see the ground, up to distance_m (10 m);
+    # the rows above it hold something upright at distance_m: no sky without a sky mask
+    assert below.argmax() == 21 and not below[:21].any() and below[21:].all()
+    np.testing.assert_array_equal(scene.depth_m, np.minimum(ground, np.float32(10.0)))
+    assert (scene.depth_m[:21] == 10.0).all()
     assert scene.camera.position_m[1] == 2.0 and scene.camera.pitch_deg < 0  # a horizon above the middle: looking down
+    far = PhotoScene(img, camera_height_m=2.0, horizon_row=21.0, distance_m=50.0)
+    np.testing.assert_array_equal(far.depth_m, np.minimum(ground, np.float32(50.0)))
     with pytest.raises(ValueError, match="either a camera or camera_height_m"):
         PhotoScene(img, camera=Camera((0, 2, 0)), horizon_row=20.0)
     with pytest.raises(ValueError, match="this photo has one"):
         PhotoScene(img, np.ones((60, 80)), camera_height_m=2.0)
-    with pytest.raises(ValueError, match=r"position_m\[1\] = -1.0 must be > 0"):
-        PhotoScene(img, camera=Camera((0, -1, 0)))
+    with pytest.raises(ValueError, match="this photo has one"):
+        PhotoScene(img, np.ones((60, 80)), distance_m=3.0)
     with pytest.raises(ValueError, match="pitch"):
         PhotoScene(img, horizon_row=1e6)
     with pytest.raises(ValueError, match="airlight"):

@@ -24,8 +24,11 @@ EXIT_OK, EXIT_IO, EXIT_USAGE, EXIT_ITEM_ERRORS, EXIT_INTERRUPTED = 0, 1, 2, 3, 1
 _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("input", ("--input",), {"type": Path, "metavar": "DIR", "help": "folder of photos (any format OpenImageIO reads), in name order"}),
     ("scene", ("--scene",), {"choices": ["street"], "help": "the bundled street, its camera jittered per item (instead of --input)"}),
-    ("depth", ("--depth",), {"type": Path, "metavar": "DIR", "help": "depth maps matched to the photos by stem: .exr (metres, inf = sky), .npy, or 16-bit .png with --depth-scale-m; a photo without one is an error for its item. Without --depth: a level ground plane (--camera-height-m, --horizon-row)"}),
-    ("depth_scale_m", ("--depth-scale-m",), {"type": float, "metavar": "M", "help": "metres per unit of integer depth (16-bit PNG, integer NPY), e.g. 0.001 for mm"}),
+    ("depth", ("--depth",), {"metavar": "DIR|estimate", "help": "depth maps matched to the photos by stem (.exr metres with inf = sky, .npy, .pfm, 16-bit .png with --depth-scale-m; see --depth-format); a photo without one is an error for its item. 'estimate': a monocular network (pip install 'skyfall[depth]'). Without --depth: the sky estimated, everything else at --distance-m (the ground plane with --camera-height-m or --horizon-row)"}),
+    ("depth_format", ("--depth-format",), {"choices": ["kitti", "cityscapes", "middlebury", "exr", "npy", "scaled"], "help": "the depth maps' format (cityscapes: camera file STEM.json beside each map; middlebury: STEM.txt or calib.txt); default from the suffix"}),
+    ("depth_model", ("--depth-model",), {"metavar": "NAME|FILE", "help": "--depth estimate: the network, depth-anything-v2-small (default, downloaded once) or an ONNX file"}),
+    ("depth_scale_m", ("--depth-scale-m",), {"type": float, "metavar": "M", "help": "metres per unit of integer depth (16-bit PNG, integer NPY), e.g. 0.001 for mm; refused with float depth"}),
+    ("distance_m", ("--distance-m",), {"type": float, "metavar": "M", "help": "without depth maps: the distance of everything that is not sky, m, in (0, 1e5]; default 10 (with --depth estimate: the median distance)"}),
     ("out", ("--out",), {"type": Path, "metavar": "DIR", "help": "output folder (items/, manifest.jsonl, config.json)"}),
     ("variants", ("--variants",), {"type": int, "metavar": "N", "help": "items per photo (per scene), default 1"}),
     ("seed", ("--seed",), {"type": int, "metavar": "S", "help": "master seed, in [0, 2^63); item i's parameters come from (seed, i) alone; default 0"}),
@@ -44,9 +47,9 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("windshield", ("--windshield",), {"nargs": "?", "const": "rain", "metavar": "PRESET", "help": "see each item through a windshield with wipers: drizzle, rain (the default with no PRESET), downpour or parked; writes drop_mask and drop_height when asked"}),
     ("rain_near_m", ("--rain-near-m",), {"type": float, "metavar": "M", "help": "radius of the streak region, m, in (0, 50]; default 5"}),
     ("rain_far_m", ("--rain-far-m",), {"type": float, "metavar": "M", "help": "draw the drops beyond M m (horizontally, below --rain-near-m) as pre-rasterised layers: faster in heavy rain and deep regions (CPU backend, no --f-number); default every drop one by one"}),
-    ("camera_height_m", ("--camera-height-m",), {"type": float, "metavar": "M", "help": "ground-plane fallback: camera height, m; default 1.6"}),
-    ("horizon_row", ("--horizon-row",), {"type": float, "metavar": "ROW", "help": "ground-plane fallback: the horizon's row, px from the top; default the middle"}),
-    ("vertical_fov_deg", ("--vertical-fov-deg",), {"type": float, "metavar": "DEG", "help": "the photos' vertical field of view, degrees; default 60"}),
+    ("camera_height_m", ("--camera-height-m",), {"type": float, "metavar": "M", "help": "photos without depth maps show a level ground plane: the camera's height, m (default 1.6 with --horizon-row)"}),
+    ("horizon_row", ("--horizon-row",), {"type": float, "metavar": "ROW", "help": "photos without depth maps show a level ground plane: the horizon's row, px from the top (default the middle with --camera-height-m)"}),
+    ("vertical_fov_deg", ("--vertical-fov-deg",), {"type": float, "metavar": "DEG", "help": "the photos' vertical field of view, degrees; default each photo's EXIF 35 mm focal length's, else 60"}),
     ("camera_jitter_m", ("--camera-jitter-m",), {"type": float, "metavar": "M", "help": "--scene: camera moves within +-M in x and z; default 0.5"}),
     ("camera_jitter_deg", ("--camera-jitter-deg",), {"type": float, "metavar": "DEG", "help": "--scene: camera turns within +-DEG in yaw (half in pitch); default 5"}),
     ("layers", ("--layers",), {"metavar": "NAMES", "help": "ground-truth layers to write as float32 .npy, comma separated, of rain_alpha, rain_depth_m, transmittance, snow_alpha, snow_depth_m, drop_mask, drop_height (or 'none'); default rain_alpha (the fast 8-bit path; other layers render float frames)"}),
@@ -72,8 +75,10 @@ _RUN_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
 _RENDER_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("input", ("--input",), {"type": Path, "metavar": "FILE", "help": "a photo (instead of --scene)"}),
     ("scene", ("--scene",), {"choices": ["street"], "help": "the bundled street (default when no --input)"}),
-    ("depth", ("--depth",), {"type": Path, "metavar": "FILE", "help": "the photo's depth map (.exr, .npy, 16-bit .png); without one, the ground plane"}),
+    ("depth", ("--depth",), {"metavar": "FILE|estimate", "help": "the photo's depth map (.exr, .npy, .pfm, 16-bit .png; see --depth-format) or 'estimate' (pip install 'skyfall[depth]'); without one, the sky estimated and the rest at --distance-m"}),
+    ("depth_format", ("--depth-format",), {"choices": ["kitti", "cityscapes", "middlebury", "exr", "npy", "scaled"], "help": "the depth map's format; default from the suffix"}),
     ("depth_scale_m", ("--depth-scale-m",), {"type": float, "metavar": "M", "help": "metres per unit of integer depth"}),
+    ("distance_m", ("--distance-m",), {"type": float, "metavar": "M", "help": "without a depth map: the distance of everything that is not sky, m; default 10"}),
     ("out", ("--out",), {"type": Path, "metavar": "FILE", "help": "output image: .png (8-bit sRGB) or .exr (float RGB, depth_m and the layers)"}),
     ("width", ("--width",), {"type": int, "metavar": "PX", "help": "street frame width, default 640"}),
     ("height", ("--height",), {"type": int, "metavar": "PX", "help": "street frame height, default 360"}),
@@ -86,9 +91,9 @@ _RENDER_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("rain_near_m", ("--rain-near-m",), {"type": float, "metavar": "M", "help": "radius of the streak region, m; default 5"}),
     ("rain_far_m", ("--rain-far-m",), {"type": float, "metavar": "M", "help": "drops beyond M m (horizontally) as pre-rasterised layers (CPU backend, no --f-number); default none"}),
     ("seed", ("--seed",), {"type": int, "metavar": "S", "help": "the rain's seed; default 0"}),
-    ("camera_height_m", ("--camera-height-m",), {"type": float, "metavar": "M", "help": "ground-plane fallback: camera height, m; default 1.6"}),
-    ("horizon_row", ("--horizon-row",), {"type": float, "metavar": "ROW", "help": "ground-plane fallback: the horizon's row, px; default the middle"}),
-    ("vertical_fov_deg", ("--vertical-fov-deg",), {"type": float, "metavar": "DEG", "help": "the photo's vertical field of view; default 60"}),
+    ("camera_height_m", ("--camera-height-m",), {"type": float, "metavar": "M", "help": "a level ground plane: the camera's height, m (default 1.6 with --horizon-row)"}),
+    ("horizon_row", ("--horizon-row",), {"type": float, "metavar": "ROW", "help": "a level ground plane: the horizon's row, px (default the middle with --camera-height-m)"}),
+    ("vertical_fov_deg", ("--vertical-fov-deg",), {"type": float, "metavar": "DEG", "help": "the photo's vertical field of view; default its EXIF focal length's, else 60"}),
     ("backend", ("--backend",), {"choices": ["cpu", "gpu", "auto"], "help": "renderer backend; default cpu"}),
 ]
 _ALIASES = {"rain_rate": "rain_rate_mm_h", "snow_rate": "snow_rate_mm_h"}
@@ -244,7 +249,16 @@ def _render(args: argparse.Namespace) -> int:
     scalars.setdefault("exposure_s", 1.0 / 30.0)
     ranges: dict[str, Any] = {k: (v, v) for k, v in scalars.items()}
     folder = Path(image).parent if image is not None else None
-    config = DatasetConfig(out=out.parent, input=folder, depth=None if depth is None else Path(depth).parent, camera_jitter_m=0.0, camera_jitter_deg=0.0, **ranges, **opts)
+    estimate = depth == "estimate"
+    config = DatasetConfig(
+        out=out.parent,
+        input=folder,
+        depth="estimate" if estimate else None if depth is None else Path(depth).parent,
+        camera_jitter_m=0.0,
+        camera_jitter_deg=0.0,
+        **ranges,
+        **opts,
+    )
     f_number = None if config.f_number is None else config.f_number[0]
     focus = (config.focus_distance_m[0] if config.focus_distance_m is not None else math.inf) if f_number is not None else None
     p = ItemParams(
@@ -264,7 +278,7 @@ def _render(args: argparse.Namespace) -> int:
     if not 0 <= p.render_seed < 2**64:
         raise ValueError(f"seed = {p.render_seed} is outside the valid range [0, 2^64)")
     worker = Worker(config)
-    src = ItemSource(0, None if image is None else Path(image), None if depth is None else Path(depth))
+    src = ItemSource(0, None if image is None else Path(image), None if depth is None or estimate else Path(depth))
     row: dict[str, Any] = {}
     scene, camera, weather = prepare(worker, src, p, row)
     renderer = worker.renderer(int(row["width"]), int(row["height"]))

@@ -123,12 +123,13 @@ def sources(config: DatasetConfig) -> list[ItemSource]:
     images = list_images(config.input)
     if not images:
         raise ValueError(f"input = {str(config.input)!r} holds no image file ({', '.join(sorted(e[1:] for e in _exts()))})")
-    if config.depth is not None and not config.depth.is_dir():
-        raise FileNotFoundError(f"depth = {str(config.depth)!r} is not a folder")
+    folder = config.depth if isinstance(config.depth, Path) else None
+    if folder is not None and not folder.is_dir():
+        raise FileNotFoundError(f"depth = {str(folder)!r} is not a folder")
     out = []
     for k, image in enumerate(images):
-        depth = find_depth(config.depth, image.stem) if config.depth is not None else None
-        missing = config.depth is not None and depth is None
+        depth = find_depth(folder, image.stem) if folder is not None else None
+        missing = folder is not None and depth is None
         out += [ItemSource(k * config.variants + v, image, depth, missing) for v in range(config.variants)]
     return out
 

@@ -38,7 +38,7 @@ __all__ = [
 
 IMAGE_EXTENSIONS = frozenset({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr", ".bmp", ".tga", ".webp", ".hdr", ".dpx", ".ppm", ".pgm"})
 """The photo file extensions an input folder is scanned for (read through OpenImageIO)."""
-DEPTH_EXTENSIONS = (".exr", ".npy", ".png", ".tif", ".tiff")
+DEPTH_EXTENSIONS = (".exr", ".npy", ".png", ".tif", ".tiff", ".pfm")
 """Depth map extensions, in the order a stem is looked up in."""
 TMP_MARK = ".tmp-"
 
@@ -65,20 +65,14 @@ def find_depth(folder: Path, stem: str) -> Path | None:
     return None
 
 
-def _read_raw(path: Path) -> tuple[NDArray[Any], str, list[str]]:
-    """A file's pixels as stored, (H, W, C) (:func:`skyfall.io.read_stored`), its base type
-    ("uint8", "uint16" or "float") and its channel names."""
-    arr, meta = io.read_stored(path)
-    kind = "float" if arr.dtype == np.float32 else str(arr.dtype)
-    return arr, kind, list(meta["channel_names"])
-
-
-def read_photo(path: Path) -> tuple[NDArray[Any], str | None]:
-    """A photo for :class:`skyfall.PhotoScene`: (image, encoding).
+def read_photo(path: Path, *, with_metadata: bool = False) -> Any:
+    """A photo for :class:`skyfall.PhotoScene`: (image, encoding), and its header attributes
+    (EXIF among them) as a third item with ``with_metadata``.
 
     8-bit files come back as their uint8 sRGB codes (encoding None: the fused 8-bit path),
     16-bit files as sRGB-encoded floats in [0, 1] ("srgb"), float files (EXR, HDR) as linear
-    floats ("linear"). Grey images are repeated into RGB; an alpha channel is dropped.
+    floats ("linear"). Grey images are repeated into RGB; an alpha channel is dropped (the
+    dataset's rows say so: ``alpha_dropped``).
 
     Raises
     ------
@@ -87,7 +81,8 @@ def read_photo(path: Path) -> tuple[NDArray[Any], str | None]:
     ValueError
         For an image with 2 or more than 4 channels.
     """
-    arr, kind, _ = _read_raw(path)
+    arr, meta = io.read_stored(path)
+    kind = "float" if arr.dtype == np.float32 else str(arr.dtype)
     c = arr.shape[2]
     if c in (1, 2):
         arr = np.repeat(arr[..., :1], 3, axis=2)
@@ -96,47 +91,38 @@ def read_photo(path: Path) -> tuple[NDArray[Any], str | None]:
     else:
         raise ValueError(f"{path.name} has {c} channels; a photo has 1 (grey), 3 (RGB) or 4 (RGBA)")
     arr = np.ascontiguousarray(arr)
+    meta["alpha_dropped"] = c in (2, 4)
     if kind == "uint8":
-        return arr, None
-    if kind == "uint16":
-        return (arr.astype(np.float32) / np.float32(65535.0)), "srgb"
-    return arr.astype(np.float32), "linear"
+        image, encoding = arr, None
+    elif kind == "uint16":
+        image, encoding = (arr.astype(np.float32) / np.float32(65535.0)), "srgb"
+    else:
+        image, encoding = arr.astype(np.float32), "linear"
+    return (image, encoding, meta) if with_metadata else (image, encoding)
 
 
-def read_depth(path: Path, depth_scale_m: float | None) -> tuple[NDArray[Any], float | None]:
-    """A depth map for :class:`skyfall.PhotoScene`: (depth, its depth_scale_m).
-
-    ``.npy``: as stored (integers need ``depth_scale_m``); ``.exr`` and other float files: the
-    ``depth_m``, ``Z`` or only channel, metres; 16-bit ``.png``/``.tif``: integer codes times
-    ``depth_scale_m``.
+def read_depth(path: Path, depth_scale_m: float | None, depth_format: str | None = None) -> NDArray[np.float32]:
+    """A depth map for :class:`skyfall.PhotoScene`, float32 metres (``inf`` sky, ``NaN`` no
+    data): :func:`skyfall.io.read_depth` with the dataset's options. For ``"cityscapes"`` the
+    camera file is ``STEM.json`` beside the depth map, for ``"middlebury"`` the calibration
+    ``STEM.txt`` beside it or else ``calib.txt``.
 
     Raises
     ------
-    ValueError
-        For an 8-bit depth file, an integer map without ``depth_scale_m``, or a float file with
-        several channels and none named ``depth_m`` or ``Z``.
-    OSError
-        When the file cannot be read.
+    ValueError, FileNotFoundError, OSError
+        As :func:`skyfall.io.read_depth`.
     """
-    if path.suffix.lower() == ".npy":
-        d = np.load(path, allow_pickle=False)
-        if d.dtype.kind in "iu" and depth_scale_m is None:
-            raise ValueError(f"{path.name} holds integer depth ({d.dtype}): give depth_scale_m, its metres per unit")
-        return d, depth_scale_m
-    arr, kind, names = _read_raw(path)
-    if kind == "float":
-        for want in ("depth_m", "Z", "z", "depth"):
-            if want in names:
-                return np.ascontiguousarray(arr[..., names.index(want)]), None
-        if arr.shape[2] == 1:
-            return np.ascontiguousarray(arr[..., 0]), None
-        raise ValueError(f"{path.name} has channels {names}: a depth EXR needs one channel, or one named depth_m or Z")
-    if kind == "uint8":
-        raise ValueError(f"{path.name} is 8-bit: depth maps must be 16-bit PNG (with depth_scale_m), EXR or NPY")
-    if depth_scale_m is None:
-        raise ValueError(f"{path.name} is 16-bit depth: give depth_scale_m, its metres per code (e.g. 0.001 for mm)")
-    return np.ascontiguousarray(arr[..., 0]), depth_scale_m
+    from skyfall.depth_io import format_for
+    from skyfall.depth_io import read_depth as read
 
+    fmt = depth_format if depth_format is not None else format_for(path)
+    extra: dict[str, Any] = {}
+    if fmt == "cityscapes":
+        extra["camera_json"] = path.with_suffix(".json")
+    elif fmt == "middlebury":
+        own = path.with_suffix(".txt")
+        extra["calib"] = own if own.is_file() else path.parent / "calib.txt"
+    return read(path, fmt, depth_scale_m=depth_scale_m, **extra)
 
 def sha256_file(path: Path) -> str:
     """The sha256 of a file's bytes, hex."""

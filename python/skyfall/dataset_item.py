@@ -19,10 +19,13 @@ from numpy.typing import NDArray
 import skyfall
 from skyfall import io, scenes
 from skyfall.camera import Camera
-from skyfall.dataset_io import NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
+from skyfall.dataset_io import DEPTH_EXTENSIONS, NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
 from skyfall.dataset_sample import DatasetConfig, ItemParams, sample_item
-from skyfall.photo import level_camera
+from skyfall.io import encode_srgb
+from skyfall.photo import assumed_depth, estimate_sky_mask, exif_vertical_fov_deg, level_camera, sky_level_camera
+from skyfall.photo_scene import DEFAULT_DISTANCE_M
 from skyfall.render import Frame, Renderer
+from skyfall.depth_io import format_for
 from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.snow import SnowCover
 from skyfall.weather import Weather
@@ -79,7 +82,8 @@ class Worker:
     def __init__(self, config: DatasetConfig) -> None:
         self.config = config
         self._renderers: dict[tuple[int, int], Renderer] = {}
-        self._photo: tuple[Path, NDArray[Any], str | None] | None = None
+        self._photo: tuple[Path, NDArray[Any], str | None, dict[str, Any]] | None = None
+        self._photo_scene: dict[str, Any] = {}  # the last photo's sky mask and estimated depth
         self._street: BoxScene | None = None
         self._clean: tuple[Path, bytes] | None = None  # a photo's clean PNG, the same for each variant
 
@@ -92,12 +96,21 @@ class Worker:
             self._renderers[key] = Renderer(width, height, backend=self.config.backend)
         return self._renderers[key]
 
-    def photo(self, path: Path) -> tuple[NDArray[Any], str | None]:
-        """The photo at ``path`` (kept while the next items are its variants)."""
+    def photo(self, path: Path) -> tuple[NDArray[Any], str | None, dict[str, Any]]:
+        """The photo at ``path`` with its encoding and header (kept while the next items are
+        its variants)."""
         if self._photo is None or self._photo[0] != path:
-            image, encoding = read_photo(path)
-            self._photo = (path, image, encoding)
-        return self._photo[1], self._photo[2]
+            image, encoding, meta = read_photo(path, with_metadata=True)
+            self._photo = (path, image, encoding, meta)
+            self._photo_scene = {}
+        return self._photo[1], self._photo[2], self._photo[3]
+
+    def photo_value(self, key: str, make: Any) -> Any:
+        """A value derived from the current photo alone (its sky mask, its estimated depth),
+        made once for all its variants."""
+        if key not in self._photo_scene:
+            self._photo_scene[key] = make()
+        return self._photo_scene[key]
 
     def clean_png(self, final: Path, photo: Path, image: NDArray[Any]) -> str:
         """Write ``image`` (the photo ``photo`` itself) as ``final``; a photo's variants reuse
@@ -173,23 +186,63 @@ def _street_camera(base: Camera, p: ItemParams) -> Camera:
 
 
 def _photo_scene(worker: Worker, src: ItemSource, p: ItemParams, row: dict[str, Any]) -> PhotoScene:
+    """The item's photo scene: its depth from a file, estimated, or assumed (the photo scene
+    model: everything not sky at ``distance_m``, the ground plane only when asked for)."""
     cfg = worker.config
     assert src.image is not None
     if src.depth_missing:
-        raise FileNotFoundError(f"no depth map for {src.image.name} in depth = {str(cfg.depth)!r} (looked for {src.image.stem}.exr/.npy/.png/.tif)")
-    image, encoding = worker.photo(src.image)
+        raise FileNotFoundError(f"no depth map for {src.image.name} in depth = {str(cfg.depth)!r} (looked for {src.image.stem}{'/'.join(DEPTH_EXTENSIONS)})")
+    image, encoding, meta = worker.photo(src.image)
     h, w = image.shape[:2]
+    if meta.get("alpha_dropped"):
+        row["alpha_dropped"] = True
+    fov, fov_source = cfg.vertical_fov_deg, "option"
+    if fov is None:
+        exif = exif_vertical_fov_deg(meta, w, h)
+        fov, fov_source = (exif, "exif") if exif is not None else (60.0, "default")
+    row["vertical_fov_deg"], row["fov_source"] = fov, fov_source
+    ground = cfg.camera_height_m is not None or cfg.horizon_row is not None
+    sky = None if src.depth is not None else worker.photo_value("sky_mask", lambda: estimate_sky_mask(image, encoding=encoding))
+    if ground:
+        height_m = 1.6 if cfg.camera_height_m is None else cfg.camera_height_m
+        level = level_camera(w, h, camera_height_m=height_m, horizon_row=cfg.horizon_row, vertical_fov_deg=fov)
+        cam = Camera(tuple(level.position_m), pitch_deg=level.pitch_deg, vertical_fov_deg=fov, width=w, height=h, **_lens(p))
+        row["camera_height_m"] = height_m
+        row["horizon_row"] = cfg.horizon_row if cfg.horizon_row is not None else h / 2.0
+    elif src.depth is None and cfg.depth != "estimate":
+        level = sky_level_camera(w, h, sky, vertical_fov_deg=fov)
+        cam = Camera((0.0, 0.0, 0.0), pitch_deg=level.pitch_deg, vertical_fov_deg=fov, width=w, height=h, **_lens(p))
+    else:
+        cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=fov, width=w, height=h, **_lens(p))
     if src.depth is not None:
-        depth, scale = read_depth(src.depth, cfg.depth_scale_m)
-        cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=cfg.vertical_fov_deg, **_lens(p))
+        depth = read_depth(src.depth, cfg.depth_scale_m, cfg.depth_format)
         row["depth_source"] = "file"
-        return PhotoScene(image, depth, camera=cam, encoding=encoding, depth_scale_m=scale)
-    level = level_camera(w, h, camera_height_m=cfg.camera_height_m, horizon_row=cfg.horizon_row, vertical_fov_deg=cfg.vertical_fov_deg)
-    cam = Camera(tuple(level.position_m), pitch_deg=level.pitch_deg, vertical_fov_deg=cfg.vertical_fov_deg, width=w, height=h, **_lens(p))
-    row["depth_source"] = "ground_plane"
-    row["camera_height_m"] = cfg.camera_height_m
-    row["horizon_row"] = cfg.horizon_row if cfg.horizon_row is not None else h / 2.0
-    return PhotoScene(image, camera=cam, encoding=encoding)
+        row["depth_format"] = cfg.depth_format if cfg.depth_format is not None else format_for(src.depth)
+        return PhotoScene(image, depth, camera=cam, encoding=encoding)
+    assert sky is not None
+    row["sky_share"] = float(np.count_nonzero(sky)) / sky.size
+    if cfg.depth == "estimate":
+        from skyfall import depth as depth_net
+
+        def estimated() -> NDArray[np.float32]:
+            coded = image if encoding in (None, "srgb") else encode_srgb(np.clip(image / max(float(np.quantile(image, 0.999)), 1e-12), 0.0, 1.0))
+            return depth_net.estimate(
+                coded,
+                model=cfg.depth_model if cfg.depth_model is not None else "depth-anything-v2-small",
+                camera_height_m=cfg.camera_height_m,
+                horizon_row=cfg.horizon_row,
+                vertical_fov_deg=fov,
+                distance_m=cfg.distance_m,
+                sky_mask=sky,
+            )
+
+        row["depth_source"] = "estimate"
+        row["depth_model"] = cfg.depth_model if cfg.depth_model is not None else "depth-anything-v2-small"
+        return PhotoScene(image, worker.photo_value("estimated_depth", estimated), camera=cam, encoding=encoding)
+    row["distance_m"] = cfg.distance_m if cfg.distance_m is not None else DEFAULT_DISTANCE_M
+    row["depth_source"] = "ground_plane" if ground else "distance"
+    depth = assumed_depth(cam, sky_mask=sky, distance_m=row["distance_m"], ground_plane=ground)
+    return PhotoScene(image, depth, camera=cam, encoding=encoding)
 
 
 def prepare(

@@ -117,12 +117,25 @@ class DatasetConfig:
     input : Path, optional
         Folder of photos (any format OpenImageIO reads: PNG, JPEG, TIFF, EXR, ...), taken in
         name order. Exactly one of ``input`` and ``scene`` is given.
-    depth : Path, optional
-        Folder of depth maps matched to the photos by file stem: ``.exr`` (the ``depth_m``, ``Z``
-        or only channel, metres, inf = sky), ``.npy`` (float metres, or integers with
-        ``depth_scale_m``) or 16-bit ``.png`` (with ``depth_scale_m``). A photo without its
-        depth map is an error for that item. Without ``depth``: the ground-plane fallback
-        (:func:`skyfall.photo.ground_plane_depth`) with ``camera_height_m`` and ``horizon_row``.
+    depth : Path or "estimate", optional
+        Folder of depth maps matched to the photos by file stem, read by
+        :func:`skyfall.io.read_depth` in ``depth_format`` (default from the suffix: ``.exr``
+        metres, ``.npy``, ``.pfm`` Middlebury, 16-bit ``.png``/``.tif`` with ``depth_scale_m``);
+        a photo without its depth map is an error for that item. ``"estimate"``: depth from a
+        monocular network (:func:`skyfall.depth.estimate`, the ``skyfall[depth]`` extra) with
+        ``depth_model``. Without ``depth``: the photo scene model
+        (:class:`skyfall.PhotoScene`): the estimated sky, everything else at ``distance_m``,
+        and the ground plane only with ``camera_height_m`` or ``horizon_row``.
+    depth_format : str, optional
+        One of :data:`skyfall.io.DEPTH_FORMATS` for every depth map (``"kitti"``,
+        ``"cityscapes"`` with its camera file ``STEM.json`` beside the map, ``"middlebury"``
+        with ``STEM.txt`` or ``calib.txt`` beside it, ``"exr"``, ``"npy"``, ``"scaled"``).
+    depth_model : str, optional
+        With ``depth="estimate"``: a name in :data:`skyfall.depth.MODELS` or an ONNX file
+        (default ``"depth-anything-v2-small"``).
+    distance_m : float, optional
+        Without a depth file: the distance of what is not sky, m (default 10; with
+        ``depth="estimate"`` the median distance it is calibrated to).
     scene : {"street"}, optional
         The bundled street (:func:`skyfall.scenes.street`) with its camera jittered per item.
     variants : int
@@ -165,9 +178,12 @@ class DatasetConfig:
         pinhole cameras only. None (default): every drop one by one.
     depth_scale_m : float, optional
         Metres per unit of integer depth maps (16-bit PNG, integer NPY).
-    camera_height_m, horizon_row, vertical_fov_deg : float
-        The photos' camera: its height and horizon row for the ground-plane fallback, and its
-        vertical field of view, degrees.
+    camera_height_m, horizon_row : float, optional
+        Either asks for the ground plane (photos without a depth file): the camera's height
+        (default 1.6 m) and the horizon's row (default the middle).
+    vertical_fov_deg : float, optional
+        The photos' vertical field of view, degrees; default each photo's EXIF 35 mm
+        focal length's, else 60.
     camera_jitter_m, camera_jitter_deg : float
         ``scene`` items: the camera moves uniformly within +-jitter_m in x and z and turns
         within +-jitter_deg in yaw (+-jitter_deg / 2 in pitch).
@@ -222,7 +238,7 @@ class DatasetConfig:
 
     out: Path
     input: Path | None = None
-    depth: Path | None = None
+    depth: Path | str | None = None
     scene: str | None = None
     variants: int = 1
     seed: int = 0
@@ -242,9 +258,12 @@ class DatasetConfig:
     rain_near_m: float = 5.0
     rain_far_m: float | None = None
     depth_scale_m: float | None = None
-    camera_height_m: float = 1.6
+    depth_format: str | None = None
+    depth_model: str | None = None
+    distance_m: float | None = None
+    camera_height_m: float | None = None
     horizon_row: float | None = None
-    vertical_fov_deg: float = 60.0
+    vertical_fov_deg: float | None = None
     camera_jitter_m: float = 0.5
     camera_jitter_deg: float = 5.0
     layers: tuple[str, ...] = ("rain_alpha",)
@@ -269,7 +288,20 @@ class DatasetConfig:
         if self.depth is not None and self.input is None:
             raise ValueError("depth needs input: depth maps are matched to the input photos by stem")
         set_(self, "input", None if self.input is None else Path(self.input))
-        set_(self, "depth", None if self.depth is None else Path(self.depth))
+        set_(self, "depth", None if self.depth is None or self.depth == "estimate" else Path(self.depth))
+        if self.depth_format is not None:
+            from skyfall.io import DEPTH_FORMATS
+
+            if self.depth_format not in DEPTH_FORMATS:
+                raise ValueError(f"depth_format = {self.depth_format!r} must be one of {', '.join(DEPTH_FORMATS)}")
+            if not isinstance(self.depth, Path):
+                raise ValueError("depth_format needs depth, a folder of depth maps")
+        if self.depth_model is not None and self.depth != "estimate":
+            raise ValueError("depth_model needs depth='estimate'")
+        if self.distance_m is not None:
+            if isinstance(self.depth, Path):
+                raise ValueError("distance_m is the depth assumed without depth maps; depth gives them")
+            set_(self, "distance_m", in_range("distance_m", self.distance_m))
         set_(self, "variants", integer("variants", self.variants, 1, 10**7))
         set_(self, "seed", integer("seed", self.seed, 0, 2**63 - 1))
         set_(self, "width", integer("width", self.width, 1, 16384))
@@ -308,10 +340,14 @@ class DatasetConfig:
             if not (math.isfinite(s) and s > 0.0):
                 raise ValueError(f"depth_scale_m = {self.depth_scale_m} must be a positive finite number of metres per unit")
             set_(self, "depth_scale_m", s)
-        set_(self, "camera_height_m", in_range("camera_height_m", self.camera_height_m))
+        if self.camera_height_m is not None:
+            set_(self, "camera_height_m", in_range("camera_height_m", self.camera_height_m))
         if self.horizon_row is not None:
             set_(self, "horizon_row", in_range("horizon_row", self.horizon_row))
-        set_(self, "vertical_fov_deg", in_range("vertical_fov_deg", self.vertical_fov_deg))
+        if (self.camera_height_m is not None or self.horizon_row is not None) and isinstance(self.depth, Path):
+            raise ValueError("camera_height_m and horizon_row ask for the ground plane, used without depth maps; depth gives them")
+        if self.vertical_fov_deg is not None:
+            set_(self, "vertical_fov_deg", in_range("vertical_fov_deg", self.vertical_fov_deg))
         for name, hi in (("camera_jitter_m", 100.0), ("camera_jitter_deg", 45.0)):
             v = float(getattr(self, name))
             if not 0.0 <= v <= hi:
@@ -359,7 +395,8 @@ class DatasetConfig:
                 d.pop(name)
         if d["exr_compression"] == "zip":  # the checksum of the options before it was one
             d.pop("exr_compression")
-        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None), ("clouds", None), ("rain_far_m", None)):
+        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None), ("clouds", None), ("rain_far_m", None),
+                            ("depth_format", None), ("depth_model", None), ("distance_m", None)):
             if d[name] == plain:  # not used: the checksum of before it was an option
                 d.pop(name)
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()

@@ -3,7 +3,8 @@
 Float formats (EXR) keep linear float32 values and any number of named channels exactly.
 8-bit formats (PNG, JPEG, TIFF-8) hold sRGB-encoded values: :func:`write_image` encodes
 linear input with the sRGB transfer function (IEC 61966-2-1) and :func:`read_image` decodes
-it back to linear float32. An alpha channel (named ``A``) is stored unencoded and
+it back to linear float32. Depth maps in the formats users have (KITTI, Cityscapes,
+Middlebury, EXR, NPY, scaled 16-bit) are read by :func:`read_depth` (:mod:`skyfall.depth_io`). An alpha channel (named ``A``) is stored unencoded and
 unassociated (``oiio:UnassociatedAlpha``), so it round-trips without OIIO
 un-premultiplying colour.
 """
@@ -18,12 +19,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core
+from skyfall.depth_io import DEPTH_FORMATS, read_depth
 
 __all__ = [
+    "DEPTH_FORMATS",
     "decode_srgb",
     "decode_srgb8",
     "encode_srgb",
     "read_channels",
+    "read_depth",
     "read_image",
     "read_image_with_metadata",
     "read_stored",

@@ -19,8 +19,23 @@ from skyfall import _core
 from skyfall._validate import in_range, integer
 from skyfall.camera import Camera
 from skyfall.io import decode_srgb8
+from skyfall.sky_mask import estimate_sky_mask
 
-__all__ = ["HORIZON_FRACTION", "PATCH_PX", "TOP_FRACTION", "dark_channel", "estimate_airlight", "ground_plane_depth"]
+__all__ = [
+    "HORIZON_FRACTION",
+    "NEUTRAL_GUARD",
+    "PATCH_PX",
+    "TOP_FRACTION",
+    "assumed_depth",
+    "dark_channel",
+    "estimate_airlight",
+    "estimate_sky_mask",
+    "exif_vertical_fov_deg",
+    "fill_depth_holes",
+    "ground_plane_depth",
+    "level_camera",
+    "sky_level_camera",
+]
 
 PATCH_PX: int = _core.AIRLIGHT_PATCH_PX
 """He, Sun & Tang's patch side, px (15)."""
@@ -28,6 +43,10 @@ TOP_FRACTION: float = _core.AIRLIGHT_TOP_FRACTION
 """The brightest share of the dark channel taken as haze-opaque (0.001)."""
 HORIZON_FRACTION = 0.1
 """The share of a photo's sky pixels, lowest first, whose median is its horizon sky."""
+NEUTRAL_GUARD = 0.5
+"""The largest saturation, (max - min)/max of its linear channels, that He, Sun & Tang's
+atmospheric light may have in a photo without sky; a more colourful one is a surface (a brown
+table, an orange wall), and the airlight is then the neutral grey of its luminance."""
 
 
 def _image(image: Any) -> NDArray[Any]:
@@ -68,7 +87,7 @@ def estimate_airlight(
     top_fraction: float = TOP_FRACTION,
 ) -> NDArray[np.float32]:
     """A photo's airlight, linear RGB in its own units: its horizon sky, or He, Sun & Tang's
-    atmospheric light where it shows no sky.
+    atmospheric light, guarded to a neutral grey, where it shows no sky.
 
     With a depth map that marks sky (``inf``) and the camera: the per-channel median of the
     sky pixels at the lowest :data:`HORIZON_FRACTION` of their elevations (on every k-th row
@@ -76,8 +95,11 @@ def estimate_airlight(
     haze of a rainy frame tends to (a median, so a lamp, a white tower or the sun there does
     not set it). Without sky pixels: among the brightest ``top_fraction`` of the dark channel
     (the haze-opaque parts of a hazy photo), the pixel whose channels sum highest (He, Sun &
-    Tang, "Single image haze removal using dark channel prior", CVPR 2009). That picks a large
-    white surface in a clear photo without sky: give the airlight yourself there
+    Tang, "Single image haze removal using dark channel prior", CVPR 2009), kept only while its
+    saturation is at most :data:`NEUTRAL_GUARD` (mist and rain light are near grey); a more
+    colourful pick is a surface in a clear photo (the coffee table's brown), and the airlight is
+    then the neutral grey of the pick's luminance (Rec. 709 weights), so rain and mist never take
+    a foreground's colour. Give the airlight yourself where you know it
     (``PhotoScene(airlight=...)``).
 
     Parameters
@@ -102,9 +124,12 @@ def estimate_airlight(
     --------
     >>> import numpy as np
     >>> img = np.zeros((40, 40, 3), np.float32)
-    >>> img[:10] = (0.5, 0.6, 0.7)  # a sky band over a black ground
+    >>> img[:10] = (0.5, 0.6, 0.7)  # a pale sky band over a black ground
     >>> estimate_airlight(img).tolist()
     [0.5, 0.6000000238418579, 0.699999988079071]
+    >>> img[:10] = (0.6, 0.3, 0.1)  # a brown table is no airlight: its grey instead
+    >>> [round(v, 4) for v in estimate_airlight(img).tolist()]
+    [0.3493, 0.3493, 0.3493]
     """
     a = _image(image)
     if depth_m is not None:
@@ -131,7 +156,12 @@ def estimate_airlight(
         raise ValueError(f"top_fraction = {top_fraction} is outside the valid range (0, 1]")
     row, col = _core.atmospheric_light_pixel(a, integer("patch_px", patch_px, 1, 1001), frac)
     px = a[row, col]
-    return decode_srgb8(px) if a.dtype == np.uint8 else px.astype(np.float32)
+    lin = decode_srgb8(px) if a.dtype == np.uint8 else px.astype(np.float32)
+    hi, lo = float(lin.max()), float(lin.min())
+    if hi > 0.0 and (hi - lo) / hi > NEUTRAL_GUARD:
+        y = float(np.dot(lin.astype(np.float64), (0.2126, 0.7152, 0.0722)))
+        return np.full(3, y, dtype=np.float32)
+    return np.asarray(lin, dtype=np.float32)
 
 
 def _rise(camera: Camera, u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -195,3 +225,132 @@ def level_camera(width: int, height: int, *, camera_height_m: float, horizon_row
     if not -89.0 <= pitch <= 89.0:
         raise ValueError(f"horizon_row = {row} puts the camera's pitch at {pitch:.2f} deg, outside [-89, 89]")
     return Camera((0.0, h_m, 0.0), pitch_deg=pitch, vertical_fov_deg=vertical_fov_deg, width=width, height=height)
+
+
+def assumed_depth(camera: Camera, *, sky_mask: Any, distance_m: float, ground_plane: bool) -> NDArray[np.float32]:
+    """The depth a :class:`skyfall.PhotoScene` assumes for a photo without a depth map.
+
+    ``inf`` on the sky mask (with ``ground_plane``, above the horizon only); elsewhere
+    ``distance_m``, or with ``ground_plane`` the level ground's depth (:func:`ground_plane_depth`) up to ``distance_m``: the ground below the
+    horizon, everything upright (and whatever the ground plane would put beyond
+    ``distance_m``) at ``distance_m``.
+
+    Parameters
+    ----------
+    camera : Camera
+        With its resolution (and, for the ground plane, above the ground).
+    sky_mask : array_like of bool, shape (height, width)
+        True where the photo shows sky.
+    distance_m : float
+        m, in (0, 1e5].
+    ground_plane : bool
+        Whether the photo shows a level ground below its horizon.
+
+    Returns
+    -------
+    ndarray of float32, shape (height, width)
+    """
+    dist = in_range("distance_m", distance_m)
+    if camera.width is None or camera.height is None:
+        raise ValueError("camera needs its resolution (Camera.with_resolution)")
+    sky = np.asarray(sky_mask, dtype=bool)
+    if sky.shape != (camera.height, camera.width):
+        raise ValueError(f"sky_mask has shape {sky.shape}, the camera's frame is {(camera.height, camera.width)}")
+    if ground_plane:
+        ground = ground_plane_depth(camera)
+        sky = sky & np.isinf(ground)  # the ground plane has no sky below its horizon
+        d = np.minimum(ground, np.float32(dist))
+    else:
+        d = np.full(sky.shape, dist, np.float32)
+    return np.where(sky, np.float32(np.inf), d).astype(np.float32)
+
+
+def fill_depth_holes(depth_m: Any, sky_mask: Any) -> NDArray[np.float32]:
+    """A depth map's ``NaN`` holes filled: sky (``inf``) where ``sky_mask`` is True, else the
+    depth of the nearest pixel with data (Euclidean distance in px; ties by scipy's
+    ``distance_transform_edt``, deterministic).
+
+    Nearest-neighbour filling keeps the depths the map has (no blending across an object's
+    edge) and fills a sparse LiDAR map (KITTI's) cell by cell.
+
+    Raises
+    ------
+    ValueError
+        When the map holds no pixel with data outside the sky.
+    """
+    from scipy import ndimage as ndi
+
+    d = np.array(depth_m, dtype=np.float32)
+    sky = np.asarray(sky_mask, dtype=bool) & np.isnan(d)
+    d[sky] = np.inf
+    holes = np.isnan(d)
+    if not holes.any():
+        return d
+    known = ~holes & np.isfinite(d)
+    if not known.any():
+        raise ValueError("depth_m holds no finite depth outside the sky: nothing to fill its NaN holes from")
+    _, (iy, ix) = ndi.distance_transform_edt(~known, return_indices=True)
+    d[holes] = d[iy[holes], ix[holes]]
+    return d
+
+
+_FRAME_35MM_DIAGONAL_MM = math.hypot(36.0, 24.0)
+
+
+def exif_vertical_fov_deg(metadata: Any, width: int, height: int) -> float | None:
+    """The vertical field of view, degrees, that a photo's EXIF 35 mm-equivalent focal length
+    implies (``Exif:FocalLengthIn35mmFilm``), or None without one.
+
+    The 35 mm equivalent keeps the diagonal field of view of a 36 x 24 mm frame (CIPA DC-008):
+    the diagonal angle is 2 atan(43.27 / (2 f35)), and the photo's own aspect ratio splits it.
+
+    Parameters
+    ----------
+    metadata : mapping
+        The file's attributes, e.g. from :func:`skyfall.io.read_image_with_metadata`.
+    width, height : int
+        The photo's size, px.
+
+    Examples
+    --------
+    >>> round(exif_vertical_fov_deg({"Exif:FocalLengthIn35mmFilm": 26}, 4032, 3024), 2)
+    53.06
+    """
+    f35 = metadata.get("Exif:FocalLengthIn35mmFilm") if hasattr(metadata, "get") else None
+    try:
+        f = float(f35) if f35 is not None else 0.0
+    except (TypeError, ValueError):
+        return None
+    if not (math.isfinite(f) and f > 0.0) or width <= 0 or height <= 0:
+        return None
+    half_diag = math.atan(_FRAME_35MM_DIAGONAL_MM / (2.0 * f))
+    return math.degrees(2.0 * math.atan(math.tan(half_diag) * height / math.hypot(width, height)))
+
+
+def sky_level_camera(width: int, height: int, sky_mask: Any, *, vertical_fov_deg: float) -> Camera:
+    """The camera a photo without depth or camera is taken with: at the origin, level (its
+    horizon on the middle row) unless the sky mask reaches below the middle, then pitched up
+    so that the horizon lies just under the lowest sky pixel (sky is never below the
+    horizon, where its path through the rain would be endless).
+
+    Parameters
+    ----------
+    width, height : int
+        The photo's size, px.
+    sky_mask : array_like of bool, shape (height, width)
+        Where the photo shows sky.
+    vertical_fov_deg : float
+        Vertical field of view, degrees.
+
+    Returns
+    -------
+    Camera
+    """
+    sky = np.asarray(sky_mask, dtype=bool)
+    rows = np.flatnonzero(sky.any(axis=1))
+    cam = Camera((0.0, 0.0, 0.0), vertical_fov_deg=vertical_fov_deg, width=width, height=height)
+    if rows.size == 0 or rows[-1] + 1.0 <= height / 2.0:
+        return cam
+    _, fy, _, cy = cam.intrinsics()
+    pitch = min(89.0, math.degrees(math.atan((rows[-1] + 1.0 - cy) / fy)))
+    return Camera((0.0, 0.0, 0.0), pitch_deg=pitch, vertical_fov_deg=vertical_fov_deg, width=width, height=height)

@@ -392,6 +392,13 @@ pub const CAMERA_HEIGHT_M: Limit = Limit::new(
     Range::open_closed(0.0, 1e4, "m"),
     "height of a photo's camera above the ground plane its depth fallback assumes",
 );
+/// Distance of a photo's content without a depth map (everything not sky; the farthest its
+/// ground plane reaches).
+pub const DISTANCE_M: Limit = Limit::new(
+    "distance_m",
+    Range::open_closed(0.0, 1e5, "m"),
+    "distance a photo without a depth map is taken to show wherever it shows no sky",
+);
 /// Image row of a photo's horizon (the depth fallback).
 pub const HORIZON_ROW: Limit = Limit::new(
     "horizon_row",
@@ -577,6 +584,7 @@ pub const ALL: &[Limit] = &[
     CULL_THRESHOLD,
     AIRLIGHT,
     CAMERA_HEIGHT_M,
+    DISTANCE_M,
     HORIZON_ROW,
     SPACING_M,
     AMBIENT_SPACING_M,
