@@ -288,7 +288,7 @@ class DatasetConfig:
         if self.depth is not None and self.input is None:
             raise ValueError("depth needs input: depth maps are matched to the input photos by stem")
         set_(self, "input", None if self.input is None else Path(self.input))
-        set_(self, "depth", None if self.depth is None or self.depth == "estimate" else Path(self.depth))
+        set_(self, "depth", self.depth if self.depth is None or self.depth == "estimate" else Path(self.depth))
         if self.depth_format is not None:
             from skyfall.io import DEPTH_FORMATS
 

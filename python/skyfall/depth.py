@@ -18,8 +18,8 @@ depth*: r = s / Z + t for unknown s > 0 and t. :func:`to_metres` recovers s and 
   residual exceeds 3 median absolute deviations (cars, kerbs, people);
 - ``distance_m`` alone: t = 0 (the network's sky, infinitely far, is at r = 0) and s such that
   the median pixel outside the sky lies at ``distance_m``;
-- both: the ground's equations and the median's, the median weighted as all the ground
-  pixels together.
+- both: the ground's equations and the median's (over the pixels the ground's fit puts at
+  a finite distance), the median weighted as all the ground pixels together.
 
 Where r - t <= 0 the pixel is sky (``inf``).
 """
@@ -99,7 +99,7 @@ _SESSIONS_KEPT = 2
 def _session(path: Path, threads: int) -> Any:
     """An onnxruntime session for ``path`` (the last two are kept)."""
     try:
-        import onnxruntime as ort
+        import onnxruntime as ort  # type: ignore[import-untyped]
     except ImportError:
         raise ImportError("depth estimation runs ONNX networks through onnxruntime: pip install 'skyfall[depth]'") from None
     key = (str(path.resolve()), threads)
@@ -121,14 +121,15 @@ def _session(path: Path, threads: int) -> Any:
 
 def _resize(a: NDArray[np.float32], shape: tuple[int, int]) -> NDArray[np.float32]:
     """Bilinear resampling of (h, w) or (h, w, c) to ``shape``, pixel centres aligned."""
-    from scipy import ndimage as ndi
+    from scipy import ndimage as ndi  # type: ignore[import-untyped]
 
     h, w = a.shape[:2]
     ys = (np.arange(shape[0], dtype=np.float64) + 0.5) * (h / shape[0]) - 0.5
     xs = (np.arange(shape[1], dtype=np.float64) + 0.5) * (w / shape[1]) - 0.5
     yy, xx = np.meshgrid(ys, xs, indexing="ij")
     if a.ndim == 2:
-        return ndi.map_coordinates(a, [yy, xx], order=1, mode="nearest").astype(np.float32)
+        out: NDArray[np.float32] = np.asarray(ndi.map_coordinates(a, [yy, xx], order=1, mode="nearest"), dtype=np.float32)
+        return out
     return np.stack([ndi.map_coordinates(a[..., c], [yy, xx], order=1, mode="nearest") for c in range(a.shape[2])], axis=-1).astype(np.float32)
 
 
@@ -266,7 +267,9 @@ def to_metres(
         weights.append(np.ones(int(keep.sum())))
     if distance_m is not None:
         d = in_range("distance_m", distance_m)
-        rm = float(np.median(r[~sky])) if (~sky).any() else float(np.median(r))
+        # the median over what is not sky: the mask's, and with a ground fit where r > t
+        solid = ~sky if camera is None else ~sky & (r > t + 1e-9 * max(abs(t), 1.0))
+        rm = float(np.median(r[solid])) if solid.any() else float(np.median(r))
         # median pixel at d: r_med = s / d + t (with t = 0 alone)
         rows.append(np.array([[1.0 / d, 1.0 if camera is not None else 0.0]]))
         rhs.append(np.array([rm]))

@@ -278,7 +278,7 @@ def fill_depth_holes(depth_m: Any, sky_mask: Any) -> NDArray[np.float32]:
     ValueError
         When the map holds no pixel with data outside the sky.
     """
-    from scipy import ndimage as ndi
+    from scipy import ndimage as ndi  # type: ignore[import-untyped]
 
     d = np.array(depth_m, dtype=np.float32)
     sky = np.asarray(sky_mask, dtype=bool) & np.isnan(d)

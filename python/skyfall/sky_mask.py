@@ -135,7 +135,7 @@ def estimate_sky_mask(
     >>> bool(m[:15].all()), bool(m[25:].any())
     (True, False)
     """
-    from scipy import ndimage as ndi
+    from scipy import ndimage as ndi  # type: ignore[import-untyped]
 
     g_max = real("max_gradient", max_gradient)
     if not 0.0 < g_max <= 1.0:
