@@ -333,8 +333,8 @@ def estimate(
     Examples
     --------
     >>> import numpy as np
-    >>> img = np.zeros((20, 30, 3), np.uint8)
-    >>> near = lambda x: np.linspace(0.5, 2.0, 20)[:, None] * np.ones((1, 30))  # nearer below
+    >>> img = np.zeros((21, 30, 3), np.uint8)
+    >>> near = lambda x: np.linspace(0.5, 2.0, 21)[:, None] * np.ones((1, 30))  # nearer below
     >>> d = estimate(img, model=near, distance_m=4.0)
     >>> round(float(np.median(d)), 3), bool(d[0, 0] > d[-1, 0])
     (4.0, True)

@@ -1,7 +1,7 @@
 """Weather inside your own tests: sweep rain rates over an image and check your model.
 
-:func:`with_weather` puts weather on a uint8 image (a :class:`skyfall.PhotoScene`, with its
-ground-plane depth when no depth map is given, rendered by
+:func:`with_weather` puts weather on a uint8 image (a :class:`skyfall.PhotoScene`: without a
+depth map its sky estimated and everything else 10 m away, rendered by
 :meth:`skyfall.Renderer.render_srgb8`). The pytest plugin (:mod:`skyfall.pytest_plugin`,
 loaded by pytest through the ``pytest11`` entry point) gives the session-scoped
 ``skyfall_renderer`` fixture, a :class:`RendererCache`.
@@ -97,9 +97,10 @@ def with_weather(
     rain_rate_mm_h : float
         Rain rate, mm/h, in [0, 500]; 0 with no other weather gives the image back unchanged.
     depth_m : array_like, shape (H, W), optional
-        Depth along the optical axis, m (``inf``: sky). Without it the photo is taken to show
-        a level ground below its horizon and sky above it (:class:`skyfall.PhotoScene`'s
-        fallback; ``scene_options`` can set ``camera_height_m`` and ``horizon_row``).
+        Depth along the optical axis, m (``inf``: sky). Without it, :class:`skyfall.PhotoScene`'s
+        model: the sky estimated from the pixels, everything else at ``distance_m`` (10 m;
+        ``scene_options`` can set ``distance_m``, ``sky_mask``, or ``camera_height_m`` and
+        ``horizon_row`` for a ground plane).
     seed : int
         Seed of the rain, in [0, 2^64): the same seed gives the same bytes.
     time_s : float
