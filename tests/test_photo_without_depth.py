@@ -131,3 +131,11 @@ def test_a_folder_of_ordinary_photos_becomes_a_rainy_dataset(tmp_path):
             assert top_ssim(photos[name], rainy) >= 0.8
         else:
             assert row["sky_share"] > 0.4
+
+
+def test_huge_and_rgba_photos_are_refused_before_any_copy():
+    # a copy would need 27.9 GiB (MemoryError, or minutes): the shape alone refuses it
+    with pytest.raises(ValueError, match=r"100000x100000 px: a photo's width and height lie within \[1, 16384\]"):
+        PhotoScene(np.broadcast_to(np.uint8(7), (100_000, 100_000, 3)))  # 27.9 GiB if copied
+    with pytest.raises(ValueError, match="RGBA"):
+        PhotoScene(np.zeros((8, 8, 4), np.uint8))

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from skyfall import _core
 from skyfall._scene_args import _box_rows, _camera, _lights
 from skyfall._validate import all_in_range, float_array, in_range, real
 from skyfall.camera import Camera
@@ -244,8 +245,16 @@ class PhotoScene:
                 "skyfall frame's rgb) or encoding='srgb' (sRGB-encoded values in [0, 1], e.g. "
                 "skimage.img_as_float of a photo)"
             )
+        if img.ndim == 3 and img.shape[2] == 4:
+            raise ValueError(
+                f"image has shape {img.shape}, RGBA: the weather is put on the colour, so pass image[..., :3] "
+                "and keep the alpha yourself (a PhotoScene holds no alpha)"
+            )
         if img.ndim != 3 or img.shape[2] != 3 or img.shape[0] == 0 or img.shape[1] == 0:
             raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
+        lo, hi = int(_core.RANGES["width"][0]), int(_core.RANGES["width"][1])
+        if not (lo <= img.shape[0] <= hi and lo <= img.shape[1] <= hi):  # before any copy of it
+            raise ValueError(f"image is {img.shape[1]}x{img.shape[0]} px: a photo's width and height lie within [{lo}, {hi}] px")
         srgb8: NDArray[np.uint8] | None = None
         if img.dtype == np.uint8:
             srgb8 = np.ascontiguousarray(img)  # decoded when `image` is first read
