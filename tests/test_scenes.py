@@ -128,7 +128,7 @@ def test_empty_passes_its_parameters_on_and_names_them():
     [
         (("photo.png", DEPTH), {}, TypeError, r"image must be an array, got the str 'photo.png'; for a file: read it with skyfall.io.read_image"),
         ((Path("photo.png"), DEPTH), {}, TypeError, r"image must be an array, got the \w*Path 'photo.png'"),
-        ((IMG, "depth.exr"), {}, TypeError, r"depth_m must be an array, got the str 'depth.exr'; for a file: read it with skyfall.io.read_channels"),
+        ((IMG, "depth.exr"), {}, TypeError, r"depth_m must be an array, got the str 'depth.exr'; for a file: read it with skyfall.io.read_depth"),
         ((IMG.astype(bool), DEPTH), {}, TypeError, r"image must be uint8 \(sRGB codes\) or float, got dtype bool"),
         ((IMG.astype(np.uint16), DEPTH), {}, TypeError, r"image must be uint8 \(sRGB codes\) or float, got dtype uint16"),
         ((IMG[..., 0], DEPTH), {}, ValueError, r"image must have shape \(H, W, 3\), got \(4, 6\)"),
@@ -159,7 +159,7 @@ def test_photo_scene_parameters_are_named(args, kwargs, error, message):
         ("image", np.nan, r"image\[1, 2, 0\] = nan is outside the valid range \[0, inf\) \(linear RGB\)"),
         ("image", np.inf, r"image\[1, 2, 0\] = inf is outside the valid range \[0, inf\)"),
         ("image", -0.5, r"image\[1, 2, 0\] = -0.5 is outside the valid range \[0, inf\)"),
-        ("depth_m", np.nan, r"depth_m\[1, 2\] = nan is outside the valid range \[0, inf\] m \(inf for sky\)"),
+        # NaN depth is no data, filled (tests/test_depth_formats.py), not refused
         ("depth_m", -2.0, r"depth_m\[1, 2\] = -2.0 is outside the valid range \[0, inf\] m"),
     ],
 )
