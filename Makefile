@@ -13,7 +13,7 @@ export VIRTUAL_ENV := $(abspath $(VENV))
 # Vulkan loaders complain on stderr without a runtime dir; give them a private one.
 export XDG_RUNTIME_DIR ?= $(abspath $(VENV))/xdg-runtime
 
-.PHONY: help setup vulkan build demo test test-rust test-python lint bench bench-ab clean
+.PHONY: help setup vulkan build wheel demo test test-rust test-python lint bench bench-ab device clean
 
 help:
 	@echo "make demo   build, then render the demo outputs into $(OUT)/"
@@ -21,6 +21,7 @@ help:
 	@echo "make bench  build, then write benches/results/"
 	@echo "make bench-ab BASE=<rev>  A/B of the bench rows, BASE (default HEAD~1) against the working tree"
 	@echo "make lint   cargo clippy and mypy"
+	@echo "make wheel  the abi3 wheel (Python >= 3.11) in dist/, for benches/device.sh on a GPU machine"
 
 $(PY):
 	@command -v cargo >/dev/null || { echo "cargo not found: install Rust (https://rustup.rs) first" >&2; exit 1; }
@@ -49,6 +50,16 @@ vulkan:
 build: setup
 	$(VENV)/bin/maturin develop --release --locked -q
 
+# One wheel for Python 3.11 and later (pyo3's abi3): what benches/device.sh installs on a GPU
+# machine without Rust. Reuses the release build's artifacts (seconds after `make build`).
+wheel: build
+	rm -f dist/skyfall-*.whl
+	$(VENV)/bin/maturin build --release --locked -q --out dist
+
+# The GPU check on this machine's Vulkan driver: benches/results/gpu.md and gpu.json.
+device: wheel vulkan
+	PYTHON=$(abspath $(PY)) bash benches/device.sh
+
 demo: build
 	$(PY) -m skyfall.demo --out $(OUT)
 
@@ -57,7 +68,7 @@ test-rust: setup vulkan
 	cargo test --workspace --locked
 	cargo clippy --workspace --all-targets --locked -- -D warnings
 
-test-python: build vulkan
+test-python: build wheel vulkan
 	$(PY) -m mypy.stubtest skyfall._core
 	$(PY) -m mypy
 	$(PY) -m pytest --nbmake tests notebooks
@@ -87,4 +98,4 @@ bench-ab: build vulkan
 	$(PY) benches/ab.py --base $(BASE) $(if $(BASE_WHEEL),--base-wheel $(BASE_WHEEL))
 
 clean:
-	rm -rf target $(VENV) $(OUT)
+	rm -rf target $(VENV) $(OUT) dist
