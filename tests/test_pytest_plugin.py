@@ -73,8 +73,8 @@ def test_the_readme_example_runs_under_pytest(pytester: pytest.Pytester):
     assert len(blocks) == 1
     pytester.makepyfile(test_my_model=blocks[0])
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-v")
-    result.assert_outcomes(passed=3)
-    result.stdout.fnmatch_lines(["*test_my_model_in_rain?0.0? PASSED*", "*test_my_model_in_rain?25.0? PASSED*"])
+    result.assert_outcomes(passed=6)
+    result.stdout.fnmatch_lines(["*test_my_model_in_rain?0.0? PASSED*", "*test_my_model_in_rain?25.0? PASSED*", "*test_my_model_across_drawn_weather?2? PASSED*"])
 
 
 def test_the_plugin_imports_nothing_of_skyfall():

@@ -17,10 +17,12 @@ clouds
 sky
     CIE skies, sky illuminance with occlusion and the ambient-light map (Yamamoto & Tadamura).
 
-Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`.
+Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`;
+``augment(image, rain_rate_mm_h=25.0)`` puts weather on any image and gives it back.
 """
 
 from skyfall import clouds, io, physics, rain, scenes, sky, snow
+from skyfall.augmentation import augment
 from skyfall._core import GpuUnavailableError, SkyfallError, __version__
 from skyfall.camera import Camera
 from skyfall.lights import PointLight, SpotLight
@@ -39,6 +41,7 @@ __all__ = [
     "SpotLight",
     "Weather",
     "__version__",
+    "augment",
     "clouds",
     "io",
     "physics",

@@ -24,7 +24,7 @@ The rule, at a working resolution of at most ``work_px`` on the long side (block
 
 4. back at the photo's size, the regions are refined to the pixel: within ``BAND_BLOCKS``
    blocks of them, a pixel is sky where its colour lies within ``COLOUR_TOLERANCE`` of the
-   sky's local colour (the regions' colours spread by a Gaussian of 2 blocks); so the mask
+   sky's colour at its block (the regions' colours spread by a Gaussian of 2 blocks); so the mask
    follows a tower's edge instead of its blocks, takes in the sky seen through a lattice,
    and leaves out a star or a wire in the sky.
 
@@ -63,8 +63,8 @@ BRIGHT_SHARE = 0.8
 _LUMA = np.array([0.2126, 0.7152, 0.0722], dtype=np.float64)
 
 
-def _coded(image: Any, encoding: str | None) -> NDArray[np.float64]:
-    """The photo as sRGB-coded values in [0, 1], (H, W, 3) float64."""
+def _coded(image: Any, encoding: str | None) -> tuple[NDArray[Any], float]:
+    """The photo as sRGB-coded values: (uint8 codes, 255) or (float32 in [0, 1], 1)."""
     a = np.asarray(image)
     if a.ndim != 3 or a.shape[2] not in (3, 4) or a.shape[0] == 0 or a.shape[1] == 0:
         raise ValueError(f"image must have shape (H, W, 3) or (H, W, 4), got {a.shape}")
@@ -72,28 +72,40 @@ def _coded(image: Any, encoding: str | None) -> NDArray[np.float64]:
     if a.dtype == np.uint8:
         if encoding == "linear":
             raise ValueError("encoding = 'linear' does not fit a uint8 image: 8-bit images are sRGB codes")
-        return a.astype(np.float64) / 255.0
+        return a, 255.0
     if a.dtype.kind != "f":
         raise TypeError(f"image must be uint8 (sRGB codes) or float, got dtype {a.dtype}")
-    f = a.astype(np.float64)
+    f = a.astype(np.float32)
     if not np.all(np.isfinite(f)) or np.any(f < 0):
         raise ValueError("image must hold finite values >= 0")
     if encoding == "srgb":
-        return np.clip(f, 0.0, 1.0)
+        return np.clip(f, 0.0, 1.0), 1.0
     if encoding != "linear":
         raise ValueError(f"encoding = {encoding!r}: a float image needs encoding='linear' or 'srgb'")
     # Linear light in any units: its 99.9th percentile taken as full scale, then encoded.
     top = float(np.quantile(f, 0.999))
-    return np.asarray(encode_srgb(np.clip(f / top, 0.0, 1.0) if top > 0 else f), dtype=np.float64)
+    return np.asarray(encode_srgb(np.clip(f / top, 0.0, 1.0) if top > 0 else f), dtype=np.float32), 1.0
 
 
-def _blocks(a: NDArray[np.float64], k: int) -> NDArray[np.float64]:
-    """Means over k x k blocks (the last partial row and column of blocks included)."""
+def _blocks(a: NDArray[Any], scale: float, k: int) -> NDArray[np.float64]:
+    """Means over k x k blocks (the last partial row and column of blocks included), in [0, 1]."""
     h, w = a.shape[:2]
     hh, ww = math.ceil(h / k), math.ceil(w / k)
-    pad = np.pad(a, ((0, hh * k - h), (0, ww * k - w), (0, 0)), mode="edge")
-    out: NDArray[np.float64] = pad.reshape(hh, k, ww, k, -1).mean(axis=(1, 3))
+    pad = _padded(a, k)
+    # summed along the block's rows first (uint16 holds k <= 257 codes), then its columns
+    wide = np.uint16 if a.dtype == np.uint8 and k <= 257 else np.float64
+    sums = pad.reshape(hh, k, ww, k, -1).sum(axis=1, dtype=wide).sum(axis=2, dtype=np.float64)
+    out: NDArray[np.float64] = sums / (k * k * scale)
     return out
+
+
+def _padded(a: NDArray[Any], k: int) -> NDArray[Any]:
+    """``a`` padded at its bottom and right edges to whole k x k blocks."""
+    h, w = a.shape[:2]
+    hh, ww = math.ceil(h / k), math.ceil(w / k)
+    if (hh * k, ww * k) == (h, w):
+        return a
+    return np.pad(a, ((0, hh * k - h), (0, ww * k - w), (0, 0)), mode="edge")
 
 
 def estimate_sky_mask(
@@ -144,10 +156,10 @@ def estimate_sky_mask(
     if not 0.0 <= share <= 1.0:
         raise ValueError(f"min_share = {share} is outside the valid range [0, 1]")
     work = integer("work_px", work_px, 16, 4096)
-    coded = _coded(image, encoding)
+    coded, scale = _coded(image, encoding)
     h, w = coded.shape[:2]
     k = max(1, math.ceil(max(h, w) / work))
-    a = _blocks(coded, k)
+    a = _blocks(coded, scale, k)
     luma = a @ _LUMA
     grad = np.hypot(ndi.sobel(luma, axis=1), ndi.sobel(luma, axis=0)) / 8.0
     smooth = ndi.maximum_filter(grad, size=3, mode="nearest") < g_max
@@ -166,14 +178,14 @@ def estimate_sky_mask(
     small = np.isin(labels, top)
     if not small.any():
         return np.zeros((h, w), dtype=bool)
-    return _refine(coded, a, small, k)
+    return _refine(coded, scale, a, small, k)
 
 
 def _up(small: NDArray[Any], k: int, h: int, w: int) -> NDArray[Any]:
     return np.repeat(np.repeat(small, k, axis=0), k, axis=1)[:h, :w]
 
 
-def _refine(coded: NDArray[np.float64], blocks: NDArray[np.float64], small: NDArray[np.bool_], k: int) -> NDArray[np.bool_]:
+def _refine(coded: NDArray[Any], scale: float, blocks: NDArray[np.float64], small: NDArray[np.bool_], k: int) -> NDArray[np.bool_]:
     """The block mask refined to the pixel (rule 4 of the module docstring)."""
     from scipy import ndimage as ndi
 
@@ -182,15 +194,18 @@ def _refine(coded: NDArray[np.float64], blocks: NDArray[np.float64], small: NDAr
     colour = np.stack([ndi.gaussian_filter(blocks[..., c] * small, 2.0, mode="nearest") for c in range(3)], axis=-1)
     colour /= np.maximum(weight, 1e-6)[..., None]
     band = ndi.binary_dilation(small, iterations=BAND_BLOCKS) & (weight > 0.02)
-    # the local sky colour at each pixel, bilinear between block centres
-    ys = np.clip((np.arange(h) + 0.5) / k - 0.5, 0, small.shape[0] - 1)
-    xs = np.clip((np.arange(w) + 0.5) / k - 0.5, 0, small.shape[1] - 1)
-    y0, x0 = np.floor(ys).astype(int), np.floor(xs).astype(int)
-    y1, x1 = np.minimum(y0 + 1, small.shape[0] - 1), np.minimum(x0 + 1, small.shape[1] - 1)
-    fy, fx = (ys - y0)[:, None, None], (xs - x0)[None, :, None]
-    local = (colour[y0][:, x0] * (1 - fy) * (1 - fx) + colour[y0][:, x1] * (1 - fy) * fx + colour[y1][:, x0] * fy * (1 - fx) + colour[y1][:, x1] * fy * fx)
-    near = np.abs(coded - local).max(axis=2) < COLOUR_TOLERANCE
-    return np.ascontiguousarray(near & _up(band, k, h, w))
+    hh, ww = small.shape
+    pad = _padded(coded, k).reshape(hh, k, ww, k, 3)
+    if coded.dtype == np.uint8:  # in codes: the tolerance is COLOUR_TOLERANCE * 255
+        local = np.round(colour * 255.0).astype(np.int16)[:, None, :, None, :]
+        diff = np.abs(pad.astype(np.int16) - local)
+        tol: float = COLOUR_TOLERANCE * 255.0
+    else:
+        diff = np.abs(pad - colour.astype(np.float32)[:, None, :, None, :])
+        tol = COLOUR_TOLERANCE
+    near = np.maximum(np.maximum(diff[..., 0], diff[..., 1]), diff[..., 2]) < tol
+    near &= band[:, None, :, None]
+    return np.ascontiguousarray(near.reshape(hh * k, ww * k)[:h, :w])
 
 
 def mask_iou(a: Any, b: Any) -> float:
