@@ -145,3 +145,31 @@ def test_the_field_of_view_from_exif(tmp_path):
     fov = 2 * math.degrees(math.atan(math.tan(diag / 2) * 30 / math.hypot(40, 30)))
     assert photo.camera.vertical_fov_deg == pytest.approx(fov, rel=1e-9)
     assert PhotoScene.read(path, vertical_fov_deg=45.0).camera.vertical_fov_deg == 45.0
+
+
+def test_the_command_line_reads_each_format_and_the_model_without_depth(tmp_path):
+    from skyfall import cli, dataset
+
+    photos, depths = tmp_path / "in", tmp_path / "depth"
+    photos.mkdir()
+    depths.mkdir()
+    rng = np.random.default_rng(2)
+    img = rng.integers(30, 220, (24, 32, 3), dtype=np.uint8)
+    io.write_image(photos / "p.png", img)
+    write_u16(depths / "p.png", np.full((24, 32), 5 * 256))  # KITTI: 5 m everywhere
+    out = tmp_path / "kitti"
+    assert cli.main(["dataset", "--input", str(photos), "--depth", str(depths), "--depth-format", "kitti", "--rain-rate", "10:10", "--layers", "rain_alpha,rain_depth_m", "--no-progress", "--out", str(out)]) == 0
+    row = dataset.read_manifest(out)[0]
+    assert row["status"] == "ok" and row["depth_source"] == "file" and row["depth_format"] == "kitti"
+    assert np.nanmax(np.where(np.isinf(d := np.load(out / "items" / "000000.rain_depth_m.npy")), np.nan, d)) <= 5.0
+    # no depth: the photo scene model at the distance asked for, recorded in the row
+    out = tmp_path / "nodepth"
+    assert cli.main(["dataset", "--input", str(photos), "--distance-m", "20", "--rain-rate", "10:10", "--no-progress", "--out", str(out)]) == 0
+    row = dataset.read_manifest(out)[0]
+    assert row["depth_source"] == "distance" and row["distance_m"] == 20.0 and row["fov_source"] == "default"
+    # a scale with float depth is refused by name, for the item
+    np.save(depths / "p.npy", np.full((24, 32), 3.0, np.float32))
+    (depths / "p.png").unlink()
+    out = tmp_path / "scaled"
+    assert cli.main(["dataset", "--input", str(photos), "--depth", str(depths), "--depth-scale-m", "0.001", "--no-progress", "--out", str(out)]) == 3
+    assert "depth_scale_m applies to integer depth only" in dataset.read_manifest(out)[0]["error"]
