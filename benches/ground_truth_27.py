@@ -179,7 +179,7 @@ def table(before: dict, after: dict) -> str:
     for item, rows in after.items():
         for k, v in rows.items():
             b = before.get(item, {}).get(k)
-            fmt = (lambda x: f"{x:.4f}") if abs(v) < 10 else (lambda x: f"{x:.4g}")
+            fmt = (lambda x: f"{x:.4f}") if 0.1 <= abs(v) < 10 else (lambda x: f"{x:.4g}")
             lines.append(f"| {item} | {k} | {fmt(b) if b is not None else '-'} | {fmt(v)} |")
     return "\n".join(lines) + "\n"
 

@@ -399,6 +399,40 @@ mod tests {
     }
 
     #[test]
+    fn the_drawn_share_is_the_bins_cross_section_over_the_whole() {
+        // ∫ e^(−ΛD) D² over the bins over ∫ over [0, ∞) (= 2/Λ³), by the midpoint rule.
+        let lam = crate::physics::dsd::mp_slope_per_mm(25.0);
+        let n = 200_000;
+        let numeric: f64 = [(0.9, 1.1), (1.1, 1.3)]
+            .iter()
+            .map(|&(lo, hi): &(f64, f64)| {
+                let h = (hi - lo) / n as f64;
+                (0..n)
+                    .map(|k| {
+                        let d = lo + (k as f64 + 0.5) * h;
+                        (-lam * d).exp() * d * d * h
+                    })
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
+            * lam.powi(3)
+            / 2.0;
+        let share = drawn_share(25.0, &[1.0, 1.2]);
+        assert!((share - numeric).abs() < 1e-9, "{share} vs {numeric}");
+        let mut w = weather(25.0, 2000.0);
+        w.rain_diameters_mm = vec![1.0, 1.2];
+        let [rain, snow] = w.drawn_extinction();
+        assert_eq!(rain.radius_m, 5.0);
+        assert!(
+            (f64::from(rain.extinction_per_m) / (w.rain_extinction_per_m() * numeric) - 1.0).abs()
+                < 1e-6
+        );
+        assert_eq!(snow, Drawn::default());
+        w.rain_streaks = false;
+        assert_eq!(w.drawn_extinction()[0], Drawn::default());
+    }
+
+    #[test]
     fn the_cloud_base_and_the_rain_follow_the_weather() {
         let mut w = weather(10.0, f64::INFINITY);
         assert_eq!(w.cloud_base_height_m(), cloud_base_m(10.0));

@@ -324,6 +324,46 @@ mod tests {
     use glam::{Mat3, Vec3};
 
     #[test]
+    fn drawn_shares_leave_the_haze_only_inside_their_spheres() {
+        // σ = 0.01 /m, of which 0.004 drawn within 5 m and 0.003 within 8 m: the optical depth
+        // is 0.003 d inside 5 m, 0.015 + 0.007 (d − 5) up to 8 m, 0.036 + 0.01 (d − 8) beyond.
+        let h = Haze::new(0.01, [1.0; 3], f32::INFINITY)
+            .unwrap()
+            .with_drawn([
+                Drawn {
+                    radius_m: 5.0,
+                    extinction_per_m: 0.004,
+                },
+                Drawn {
+                    radius_m: 8.0,
+                    extinction_per_m: 0.003,
+                },
+            ])
+            .unwrap();
+        for (d, want) in [(2.0f32, 0.006f32), (6.0, 0.022), (20.0, 0.156)] {
+            assert!(
+                (h.optical_depth(d) - want).abs() < 1e-6,
+                "{d}: {}",
+                h.optical_depth(d)
+            );
+            assert!((h.transmittance(d) - (-want).exp()).abs() < 1e-6);
+        }
+        assert_eq!(h.transmittance(f32::INFINITY), 0.0);
+        // shares beyond σ are refused
+        let too_much = [
+            Drawn {
+                radius_m: 5.0,
+                extinction_per_m: 0.008,
+            },
+            Drawn {
+                radius_m: 8.0,
+                extinction_per_m: 0.003,
+            },
+        ];
+        assert!(h.with_drawn(too_much).is_err());
+    }
+
+    #[test]
     fn haze_limits() {
         let h = Haze::new(0.01, [0.4; 3], f32::INFINITY).unwrap();
         assert_eq!(h.transmittance(f32::INFINITY), 0.0);

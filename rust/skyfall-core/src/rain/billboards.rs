@@ -104,7 +104,7 @@ fn probe_area(
     );
     let (near, frame) = (region.near_m as f32, (cam.width as f32, cam.height as f32));
     let (cam, lens) = (*cam, lens.copied());
-    let area_at = move |end: Vec3| -> f32 {
+    move |end: Vec3| -> f32 {
         if end.length() > near {
             return 0.0;
         }
@@ -122,8 +122,7 @@ fn probe_area(
             camera_velocity_m_s,
         )
         .map_or(0.0, |s: ScreenStreak| s.opacity_area_in(frame.0, frame.1))
-    };
-    area_at
+    }
 }
 
 /// One column of voxels' billboard streaks, and its share of the frame's opacity balance.
