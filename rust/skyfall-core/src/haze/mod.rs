@@ -112,10 +112,19 @@ impl Haze {
     /// ray's stretch inside their spheres (∞ for d = ∞ when σ > 0).
     #[inline(always)]
     pub fn optical_depth(&self, distance_m: f32) -> f32 {
+        // (plain comparisons, not f32::min's NaN handling: they vectorise to one instruction)
+        let within = |radius: f32| {
+            if distance_m < radius {
+                distance_m
+            } else {
+                radius
+            }
+        };
         let [r, s] = self.drawn;
-        let drawn = r.extinction_per_m * distance_m.min(r.radius_m)
-            + s.extinction_per_m * distance_m.min(s.radius_m);
-        (self.extinction_per_m * distance_m - drawn).max(0.0)
+        let tau = self.extinction_per_m * distance_m
+            - r.extinction_per_m * within(r.radius_m)
+            - s.extinction_per_m * within(s.radius_m);
+        if tau > 0.0 { tau } else { 0.0 }
     }
 
     /// Transmittance e^(−τ) along `distance_m`, τ its [`Self::optical_depth`] (1 when σ = 0,
@@ -135,8 +144,19 @@ impl Haze {
     /// it a second time for AVX2.
     #[inline(always)]
     pub fn transmittance_row(&self, rays: &RowRays<'_>, depth: &[f32], t: &mut [f32]) {
-        for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
-            *t = self.transmittance(d * (u2 + rays.v2 + 1.0).sqrt());
+        if self.drawn.iter().all(|d| d.extinction_per_m == 0.0) {
+            // (nothing drawn near the eye: σ·d alone, the cheaper loop)
+            for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
+                *t = if self.extinction_per_m <= 0.0 {
+                    1.0
+                } else {
+                    exp_neg(-self.extinction_per_m * (d * (u2 + rays.v2 + 1.0).sqrt()))
+                };
+            }
+        } else {
+            for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
+                *t = self.transmittance(d * (u2 + rays.v2 + 1.0).sqrt());
+            }
         }
         // Rows without sky (most of them in most frames) skip the second pass after one
         // branch-free scan.
