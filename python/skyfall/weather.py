@@ -59,11 +59,13 @@ class Weather:
         (default 8: flakes fall about 1 m/s, so their streaks are short, and the largest, 10 mm,
         is still about a pixel wide at 8 m in a 1080p frame with a 60 deg field of view);
         beyond it, and for flakes under 1 mm, snow shows only as haze
-        (``snow_extinction_per_m``). The flakes in view go as snow_near_m^3.
+        (``snow_extinction_per_m``; within it the haze carries only the flakes under 1 mm, so
+        the drawn flakes are not counted twice). The flakes in view go as snow_near_m^3.
     snow_opacity : {"extinction", "levels"}
         How a flake's opacity falls with its distance d: ``"extinction"`` (default)
-        continuously, e^(-sigma d) with sigma this weather's ``extinction_per_m`` (the snow's
-        own included), as the haze dims a surface at d; ``"levels"``: Koitabashi et al.'s three
+        continuously, e^(-tau) with tau the haze's optical depth to the flake (this weather's
+        ``extinction_per_m``, the snow's own included, less the drawn particles' share within
+        their regions), as the haze dims a surface at d; ``"levels"``: Koitabashi et al.'s three
         levels, 0.75 / 0.5 / 0.25 in the near, middle and far thirds of ``snow_near_m``.
     wind_m_s : sequence of 3 float
         Wind velocity (x, y, z), m/s, each in [-60, 60]; drops move with it horizontally
@@ -71,7 +73,8 @@ class Weather:
         slant along the drop's velocity.
     rain_near_m : float
         Radius of the rain region around the camera in which drops are drawn as streaks, m,
-        in (0, 50] (5 m as in Yoshida, Dobashi & Yamamoto); beyond it rain shows only as haze.
+        in (0, 50] (5 m as in Yoshida, Dobashi & Yamamoto); beyond it rain shows only as haze,
+        and within it the haze carries only the drops outside the drawn bins.
     rain_far_m : float, optional
         The rain's far level of detail: drops farther than this horizontally, m, in
         (0, 50] and below ``rain_near_m``, are drawn as one pre-rasterised, world-anchored

@@ -3,14 +3,14 @@
 //! model), the cloud base, the sky, the haze with its airlight, the rain region.
 
 use crate::error::{Error, Param, Result};
-use crate::haze::Haze;
+use crate::haze::{Drawn, Haze};
 use crate::physics::extinction::rain_extinction_per_m;
 use crate::physics::snow::Snowfall;
 use crate::rain::drops::{RainMethod, RainRegion};
 use crate::ranges;
 use crate::sky::cie::SkyKind;
 use crate::sky::{Sky, cloud_base_m, sun_direction};
-use crate::snow::flakes::SnowRegion;
+use crate::snow::flakes::{FLAKE_DRAWN_MIN_MM, SnowRegion};
 pub use crate::snow::streaks::SnowOpacity;
 
 /// −ln(0.02): the meteorological visibility is where contrast falls to 2 % (Koschmieder).
@@ -227,7 +227,36 @@ impl Weather {
             return Ok(None);
         }
         let ceiling = (self.cloud_base_height_m() - eye_height_m).max(0.0);
-        Haze::new(sigma as f32, airlight, ceiling as f32).map(Some)
+        let haze = Haze::new(sigma as f32, airlight, ceiling as f32)?;
+        haze.with_drawn(self.drawn_extinction()).map(Some)
+    }
+
+    /// The extinction a frame draws as particles, taken off the haze near the eye: the rain's
+    /// drops in the drawn bins within `rain_near_m` (when it draws streaks), the flakes of the
+    /// drawn sizes within `snow_near_m`.
+    pub fn drawn_extinction(&self) -> [Drawn; 2] {
+        let rain = if self.draws_streaks() {
+            Drawn {
+                radius_m: self.rain_near_m as f32,
+                extinction_per_m: (self.rain_extinction_per_m()
+                    * drawn_share(self.rain_rate_mm_h, &self.rain_diameters_mm))
+                    as f32,
+            }
+        } else {
+            Drawn::default()
+        };
+        let snow = if self.snow_rate_mm_h > 0.0 {
+            let min_mm = crate::physics::snow::flake_melted_mm(FLAKE_DRAWN_MIN_MM);
+            Drawn {
+                radius_m: self.snow_near_m as f32,
+                extinction_per_m: Snowfall::new(self.snow_rate_mm_h)
+                    .extinction_between_per_m(min_mm, f64::INFINITY)
+                    as f32,
+            }
+        } else {
+            Drawn::default()
+        };
+        [rain, snow]
     }
 
     /// Whether the frame draws the rain near the camera as streaks.
@@ -283,6 +312,25 @@ impl SkySpec {
             }),
         }
     }
+}
+
+/// The drawn bins' share of the rain's extinction: Marshall–Palmer's ∫ N D² dD over the
+/// bins of `diameters_mm` over that over [0, ∞), in closed form (the D² moment of e^(−ΛD)
+/// below x = ΛD is 2·P(3, x), P the regularised incomplete gamma function:
+/// 1 − e^(−x)(1 + x + x²/2)). 0 for bins that cannot be made.
+pub fn drawn_share(rain_rate_mm_h: f64, diameters_mm: &[f64]) -> f64 {
+    let Ok(bins) = crate::rain::bins::diameter_bins(diameters_mm) else {
+        return 0.0;
+    };
+    if rain_rate_mm_h <= 0.0 {
+        return 0.0;
+    }
+    let lam = crate::physics::dsd::mp_slope_per_mm(rain_rate_mm_h);
+    let below = |d: f64| {
+        let x = lam * d;
+        -(-x).exp_m1() - (-x).exp() * (x + 0.5 * x * x)
+    };
+    bins.iter().map(|&(lo, hi)| below(hi) - below(lo)).sum()
 }
 
 #[cfg(test)]
@@ -348,6 +396,40 @@ mod tests {
         w.snow_near_m = 0.0;
         let e = w.validate().unwrap_err().to_string();
         assert!(e.starts_with("snow_near_m = 0"), "{e}");
+    }
+
+    #[test]
+    fn the_drawn_share_is_the_bins_cross_section_over_the_whole() {
+        // ∫ e^(−ΛD) D² over the bins over ∫ over [0, ∞) (= 2/Λ³), by the midpoint rule.
+        let lam = crate::physics::dsd::mp_slope_per_mm(25.0);
+        let n = 200_000;
+        let numeric: f64 = [(0.9, 1.1), (1.1, 1.3)]
+            .iter()
+            .map(|&(lo, hi): &(f64, f64)| {
+                let h = (hi - lo) / n as f64;
+                (0..n)
+                    .map(|k| {
+                        let d = lo + (k as f64 + 0.5) * h;
+                        (-lam * d).exp() * d * d * h
+                    })
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
+            * lam.powi(3)
+            / 2.0;
+        let share = drawn_share(25.0, &[1.0, 1.2]);
+        assert!((share - numeric).abs() < 1e-9, "{share} vs {numeric}");
+        let mut w = weather(25.0, 2000.0);
+        w.rain_diameters_mm = vec![1.0, 1.2];
+        let [rain, snow] = w.drawn_extinction();
+        assert_eq!(rain.radius_m, 5.0);
+        assert!(
+            (f64::from(rain.extinction_per_m) / (w.rain_extinction_per_m() * numeric) - 1.0).abs()
+                < 1e-6
+        );
+        assert_eq!(snow, Drawn::default());
+        w.rain_streaks = false;
+        assert_eq!(w.drawn_extinction()[0], Drawn::default());
     }
 
     #[test]

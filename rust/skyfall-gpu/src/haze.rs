@@ -38,6 +38,12 @@ impl FramePass for HazePass {
         let block = HazeUniform {
             params: [haze.extinction_per_m, haze.sky_ceiling_m, 0.0, 0.0],
             airlight: [a[0], a[1], a[2], 0.0],
+            drawn: [
+                haze.drawn[0].radius_m,
+                haze.drawn[0].extinction_per_m,
+                haze.drawn[1].radius_m,
+                haze.drawn[1].extinction_per_m,
+            ],
         };
         let cam = f.uniform("camera", &CameraUniform::new(f.cam));
         let params = f.uniform("haze", &block);

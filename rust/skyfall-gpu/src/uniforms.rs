@@ -46,6 +46,9 @@ pub struct HazeUniform {
     pub params: [f32; 4],
     /// Airlight, linear RGB.
     pub airlight: [f32; 4],
+    /// The drawn shares ([`skyfall_core::haze::Drawn`]): the rain's radius, m, and share,
+    /// 1/m, then the snow's.
+    pub drawn: [f32; 4],
 }
 
 /// `RainParams` in `shaders/rain.wgsl`.

@@ -460,7 +460,8 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
         .filter(|(x, y)| **x > 1.2 * **y + 1e-3)
         .count();
     assert!(brighter * 4 > c.rgb.len(), "{brighter}");
-    let glow = skyfall_core::glow::Glow::prepare(&cam, &scene, &lights, 0.01, 30.0).unwrap();
+    let glow =
+        skyfall_core::glow::Glow::prepare(&cam, &scene, &lights, |d| 0.01 * d, 30.0).unwrap();
     assert_eq!(
         glow.sources.len(),
         4,
@@ -512,7 +513,7 @@ fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
             shelter: &scene.boxes,
             shading: &snow_shading,
             opacity,
-            extinction_per_m: 0.01,
+            haze: Some(skyfall_core::haze::Haze::new(0.01, [1.0; 3], f32::INFINITY).unwrap()),
         };
         for rain in [None, Some(&rf)] {
             let c = render(photo, &cam, &light, None, rain, Some(&sf)).unwrap();

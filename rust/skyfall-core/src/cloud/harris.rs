@@ -41,33 +41,57 @@ pub fn harris_illumination(cloud: &Cloud, sun: [f64; 3], sun_radiance: f64) -> R
     let mut grid: Vec<Vec<Passed>> = try_filled("Harris' grid of particles", nx * ny, Vec::new())?;
     let cell_of = |x: f64, n: usize| ((x / cell).floor().max(0.0) as usize).min(n - 1);
 
+    let amp = |k: usize| -cloud.attenuation_per_depth(k) * cloud.optical_depths[k];
+    // Nearest the sun first; particles at the same depth in an order of their own values
+    // (across the light, radius, attenuation; the index only between identical particles), so
+    // the result does not depend on the input's order.
     let mut order: Vec<usize> = (0..cloud.len()).collect();
-    order.sort_by(|&a, &b| lp.centres[a].z.total_cmp(&lp.centres[b].z).then(a.cmp(&b)));
+    order.sort_by(|&a, &b| {
+        let (pa, pb) = (lp.centres[a], lp.centres[b]);
+        pa.z.total_cmp(&pb.z)
+            .then(pa.x.total_cmp(&pb.x))
+            .then(pa.y.total_cmp(&pb.y))
+            .then(cloud.radii_m[a].total_cmp(&cloud.radii_m[b]))
+            .then(amp(a).total_cmp(&amp(b)))
+            .then(a.cmp(&b))
+    });
     let mut light = vec![0.0; cloud.len()];
-    for &k in &order {
-        let c = lp.centres[k] - lp.lo;
-        let (cx, cy) = (cell_of(c.x, nx), cell_of(c.y, ny));
-        let mut log_light = 0.0;
-        for gy in cy.saturating_sub(2)..=(cy + 2).min(ny - 1) {
-            for gx in cx.saturating_sub(2)..=(cx + 2).min(nx - 1) {
-                for p in &grid[gy * nx + gx] {
-                    let (du, dv) = (c.x - p.u, c.y - p.v);
-                    let rho2 = du * du + dv * dv;
-                    if rho2 <= p.cut2 {
-                        log_light += p.amp * exp_fast(-rho2 * p.inv_r2);
+    // Particles at exactly the same depth do not shadow each other (neither lies before the
+    // other along the light): a group of ties all read before any is added.
+    let mut start = 0;
+    while start < order.len() {
+        let z = lp.centres[order[start]].z;
+        let end = start + order[start..].partition_point(|&k| lp.centres[k].z == z);
+        for &k in &order[start..end] {
+            let c = lp.centres[k] - lp.lo;
+            let (cx, cy) = (cell_of(c.x, nx), cell_of(c.y, ny));
+            let mut log_light = 0.0;
+            for gy in cy.saturating_sub(2)..=(cy + 2).min(ny - 1) {
+                for gx in cx.saturating_sub(2)..=(cx + 2).min(nx - 1) {
+                    for p in &grid[gy * nx + gx] {
+                        let (du, dv) = (c.x - p.u, c.y - p.v);
+                        let rho2 = du * du + dv * dv;
+                        if rho2 <= p.cut2 {
+                            log_light += p.amp * exp_fast(-rho2 * p.inv_r2);
+                        }
                     }
                 }
             }
+            light[k] = sun_radiance * log_light.exp();
         }
-        light[k] = sun_radiance * log_light.exp();
-        let r = cloud.radii_m[k];
-        grid[cy * nx + cx].push(Passed {
-            u: c.x,
-            v: c.y,
-            inv_r2: 1.0 / (r * r),
-            cut2: (CUTOFF_RADII * r).powi(2),
-            amp: -cloud.attenuation_per_depth(k) * cloud.optical_depths[k],
-        });
+        for &k in &order[start..end] {
+            let c = lp.centres[k] - lp.lo;
+            let (cx, cy) = (cell_of(c.x, nx), cell_of(c.y, ny));
+            let r = cloud.radii_m[k];
+            grid[cy * nx + cx].push(Passed {
+                u: c.x,
+                v: c.y,
+                inv_r2: 1.0 / (r * r),
+                cut2: (CUTOFF_RADII * r).powi(2),
+                amp: amp(k),
+            });
+        }
+        start = end;
     }
     Ok(light)
 }
@@ -95,6 +119,51 @@ mod tests {
         for (i, l) in light.iter().enumerate() {
             let want = 2.0 * (-k * i as f64).exp();
             assert!((l - want).abs() < 1e-9 * want, "{i}: {l} vs {want}");
+        }
+    }
+
+    #[test]
+    fn ties_in_depth_shadow_neither_way_whatever_the_input_order() {
+        // Two particles side by side across the sun's ray at one height, 3 m apart, and one
+        // below between them: the two see the full sun (neither lies before the other), the
+        // one below their two footprints, G_i = exp(−k_i τ_i e^(−ρ²/r²)), ρ = 1.5 m, r = 5 m.
+        let centres = vec![[-1.5, 100.0, 0.0], [1.5, 100.0, 0.0], [0.0, 90.0, 0.0]];
+        let taus = vec![0.5, 0.8, 0.3];
+        let cloud = Cloud::new(
+            centres.clone(),
+            vec![5.0; 3],
+            taus.clone(),
+            vec![1.0; 3],
+            0.86,
+        )
+        .unwrap();
+        let light = harris_illumination(&cloud, [0.0, 1.0, 0.0], 2.0).unwrap();
+        let k = cloud.attenuation_per_depth(0);
+        let foot = (-(1.5f64 * 1.5) / 25.0).exp();
+        let below = 2.0 * (-k * (taus[0] + taus[1]) * foot).exp();
+        assert!(
+            (light[0] - 2.0).abs() < 1e-12 && (light[1] - 2.0).abs() < 1e-12,
+            "{light:?}"
+        );
+        assert!(
+            (light[2] - below).abs() < 1e-5 * below,
+            "{} vs {below}",
+            light[2]
+        );
+        // Every order of the input gives the same bits, particle by particle.
+        for perm in [[1, 0, 2], [2, 1, 0], [0, 2, 1]] {
+            let c = Cloud::new(
+                perm.iter().map(|&i| centres[i]).collect(),
+                vec![5.0; 3],
+                perm.iter().map(|&i| taus[i]).collect(),
+                vec![1.0; 3],
+                0.86,
+            )
+            .unwrap();
+            let l = harris_illumination(&c, [0.0, 1.0, 0.0], 2.0).unwrap();
+            for (j, &i) in perm.iter().enumerate() {
+                assert_eq!(l[j].to_bits(), light[i].to_bits(), "{perm:?}");
+            }
         }
     }
 }

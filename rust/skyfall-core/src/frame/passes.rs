@@ -89,8 +89,8 @@ impl<'a> Passes<'a> {
             if light.lights.is_empty() {
                 return None;
             }
-            let sigma = haze.map_or(0.0, |h| h.extinction_per_m);
-            Glow::prepare(cam, scene, light.lights, sigma, light.sky_illuminance_lux)
+            let tau = |d: f32| haze.map_or(0.0, |h| h.optical_depth(d));
+            Glow::prepare(cam, scene, light.lights, tau, light.sky_illuminance_lux)
         });
         Ok(Passes {
             haze,

@@ -331,7 +331,7 @@ impl FrameSetup {
                 shelter: &self.shelter,
                 shading,
                 opacity: *opacity,
-                extinction_per_m: self.haze.as_ref().map_or(0.0, |h| h.extinction_per_m),
+                haze: self.haze,
             })
     }
 }

@@ -4,7 +4,8 @@
 //!
 //! A light whose illuminance at the camera is E_c (lux, [`Light::illuminance_lux`] at the eye:
 //! a spot's cone towards the camera included) reaches it through the optical depth T = σ·d
-//! (σ the weather's extinction, d the distance). Of that light, the part that was scattered n
+//! (σ the weather's extinction, d the distance; less the particles drawn near the eye, whose
+//! streaks hide the lamp themselves: [`crate::haze::Haze::optical_depth`]). Of that light, the part that was scattered n
 //! times arrives with the Poisson weight p_n = e^(−T) Tⁿ/n! (the direct part is n = 0):
 //!
 //! - the **direct** part, e^(−T)·E_c, is the emitter: a disc of angular radius
@@ -121,14 +122,15 @@ pub struct Glow {
 }
 
 impl Glow {
-    /// The glows of `lights` in `scene` seen by `cam` through extinction `extinction_per_m`
-    /// (1/m; 0 in clear air: discs only), under a sky of horizontal illuminance
+    /// The glows of `lights` in `scene` seen by `cam` through the optical depth
+    /// `optical_depth(d)` to a light d m away (the haze's, [`crate::haze::Haze::optical_depth`];
+    /// 0 in clear air: discs only), under a sky of horizontal illuminance
     /// `sky_illuminance_lux`; None when no light is in front of the camera and visible.
     pub fn prepare(
         cam: &Camera,
         scene: &BoxScene,
         lights: &[Light],
-        extinction_per_m: f32,
+        optical_depth: impl Fn(f32) -> f32,
         sky_illuminance_lux: f32,
     ) -> Option<Self> {
         let eye = cam.eye();
@@ -151,7 +153,7 @@ impl Glow {
                 if flux.max_element() <= 0.0 {
                     return None;
                 }
-                let t = extinction_per_m * d;
+                let t = optical_depth(d);
                 // (at most MAX_DISC_RAD: a camera all but inside a lamp sees a wide disc, not
                 // a sphere's worth of one)
                 let disc_radius =
@@ -334,7 +336,7 @@ mod tests {
         .unwrap();
         let open = BoxScene::new(vec![], true, Vec3::splat(0.2)).unwrap();
         let e_sky = 30.0;
-        let glow = Glow::prepare(&cam, &open, &[lamp], 0.02, e_sky).unwrap();
+        let glow = Glow::prepare(&cam, &open, &[lamp], |d| 0.02 * d, e_sky).unwrap();
         let want = 2000.0 / 400.0 * std::f64::consts::PI / 30.0;
         let mut sum = 0.0f64;
         let mut direct = 0.0f64;
@@ -372,12 +374,12 @@ mod tests {
             albedo: Vec3::splat(0.5),
         };
         let walled = BoxScene::new(vec![wall], true, Vec3::splat(0.2)).unwrap();
-        assert!(Glow::prepare(&cam, &walled, &[lamp], 0.02, e_sky).is_none());
+        assert!(Glow::prepare(&cam, &walled, &[lamp], |d| 0.02 * d, e_sky).is_none());
         // behind the camera: none either
         let behind = Light {
             position_m: Vec3::new(0.0, 1.5, 5.0),
             ..lamp
         };
-        assert!(Glow::prepare(&cam, &open, &[behind], 0.02, e_sky).is_none());
+        assert!(Glow::prepare(&cam, &open, &[behind], |d| 0.02 * d, e_sky).is_none());
     }
 }

@@ -6,6 +6,13 @@
 //! base's horizon luminance, [`crate::sky::Sky`]): distant objects fade into the horizon sky
 //! as in real haze, and the σ → 0 limit is exact (no division by σ).
 //!
+//! Near the eye a frame draws part of σ as particles: the rain's drops of the drawn bins
+//! within `rain_near_m`, the flakes of the drawn sizes within `snow_near_m`. Their share is
+//! left out of the haze along each ray's stretch inside those spheres ([`Drawn`]: σ·d becomes
+//! σ·d − Σ s·min(d, r)), so drawn particles and the haze do not count the same extinction
+//! twice; the haze there carries only what is not drawn (drops outside the bins, flakes under
+//! the smallest drawn size) and the air.
+//!
 //! A sky pixel (depth ∞) is seen through the rain and mist only up to the cloud base, a shell
 //! h above the eye on the Earth's sphere ([`path_to_ceiling_m`]): h / sin γ overhead, about
 //! √(2Rh) (138 km under a 1500 m base) along the horizon, so the sky fades continuously as σ
@@ -22,16 +29,30 @@ use crate::error::{Error, Param, Range, Result};
 use crate::scene::camera::Camera;
 use rayon::prelude::*;
 
+/// Extinction that a frame draws as particles within `radius_m` of the eye (the rain's drops
+/// within `rain_near_m`, the flakes within `snow_near_m`): the haze leaves it out of each ray's
+/// stretch inside that sphere, so the particles and the haze do not count it twice.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Drawn {
+    /// The sphere's radius, m.
+    pub radius_m: f32,
+    /// The drawn particles' share of σ, 1/m.
+    pub extinction_per_m: f32,
+}
+
 /// Parameters of the haze pass.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Haze {
-    /// Total extinction σ, 1/m.
+    /// Total extinction σ, 1/m (beyond the particles' spheres).
     pub extinction_per_m: f32,
     /// Airlight radiance at saturation, linear RGB (relative units).
     pub airlight: [f32; 3],
     /// Height of the cloud base above the eye, m: where a sky pixel's path ends (∞: sky
     /// pixels are the airlight, as for a fog without a top).
     pub sky_ceiling_m: f32,
+    /// The rain's and the snow's drawn shares (zero where a frame draws none): along a ray of
+    /// length d the optical depth is σ·d − Σ s·min(d, r).
+    pub drawn: [Drawn; 2],
 }
 
 impl Haze {
@@ -55,17 +76,65 @@ impl Haze {
             extinction_per_m,
             airlight,
             sky_ceiling_m,
+            drawn: [Drawn::default(); 2],
         })
     }
 
-    /// Transmittance e^(−σ d) along `distance_m` (1 when σ = 0, 0 for d = ∞ when σ > 0),
-    /// through [`exp_neg`].
+    /// The haze with `drawn` left out near the eye: each share within [0, σ] and its radius
+    /// finite and ≥ 0.
+    pub fn with_drawn(mut self, drawn: [Drawn; 2]) -> Result<Self> {
+        let total: f32 = drawn.iter().map(|d| d.extinction_per_m).sum();
+        for (i, d) in drawn.iter().enumerate() {
+            Range::closed(0.0, 1e6, "m").check("drawn radius_m", Some(i), f64::from(d.radius_m))?;
+            Range::closed(0.0, f64::from(self.extinction_per_m), "1/m").check(
+                "drawn extinction_per_m",
+                Some(i),
+                f64::from(d.extinction_per_m),
+            )?;
+        }
+        if total > self.extinction_per_m * (1.0 + 1e-6) {
+            return Err(Error::Invalid {
+                param: Param {
+                    name: "drawn extinction_per_m",
+                    index: None,
+                },
+                message: format!(
+                    "the drawn shares sum to {total} 1/m, more than σ = {} 1/m",
+                    self.extinction_per_m
+                ),
+            });
+        }
+        self.drawn = drawn;
+        Ok(self)
+    }
+
+    /// The optical depth along `distance_m` from the eye: σ·d less the drawn shares over the
+    /// ray's stretch inside their spheres (∞ for d = ∞ when σ > 0).
+    #[inline(always)]
+    pub fn optical_depth(&self, distance_m: f32) -> f32 {
+        // (plain comparisons, not f32::min's NaN handling: they vectorise to one instruction)
+        let within = |radius: f32| {
+            if distance_m < radius {
+                distance_m
+            } else {
+                radius
+            }
+        };
+        let [r, s] = self.drawn;
+        let tau = self.extinction_per_m * distance_m
+            - r.extinction_per_m * within(r.radius_m)
+            - s.extinction_per_m * within(s.radius_m);
+        if tau > 0.0 { tau } else { 0.0 }
+    }
+
+    /// Transmittance e^(−τ) along `distance_m`, τ its [`Self::optical_depth`] (1 when σ = 0,
+    /// 0 for d = ∞ when σ > 0), through [`exp_neg`].
     #[inline(always)]
     pub fn transmittance(&self, distance_m: f32) -> f32 {
         if self.extinction_per_m <= 0.0 {
             1.0
         } else {
-            exp_neg(-self.extinction_per_m * distance_m)
+            exp_neg(-self.optical_depth(distance_m))
         }
     }
 
@@ -75,8 +144,19 @@ impl Haze {
     /// it a second time for AVX2.
     #[inline(always)]
     pub fn transmittance_row(&self, rays: &RowRays<'_>, depth: &[f32], t: &mut [f32]) {
-        for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
-            *t = self.transmittance(d * (u2 + rays.v2 + 1.0).sqrt());
+        if self.drawn.iter().all(|d| d.extinction_per_m == 0.0) {
+            // (nothing drawn near the eye: σ·d alone, the cheaper loop)
+            for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
+                *t = if self.extinction_per_m <= 0.0 {
+                    1.0
+                } else {
+                    exp_neg(-self.extinction_per_m * (d * (u2 + rays.v2 + 1.0).sqrt()))
+                };
+            }
+        } else {
+            for ((t, &d), &u2) in t.iter_mut().zip(depth).zip(rays.u2) {
+                *t = self.transmittance(d * (u2 + rays.v2 + 1.0).sqrt());
+            }
         }
         // Rows without sky (most of them in most frames) skip the second pass after one
         // branch-free scan.
@@ -262,6 +342,46 @@ mod tests {
     use super::*;
     use crate::scene::camera::Camera;
     use glam::{Mat3, Vec3};
+
+    #[test]
+    fn drawn_shares_leave_the_haze_only_inside_their_spheres() {
+        // σ = 0.01 /m, of which 0.004 drawn within 5 m and 0.003 within 8 m: the optical depth
+        // is 0.003 d inside 5 m, 0.015 + 0.007 (d − 5) up to 8 m, 0.036 + 0.01 (d − 8) beyond.
+        let h = Haze::new(0.01, [1.0; 3], f32::INFINITY)
+            .unwrap()
+            .with_drawn([
+                Drawn {
+                    radius_m: 5.0,
+                    extinction_per_m: 0.004,
+                },
+                Drawn {
+                    radius_m: 8.0,
+                    extinction_per_m: 0.003,
+                },
+            ])
+            .unwrap();
+        for (d, want) in [(2.0f32, 0.006f32), (6.0, 0.022), (20.0, 0.156)] {
+            assert!(
+                (h.optical_depth(d) - want).abs() < 1e-6,
+                "{d}: {}",
+                h.optical_depth(d)
+            );
+            assert!((h.transmittance(d) - (-want).exp()).abs() < 1e-6);
+        }
+        assert_eq!(h.transmittance(f32::INFINITY), 0.0);
+        // shares beyond σ are refused
+        let too_much = [
+            Drawn {
+                radius_m: 5.0,
+                extinction_per_m: 0.008,
+            },
+            Drawn {
+                radius_m: 8.0,
+                extinction_per_m: 0.003,
+            },
+        ];
+        assert!(h.with_drawn(too_much).is_err());
+    }
 
     #[test]
     fn haze_limits() {

@@ -13,7 +13,11 @@
 //! partially); along, a one-pixel ramp at each end. α carries the particle's silhouette: a
 //! sphere's time-averaged shadow on its w-wide band is π/4 of the band ([`SILHOUETTE`]), so
 //! each streak adds α·w·L = (π/4)·w² of opacity-area, the drop's πD²/4 cross-section on
-//! screen (the same cross-section the haze's extinction counts). Through a thin lens
+//! screen (the same cross-section the haze's extinction counts). Off the optical axis by θ a
+//! sphere's image is an ellipse stretched by sec θ along the radial direction (the image plane
+//! meets its ray obliquely), so the band's width is the ellipse's across the path and the
+//! opacity-area (π/4)·w²·sec θ: a pixel's expected coverage is then the same n·πD²/4 per metre
+//! of its ray everywhere in the frame. Through a thin lens
 //! ([`screen_streak_through`]) the streak is widened and lengthened by the drop's circle of
 //! confusion and α divided so that this opacity-area is unchanged. [`ScreenStreak::fragment`] is the per-pixel definition; the walks of
 //! [`super::walk`] and the GPU's `rain.wgsl` compute the same values, and
@@ -217,6 +221,29 @@ fn project(cam: &Camera, pc: glam::Vec3) -> Vec2 {
     Vec2::new(cam.cx + cam.fx * pc.x / z, cam.cy - cam.fy * pc.y / z)
 }
 
+/// How a sphere's image stretches off the optical axis, at one point of its path (camera
+/// space): its width across the streak and its extent along it relative to the on-axis
+/// D·f/z, and sec θ, its area's ratio to the on-axis disc's.
+struct Obliquity {
+    across: f32,
+    along: f32,
+    sec: f32,
+}
+
+impl Obliquity {
+    fn at(pc: glam::Vec3, across: Vec2, along: Vec2) -> Self {
+        let z = -pc.z;
+        // The point's offset from the image's centre on the image plane at unit distance
+        // (image rows grow downwards): radial, of length tan θ.
+        let t = Vec2::new(pc.x, -pc.y) / z;
+        Obliquity {
+            across: (1.0 + across.dot(t).powi(2)).sqrt(),
+            along: (1.0 + along.dot(t).powi(2)).sqrt(),
+            sec: (1.0 + t.length_squared()).sqrt(),
+        }
+    }
+}
+
 /// The distance from a streak's axis beyond which a pixel gets no coverage, px: its widest
 /// half-width plus half a pixel, at least one pixel (see [`ScreenStreak::fragment`]).
 #[inline]
@@ -239,8 +266,8 @@ pub fn screen_streak(
 /// [`screen_streak`]): the streak is the drop's pinhole streak convolved with its blur circle,
 /// approximated by a box: each end's width grows by that end's blur diameter c (at its depth,
 /// [`Defocus::blur_px`]) and each end moves out along the axis by c/2, and α is divided so
-/// that the opacity-area α·w·L stays the drop's (π/4)·w² (a blur spreads the drop's shadow, it
-/// does not add to it).
+/// that the opacity-area α·w·L stays the drop's (π/4)·w²·sec θ (a blur spreads the drop's
+/// shadow, it does not add to it).
 pub fn screen_streak_through(
     cam: &Camera,
     lens: Option<&Defocus>,
@@ -265,23 +292,40 @@ pub fn screen_streak_through(
     let (za, zb) = (-pa.z, -pb.z);
     let f = 0.5 * (cam.fx + cam.fy);
     let (mut a, mut b) = (project(cam, pa), project(cam, pb));
+    // The drop's width on the tangent side (across the line to the image's centre): D·f/z, z
+    // its depth along the axis.
     let (wa, wb) = (d.diameter_m * f / za, d.diameter_m * f / zb);
     let mut len = a.distance(b);
     let w_mid = 0.5 * (wa + wb);
-    // Every streak carries (π/4)·w² of opacity-area, whatever the exposure: its pixels' coverage
-    // sums to α·w·L for L ≥ 1 px, wherever it falls on the pixel grid (the anti-aliased ends
-    // are one pixel long), so α = w / L. A path shorter than a pixel or than the drop is wide
-    // (a near drop in a short exposure, a drop moving with the camera) is lengthened about its
-    // middle to max(w, 1 px): opaque when w ≥ 1 px, as the drop's disc is.
-    let l = len.max(w_mid).max(1.0);
+    let path = if len > 1e-6 { (b - a) / len } else { Vec2::Y };
+    let across = path.perp();
+    // Off the axis by θ a sphere images to an ellipse, D·f/z across the radial direction and
+    // D·f/(z cos θ) along it (the image plane meets the ray obliquely): its area is the
+    // on-axis disc's over cos θ, sec θ = |p|/z. With t = (x, −y)/z the point's offset on the
+    // image plane (radial, of length tan θ), the ellipse's width across a unit direction n is
+    // w·√(1 + (n·t)²). [`Obliquity`] holds one end's.
+    let (oa, ob) = (
+        Obliquity::at(pa, across, path),
+        Obliquity::at(pb, across, path),
+    );
+    let (wa_band, wb_band) = (wa * oa.across, wb * ob.across);
+    let band_mid = 0.5 * (wa_band + wb_band);
+    let along_mid = w_mid * 0.5 * (oa.along + ob.along);
+    // Every streak carries the drop's (π/4)·w²·sec θ of opacity-area, whatever the exposure:
+    // its pixels' coverage sums to α·w_band·L for L ≥ 1 px, wherever it falls on the pixel
+    // grid (the anti-aliased ends are one pixel long), so α = area / (w_band·L). A path shorter
+    // than a pixel or than the drop is long along it (a near drop in a short exposure, a drop
+    // moving with the camera) is lengthened about its middle to max(that, 1 px): opaque over
+    // its π/4 when w ≥ 1 px, as the drop's ellipse is.
+    let area = SILHOUETTE * w_mid * w_mid * 0.5 * (oa.sec + ob.sec);
+    let l = len.max(along_mid).max(1.0);
     if l > len {
-        let dir = if len > 1e-6 { (b - a) / len } else { Vec2::Y };
         let grow = 0.5 * (l - len);
-        (a, b) = (a - dir * grow, b + dir * grow);
+        (a, b) = (a - path * grow, b + path * grow);
         len = l;
     }
-    let mut alpha = SILHOUETTE * w_mid / l;
-    let (mut wa, mut wb) = (wa, wb);
+    let mut alpha = area / (band_mid * l);
+    let (mut wa, mut wb) = (wa_band, wb_band);
     if let Some(lens) = lens {
         let (ca, cb) = (lens.blur_px(1.0 / za), lens.blur_px(1.0 / zb));
         if ca > 0.0 || cb > 0.0 {
@@ -290,7 +334,7 @@ pub fn screen_streak_through(
             (a, b) = (a - dir * (0.5 * ca), b + dir * (0.5 * cb));
             len += 0.5 * (ca + cb);
             (wa, wb) = (wa + ca, wb + cb);
-            alpha *= w_mid * l / (0.5 * (wa + wb) * len);
+            alpha *= band_mid * l / (0.5 * (wa + wb) * len);
         }
     }
     let r = 0.5 * wa.max(wb) + 1.0;
@@ -379,6 +423,15 @@ impl ScreenStreak {
         self
     }
 
+    /// The streak moved by `by`, px.
+    pub(crate) fn translated(mut self, by: Vec2) -> Self {
+        self.a += by;
+        self.b += by;
+        self.min += by;
+        self.max += by;
+        self
+    }
+
     /// α, the share of the exposure a pixel on its path is covered (times its opacity).
     pub fn alpha(&self) -> f32 {
         self.alpha
@@ -416,8 +469,8 @@ impl ScreenStreak {
 
     /// The streak's opacity-area inside a `width` × `height` frame, px²: α times the length of
     /// its axis inside the frame times its mean width there, the sum of its pixels' α·coverage
-    /// up to the anti-aliased ends. Over the whole axis it is (π/4)·w² (streaks are at least a pixel
-    /// long, see [`screen_streak`]), which goes as 1/z² with the drop's depth z.
+    /// up to the anti-aliased ends. Over the whole axis it is (π/4)·w²·sec θ (streaks are at least a
+    /// pixel long, see [`screen_streak`]), which goes as 1/z² with the drop's depth z.
     pub fn opacity_area_in(&self, width: f32, height: f32) -> f32 {
         let inside = |p: Vec2| p.x >= 0.0 && p.y >= 0.0 && p.x <= width && p.y <= height;
         if self.len <= 1e-6 {
@@ -765,7 +818,14 @@ mod tests {
                 );
             }
             let (a, b) = (sum(&pin), sum(&lensed));
-            let analytic = f64::from(SILHOUETTE) * f64::from(0.5 * (pin.wa + pin.wb)).powi(2);
+            // The drop's image: π/4 · (D·f/z)² · sec θ, z and sec θ = |p|/z at each end.
+            let (start, end) = (p - v * exposure, p);
+            let wz = |q: Vec3| f64::from(d.diameter_m * 600.0 / -q.z);
+            let sec = |q: Vec3| f64::from(q.length() / -q.z);
+            let analytic = f64::from(SILHOUETTE)
+                * (0.5 * (wz(start) + wz(end))).powi(2)
+                * 0.5
+                * (sec(start) + sec(end));
             // The analytic opacity-area is kept exactly; the pixel grid samples a streak's
             // anti-aliased ends, so a streak about a pixel long sums to within a few per cent
             // of it: drop by drop for streaks 4 px long or more, and over all drops.

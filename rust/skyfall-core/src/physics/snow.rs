@@ -184,6 +184,22 @@ impl Snowfall {
     pub fn extinction_per_m(&self) -> f64 {
         self.moment(|d| 2.0 * flake_area_mm2(flake_size_mm(d))) * 1e-6
     }
+
+    /// The share of [`Self::extinction_per_m`] of the flakes of melted diameter in
+    /// [`lo_mm`, `hi_mm`] (clipped to the drawn range), 1/m.
+    pub fn extinction_between_per_m(&self, lo_mm: f64, hi_mm: f64) -> f64 {
+        let (lo, hi) = (lo_mm.max(0.0), hi_mm.min(self.melted_max_mm()));
+        if self.n0_per_m3_mm == 0.0 || hi <= lo {
+            return 0.0;
+        }
+        integrate(
+            |d| self.density_per_m3_mm(d) * 2.0 * flake_area_mm2(flake_size_mm(d)),
+            lo,
+            hi,
+            &[],
+            PANELS,
+        ) * 1e-6
+    }
 }
 
 #[cfg(test)]

@@ -52,11 +52,10 @@ const NEAR_VOXEL_M: f32 = 2.5;
 const NEAR_FINER: usize = 3;
 
 /// A voxel's (A_v, B_v) of the module docs: the mean on-screen opacity-area, px², of a probe
-/// drop ending uniformly through the voxel (`corner` its lowest corner) and of one whose
-/// streak's top is uniform over the billboard through `centre` along `right` (as the
-/// textures' streaks are: their top uniform over the voxel's height, their axis uniform over its
-/// width); `area_at(end)` is the probe's opacity-area ending at `end`, `length_m` its streak
-/// length. Stratified sampling, one jittered point per stratum ((3·`finer`)³ and
+/// drop ending uniformly through the voxel (`corner` its lowest corner) and of one ending
+/// uniformly over the billboard through `centre` along `right` (as the textures' streaks do:
+/// their end uniform over the voxel's height, their axis uniform over its width);
+/// `area_at(end)` is the probe's opacity-area ending at `end`. Stratified sampling, one jittered point per stratum ((3·`finer`)³ and
 /// (6·`finer`)²): unbiased for each voxel, so the frame's sums converge as voxels add up;
 /// `rng` makes it deterministic.
 fn opacity_balance(
@@ -65,7 +64,6 @@ fn opacity_balance(
     corner: Vec3,
     centre: Vec3,
     right: Vec3,
-    length_m: f32,
     finer: usize,
 ) -> (f64, f64) {
     let mut at = |i: usize, n: usize| (i as f32 + rng.random::<f32>()) / n as f32;
@@ -81,7 +79,7 @@ fn opacity_balance(
     for i in 0..m {
         for j in 0..m {
             board += f64::from(area_at(
-                centre + right * (at(i, m) - 0.5) + Vec3::Y * (0.5 - at(j, m) - length_m),
+                centre + right * (at(i, m) - 0.5) + Vec3::Y * (0.5 - at(j, m)),
             ));
         }
     }
@@ -89,15 +87,14 @@ fn opacity_balance(
 }
 
 /// The probe of [`opacity_balance`], a drop of the region's middle diameter falling at its
-/// speed in the wind: its on-screen opacity-area ending at a point (0 beyond the region), and
-/// its streak length, m.
+/// speed in the wind: its on-screen opacity-area ending at a point (0 beyond the region).
 fn probe_area(
     region: &RainRegion,
     cam: &Camera,
     exposure_s: f64,
     camera_velocity_m_s: Vec3,
     lens: Option<&Defocus>,
-) -> (impl Fn(Vec3) -> f32 + Sync, f32) {
+) -> impl Fn(Vec3) -> f32 + Sync {
     let law = *FallSpeed::beard_standard();
     let d_mid = region.middle_diameter_mm();
     let velocity = Vec3::new(
@@ -107,7 +104,7 @@ fn probe_area(
     );
     let (near, frame) = (region.near_m as f32, (cam.width as f32, cam.height as f32));
     let (cam, lens) = (*cam, lens.copied());
-    let area_at = move |end: Vec3| -> f32 {
+    move |end: Vec3| -> f32 {
         if end.length() > near {
             return 0.0;
         }
@@ -125,8 +122,7 @@ fn probe_area(
             camera_velocity_m_s,
         )
         .map_or(0.0, |s: ScreenStreak| s.opacity_area_in(frame.0, frame.1))
-    };
-    (area_at, (law.m_s(d_mid) * exposure_s) as f32)
+    }
 }
 
 /// One column of voxels' billboard streaks, and its share of the frame's opacity balance.
@@ -171,9 +167,7 @@ pub fn billboards_in_view(
     let voxel_rel = |voxel: [i64; 3], offset: f64| {
         (DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64) + offset - eye).as_vec3()
     };
-    let (area_at, probe_len) = probe_area(region, cam, exposure_s, camera_velocity_m_s, lens);
-    // A billboard's streak can end up to its own length below the voxel (the texture wraps).
-    let longest = region.bins.last().map_or(0.0, |b| law.m_s(b.1)) * exposure_s;
+    let area_at = probe_area(region, cam, exposure_s, camera_velocity_m_s, lens);
     let per_voxel: usize = textures.iter().map(Vec::len).sum();
     let board_streaks = |voxel: [i64; 3], column: &mut Column| {
         column.drops.reserve(per_voxel);
@@ -193,8 +187,7 @@ pub fn billboards_in_view(
         } else {
             1
         };
-        let (want, board) =
-            opacity_balance(&area_at, &mut rng, corner, centre, right, probe_len, finer);
+        let (want, board) = opacity_balance(&area_at, &mut rng, corner, centre, right, finer);
         let gain = if board > 0.0 {
             ((want / board).sqrt() as f32).min(MAX_GAIN)
         } else {
@@ -209,8 +202,13 @@ pub fn billboards_in_view(
             for (k, s) in streaks.iter().enumerate() {
                 let u = wrap(s.x_m + ox);
                 let top = wrap(s.y_m + oy + scroll[bin]);
-                let bottom = top + s.length_m;
-                let end = centre + right * (u - 0.5) as f32 + Vec3::Y * (0.5 - bottom) as f32;
+                // The texture's top is where the drop is at the end of the exposure (its
+                // streak reaches up from there), as the per-drop reference's drops end
+                // uniformly through their voxel. (Taking it for the streak's top put every
+                // billboard's rain a streak's length lower than the voxel's drops: a near
+                // voxel's opacity moved down the frame, 0.80 / 1.05 / 1.17 of the drops' by
+                // thirds, top to bottom, at 640 × 360.)
+                let end = centre + right * (u - 0.5) as f32 + Vec3::Y * (0.5 - top) as f32;
                 let fall = (s.length_m / exposure_s) as f32;
                 column.drops.push(Drop {
                     position_m: end,
@@ -225,7 +223,7 @@ pub fn billboards_in_view(
             }
         }
     };
-    let keep = voxel_in_view(region, cam, exposure_s, camera_speed_m_s, longest);
+    let keep = voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0);
     let columns = map_voxel_columns(eye, region.near_m, ground, keep, |voxels| {
         let mut column = Column {
             drops: Vec::new(),
@@ -277,12 +275,12 @@ mod tests {
             Mat3::IDENTITY,
         )
         .unwrap();
-        let (area_at, len) = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO, None);
+        let area_at = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO, None);
         // (positions relative to the camera, as billboards_in_view makes them)
         let (corner_m, centre_m) = (Vec3::new(0.0, 1.0, -1.0), Vec3::new(0.5, 1.5, -0.5));
         let (corner, centre) = (corner_m - cam.eye(), centre_m - cam.eye());
         let mut rng = Pcg64Mcg::seed_from_u64(3);
-        let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
+        let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, NEAR_FINER);
         assert!((a / b - 1.125).abs() < 0.02, "{}", a / b);
         // Through a lens the probes blur as the drawn streaks do and keep their opacity-area,
         // so the balance is Jensen's ratio still (f = 100 px · 400 mm / 400 px = 100 mm at f/1
@@ -290,9 +288,9 @@ mod tests {
         let lens = crate::scene::camera::ThinLens::new(1.0, f64::INFINITY, 400.0).unwrap();
         let defocus = lens.defocus(&cam).unwrap();
         assert!(defocus.blur_px(1.0 / 1.5) > 5.0);
-        let (area_at, len) = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO, Some(&defocus));
+        let area_at = probe_area(&r, &cam, 1.0 / 30.0, Vec3::ZERO, Some(&defocus));
         let mut rng = Pcg64Mcg::seed_from_u64(3);
-        let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
+        let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, NEAR_FINER);
         assert!((a / b - 1.125).abs() < 0.02, "through a lens: {}", a / b);
         // far away the spread of depths no longer matters
         let far = Camera::new(
@@ -304,9 +302,9 @@ mod tests {
         )
         .unwrap();
         let r = RainRegion::new(10.0, &[1.0, 2.0], 30.0, [0.0; 3], 0.0, 1).unwrap();
-        let (area_at, len) = probe_area(&r, &far, 1.0 / 30.0, Vec3::ZERO, None);
+        let area_at = probe_area(&r, &far, 1.0 / 30.0, Vec3::ZERO, None);
         let (corner, centre) = (corner_m - far.eye(), centre_m - far.eye());
-        let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, len, NEAR_FINER);
+        let (a, b) = opacity_balance(&area_at, &mut rng, corner, centre, Vec3::X, NEAR_FINER);
         assert!((a / b - 1.0).abs() < 0.003, "{}", a / b);
     }
 

@@ -18,10 +18,10 @@
 //! b = tan(elevation)/δ for every shell (the same texel for all of them, up to each shell's
 //! offset); that is exact on a cylinder, whatever the camera's pitch and roll, and vertical
 //! streaks stay vertical in the world, converging as the per-drop path's do. Per pixel the
-//! texture's α is scaled by sec(elevation)/|r| = 1/h (an oblique ray crosses a shell Δ/cos
-//! wide; the per-drop path draws a drop D·f/z wide, z its depth, so its opacity-area per pixel
-//! falls as 1/|r| away from the axis, r the ray with camera z = −1 and h its horizontal length)
-//! and by the share of the shell's depth span in front of both the scene and the region's
+//! texture's α is scaled by sec(elevation) = |r|/h (an oblique ray crosses a shell Δ/cos
+//! wide; r the ray with camera z = −1 and h its horizontal length: the per-drop path's drops
+//! carry their off-axis (π/4)·w²·sec θ, so their opacity per pixel is n·πD²/4 per metre of ray
+//! everywhere in the frame, and the texture's drops are each drawn straight ahead) and by the share of the shell's depth span in front of both the scene and the region's
 //! sphere (drops' opacity per pixel is uniform in their distance for streaks under a pixel wide), and
 //! composited far to near like a streak fragment, before the near streaks. Wind and the camera's
 //! motion slant the streaks: the lookup is sheared by the relative horizontal velocity's
@@ -180,7 +180,7 @@ fn shell_texture(
     let side_m = s as f64 * delta * radius_m;
     let volume_m3 = side_m * side_m * spacing_m;
     let mut rng = Pcg64Mcg::seed_from_u64(voxel_seed(TEXTURE_SEED, [stream as i64, 0, 0], &[]));
-    let (r, texel_m) = (radius_m as f32, (delta * radius_m) as f32);
+    let r = radius_m as f32;
     for (bin, &(lo, hi)) in region.bins.iter().enumerate() {
         let sampler = BinSampler::new(region.rain_rate_mm_h, lo, hi);
         for _ in 0..sampler.count_in(volume_m3, &mut rng) {
@@ -189,9 +189,13 @@ fn shell_texture(
                 rng.random::<f32>() * s as f32,
                 rng.random::<f32>() * s as f32,
             );
+            // Drawn straight ahead (its path's middle on the axis) and moved to (a, b): every
+            // texel stands for the same angle at the shell, so the texture carries no
+            // obliquity of its own (the lookup scales it per pixel).
+            let fall = speeds.m_s(bin, d_mm) as f32;
             let drop = crate::particles::Particle {
-                position_m: Vec3::new((a - half) * texel_m, (half - b) * texel_m, -r),
-                velocity_m_s: Vec3::new(0.0, -speeds.m_s(bin, d_mm) as f32, 0.0),
+                position_m: Vec3::new(0.0, -0.5 * fall * exposure_s as f32, -r),
+                velocity_m_s: Vec3::new(0.0, -fall, 0.0),
                 diameter_m: (d_mm * 1e-3) as f32,
                 id: [0; 5],
             };
@@ -199,6 +203,7 @@ fn shell_texture(
             else {
                 continue;
             };
+            let st = st.translated(Vec2::new(a - half, b - half));
             let (x0, x1) = (st.min.x.floor() as i64, st.max.x.ceil() as i64);
             let (y0, y1) = (st.min.y.floor() as i64, st.max.y.ceil() as i64);
             for y in y0..y1 {
@@ -507,10 +512,11 @@ impl FarRain {
                     let t = Vec4::new(0.0, 1.0, 2.0, 3.0) + Vec4::splat((x - xb) as f32);
                     let at = |j: usize| Vec4::splat(a0[j]) + t * slope[j];
                     let (az, vv, h, near_h) = (at(0), at(1), at(2), at(3));
-                    // sec(elevation) for the oblique crossing, over |ray| for the drops' own
-                    // projection (w = D·f/z with z the depth: a drop's opacity-area per pixel
-                    // falls as 1/|ray| off the axis in the per-drop path): 1/h.
-                    let scale = Vec4::ONE / h;
+                    // sec(elevation) = |ray|/h for the oblique crossing (the per-drop path's
+                    // drops carry (π/4)·w²·sec θ, so their opacity per pixel is n·πD²/4 per
+                    // metre of ray everywhere in the frame).
+                    let u = (t + Vec4::splat(xb as f32 + 0.5 - cx)) / Vec4::splat(fx);
+                    let scale = (u * u + Vec4::splat(dy_row)).sqrt() / h;
                     let i = row * w + x;
                     let mut d = [f32::INFINITY; 4];
                     d[..lanes].copy_from_slice(&depth[i..i + lanes]);

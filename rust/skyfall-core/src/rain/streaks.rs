@@ -455,16 +455,19 @@ mod tests {
                 culled: 1
             }
         );
-        // a camera moving with the drop sees a dot (the drop's disc), not a streak: a pixel
-        // long, at α = π w/4, so that it still carries π w²/4
+        // a camera moving with the drop sees a dot (the drop's image), not a streak: a pixel
+        // long, at α = π w/4 · sec θ, so that it carries π w²/4 · sec θ (0.1 m below the axis
+        // 1 m ahead: its image is stretched by sec θ = √1.01 along the vertical, its path)
+        let sec = 1.01f32.sqrt();
         let s = screen_streak(&cam, &d, 1.0 / 30.0, d.velocity_m_s).unwrap();
         assert!(
-            (s.len - 1.0).abs() < 1e-6 && (s.alpha - std::f32::consts::FRAC_PI_4 * w).abs() < 1e-6,
+            (s.len - 1.0).abs() < 1e-6
+                && (s.alpha - std::f32::consts::FRAC_PI_4 * w * sec).abs() < 1e-6,
             "{} {}",
             s.len,
             s.alpha
         );
-        assert!((s.opacity_area_in(400.0, 400.0) / disc(w) - 1.0).abs() < 1e-4);
+        assert!((s.opacity_area_in(400.0, 400.0) / (disc(w) * sec) - 1.0).abs() < 1e-4);
         // whatever the exposure, the pixels sum to π w²/4 (a still drop: a dot; a near drop in a
         // short exposure: lengthened; 1/30 s: a streak)
         for (v, z, t) in [
@@ -481,6 +484,8 @@ mod tests {
                 ..d
             };
             let w = 2e-3 * 300.0 / z;
+            // (0.05 m off the axis: its image's area is the disc's times sec θ)
+            let sec = (1.0 + (0.05 / z) * (0.05 / z)).sqrt();
             let mut alpha = vec![0.0; n];
             composite(
                 &cam,
@@ -497,9 +502,9 @@ mod tests {
             .unwrap();
             let sum: f32 = alpha.iter().sum();
             assert!(
-                (sum / disc(w) - 1.0).abs() < 0.02,
+                (sum / (disc(w) * sec) - 1.0).abs() < 0.02,
                 "v {v} z {z} T {t}: {sum} vs {}",
-                disc(w)
+                disc(w) * sec
             );
         }
         // a camera moving up at 6.5 m/s doubles the streak

@@ -10,9 +10,10 @@
 //!   area is Mitchell's A(S), so α is scaled by A / (π S²/4) (about 0.3: aggregates are lacy).
 //! - **Sprite**: seeded per flake ([`crate::snow::flakes::sprite_key`]): a lump, a six-armed
 //!   star at a random angle, or a broad aggregate ([`crate::particles::streak::Sprite`]).
-//! - **Opacity with distance** ([`SnowOpacity`]): by default continuous, α·e^(−σ d) with σ the
-//!   frame's extinction (air, rain and the snow's own σ_snow, the haze's σ: a flake fades into
-//!   the haze exactly as a surface at its distance does); or Koitabashi et al.'s three levels,
+//! - **Opacity with distance** ([`SnowOpacity`]): by default continuous, α·e^(−τ(d)) with τ the
+//!   haze's optical depth to the flake (air, rain and the snow's own σ_snow, less what the frame
+//!   draws as particles near the eye, [`crate::haze::Drawn`]: a flake fades into the haze
+//!   exactly as a surface at its distance does); or Koitabashi et al.'s three levels,
 //!   0.75 / 0.5 / 0.25 of α in the near, middle and far thirds of the snow region.
 
 use super::flakes::{Flake, SnowRegion, flakes_in_view, sprite_key};
@@ -88,8 +89,8 @@ pub struct SnowFrame<'a> {
     pub shading: &'a RainShading,
     /// How their opacity falls with distance.
     pub opacity: SnowOpacity,
-    /// The frame's extinction σ, 1/m (the haze's).
-    pub extinction_per_m: f32,
+    /// The frame's haze (its optical depth to each flake fades it), None in clear air.
+    pub haze: Option<crate::haze::Haze>,
 }
 
 /// A flake's sprite, from its identity.
@@ -101,12 +102,13 @@ pub fn flake_sprite(seed: u64, f: &Flake) -> Sprite {
 }
 
 /// A flake's opacity factor: its share of the disc's silhouette (Mitchell's area over π S²/4)
-/// times its fading at distance `d_m` in a region of radius `near_m`.
-pub fn flake_opacity(size_mm: f32, d_m: f32, near_m: f32, opacity: SnowOpacity, sigma: f32) -> f32 {
+/// times its fading at distance `d_m` in a region of radius `near_m`, `tau` the haze's optical
+/// depth to it.
+pub fn flake_opacity(size_mm: f32, d_m: f32, near_m: f32, opacity: SnowOpacity, tau: f32) -> f32 {
     let s = f64::from(size_mm);
     let fill = (flake_area_mm2(s) / (std::f64::consts::FRAC_PI_4 * s * s)) as f32;
     let fade = match opacity {
-        SnowOpacity::Extinction => (-sigma * d_m).exp(),
+        SnowOpacity::Extinction => (-tau).exp(),
         SnowOpacity::Levels => {
             let third = near_m / 3.0;
             if d_m < third {
@@ -145,13 +147,9 @@ pub fn prepare(cam: &Camera, frame: &SnowFrame<'_>, flakes: &[Flake]) -> Vec<Scr
             {
                 return None;
             }
-            let opacity = flake_opacity(
-                f.diameter_m * 1e3,
-                f.position_m.length(),
-                near,
-                frame.opacity,
-                frame.extinction_per_m,
-            );
+            let d = f.position_m.length();
+            let tau = frame.haze.map_or(0.0, |h| h.optical_depth(d));
+            let opacity = flake_opacity(f.diameter_m * 1e3, d, near, frame.opacity, tau);
             Some(s.with_particle(
                 LAYER_SNOW,
                 flake_sprite(seed, f),
@@ -339,7 +337,7 @@ mod tests {
             shelter: &[],
             shading: &snow_shading,
             opacity: SnowOpacity::Extinction,
-            extinction_per_m: 0.02,
+            haze: Some(crate::haze::Haze::new(0.02, [1.0; 3], f32::INFINITY).unwrap()),
         };
         let (flakes, stats) = frame.streaks(c).unwrap();
         assert_eq!(stats.streaks, flakes.len());
@@ -437,15 +435,15 @@ mod tests {
     #[test]
     fn opacity_falls_with_distance_continuously_or_by_levels() {
         let s = 5.0;
-        let fill = flake_opacity(s, 0.0, 8.0, SnowOpacity::Extinction, 0.05);
+        let fill = flake_opacity(s, 0.0, 8.0, SnowOpacity::Extinction, 0.0);
         let want_fill = (flake_area_mm2(5.0) / (std::f64::consts::FRAC_PI_4 * 25.0)) as f32;
         assert!(
             (fill - want_fill).abs() < 1e-6 && (0.2..0.5).contains(&fill),
             "{fill}"
         );
-        let far = flake_opacity(s, 6.0, 8.0, SnowOpacity::Extinction, 0.05);
+        let far = flake_opacity(s, 6.0, 8.0, SnowOpacity::Extinction, 0.05 * 6.0);
         assert!((far / fill - (-0.3f32).exp()).abs() < 1e-6);
-        let lv = |d: f32| flake_opacity(s, d, 9.0, SnowOpacity::Levels, 0.05) / fill;
+        let lv = |d: f32| flake_opacity(s, d, 9.0, SnowOpacity::Levels, 0.05 * d) / fill;
         assert_eq!([lv(1.0), lv(4.0), lv(8.0)], OPACITY_LEVELS);
         assert!(SnowOpacity::parse("levels").is_ok());
         let e = SnowOpacity::parse("fog").unwrap_err().to_string();

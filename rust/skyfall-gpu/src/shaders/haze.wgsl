@@ -3,6 +3,7 @@
 struct Haze {
     params: vec4<f32>,   // extinction (1/m), cloud base above the eye (m, may be inf), unused x2
     airlight: vec4<f32>, // linear RGB
+    drawn: vec4<f32>,    // the rain's radius (m) and drawn share (1/m), the snow's
 }
 
 @group(0) @binding(0) var<uniform> cam: Camera;
@@ -39,7 +40,10 @@ fn haze_transmittance(depth_m: f32, per_depth: f32, rise: f32) -> f32 {
         }
         path = path_to_ceiling(rise / per_depth, haze.params.y);
     }
-    return exp(-sigma * path);
+    // The particles drawn near the eye carry their share of σ there
+    // (skyfall_core::haze::Haze::optical_depth).
+    let drawn = haze.drawn.y * min(path, haze.drawn.x) + haze.drawn.w * min(path, haze.drawn.z);
+    return exp(-max(sigma * path - drawn, 0.0));
 }
 
 @compute @workgroup_size(8, 8)
