@@ -47,7 +47,10 @@ vulkan:
 	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null; \
 	else echo "GPU tests need a Vulkan driver: sudo apt-get install mesa-vulkan-drivers libvulkan1" >&2; exit 1; fi
 
+# The extension is abi3 (_core.abi3.so): a _core.cpython-*.so left by an older build would be
+# imported before it, so it goes.
 build: setup
+	rm -f python/skyfall/_core.cpython-*.so
 	$(VENV)/bin/maturin develop --release --locked -q
 
 # One wheel for Python 3.11 and later (pyo3's abi3): what benches/device.sh installs on a GPU
