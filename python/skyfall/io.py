@@ -103,6 +103,12 @@ def to_srgb8(linear: Any, *, alpha_channel: int | None = None) -> NDArray[np.uin
     """Encode linear values to 8-bit sRGB (rounded to nearest, in Rust, in parallel);
     values are clipped to [0, 1]; an alpha channel stays linear.
 
+    Raises
+    ------
+    ValueError
+        For NaN anywhere in ``linear`` (8-bit sRGB has no NaN; :func:`write_image` refuses
+        it too): replace it first (``np.nan_to_num``).
+
     Examples
     --------
     >>> to_srgb8([0.0, 0.214, 1.0, 2.0])

@@ -23,6 +23,7 @@ from it only the item's phase within a period: ``t mod T`` of work at most, per 
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -94,9 +95,10 @@ class Windshield:
     rain_rate_mm_h : float
         Rain rate, mm/h, in [0, 500].
     glass_width_mm : float
-        Glass width, mm, in [10, 4000] (default 1400).
+        Glass width, mm, in [10, 4000] (default 1400); with ``cell_mm``, at most 4e6 cells.
     glass_height_mm : float
-        Glass height along its slope, mm, in [10, 4000] (default 800).
+        Glass height along its slope, mm, in [10, 4000] (default 800); with ``cell_mm``, at
+        most 4e6 cells.
     glass_tilt_deg : float
         Inclination from the horizontal, deg, in [0, 90] (default 30, a car's windshield).
     car_speed_m_s : float
@@ -114,7 +116,10 @@ class Windshield:
         Receding contact angle, deg, in (0, 180), below ``advancing_deg`` (default 20). The
         40/20 pair is an assumed clean glass; a coated glass is nearer 110/90.
     cell_mm : float
-        The mesh model's cell, mm, in [0.5, 10] (the paper's 2 mm).
+        The mesh model's cell, mm, in [0.5, 10] (the paper's 2 mm). The glass is at most 4e6
+        cells (``glass_width_mm / cell_mm × glass_height_mm / cell_mm``): a 4000 × 4000 mm
+        glass takes cells of 2 mm or more, 0.5 mm cells a glass of up to 1 m²; beyond it a
+        ValueError names ``cell_mm`` and the least cell for the glass.
     particle_radius_mm : float
         The particle model's particle base radius, mm, in [0.2, 5] (default 1).
     seed : int
@@ -230,21 +235,54 @@ class Windshield:
 
     @classmethod
     def load(cls, path: str | Path) -> Windshield:
-        """A windshield saved by :meth:`save`."""
-        import ast
+        """A windshield saved by :meth:`save`.
 
-        with np.load(path) as z:
-            params = ast.literal_eval(str(z["params"]))
-            t, arrived, off, evap = (float(v) for v in z["scalars"])
-            state = {
-                "t_s": t,
-                "steps": int(z["steps"][0]),
-                "drops": np.ascontiguousarray(z["drops"]),
-                "particles": np.ascontiguousarray(z["particles"]),
-                "arrived_kg": arrived,
-                "swept_off_kg": off,
-                "evaporated_kg": evap,
-            }
+        Raises
+        ------
+        FileNotFoundError, PermissionError, IsADirectoryError
+            When ``path`` cannot be opened.
+        ValueError
+            When the file is not what :meth:`save` writes (naming the file and what it lacks),
+            or its parameters or state are outside their ranges.
+        """
+        import ast
+        import zipfile
+
+        expected = "a windshield saved by Windshield.save (an .npz of params, scalars, steps, drops and particles)"
+
+        def refuse(why: str) -> ValueError:
+            return ValueError(f"{os.fspath(path)!r} is not {expected}: {why}")
+
+        try:
+            z = np.load(path, allow_pickle=False)
+        except (FileNotFoundError, PermissionError, IsADirectoryError):
+            raise
+        except EOFError:
+            raise refuse("it is empty") from None
+        except (ValueError, OSError, zipfile.BadZipFile):  # numpy's pickle hint is no help here
+            raise refuse("its bytes are not an .npz archive") from None
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise refuse("it holds one array, not an .npz archive")
+        with z:
+            missing = [k for k in ("params", "scalars", "steps", "drops", "particles") if k not in z.files]
+            if missing:
+                raise refuse(f"it has no {', '.join(missing)}")
+            try:
+                params = ast.literal_eval(str(z["params"]))
+                t, arrived, off, evap = (float(v) for v in z["scalars"])
+                state = {
+                    "t_s": t,
+                    "steps": int(z["steps"][0]),
+                    "drops": np.ascontiguousarray(z["drops"]),
+                    "particles": np.ascontiguousarray(z["particles"]),
+                    "arrived_kg": arrived,
+                    "swept_off_kg": off,
+                    "evaporated_kg": evap,
+                }
+            except (ValueError, TypeError, SyntaxError, IndexError, zipfile.BadZipFile, EOFError, OSError) as e:
+                raise refuse(f"{type(e).__name__}: {e}") from None
+        if not isinstance(params, dict) or not all(isinstance(k, str) for k in params):
+            raise refuse(f"its params are {type(params).__name__}, not a dict of the constructor's keywords")
         return cls(**params, state=state)
 
 

@@ -245,9 +245,10 @@ impl RainMethod {
 
 /// Every drop within `region.near_m` of `center_m` (voxels at or above the ground only when
 /// `ground` is set), in a deterministic order, positioned relative to `center_m`.
-pub fn drops_near(region: &RainRegion, center_m: DVec3, ground: bool) -> Vec<Drop> {
+pub fn drops_near(region: &RainRegion, center_m: DVec3, ground: bool) -> Result<Vec<Drop>> {
     let speeds = BinSpeeds::new(&region.bins);
     voxels_where(
+        "the rain's drops",
         center_m,
         region.near_m,
         ground,
@@ -290,7 +291,7 @@ pub fn drops_in_view(
     exposure_s: f64,
     camera_speed_m_s: f64,
     ground: bool,
-) -> Vec<Drop> {
+) -> Result<Vec<Drop>> {
     drops_in_view_where(region, cam, exposure_s, camera_speed_m_s, ground, |_| true)
 }
 
@@ -302,10 +303,11 @@ pub fn drops_in_view_where(
     camera_speed_m_s: f64,
     ground: bool,
     also: impl Fn(Vec3) -> bool + Sync,
-) -> Vec<Drop> {
+) -> Result<Vec<Drop>> {
     let speeds = BinSpeeds::new(&region.bins);
     let in_view = voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0);
     voxels_where(
+        "the rain's drops in view",
         cam.position_m,
         region.near_m,
         ground,
@@ -361,8 +363,9 @@ mod tests {
     fn drops_are_world_anchored_and_coherent_in_time() {
         use std::collections::HashMap;
         let (ca, cb) = (DVec3::new(0.0, 1.6, 0.0), DVec3::new(0.5, 1.6, 0.0));
-        let a = drops_near(&region(0.0), ca, true);
+        let a = drops_near(&region(0.0), ca, true).unwrap();
         let b: HashMap<_, _> = drops_near(&region(0.0), cb, true)
+            .unwrap()
             .into_iter()
             .map(|d| (d.id, d))
             .collect();
@@ -381,6 +384,7 @@ mod tests {
         }
         // 10 ms later every drop moved by v dt (no wrap for most)
         let later: HashMap<_, _> = drops_near(&region(0.01), ca, true)
+            .unwrap()
             .into_iter()
             .map(|d| (d.id, d))
             .collect();
@@ -415,8 +419,8 @@ mod tests {
             rot,
         )
         .unwrap();
-        let all = drops_near(&r, cam.position_m, true);
-        let seen = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true);
+        let all = drops_near(&r, cam.position_m, true).unwrap();
+        let seen = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true).unwrap();
         assert!(
             seen.len() * 2 < all.len(),
             "{} of {}",
@@ -452,7 +456,7 @@ mod tests {
     #[test]
     fn drop_count_follows_marshall_palmer() {
         let r = region(0.0);
-        let d = drops_near(&r, DVec3::new(0.3, 10.0, 0.7), true);
+        let d = drops_near(&r, DVec3::new(0.3, 10.0, 0.7), true).unwrap();
         let per_m3: f64 = r
             .bins
             .iter()
@@ -465,7 +469,11 @@ mod tests {
             "{} vs {expected}",
             d.len()
         );
-        assert!(drops_near(&r, DVec3::new(0.0, -10.0, 0.0), true).is_empty());
+        assert!(
+            drops_near(&r, DVec3::new(0.0, -10.0, 0.0), true)
+                .unwrap()
+                .is_empty()
+        );
         // the budget's estimate holds them (it grows the sphere by a voxel's diagonal)
         assert!(r.expected_drops(1.0) >= d.len() as f64);
     }
