@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core
-from skyfall._validate import in_range, integer
+from skyfall._validate import in_range, integer, real, values
 
 __all__ = [
     "PRESETS",
@@ -157,8 +157,8 @@ class Windshield:
     ) -> None:
         integer("wipers", wipers, int(_core.RANGES["wipers"][0]), int(_core.RANGES["wipers"][1]))
         integer("seed", seed, 0, 2**64 - 1)
-        if len(wiper_angles_deg) != 2:
-            raise ValueError(f"wiper_angles_deg must be (from, to), got {wiper_angles_deg!r}")
+        if not isinstance(wiper_angles_deg, (tuple, list, np.ndarray)) or len(wiper_angles_deg) != 2:
+            raise TypeError(f"wiper_angles_deg must be (from, to), two numbers, got {wiper_angles_deg!r}")
         self.params: dict[str, Any] = dict(
             rain_rate_mm_h=in_range("rain_rate_mm_h", rain_rate_mm_h),
             glass_width_mm=in_range("glass_width_mm", glass_width_mm),
@@ -357,16 +357,20 @@ def metaball_height_map(
     -------
     ndarray of float32, shape (H, W)
     """
-    c = np.ascontiguousarray(np.asarray(centers_px, np.float32).reshape(-1, 2))
-    r = np.ascontiguousarray(np.asarray(radii_px, np.float32).reshape(-1))
-    h, w = (int(shape[0]), int(shape[1]))
+    c = values("centers_px", centers_px, shape="(N, 2)")
+    r = values("radii_px", radii_px, shape="(N,)")
+    if not isinstance(shape, (tuple, list)) or len(shape) != 2:
+        raise TypeError(f"shape must be (H, W), two ints, got {shape!r}")
+    h, w = integer("height", shape[0], 1, 16384), integer("width", shape[1], 1, 16384)
     return _core.metaball_height_map(c, r, w, h, bool(compress))
 
 
 def normals(height_map: NDArray[np.float32], slope_px: float) -> NDArray[np.float32]:
     """Unit normals (x, y, z) of the water surface, (H, W, 3) float32: central differences of
-    the field, n ∝ (−s ∂V/∂x, −s ∂V/∂y, 1) with s = ``slope_px`` px of height per unit of V."""
-    return _core.metaball_normals(np.ascontiguousarray(height_map, np.float32), float(slope_px))
+    the field, n ∝ (−s ∂V/∂x, −s ∂V/∂y, 1) with s = ``slope_px`` px of height per unit of V
+    in [0, 1e5] px; ``height_map`` is (H, W), finite."""
+    s = real("slope_px", slope_px)
+    return _core.metaball_normals(values("height_map", height_map, finite=True, shape="(H, W)"), s)
 
 
 def refract(

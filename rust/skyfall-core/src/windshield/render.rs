@@ -180,9 +180,21 @@ fn gradient(field: &[f32], width: usize, height: usize, i: usize, j: usize) -> (
 }
 
 /// The unit normals (x, y, z) of the field at every pixel, `slope_px` px of height per unit V.
+/// `slope_px` in [0, 1e5] px, as the refraction's (beyond, its square overflows: NaN normals).
 pub fn normals(field: &[f32], width: usize, height: usize, slope_px: f32) -> Result<Vec<f32>> {
     check_size(width, height)?;
     check_field(field, width, height)?;
+    if !(0.0..=1e5).contains(&slope_px) {
+        return Err(Error::OutOfRange {
+            param: Param {
+                name: "slope_px",
+                index: None,
+            },
+            value: f64::from(slope_px),
+            range: "[0, 1e5] px".into(),
+            integer: false,
+        });
+    }
     let mut out = crate::error::try_filled_par("the normals", width * height * 3, 0.0f32)?;
     out.par_chunks_mut(width * 3)
         .enumerate()
