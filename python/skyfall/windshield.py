@@ -119,7 +119,7 @@ class Windshield:
         The mesh model's cell, mm, in [0.5, 10] (the paper's 2 mm). The glass is at most 4e6
         cells (``glass_width_mm / cell_mm × glass_height_mm / cell_mm``): a 4000 × 4000 mm
         glass takes cells of 2 mm or more, 0.5 mm cells a glass of up to 1 m²; beyond it a
-        ValueError names ``cell_mm`` and the least cell for the glass.
+        ValueError names this parameter and the least cell for the glass.
     particle_radius_mm : float
         The particle model's particle base radius, mm, in [0.2, 5] (default 1).
     seed : int

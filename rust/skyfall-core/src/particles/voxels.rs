@@ -63,32 +63,28 @@ pub fn in_view(cam: &Camera, margin: f32) -> impl Fn(Vec3) -> bool + Sync + use<
 
 /// Runs `fill` for every voxel within `radius_m` of `center_m` that `keep_voxel` accepts
 /// (by its centre relative to `center_m`), columns in parallel, and keeps the particles within `radius_m`, in a
-/// deterministic order. The whole list is reserved fallibly ([`crate::Error::OutOfMemory`],
-/// naming `what`); a column's own vector grows as any does.
+/// deterministic order. `fill` pushes a voxel's particles after reserving room for them with
+/// `try_reserve`, and returns false where that failed; the whole list is reserved fallibly
+/// too: either is [`crate::Error::OutOfMemory`], naming `what`.
 pub fn voxels_where<P: Anchored + Send + Clone>(
     what: &str,
     center_m: DVec3,
     radius_m: f64,
     ground: bool,
     keep_voxel: impl Fn(Vec3) -> bool + Sync,
-    fill: impl Fn([i64; 3], &mut Vec<P>) + Sync,
+    fill: impl Fn([i64; 3], &mut Vec<P>) -> bool + Sync,
 ) -> crate::error::Result<Vec<P>> {
-    // Each voxel's particles are made into a small buffer, then the column's list grows
-    // fallibly by them: the first refusal ends the column and is reported.
+    // The first refusal ends the column and is reported.
     let columns = map_voxel_columns(center_m, radius_m, ground, keep_voxel, |voxels| {
         let mut out = FallibleColumn {
             items: Vec::new(),
             refused: None,
         };
-        let mut one = Vec::new();
         for v in voxels {
-            one.clear();
-            fill(v, &mut one);
-            if out.items.try_reserve(one.len()).is_err() {
-                out.refused = Some(out.items.len() + one.len());
+            if !fill(v, &mut out.items) {
+                out.refused = Some(out.items.capacity().max(1) * 2);
                 break;
             }
-            out.items.append(&mut one);
         }
         out
     });

@@ -184,11 +184,11 @@ fn voxel_drops(
     bin: usize,
     origin_m: DVec3,
     out: &mut Vec<Drop>,
-) {
+) -> bool {
     let (lo, hi) = region.bins[bin];
     let sampler = BinSampler::new(region.rain_rate_mm_h, lo, hi);
     if sampler.expected_per_m3() <= 0.0 {
-        return;
+        return true;
     }
     let key = voxel_seed(
         region.seed,
@@ -197,6 +197,10 @@ fn voxel_drops(
     );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
     let n = sampler.count(&mut rng);
+    // Room for the voxel's drops first, fallibly: the pushes below do not allocate.
+    if out.try_reserve(n).is_err() {
+        return false;
+    }
     let base = DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64);
     for k in 0..n {
         let d_mm = sampler.diameter_mm(rng.random());
@@ -212,6 +216,7 @@ fn voxel_drops(
             id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
         });
     }
+    true
 }
 
 /// How the rain region is filled.
@@ -254,9 +259,8 @@ pub fn drops_near(region: &RainRegion, center_m: DVec3, ground: bool) -> Result<
         ground,
         |_| true,
         |voxel, out| {
-            for bin in 0..region.bins.len() {
-                voxel_drops(region, &speeds, voxel, bin, center_m, out);
-            }
+            (0..region.bins.len())
+                .all(|bin| voxel_drops(region, &speeds, voxel, bin, center_m, out))
         },
     )
 }
@@ -313,9 +317,8 @@ pub fn drops_in_view_where(
         ground,
         |c| also(c) && in_view(c),
         |voxel, out| {
-            for bin in 0..region.bins.len() {
-                voxel_drops(region, &speeds, voxel, bin, cam.position_m, out);
-            }
+            (0..region.bins.len())
+                .all(|bin| voxel_drops(region, &speeds, voxel, bin, cam.position_m, out))
         },
     )
 }

@@ -215,11 +215,11 @@ fn voxel_flakes(
     bin: usize,
     origin_m: DVec3,
     out: &mut Vec<Flake>,
-) {
+) -> bool {
     let (lo, hi) = region.bins[bin];
     let sampler = region.snowfall.bin_sampler(lo, hi);
     if sampler.expected_per_m3() <= 0.0 {
-        return;
+        return true;
     }
     let key = voxel_seed(
         region.seed,
@@ -228,6 +228,10 @@ fn voxel_flakes(
     );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
     let n = sampler.count(&mut rng);
+    // Room for the voxel's flakes first, fallibly: the pushes below do not allocate.
+    if out.try_reserve(n).is_err() {
+        return false;
+    }
     let base = DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64);
     let t = region.time_s;
     for k in 0..n {
@@ -249,6 +253,7 @@ fn voxel_flakes(
             id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
         });
     }
+    true
 }
 
 /// Every flake within `region.near_m` of `center_m` (voxels at or above the ground only when
@@ -270,9 +275,7 @@ fn flakes_where(
         ground,
         keep_voxel,
         |voxel, out| {
-            for bin in 0..region.bins.len() {
-                voxel_flakes(region, voxel, bin, center_m, out);
-            }
+            (0..region.bins.len()).all(|bin| voxel_flakes(region, voxel, bin, center_m, out))
         },
     )
 }
@@ -316,7 +319,7 @@ mod tests {
                 for ix in -2..3 {
                     for iz in -2..3 {
                         for bin in 0..r.bins.len() {
-                            voxel_flakes(&r, [ix, 1, iz], bin, DVec3::ZERO, &mut out);
+                            assert!(voxel_flakes(&r, [ix, 1, iz], bin, DVec3::ZERO, &mut out));
                         }
                     }
                 }
