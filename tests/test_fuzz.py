@@ -114,9 +114,12 @@ def _config(**kw: Any) -> Any:
     return DatasetConfig(out=Path("unused"), scene="street", **kw)
 
 
+_OUT = Path(__import__("tempfile").mkdtemp(prefix="skyfall-fuzz-"))
+
+
 def _cli_render(**kw: Any) -> Any:
     (flag, value), = kw.items()
-    code = cli.main(["render", "--width", "8", "--height", "6", "--out", os.devnull + ".png", f"--{flag}", str(value)])
+    code = cli.main(["render", "--width", "8", "--height", "6", "--out", str(_OUT / "fuzz.png"), f"--{flag}", str(value)])
     if code == cli.EXIT_USAGE:
         raise ValueError(f"{flag}: usage error")
     return code
