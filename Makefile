@@ -13,13 +13,14 @@ export VIRTUAL_ENV := $(abspath $(VENV))
 # Vulkan loaders complain on stderr without a runtime dir; give them a private one.
 export XDG_RUNTIME_DIR ?= $(abspath $(VENV))/xdg-runtime
 
-.PHONY: help setup vulkan build wheel demo test test-rust test-python lint bench bench-ab device clean
+.PHONY: help setup vulkan build wheel demo test test-rust test-python fuzz lint bench bench-ab device clean
 
 help:
 	@echo "make demo   build, then render the demo outputs into $(OUT)/"
 	@echo "make test   build, then cargo test, clippy, stub check and pytest (notebooks included)"
 	@echo "make bench  build, then write benches/results/"
 	@echo "make bench-ab BASE=<rev>  A/B of the bench rows, BASE (default HEAD~1) against the working tree"
+	@echo "make fuzz   build, then the property-based harness (tests/test_fuzz.py) at FUZZ_EXAMPLES cases per target"
 	@echo "make lint   cargo clippy and mypy"
 	@echo "make wheel  the abi3 wheel (Python >= 3.11) in dist/, for benches/device.sh on a GPU machine"
 
@@ -77,6 +78,12 @@ test-python: build wheel vulkan
 	$(PY) -m pytest --nbmake tests notebooks
 
 test: test-rust test-python
+
+# The harness of tests/test_fuzz.py, longer than make test's bounded run (12 cases per target);
+# it prints the number of cases run.
+FUZZ_EXAMPLES ?= 400
+fuzz: build
+	SKYFALL_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -s -p no:randomly tests/test_fuzz.py
 
 lint: setup
 	cargo fmt --all --check

@@ -59,6 +59,69 @@ def test_out_of_memory_is_a_memory_error(margin_mib: int, warm: str, what: str) 
         assert bad not in r.stderr, r.stderr[-3000:]
 
 
+# Each path whose memory grows with the weather, under an address-space limit a margin above
+# the warmed-up process: at every margin the call renders or raises MemoryError, never aborts
+# (the allocator's abort, SIGABRT, is exit -6; issue 28 found it in rain::streaks::prepare). The
+# margins sweep from the first small lists to the largest ones of each path.
+WEATHER_OOM_CHILD = textwrap.dedent(
+    """
+    import resource, sys
+    from skyfall import Renderer, Weather, scenes
+    margin_mib, case = int(sys.argv[1]), sys.argv[2]
+    Renderer(64, 48, backend="cpu").render(scenes.street(), Weather(rain_rate_mm_h=5.0))
+    street = scenes.street()
+    vm = int(open("/proc/self/status").read().split("VmSize:")[1].split()[0]) * 1024
+    limit = vm + margin_mib * 1024 * 1024
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    try:
+        if case == "billboards":  # the issue's case: 100 mm/h, 20 m
+            Renderer(640, 360, backend="cpu").render(street, Weather(rain_rate_mm_h=100, rain_near_m=20))
+        elif case == "drops":
+            Renderer(640, 360, backend="cpu").render(street, Weather(rain_rate_mm_h=100, rain_near_m=20, rain_method="drops"))
+        elif case == "far":  # the far shells' textures and lights
+            Renderer(1280, 720, backend="cpu").render(street, Weather(rain_rate_mm_h=10, rain_near_m=20, rain_far_m=10))
+        elif case == "snow":
+            Renderer(640, 360, backend="cpu").render(street, Weather(snow_rate_mm_h=10, snow_near_m=20))
+        elif case == "clouds":
+            Renderer(640, 360, backend="cpu").render(street, Weather(sky=12, sun_elevation_deg=50.0, sun_azimuth_deg=185.0, clouds="broken"))
+        elif case == "cover":
+            from skyfall import snow
+            snow.accumulate(street, Weather(snow_rate_mm_h=5), duration_s=3600.0, resolution_m=0.05)
+        elif case == "frame":  # the largest documented frame: within the budget, beyond the limit
+            Renderer(16384, 16384, backend="cpu").render(street, Weather(rain_rate_mm_h=5.0))
+        print("rendered")
+    except MemoryError as e:
+        print("MemoryError:", e)
+    """
+)
+
+
+@pytest.mark.parametrize(
+    ("case", "margins"),
+    [
+        ("billboards", (20, 250, 450, 590)),
+        ("drops", (20, 60, 400)),
+        ("far", (10, 30)),
+        ("snow", (30, 400)),
+        ("clouds", (10,)),
+        ("cover", (30,)),
+        ("frame", (600,)),
+    ],
+)
+def test_weather_that_outgrows_memory_is_a_memory_error(case: str, margins: tuple[int, ...]) -> None:
+    outcomes = []
+    for margin in margins:
+        r = subprocess.run([sys.executable, "-c", WEATHER_OOM_CHILD, str(margin), case], capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, f"{case} at +{margin} MiB: exit {r.returncode} (-6: the allocator's abort)\n{r.stderr[-3000:]}"
+        for bad in ("panicked", "PanicException", "memory allocation of"):
+            assert bad not in r.stderr, r.stderr[-3000:]
+        out = r.stdout.strip()
+        assert out == "rendered" or out.startswith("MemoryError: "), out
+        outcomes.append(out)
+    # each path is driven out of memory at least once (the test is not vacuous)
+    assert any(o.startswith("MemoryError") for o in outcomes), outcomes
+
+
 SIGINT_CHILD = textwrap.dedent(
     """
     import sys

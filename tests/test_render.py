@@ -257,10 +257,9 @@ def test_bad_inputs_give_clear_errors(cpu):
         scenes.boxes([{"min": (0, 0, 0), "max": (1, 1, 1), "albedo": 2.0}])
 
 
-def test_huge_frames_are_refused_before_allocating():
-    r = Renderer(16384, 16384, backend="cpu")
-    with pytest.raises(ValueError, match="16384x16384 frame.*GiB"):
-        r.render(scenes.empty())
+# The largest documented frame (16384 x 16384) is within the frame budget now (issue 28: the
+# 4 GiB budget refused it); what the machine cannot give is a MemoryError, tested under an
+# address-space limit in tests/test_failures.py (case "frame").
 
 
 def test_without_vulkan_gpu_is_a_clear_error_and_auto_falls_back():

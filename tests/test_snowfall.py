@@ -225,3 +225,25 @@ def test_an_8bit_clip_fills_the_snow_layer_frame_by_frame(cpu):
         assert img.tobytes() == cpu.render_srgb8(scene, weather, seed=4, time_s=k / 10.0, snow_alpha_out=want).tobytes()
         np.testing.assert_array_equal(alpha, want)
         assert alpha.max() > 0.0
+
+
+@pytest.mark.parametrize("exposure_s", [0.004, 0.001])
+def test_snow_alpha_is_a_coverage_at_most_1_at_short_shutters(exposure_s, cpu, gpu):
+    # A flake's sprite peaks at ~1.6 times its mean: on a short path its fragments' α·coverage
+    # passed 1 (1.05 here, 1.135 on chelsea at 3 m), and 1 − ∏(1 − a) with it.
+    cam = Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0, exposure_s=exposure_s)
+    img8 = np.full((H, W, 3), 90, np.uint8)
+    depth = np.full((H, W), 3.0, np.float32)
+    float_scene = PhotoScene(np.full((H, W, 3), 0.1, np.float32), depth, camera=cam, encoding="linear", airlight="sky")
+    scene8 = PhotoScene(img8, depth, camera=cam)
+    weather = Weather(snow_rate_mm_h=3.0)
+    peaks = []
+    for seed in range(4):
+        for r in (cpu, gpu):
+            a = r.render(float_scene, weather, seed=seed).layers["snow_alpha"]
+            assert a.min() >= 0.0 and a.max() <= 1.0, (r.backend, seed, a.max())
+            peaks.append(a.max())
+        out = np.full((H, W), -1.0, np.float32)
+        cpu.render_srgb8(scene8, weather, seed=seed, snow_alpha_out=out)
+        assert out.min() >= 0.0 and out.max() <= 1.0, (seed, out.max())
+    assert max(peaks) > 0.99  # the flakes that passed 1 are opaque, not gone

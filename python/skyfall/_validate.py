@@ -32,6 +32,31 @@ def float_array(name: str, value: Any) -> NDArray[np.float64]:
     return arr.astype(np.float64, copy=False)
 
 
+def values(
+    name: str, value: Any, dtype: Any = np.float32, *, nan: bool = False, finite: bool = False, shape: str | None = None
+) -> NDArray[Any]:
+    """``value`` as a C-contiguous array of ``dtype``, each refusal naming ``name``: TypeError
+    for what is not real numbers, ValueError for NaN (unless ``nan``), for infinities (with
+    ``finite``) and for a shape that does not match ``shape`` (``"(N, 2)"``, ``"(H, W)"``,
+    ``"(N,)"``)."""
+    # (an array of floats as it is: no float64 copy of a frame)
+    a = value if isinstance(value, np.ndarray) and value.dtype.kind == "f" else float_array(name, value)
+    if not nan and np.isnan(a).any():
+        raise ValueError(f"{name} holds {int(np.count_nonzero(np.isnan(a)))} NaN values: replace them (np.nan_to_num)")
+    if finite and not np.isfinite(a).all():
+        raise ValueError(f"{name} holds infinities: its values must be finite")
+    if shape == "(N,)":
+        a = a.reshape(-1)
+    elif shape == "(N, 2)":
+        if a.size % 2 or (a.ndim > 1 and a.shape[-1] != 2) or a.ndim > 2:
+            raise ValueError(f"{name} must have shape (N, 2), got {a.shape}")
+        a = a.reshape(-1, 2)
+    elif shape == "(H, W)" and (a.ndim != 2 or 0 in a.shape):
+        raise ValueError(f"{name} must have shape (H, W) with H, W >= 1, got {a.shape}")
+    with np.errstate(over="ignore"):
+        return np.ascontiguousarray(a, dtype=dtype)
+
+
 def broadcast_flat(
     arrays: Sequence[tuple[str, Any]],
 ) -> tuple[list[NDArray[np.float64]], tuple[int, ...]]:

@@ -132,6 +132,10 @@ class Camera:
             pitch = math.degrees(math.asin(max(-1.0, min(1.0, float(d[1])))))
             yaw = math.degrees(math.atan2(-float(d[0]), -float(d[2])))
             yaw_deg, pitch_deg = yaw, pitch
+            if not -89.0 <= pitch <= 89.0:  # pitch_deg's range, [-89, 89] deg
+                raise ValueError(
+                    f"look_at_m = {target.tolist()} is {pitch:.1f} deg from level: within [-89, 89] deg (pitch_deg's range) only"
+                )
         yaw_v, pitch_v = in_range("yaw_deg", yaw_deg), in_range("pitch_deg", pitch_deg)
         self.yaw_deg, self.pitch_deg = yaw_v, pitch_v
         self.rotation = _rotation_from_yaw_pitch(yaw_v, pitch_v)

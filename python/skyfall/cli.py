@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 import tomllib
 from pathlib import Path
@@ -299,6 +300,36 @@ def _render(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# A value that starts with "-" but is a number or a range: "-5:5", "-1e3", "-inf", "-.5:-0.1".
+_NEGATIVE = re.compile(r"^-(\d|\.\d|inf\b|infinity\b)", re.IGNORECASE)
+
+
+def _join_negative_values(argv: list[str]) -> list[str]:
+    """``--wind-m-s -5:5`` as ``--wind-m-s=-5:5``: argparse takes a value that starts with
+    ``-`` for an option unless it is a plain negative number (``-5``), so a negative range
+    (``-5:5``) or ``-1e3`` would fail with "expected one argument"."""
+    takes_value = {
+        flag
+        for dest, flags, kw in _DATASET_OPTIONS + _RUN_OPTIONS + _RENDER_OPTIONS
+        if "action" not in kw and "nargs" not in kw
+        for flag in flags
+    }
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a == "--":
+            out.extend(argv[i:])
+            break
+        if a in takes_value and i + 1 < len(argv) and _NEGATIVE.match(argv[i + 1]):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``skyfall`` command; returns its exit status.
 
@@ -308,7 +339,7 @@ def main(argv: list[str] | None = None) -> int:
         The arguments (default ``sys.argv[1:]``).
     """
     parser = _parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_join_negative_values(list(sys.argv[1:] if argv is None else argv)))
     if args.command == "demo":
         from skyfall import demo
 

@@ -33,6 +33,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import sys
 import threading
 import time
 from collections.abc import Iterable, Iterator
@@ -62,7 +63,10 @@ class Summary:
     items : int
         Items in the run (those of ``indices`` when given).
     generated, skipped, errors : int
-        Items rendered now, kept by ``resume`` (complete and intact), and recorded as errors.
+        Items rendered now and complete, kept by ``resume`` (complete and intact), and
+        recorded as errors (an error is not counted as generated). An interrupted run counts
+        what its rows on disk say: every item finished before it stopped (those in flight
+        included), none more.
     interrupted : bool
         Stopped by Ctrl-C (the items done are complete; resume to finish).
     seconds : float
@@ -144,10 +148,42 @@ def _exts() -> frozenset[str]:
 _WORKER: Worker | None = None
 
 
-def _init_worker(config: DatasetConfig, threads: int | None) -> None:
-    """A worker process's start: Ctrl-C is the main process's to handle (it lets the items
-    in flight finish), and the renderer's thread pool is sized before its first frame."""
+def _end_with_parent(parent: int) -> None:
+    """Make this worker process end when its parent dies, however it dies (``kill -9``
+    included, which runs none of the parent's clean-up): on Linux the kernel's parent-death
+    signal (``prctl(PR_SET_PDEATHSIG, SIGKILL)``), elsewhere a thread that watches the parent's
+    pid. A worker's item in flight is written atomically, so ending it anywhere is safe; with
+    the workers gone the multiprocessing resource tracker ends too (its pipe closes)."""
+    armed = False
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            pr_set_pdeathsig = 1
+            armed = libc.prctl(pr_set_pdeathsig, int(signal.SIGKILL), 0, 0, 0) == 0
+        except (OSError, AttributeError):
+            armed = False
+    if os.getppid() != parent:  # the parent died before the signal was armed
+        os._exit(1)
+    if armed:
+        return
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="skyfall-parent-watch", daemon=True).start()
+
+
+def _init_worker(config: DatasetConfig, threads: int | None, parent: int | None = None) -> None:
+    """A worker process's start: it ends when its parent does (:func:`_end_with_parent`),
+    Ctrl-C is the main process's to handle (it lets the items in flight finish), and the
+    renderer's thread pool is sized before its first frame."""
     global _WORKER
+    if parent is not None:
+        _end_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     if threads is not None:
         os.environ["RAYON_NUM_THREADS"] = str(threads)
@@ -257,12 +293,13 @@ def generate(
         if bad:
             raise ValueError(f"indices: {bad[0]} is outside the valid range [0, {len(all_sources) - 1}] of this run's items")
         chosen = [all_sources[i] for i in wanted]
-    options = config.to_json()
-    options.pop("out")  # the folder can move: its files do not name it
-    write_json(config.out / "config.json", {"config": options, "config_sha256": config.sha256(), "skyfall_version": skyfall.__version__})
+    if indices is None:  # a whole run: its manifest and config.json are written once it is complete
+        for name in ("manifest.jsonl", "manifest.parquet", "config.json"):
+            (config.out / name).unlink(missing_ok=True)
     summary = Summary(items=len(chosen), workers=workers)
     todo = [s for s in chosen if not (resume and verify_item(config, s.index))]
     summary.skipped = len(chosen) - len(todo)
+    before = {s.index: _row_identity(config, s.index) for s in todo}
     bar = tqdm(total=len(todo), unit="item", disable=not progress, dynamic_ncols=True)
     results: Iterator[tuple[dict[str, Any], dict[str, float]]] | None = None
     try:
@@ -272,13 +309,14 @@ def generate(
             now = time.perf_counter()
             first = now if first is None else first
             summary.first_to_last_s = now - first
-            summary.generated += 1
             for k in COSTS:
                 summary.cost_s[k] += times.get(k, 0.0)
             if row["status"] != "ok":
                 summary.errors += 1
                 summary.error_messages.append(f"item {row['index']}: {row['error']}")
                 bar.set_postfix(errors=summary.errors)
+            else:
+                summary.generated += 1
             bar.update(1)
     except KeyboardInterrupt:
         summary.interrupted = True
@@ -291,10 +329,46 @@ def generate(
         if close is not None:  # the generators' own finally: the item being written is finished
             close()
         bar.close()
-    if not summary.interrupted and indices is None:
+    if summary.interrupted:
+        # The items in flight when Ctrl-C came were finished but never reached the loop
+        # above: count every row this run wrote, from the disk.
+        _recount(config, before, summary)
+    elif indices is None:
         write_manifest(config, [s.index for s in all_sources])
+        options = config.to_json()
+        options.pop("out")  # the folder can move: its files do not name it
+        write_json(config.out / "config.json", {"config": options, "config_sha256": config.sha256(), "skyfall_version": skyfall.__version__})
     summary.seconds = time.perf_counter() - start
     return summary
+
+
+def _row_identity(config: DatasetConfig, index: int) -> tuple[int, int] | None:
+    """Which file item ``index``'s row is now (inode, mtime), None without one: rows are
+    replaced atomically, so a row written later is another file."""
+    try:
+        st = (config.out / "items" / f"{item_name(index)}.json").stat()
+    except OSError:
+        return None
+    return (st.st_ino, st.st_mtime_ns)
+
+
+def _recount(config: DatasetConfig, before: dict[int, tuple[int, int] | None], summary: Summary) -> None:
+    """``summary``'s generated and errors from the rows written since ``before``."""
+    summary.generated = summary.errors = 0
+    summary.error_messages.clear()
+    for index, was in before.items():
+        now = _row_identity(config, index)
+        if now is None or now == was:
+            continue
+        try:
+            row = json.loads((config.out / "items" / f"{item_name(index)}.json").read_text())
+        except (OSError, ValueError):
+            continue
+        if row.get("status") == "ok":
+            summary.generated += 1
+        else:
+            summary.errors += 1
+            summary.error_messages.append(f"item {index}: {row.get('error')}")
 
 
 def _run_local(
@@ -308,7 +382,7 @@ def _run_local(
         return
     if threads is None:
         threads = max(1, (os.cpu_count() or 1) // workers)
-    pool = ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=_init_worker, initargs=(config, threads))
+    pool = ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=_init_worker, initargs=(config, threads, os.getpid()))
     pending: set[Future[list[tuple[dict[str, Any], dict[str, float]]]]] = set()
     queue = iter(_chunks(todo, workers))
     try:

@@ -302,6 +302,10 @@ class DatasetConfig:
             if isinstance(self.depth, Path):
                 raise ValueError("distance_m is the depth assumed without depth maps; depth gives them")
             set_(self, "distance_m", in_range("distance_m", self.distance_m))
+        for name in ("windshield", "clouds", "png_strategy", "exr_compression", "backend"):  # names, not values
+            v = getattr(self, name)
+            if not (isinstance(v, str) or (v is None and name in ("windshield", "clouds"))):
+                raise TypeError(f"{name} must be a name (str), got {type(v).__name__}")
         set_(self, "variants", integer("variants", self.variants, 1, 10**7))
         set_(self, "seed", integer("seed", self.seed, 0, 2**63 - 1))
         set_(self, "width", integer("width", self.width, 1, 16384))
@@ -324,7 +328,10 @@ class DatasetConfig:
         set_(self, "snow_hours", _hours(self.snow_hours))
         if self.snow_hours[1] > 0.0 and self.snow_rate_mm_h[1] <= 0.0:
             raise ValueError("snow_hours needs snow_rate_mm_h (a cover is the snow that fell)")
-        set_(self, "snow_resolution_m", in_range("resolution_m", self.snow_resolution_m))
+        try:  # the range of snow.accumulate's resolution_m, under this option's own name
+            set_(self, "snow_resolution_m", in_range("resolution_m", self.snow_resolution_m))
+        except (TypeError, ValueError) as e:
+            raise type(e)("snow_resolution_m" + str(e).removeprefix("resolution_m")) from None
         if self.windshield is not None:
             from skyfall.windshield import PRESETS
 
@@ -349,10 +356,12 @@ class DatasetConfig:
         if self.vertical_fov_deg is not None:
             set_(self, "vertical_fov_deg", in_range("vertical_fov_deg", self.vertical_fov_deg))
         for name, hi in (("camera_jitter_m", 100.0), ("camera_jitter_deg", 45.0)):
-            v = float(getattr(self, name))
+            v = real(name, getattr(self, name))
             if not 0.0 <= v <= hi:
                 raise ValueError(f"{name} = {v:g} is outside the valid range [0, {hi:g}]")
             set_(self, name, v)
+        if not isinstance(self.layers, (str, tuple, list)):
+            raise TypeError(f"layers must be a name or a sequence of names, got {type(self.layers).__name__}")
         layers = (self.layers,) if isinstance(self.layers, str) else tuple(self.layers)
         for name in layers:
             if name not in LAYER_NAMES:

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core
+from skyfall._validate import values
 from skyfall.depth_io import DEPTH_FORMATS, read_depth
 
 __all__ = [
@@ -44,25 +45,27 @@ def encode_srgb(linear: Any) -> NDArray[np.float32]:
     """sRGB transfer function (IEC 61966-2-1): linear [0, 1] to encoded [0, 1].
 
     12.92 x for x <= 0.0031308, 1.055 x^(1/2.4) - 0.055 above; input is clipped to [0, 1].
+    NaN is refused (ValueError naming ``linear``), as :func:`to_srgb8` refuses it.
 
     Examples
     --------
     >>> np.round(encode_srgb([0.0, 0.214, 1.0, 2.0]), 3)  # linear 0.214 is mid-grey
     array([0. , 0.5, 1. , 1. ], dtype=float32)
     """
-    x = np.clip(np.asarray(linear, dtype=np.float32), 0.0, 1.0)
+    x: NDArray[np.float32] = np.clip(values("linear", linear), 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055).astype(np.float32)
 
 
 def decode_srgb(encoded: Any) -> NDArray[np.float32]:
-    """Inverse sRGB transfer function: encoded [0, 1] to linear [0, 1].
+    """Inverse sRGB transfer function: encoded [0, 1] to linear [0, 1] (clipped); NaN is
+    refused (ValueError naming ``encoded``).
 
     Examples
     --------
     >>> np.round(decode_srgb([0.0, 0.5, 1.0]), 3)
     array([0.   , 0.214, 1.   ], dtype=float32)
     """
-    v = np.clip(np.asarray(encoded, dtype=np.float32), 0.0, 1.0)
+    v: NDArray[np.float32] = np.clip(values("encoded", encoded), 0.0, 1.0)
     return np.where(v <= 0.04045, v / 12.92, np.power((v + 0.055) / 1.055, 2.4)).astype(np.float32)
 
 
@@ -107,6 +110,12 @@ def to_srgb8(linear: Any, *, alpha_channel: int | None = None) -> NDArray[np.uin
     """Encode linear values to 8-bit sRGB (rounded to nearest, in Rust, in parallel);
     values are clipped to [0, 1]; an alpha channel stays linear.
 
+    Raises
+    ------
+    ValueError
+        For NaN anywhere in ``linear`` (8-bit sRGB has no NaN; :func:`write_image` refuses
+        it too): replace it first (``np.nan_to_num``).
+
     Examples
     --------
     >>> to_srgb8([0.0, 0.214, 1.0, 2.0])
@@ -114,7 +123,7 @@ def to_srgb8(linear: Any, *, alpha_channel: int | None = None) -> NDArray[np.uin
     >>> to_srgb8([[0.214, 0.214, 0.214, 0.5]], alpha_channel=3)  # alpha: 0.5 * 255, rounded
     array([[127, 127, 127, 128]], dtype=uint8)
     """
-    arr = np.ascontiguousarray(linear, dtype=np.float32)
+    arr = values("linear", linear, nan=True)  # NaN: refused by the encoder, with the count
     out: NDArray[np.uint8] = _core.encode_srgb8(arr)
     if alpha_channel is not None:
         out[..., alpha_channel] = np.rint(np.clip(arr[..., alpha_channel], 0.0, 1.0) * 255.0).astype(np.uint8)

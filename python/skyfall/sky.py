@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core
-from skyfall._validate import all_in_range, float_array, in_range, integer_in_range
+from skyfall._validate import all_in_range, float_array, in_range, integer_in_range, real
 from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.weather import Weather
 
@@ -109,9 +109,16 @@ def _weather(
         if clash:
             raise ValueError(f"give the sky either through weather or through keywords, not both ({', '.join(clash)})")
         return weather
+    e = 10000.0
+    if horizontal_illuminance_lux is not None:  # checked under its own name (Weather's is sky_illuminance_lux)
+        e = real("horizontal_illuminance_lux", horizontal_illuminance_lux)
+        try:
+            _core.check_range("sky_illuminance_lux", e, None)
+        except ValueError as err:
+            raise ValueError("horizontal_illuminance_lux" + str(err).removeprefix("sky_illuminance_lux")) from None
     return Weather(
         sky=sky if sky is not None else "overcast",
-        sky_illuminance_lux=horizontal_illuminance_lux if horizontal_illuminance_lux is not None else 10000.0,
+        sky_illuminance_lux=e,
         sun_elevation_deg=sun_elevation_deg,
         sun_azimuth_deg=sun_azimuth_deg,
     )

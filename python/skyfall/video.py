@@ -177,8 +177,37 @@ def read_video(path: str | PathLike[str]) -> Iterator[NDArray[np.uint8]]:
     Returns
     -------
     iterator of ndarray of uint8, shape (H, W, 3)
+
+    Raises
+    ------
+    FileNotFoundError, PermissionError, IsADirectoryError
+        When ``path`` cannot be opened.
+    ValueError
+        When it is not a video FFmpeg can decode (naming the file), or has no video stream.
     """
     av = _av()
-    with av.open(str(path)) as container:
-        for frame in container.decode(video=0):
+    name = os.fspath(path)
+
+    def refuse(e: Exception) -> ValueError:
+        return ValueError(f"{name!r} is not a video FFmpeg can decode (an .mp4 such as write_video writes): {e}")
+
+    try:
+        container = av.open(str(name))
+    except (FileNotFoundError, PermissionError, IsADirectoryError):
+        raise
+    except (av.error.FFmpegError, OSError, ValueError) as e:
+        raise refuse(e) from None
+    with container:
+        if not container.streams.video:
+            raise ValueError(f"{name!r} has no video stream")
+        frames = container.decode(video=0)
+        while True:
+            try:
+                frame = next(frames)
+            except StopIteration:
+                return
+            except (FileNotFoundError, PermissionError, IsADirectoryError):
+                raise
+            except (av.error.FFmpegError, OSError, ValueError) as e:
+                raise refuse(e) from None
             yield np.asarray(frame.to_ndarray(format="rgb24"), dtype=np.uint8)

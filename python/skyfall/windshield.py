@@ -22,6 +22,7 @@ is not yet stationary after a few periods: its held water keeps growing, see :fu
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -31,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import _core
-from skyfall._validate import in_range, integer
+from skyfall._validate import in_range, integer, real, values
 
 __all__ = [
     "PRESETS",
@@ -93,9 +94,10 @@ class Windshield:
     rain_rate_mm_h : float
         Rain rate, mm/h, in [0, 500].
     glass_width_mm : float
-        Glass width, mm, in [10, 4000] (default 1400).
+        Glass width, mm, in [10, 4000] (default 1400); with ``cell_mm``, at most 4e6 cells.
     glass_height_mm : float
-        Glass height along its slope, mm, in [10, 4000] (default 800).
+        Glass height along its slope, mm, in [10, 4000] (default 800); with ``cell_mm``, at
+        most 4e6 cells.
     glass_tilt_deg : float
         Inclination from the horizontal, deg, in [0, 90] (default 30, a car's windshield).
     car_speed_m_s : float
@@ -113,7 +115,10 @@ class Windshield:
         Receding contact angle, deg, in (0, 180), below ``advancing_deg`` (default 20). The
         40/20 pair is an assumed clean glass; a coated glass is nearer 110/90.
     cell_mm : float
-        The mesh model's cell, mm, in [0.5, 10] (the paper's 2 mm).
+        The mesh model's cell, mm, in [0.5, 10] (the paper's 2 mm). The glass is at most 4e6
+        cells (``glass_width_mm / cell_mm × glass_height_mm / cell_mm``): a 4000 × 4000 mm
+        glass takes cells of 2 mm or more, 0.5 mm cells a glass of up to 1 m²; beyond it a
+        ValueError names this parameter and the least cell for the glass.
     particle_radius_mm : float
         The particle model's particle base radius, mm, in [0.2, 5] (default 1).
     seed : int
@@ -151,8 +156,8 @@ class Windshield:
     ) -> None:
         integer("wipers", wipers, int(_core.RANGES["wipers"][0]), int(_core.RANGES["wipers"][1]))
         integer("seed", seed, 0, 2**64 - 1)
-        if len(wiper_angles_deg) != 2:
-            raise ValueError(f"wiper_angles_deg must be (from, to), got {wiper_angles_deg!r}")
+        if not isinstance(wiper_angles_deg, (tuple, list, np.ndarray)) or len(wiper_angles_deg) != 2:
+            raise TypeError(f"wiper_angles_deg must be (from, to), two numbers, got {wiper_angles_deg!r}")
         self.params: dict[str, Any] = dict(
             rain_rate_mm_h=in_range("rain_rate_mm_h", rain_rate_mm_h),
             glass_width_mm=in_range("glass_width_mm", glass_width_mm),
@@ -229,21 +234,54 @@ class Windshield:
 
     @classmethod
     def load(cls, path: str | Path) -> Windshield:
-        """A windshield saved by :meth:`save`."""
-        import ast
+        """A windshield saved by :meth:`save`.
 
-        with np.load(path) as z:
-            params = ast.literal_eval(str(z["params"]))
-            t, arrived, off, evap = (float(v) for v in z["scalars"])
-            state = {
-                "t_s": t,
-                "steps": int(z["steps"][0]),
-                "drops": np.ascontiguousarray(z["drops"]),
-                "particles": np.ascontiguousarray(z["particles"]),
-                "arrived_kg": arrived,
-                "swept_off_kg": off,
-                "evaporated_kg": evap,
-            }
+        Raises
+        ------
+        FileNotFoundError, PermissionError, IsADirectoryError
+            When ``path`` cannot be opened.
+        ValueError
+            When the file is not what :meth:`save` writes (naming the file and what it lacks),
+            or its parameters or state are outside their ranges.
+        """
+        import ast
+        import zipfile
+
+        expected = "a windshield saved by Windshield.save (an .npz of params, scalars, steps, drops and particles)"
+
+        def refuse(why: str) -> ValueError:
+            return ValueError(f"{os.fspath(path)!r} is not {expected}: {why}")
+
+        try:
+            z = np.load(path, allow_pickle=False)
+        except (FileNotFoundError, PermissionError, IsADirectoryError):
+            raise
+        except EOFError:
+            raise refuse("it is empty") from None
+        except (ValueError, OSError, zipfile.BadZipFile):  # numpy's pickle hint is no help here
+            raise refuse("its bytes are not an .npz archive") from None
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise refuse("it holds one array, not an .npz archive")
+        with z:
+            missing = [k for k in ("params", "scalars", "steps", "drops", "particles") if k not in z.files]
+            if missing:
+                raise refuse(f"it has no {', '.join(missing)}")
+            try:
+                params = ast.literal_eval(str(z["params"]))
+                t, arrived, off, evap = (float(v) for v in z["scalars"])
+                state = {
+                    "t_s": t,
+                    "steps": int(z["steps"][0]),
+                    "drops": np.ascontiguousarray(z["drops"]),
+                    "particles": np.ascontiguousarray(z["particles"]),
+                    "arrived_kg": arrived,
+                    "swept_off_kg": off,
+                    "evaporated_kg": evap,
+                }
+            except (ValueError, TypeError, SyntaxError, IndexError, zipfile.BadZipFile, EOFError, OSError) as e:
+                raise refuse(f"{type(e).__name__}: {e}") from None
+        if not isinstance(params, dict) or not all(isinstance(k, str) for k in params):
+            raise refuse(f"its params are {type(params).__name__}, not a dict of the constructor's keywords")
         return cls(**params, state=state)
 
 
@@ -321,16 +359,20 @@ def metaball_height_map(
     -------
     ndarray of float32, shape (H, W)
     """
-    c = np.ascontiguousarray(np.asarray(centers_px, np.float32).reshape(-1, 2))
-    r = np.ascontiguousarray(np.asarray(radii_px, np.float32).reshape(-1))
-    h, w = (int(shape[0]), int(shape[1]))
+    c = values("centers_px", centers_px, shape="(N, 2)")
+    r = values("radii_px", radii_px, shape="(N,)")
+    if not isinstance(shape, (tuple, list)) or len(shape) != 2:
+        raise TypeError(f"shape must be (H, W), two ints, got {shape!r}")
+    h, w = integer("height", shape[0], 1, 16384), integer("width", shape[1], 1, 16384)
     return _core.metaball_height_map(c, r, w, h, bool(compress))
 
 
 def normals(height_map: NDArray[np.float32], slope_px: float) -> NDArray[np.float32]:
     """Unit normals (x, y, z) of the water surface, (H, W, 3) float32: central differences of
-    the field, n ∝ (−s ∂V/∂x, −s ∂V/∂y, 1) with s = ``slope_px`` px of height per unit of V."""
-    return _core.metaball_normals(np.ascontiguousarray(height_map, np.float32), float(slope_px))
+    the field, n ∝ (−s ∂V/∂x, −s ∂V/∂y, 1) with s = ``slope_px`` px of height per unit of V
+    in [0, 1e5] px; ``height_map`` is (H, W), finite."""
+    s = real("slope_px", slope_px)
+    return _core.metaball_normals(values("height_map", height_map, finite=True, shape="(H, W)"), s)
 
 
 def refract(

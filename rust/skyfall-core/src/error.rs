@@ -2,6 +2,21 @@
 
 use std::fmt;
 
+/// A parameter's value as the user wrote it: an integer parameter's whole value without
+/// `.0` (`20000`), any other as Python writes a float (`180.0`, `1e-300`, `NaN`).
+struct Shown(f64, bool);
+
+impl fmt::Display for Shown {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Shown(v, integer) = *self;
+        if integer && v.is_finite() && v.fract() == 0.0 && v.abs() < 1e300 {
+            write!(f, "{v:.0}")
+        } else {
+            write!(f, "{v:?}")
+        }
+    }
+}
+
 /// Result with the core crate's [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;
 
@@ -27,8 +42,9 @@ impl fmt::Display for Param {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
     /// A number outside its valid range (NaN and infinities included).
-    /// (The value prints as Python writes a float: `180.0`, `1e-300`, but `NaN`.)
-    #[error("{param} = {value:?} is outside the valid range {range}")]
+    /// (The value prints as Python writes a float: `180.0`, `1e-300`, but `NaN`; an integer
+    /// parameter's whole value as an integer: `width = 20000`.)
+    #[error("{param} = {} is outside the valid range {range}", Shown(*.value, *.integer))]
     OutOfRange {
         /// The offending parameter.
         param: Param,
@@ -36,6 +52,9 @@ pub enum Error {
         value: f64,
         /// The valid range, with units, e.g. `[0, 8] mm`.
         range: String,
+        /// Whether the parameter is an integer (a count, pixels, a seed): its whole values
+        /// print without `.0`.
+        integer: bool,
     },
     /// A value that is not allowed for another reason (an unknown model name, unsorted input).
     #[error("{param}: {message}")]
@@ -145,6 +164,57 @@ pub fn try_filled_par<T: Clone + Send + Sync>(what: &str, len: usize, value: T) 
     Ok(v)
 }
 
+/// `items` through `f` in parallel (at least `min_len` items per task), the `Some`s kept in
+/// their order, in a vector grown fallibly: [`Error::OutOfMemory`] naming `what` where
+/// `collect` would abort the process. Works through chunks of 2^16 items, so besides the
+/// result it holds one chunk's `Option`s.
+pub fn try_par_filter_map<T: Sync, U: Send>(
+    what: &str,
+    items: &[T],
+    min_len: usize,
+    f: impl Fn(&T) -> Option<U> + Sync + Send,
+) -> Result<Vec<U>> {
+    use rayon::prelude::*;
+    const CHUNK: usize = 1 << 16;
+    let first = items.len().min(CHUNK);
+    let mut part: Vec<Option<U>> = Vec::new();
+    part.try_reserve_exact(first)
+        .map_err(|_| Error::out_of_memory::<Option<U>>(what, first))?;
+    let mut out: Vec<U> = Vec::new();
+    for chunk in items.chunks(CHUNK) {
+        chunk
+            .par_iter()
+            .with_min_len(min_len.max(1))
+            .map(&f)
+            .collect_into_vec(&mut part);
+        let n = part.iter().filter(|s| s.is_some()).count();
+        out.try_reserve(n)
+            .map_err(|_| Error::out_of_memory::<U>(what, out.len() + n))?;
+        out.extend(part.drain(..).flatten());
+    }
+    Ok(out)
+}
+
+/// The parts one after the other, in a vector reserved fallibly (as `concat` would abort).
+pub fn try_concat<T>(what: &str, parts: Vec<Vec<T>>) -> Result<Vec<T>> {
+    let n: usize = parts.iter().map(Vec::len).sum();
+    let mut out = Vec::new();
+    out.try_reserve_exact(n)
+        .map_err(|_| Error::out_of_memory::<T>(what, n))?;
+    for p in parts {
+        out.extend(p);
+    }
+    Ok(out)
+}
+
+/// A vector with room for `n` values reserved fallibly.
+pub fn try_with_capacity<T>(what: &str, n: usize) -> Result<Vec<T>> {
+    let mut out = Vec::new();
+    out.try_reserve_exact(n)
+        .map_err(|_| Error::out_of_memory::<T>(what, n))?;
+    Ok(out)
+}
+
 /// [`Error::Cancelled`] once `cancel` is set: the check long loops make between chunks.
 #[inline]
 pub fn check_cancel(cancel: &std::sync::atomic::AtomicBool, what: &'static str) -> Result<()> {
@@ -168,6 +238,8 @@ pub struct Range {
     pub hi_open: bool,
     /// Unit shown in messages.
     pub unit: &'static str,
+    /// Whether the values are integers (a count, pixels, a seed): messages print them so.
+    pub integer: bool,
 }
 
 impl Range {
@@ -179,6 +251,14 @@ impl Range {
             lo_open: false,
             hi_open: false,
             unit,
+            integer: false,
+        }
+    }
+    /// The same range over integers (messages print whole values without `.0`).
+    pub const fn integers(self) -> Self {
+        Range {
+            integer: true,
+            ..self
         }
     }
     /// `(lo, hi] unit`.
@@ -229,6 +309,7 @@ impl Range {
                 param: Param { name, index },
                 value,
                 range: self.to_string(),
+                integer: self.integer,
             })
         }
     }

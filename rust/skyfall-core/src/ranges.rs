@@ -160,7 +160,7 @@ pub const DIAMETERS_MM: Limit = Limit::new(
 /// CIE general sky type.
 pub const SKY: Limit = Limit::new(
     "sky",
-    Range::closed(1.0, 15.0, ""),
+    Range::closed(1.0, 15.0, "").integers(),
     "CIE S 011 general sky type (or \"overcast\")",
 );
 /// The sun's elevation.
@@ -202,7 +202,7 @@ pub const CLOUD_BASE_M: Limit = Limit::new(
 
 // Camera.
 /// Frame and camera width or height.
-pub const SIDE_PX: Range = Range::closed(1.0, 16_384.0, "px");
+pub const SIDE_PX: Range = Range::closed(1.0, 16_384.0, "px").integers();
 /// Frame width.
 pub const WIDTH: Limit = Limit::new("width", SIDE_PX, "frame width");
 /// Frame height.
@@ -311,7 +311,7 @@ pub const TIME_S: Limit = Limit::new(
 /// Particles of a generated cloud.
 pub const N_PARTICLES: Limit = Limit::new(
     "n_particles",
-    Range::closed(1.0, 1_000_000.0, ""),
+    Range::closed(1.0, 1_000_000.0, "").integers(),
     "particles of a generated cloud",
 );
 /// Horizontal extent of a generated cloud.
@@ -365,13 +365,13 @@ pub const SUN_RADIANCE: Limit = Limit::new(
 /// Voxels per side of a cloud's attenuation volume.
 pub const RESOLUTION: Limit = Limit::new(
     "resolution",
-    Range::closed(2.0, 512.0, ""),
+    Range::closed(2.0, 512.0, "").integers(),
     "voxels per side of a cloud's attenuation volume",
 );
 /// Rain seed.
 pub const SEED: Limit = Limit::new(
     "seed",
-    Range::closed_open(0.0, 18_446_744_073_709_551_616.0, ""),
+    Range::closed_open(0.0, 18_446_744_073_709_551_616.0, "").integers(),
     "seed of the rain, an integer below 2^64",
 );
 /// Received-light threshold below which drops are skipped.
@@ -420,7 +420,7 @@ pub const AMBIENT_SPACING_M: Limit = Limit::new(
 /// Azimuths sampled per point.
 pub const SAMPLES: Limit = Limit::new(
     "samples",
-    Range::closed(4.0, 65_536.0, ""),
+    Range::closed(4.0, 65_536.0, "").integers(),
     "azimuths sampled per point of a sky-illuminance integral",
 );
 /// The renderer's azimuths per map node (as [`SAMPLES`]).
@@ -464,7 +464,7 @@ pub const D_MIN_MM: Limit = Limit::new(
 /// Texture size.
 pub const SIZE_PX: Limit = Limit::new(
     "size_px",
-    Range::closed(16.0, 16_384.0, "px"),
+    Range::closed(16.0, 16_384.0, "px").integers(),
     "rain texture size, pixels per side (per metre of the cube)",
 );
 
@@ -497,7 +497,8 @@ pub const CAR_SPEED_M_S: Limit = Limit::new(
 pub const CELL_MM: Limit = Limit::new(
     "cell_mm",
     Range::closed(0.5, 10.0, "mm"),
-    "side of the windshield's grid cells (the mesh model)",
+    "side of the windshield's grid cells (the mesh model); the glass is at most 4e6 cells \
+     (glass_width_mm / cell_mm × glass_height_mm / cell_mm)",
 );
 /// Advancing contact angle of water on the glass.
 pub const ADVANCING_DEG: Limit = Limit::new(
@@ -514,7 +515,7 @@ pub const RECEDING_DEG: Limit = Limit::new(
 /// Number of wipers.
 pub const WIPERS: Limit = Limit::new(
     "wipers",
-    Range::closed(0.0, 2.0, ""),
+    Range::closed(0.0, 2.0, "").integers(),
     "number of wipers (0, 1 or 2)",
 );
 /// Wiper period.

@@ -165,7 +165,7 @@ impl WindshieldPass {
             items.extend_from_slice(l);
             offsets.push(items.len() as u32);
         }
-        let (look, lw, lh, scale) = render::lookup_copy(frame, width, height, r.lookup_px);
+        let (look, lw, lh, scale) = render::lookup_copy(frame, width, height, r.lookup_px)?;
         let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
         let fp = FieldParams {
             dims: [width as u32, height as u32, tx as u32, u32::from(compress)],

@@ -607,7 +607,7 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
         seed: 1,
     };
     let cover = accumulate(field, &weather, &params, None).unwrap();
-    let snow = SnowRender::boxes(&cover);
+    let snow = SnowRender::boxes(&cover).unwrap();
     let light = SceneLight::new(&sky, &amb).with_snow(Some(&snow));
     let c = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
     let g = gpu

@@ -12,6 +12,17 @@ pub fn encode_srgb8<'py>(
     linear: PyReadonlyArrayDyn<'py, f32>,
 ) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
     let src = linear.as_slice()?;
+    // 8-bit sRGB has no NaN: refused as `io.write_image` refuses it, not encoded as 0.
+    let nan = py.detach(|| src.iter().filter(|v| v.is_nan()).count());
+    if nan > 0 {
+        return Err(invalid(
+            "linear",
+            None,
+            format!(
+                "holds {nan} NaN values, which 8-bit sRGB cannot store: replace them (np.nan_to_num)"
+            ),
+        ));
+    }
     crate::alloc::filled::<u8, IxDyn>(py, linear.shape(), |out| {
         py.detach(|| skyfall_core::color::encode_srgb8(src, out));
         Ok(())

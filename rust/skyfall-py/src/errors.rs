@@ -43,9 +43,10 @@ pub fn invalid(name: &'static str, index: Option<usize>, message: impl Into<Stri
 
 /// An `out=` array numpy will not lend for writing (an input of the same render, or in use
 /// by another): the one refusal that is about Python objects rather than values.
-pub fn in_use(name: &str) -> PyErr {
+/// `what` names the array as the caller knows it (`out rgb`, `rain_alpha_out`).
+pub fn in_use(what: &str) -> PyErr {
     PyValueError::new_err(format!(
-        "out {name} is in use elsewhere (an input of this render, or another render): pass a separate array"
+        "{what} is in use elsewhere (an input of this render, or another render, perhaps on another thread): pass a separate array"
     ))
 }
 

@@ -45,11 +45,13 @@ pub fn rain_drops<'py>(
     };
     let c = DVec3::from(center_m);
     reg.check_budget(1.0).map_err(CoreError)?;
-    let drops: Vec<Drop> = py.detach(|| {
-        let mut d = drops_near(&reg, c, ground);
-        remove_sheltered(&mut d, &boxes, c.as_vec3(), reg.near_m as f32);
-        d
-    });
+    let drops: Vec<Drop> = py
+        .detach(|| {
+            let mut d = drops_near(&reg, c, ground)?;
+            remove_sheltered(&mut d, &boxes, c.as_vec3(), reg.near_m as f32);
+            Ok::<_, skyfall_core::Error>(d)
+        })
+        .map_err(CoreError)?;
     particle_arrays(py, c, &drops)
 }
 

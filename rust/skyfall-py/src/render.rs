@@ -5,10 +5,7 @@
 use crate::errors::{CoreError, gpu_error, in_use, invalid};
 use crate::request::{ParsedRequest, RequestArgs};
 use numpy::ndarray::{Ix2, Ix3};
-use numpy::{
-    PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray3, PyReadwriteArray2,
-    PyReadwriteArray3, PyUntypedArrayMethods,
-};
+use numpy::{PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use skyfall_core::frame::float::render_into_reporting;
@@ -111,7 +108,7 @@ pub fn render_frame<'py>(
     }
     let (report, snow_report) = {
         fn busy(name: &'static str) -> impl Fn(numpy::BorrowError) -> PyErr {
-            move |_| in_use(name)
+            move |_| in_use(&format!("out {name}"))
         }
         let mut rgb_w = rgb.try_readwrite().map_err(busy("rgb"))?;
         let mut depth_w = depth.try_readwrite().map_err(busy("depth_m"))?;
@@ -169,12 +166,24 @@ pub fn render_frame<'py>(
 pub fn render_photo8<'py>(
     py: Python<'py>,
     request: RequestArgs<'py>,
-    photo_srgb8: PyReadonlyArray3<'py, u8>,
+    photo_srgb8: Bound<'py, PyArray3<u8>>,
     decode_table: PyReadonlyArray1<'py, f32>,
-    mut out_srgb8: PyReadwriteArray3<'py, u8>,
-    rain_alpha_out: Option<PyReadwriteArray2<'py, f32>>,
-    snow_alpha_out: Option<PyReadwriteArray2<'py, f32>>,
+    out_srgb8: Bound<'py, PyArray3<u8>>,
+    rain_alpha_out: Option<F2<'py>>,
+    snow_alpha_out: Option<F2<'py>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    // Borrowed here rather than at the call's conversion, so an array another render (on
+    // another thread) holds is refused as a `ValueError` naming it, not pyo3's TypeError.
+    let photo_srgb8 = photo_srgb8
+        .try_readonly()
+        .map_err(|_| in_use("the photo (scene.srgb8)"))?;
+    let mut out_srgb8 = out_srgb8.try_readwrite().map_err(|_| in_use("out"))?;
+    let rain_alpha_out = rain_alpha_out
+        .map(|a| a.try_readwrite().map_err(|_| in_use("rain_alpha_out")))
+        .transpose()?;
+    let snow_alpha_out = snow_alpha_out
+        .map(|a| a.try_readwrite().map_err(|_| in_use("snow_alpha_out")))
+        .transpose()?;
     let parsed: ParsedRequest<'py> = request.parse(false)?;
     let req = parsed.request()?;
     let setup = FrameSetup::new(&req).map_err(CoreError)?;

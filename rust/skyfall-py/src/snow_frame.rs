@@ -25,6 +25,8 @@ pub fn snowflakes<'py>(
         .map_err(CoreError)?;
     reg.check_budget(1.0).map_err(CoreError)?;
     let c = DVec3::from(center_m);
-    let flakes: Vec<Flake> = py.detach(|| flakes_near(&reg, c, ground));
+    let flakes: Vec<Flake> = py
+        .detach(|| flakes_near(&reg, c, ground))
+        .map_err(CoreError)?;
     particle_arrays(py, c, &flakes)
 }

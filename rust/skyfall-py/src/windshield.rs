@@ -369,10 +369,10 @@ pub fn refract_through_drops<'py>(
     {
         let mut ro = rgb
             .try_readwrite()
-            .map_err(|_| crate::errors::in_use("rgb"))?;
+            .map_err(|_| crate::errors::in_use("out rgb"))?;
         let mut mo = mask
             .try_readwrite()
-            .map_err(|_| crate::errors::in_use("mask"))?;
+            .map_err(|_| crate::errors::in_use("out mask"))?;
         let (ro, mo) = (ro.as_slice_mut()?, mo.as_slice_mut()?);
         py.detach(|| render::refract_frame(src, w, h, field, &r, ro, mo))
             .map_err(CoreError)?;

@@ -35,7 +35,7 @@ use glam::{DVec3, Vec3};
 use super::optics::henyey_greenstein;
 use super::volume::{AttenuationVolume, VolumeBox};
 use super::{CUTOFF_RADII, Cloud};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, try_filled, try_with_capacity};
 use crate::haze::exp_neg;
 use crate::scene::camera::Camera;
 
@@ -304,7 +304,9 @@ impl<'a> CloudSplats<'a> {
     pub fn prepare(pass: &CloudPass<'a>, cam: &Camera) -> Result<Self> {
         let cloud = &pass.field.cloud;
         let eye = cam.position_m;
-        let mut order: Vec<(f32, u32, Splat)> = Vec::with_capacity(cloud.len());
+        // Each list grows with the cloud's particles: reserved fallibly.
+        let what = "the clouds' splats";
+        let mut order: Vec<(f32, u32, Splat)> = try_with_capacity(what, cloud.len())?;
         for i in 0..cloud.len() {
             let centre = (DVec3::from_array(cloud.positions_m[i]) - eye).as_vec3();
             order.push((
@@ -323,11 +325,11 @@ impl<'a> CloudSplats<'a> {
         let tiles_x = cam.width.div_ceil(TILE_PX);
         let tiles_y = cam.height.div_ceil(TILE_PX);
         let n_tiles = (tiles_x * tiles_y) as usize;
-        let mut boxes = Vec::with_capacity(order.len());
+        let mut boxes: Vec<([u32; 4], Vec3, f32)> = try_with_capacity(what, order.len())?;
         let to_cam = cam.rotation.transpose();
         let tiles = TilePlanes::new(cam);
-        let mut splats = Vec::with_capacity(order.len());
-        let mut counts = vec![0usize; n_tiles + 1];
+        let mut splats = try_with_capacity(what, order.len())?;
+        let mut counts = try_filled("the clouds' tile lists", n_tiles + 1, 0usize)?;
         for (_, _, s) in &order {
             let support = s.radius_m * CUTOFF_RADII as f32;
             if let Some(b) = pixel_box(cam, s.centre, support) {
@@ -354,8 +356,11 @@ impl<'a> CloudSplats<'a> {
                 MAX_ENTRIES as u64 * 4,
             ));
         }
-        let mut fill = counts.clone();
-        let mut indices = vec![0u32; counts[n_tiles]];
+        let mut fill = try_filled("the clouds' tile lists", n_tiles + 1, 0usize)?;
+        fill.copy_from_slice(&counts);
+        let mut indices = try_filled("the clouds' tile lists", counts[n_tiles], 0u32)?;
+        let mut offsets = try_with_capacity("the clouds' tile lists", counts.len())?;
+        offsets.extend(counts.iter().map(|&c| c as u32));
         for (k, ([tx0, ty0, tx1, ty1], c, support)) in boxes.iter().enumerate() {
             for ty in *ty0..=*ty1 {
                 for tx in *tx0..=*tx1 {
@@ -371,7 +376,7 @@ impl<'a> CloudSplats<'a> {
         Ok(CloudSplats {
             splats,
             tiles_x,
-            offsets: counts.iter().map(|&c| c as u32).collect(),
+            offsets,
             indices,
             sun: field
                 .sun

@@ -435,7 +435,7 @@ mod tests {
     }
 
     #[test]
-    fn huge_frames_are_refused() {
+    fn the_largest_documented_frame_is_within_the_budget_and_checked_before_allocating() {
         let cam = Camera::new(
             16384,
             16384,
@@ -459,7 +459,10 @@ mod tests {
                 None,
                 None
             ),
-            Err(Error::TooLarge { .. })
+            // the photo's arrays are checked before any frame-sized allocation
+            Err(Error::Length { .. })
         ));
+        // every size the width and height ranges accept is within the budget
+        assert!(crate::frame::check_frame_size(&cam).is_ok());
     }
 }

@@ -29,8 +29,11 @@ pub mod srgb8;
 
 pub use float::{render, render_into};
 
-/// Largest frame (rgb + depth + layers, float32) the renderers allocate: 4 GiB.
-pub const FRAME_BUDGET_BYTES: u64 = 4 << 30;
+/// Largest frame (rgb + depth + layers, float32) the renderers allocate: 8 GiB, the
+/// documented largest frame (16384 × 16384, [`crate::ranges::SIDE_PX`]) with every value per
+/// pixel, so every size within the width and height ranges is allowed (the budget was 4 GiB,
+/// which refused sizes the ranges accept); what the machine cannot give is a `MemoryError`.
+pub const FRAME_BUDGET_BYTES: u64 = 8 << 30;
 /// float32 values per pixel a frame may hold: rgb, depth and up to four layers.
 const VALUES_PER_PIXEL: u64 = 8;
 
@@ -68,7 +71,7 @@ impl FrameBuffers {
     }
 }
 
-/// Refuses frames over [`FRAME_BUDGET_BYTES`] before allocating.
+/// Refuses frames over [`FRAME_BUDGET_BYTES`] before allocating (none within the ranges).
 pub fn check_frame_size(cam: &Camera) -> Result<()> {
     let bytes = cam.pixels() as u128 * u128::from(VALUES_PER_PIXEL) * 4;
     if bytes > u128::from(FRAME_BUDGET_BYTES) {

@@ -81,8 +81,14 @@ impl<'a> Passes<'a> {
             });
             // One list: the rain's (sorted) then the flakes, sorted together far to near
             // (ties in that order).
+            p.streaks.try_reserve(flakes.len()).map_err(|_| {
+                crate::Error::out_of_memory::<crate::particles::streak::ScreenStreak>(
+                    "the particles' streaks",
+                    p.streaks.len() + flakes.len(),
+                )
+            })?;
             p.streaks.extend(flakes);
-            far_to_near(&mut p.streaks);
+            far_to_near(&mut p.streaks)?;
             p.snow = Some(stats);
         }
         let glow = lit.and_then(|(scene, light)| {

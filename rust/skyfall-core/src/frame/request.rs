@@ -219,7 +219,7 @@ impl FrameSetup {
             .transpose()?;
         let snow_cover = match (req.snow_cover, &req.scene) {
             (None, _) => None,
-            (Some(c), SceneData::Boxes(_)) => Some(SnowRender::boxes(c)),
+            (Some(c), SceneData::Boxes(_)) => Some(SnowRender::boxes(c)?),
             (Some(c), SceneData::Photo { depth_m, .. } | SceneData::Photo8 { depth_m, .. }) => {
                 Some(SnowRender::photo(c, &req.camera, depth_m, units)?)
             }

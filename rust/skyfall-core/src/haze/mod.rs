@@ -316,6 +316,7 @@ pub fn check_depth(depth_m: &[f32]) -> Result<()> {
         },
         value: f64::from(d),
         range: "[0, inf] m (inf for sky)".into(),
+        integer: false,
     })
 }
 

@@ -28,15 +28,22 @@ pub fn permute_in_place<T: Copy>(v: &mut [T], mut from: Vec<u32>) {
 /// Sorts streaks far to near, ties in their given order: (key, index) pairs are a total order,
 /// so the unstable sort of the small pairs gives the stable sort's order, the same in every
 /// process, without moving the streaks around.
-pub fn far_to_near(streaks: &mut [super::streak::ScreenStreak]) {
+/// Its two index lists are reserved fallibly ([`crate::Error::OutOfMemory`]).
+pub fn far_to_near(streaks: &mut [super::streak::ScreenStreak]) -> crate::error::Result<()> {
     use rayon::prelude::*;
-    let mut order: Vec<(f32, u32)> = streaks
-        .iter()
-        .enumerate()
-        .map(|(i, s)| (s.inv_za + s.inv_zb, i as u32))
-        .collect();
+    let what = "the particles' far-to-near order";
+    let mut order: Vec<(f32, u32)> = crate::error::try_with_capacity(what, streaks.len())?;
+    order.extend(
+        streaks
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (s.inv_za + s.inv_zb, i as u32)),
+    );
     order.par_sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
-    permute_in_place(streaks, order.into_iter().map(|(_, i)| i).collect());
+    let mut from: Vec<u32> = crate::error::try_with_capacity(what, order.len())?;
+    from.extend(order.into_iter().map(|(_, i)| i));
+    permute_in_place(streaks, from);
+    Ok(())
 }
 
 #[cfg(test)]

@@ -595,8 +595,10 @@ impl ScreenStreak {
         if cov <= 0.0 {
             return None;
         }
+        // A sprite's peak (up to 1.6 at a flake's middle) times α can pass 1 on a short
+        // path: a coverage is at most 1.
         Some((
-            self.alpha * cov,
+            (self.alpha * cov).min(1.0),
             1.0 / (self.inv_za + (self.inv_zb - self.inv_za) * k),
         ))
     }
@@ -626,7 +628,7 @@ impl ScreenStreak {
         }
         let cov_along = clamp01(least(along, self.len - along) + 0.5);
         (
-            self.alpha * cov_across * cov_along,
+            (self.alpha * cov_across * cov_along).min(1.0),
             self.inv_za + (self.inv_zb - self.inv_za) * k,
         )
     }
@@ -659,7 +661,7 @@ impl ScreenStreak {
         }
         let cov_along = clamp01(along.min(Vec4::splat(self.len) - along) + half);
         (
-            Vec4::splat(self.alpha) * cov_across * cov_along,
+            (Vec4::splat(self.alpha) * cov_across * cov_along).min(one),
             Vec4::splat(self.inv_za) + Vec4::splat(self.inv_zb - self.inv_za) * k,
         )
     }

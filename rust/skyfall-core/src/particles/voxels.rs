@@ -63,22 +63,47 @@ pub fn in_view(cam: &Camera, margin: f32) -> impl Fn(Vec3) -> bool + Sync + use<
 
 /// Runs `fill` for every voxel within `radius_m` of `center_m` that `keep_voxel` accepts
 /// (by its centre relative to `center_m`), columns in parallel, and keeps the particles within `radius_m`, in a
-/// deterministic order.
+/// deterministic order. `fill` pushes a voxel's particles after reserving room for them with
+/// `try_reserve`, and returns false where that failed; the whole list is reserved fallibly
+/// too: either is [`crate::Error::OutOfMemory`], naming `what`.
 pub fn voxels_where<P: Anchored + Send + Clone>(
+    what: &str,
     center_m: DVec3,
     radius_m: f64,
     ground: bool,
     keep_voxel: impl Fn(Vec3) -> bool + Sync,
-    fill: impl Fn([i64; 3], &mut Vec<P>) + Sync,
-) -> Vec<P> {
+    fill: impl Fn([i64; 3], &mut Vec<P>) -> bool + Sync,
+) -> crate::error::Result<Vec<P>> {
+    // The first refusal ends the column and is reported.
     let columns = map_voxel_columns(center_m, radius_m, ground, keep_voxel, |voxels| {
-        let mut out = Vec::new();
+        let mut out = FallibleColumn {
+            items: Vec::new(),
+            refused: None,
+        };
         for v in voxels {
-            fill(v, &mut out);
+            if !fill(v, &mut out.items) {
+                out.refused = Some(out.items.capacity().max(1) * 2);
+                break;
+            }
         }
         out
     });
-    columns.concat()
+    if let Some(n) = columns.iter().find_map(|c| c.refused) {
+        return Err(crate::error::Error::out_of_memory::<P>(what, n));
+    }
+    crate::error::try_concat(what, columns.into_iter().map(|c| c.items).collect())
+}
+
+/// A column's particles, and the length its list could not grow to (None: all made).
+struct FallibleColumn<P> {
+    items: Vec<P>,
+    refused: Option<usize>,
+}
+
+impl<P> AsMut<Vec<P>> for FallibleColumn<P> {
+    fn as_mut(&mut self) -> &mut Vec<P> {
+        &mut self.items
+    }
 }
 
 /// `per_column` of the voxels within `radius_m` of `center_m` that `keep_voxel` accepts

@@ -91,8 +91,14 @@ impl Snowfall {
         // R [mm/h] = F / ρ_w; F in mg m⁻² s⁻¹ for N0 = 1 is `unit.mass_flux`; 1 mm/h of water
         // is 1 kg m⁻² h⁻¹ = 1e6/3600 mg m⁻² s⁻¹.
         let want_mg_m2_s = snow_rate_mm_h * 1e6 / 3600.0;
+        let n0_per_m3_mm = want_mg_m2_s / unit.mass_flux_mg_m2_s();
+        if !n0_per_m3_mm.is_finite() {
+            // A rate so small (1e-300 mm/h) that the unit flux underflows to 0: no snow (its
+            // N0 would be inf, and the extinction inf · 0 = NaN).
+            return Snowfall::new(0.0);
+        }
         Snowfall {
-            n0_per_m3_mm: want_mg_m2_s / unit.mass_flux_mg_m2_s(),
+            n0_per_m3_mm,
             ..unit
         }
     }
@@ -215,6 +221,12 @@ mod tests {
         assert_eq!(s.extinction_per_m(), 0.0);
         assert_eq!(s.mean_fall_speed_m_s(), 0.0);
         assert_eq!(Snowfall::new(f64::NAN).rate_mm_h(), 0.0);
+        // a rate whose unit flux underflows is no snow, not NaN (found by tests/test_fuzz.py)
+        for r in [1e-300, 5e-324, 1e-200] {
+            let s = Snowfall::new(r);
+            assert_eq!(s.extinction_per_m(), 0.0, "{r}");
+            assert!(s.flakes_per_m3(0.0, 10.0).is_finite());
+        }
     }
 
     #[test]

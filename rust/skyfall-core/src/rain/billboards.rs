@@ -132,6 +132,8 @@ struct Column {
     wanted: f64,
     /// Σ g_v² B_v: what their widened billboards show.
     shown: f64,
+    /// The length `drops` could not grow to (None: every voxel's streaks made).
+    refused: Option<usize>,
 }
 
 impl AsMut<Vec<Drop>> for Column {
@@ -150,7 +152,7 @@ pub fn billboards_in_view(
     camera_velocity_m_s: Vec3,
     lens: Option<&Defocus>,
     ground: bool,
-) -> Vec<Drop> {
+) -> crate::error::Result<Vec<Drop>> {
     let camera_speed_m_s = f64::from(camera_velocity_m_s.length());
     let law = *FallSpeed::beard_standard();
     let textures: Vec<Vec<Streak>> = region
@@ -170,7 +172,11 @@ pub fn billboards_in_view(
     let area_at = probe_area(region, cam, exposure_s, camera_velocity_m_s, lens);
     let per_voxel: usize = textures.iter().map(Vec::len).sum();
     let board_streaks = |voxel: [i64; 3], column: &mut Column| {
-        column.drops.reserve(per_voxel);
+        // Reserved fallibly, then pushed without growing (a voxel makes per_voxel drops).
+        if column.refused.is_some() || column.drops.try_reserve(per_voxel).is_err() {
+            column.refused.get_or_insert(column.drops.len() + per_voxel);
+            return;
+        }
         // Relative to the camera, as the drops are.
         let centre = voxel_rel(voxel, 0.5);
         let to_eye = Vec3::new(-centre.x, 0.0, -centre.z);
@@ -229,12 +235,19 @@ pub fn billboards_in_view(
             drops: Vec::new(),
             wanted: 0.0,
             shown: 0.0,
+            refused: None,
         };
         for voxel in voxels {
             board_streaks(voxel, &mut column);
         }
         column
     });
+    if let Some(n) = columns.iter().find_map(|c| c.refused) {
+        return Err(crate::error::Error::out_of_memory::<Drop>(
+            "the rain's billboards",
+            n,
+        ));
+    }
     // What no billboard could show, spread over all of them (the sums in column order: the
     // same bits in every run).
     let (wanted, shown) = columns
@@ -245,14 +258,17 @@ pub fn billboards_in_view(
     } else {
         1.0
     };
-    let mut drops: Vec<Drop> = Vec::with_capacity(columns.iter().map(|c| c.drops.len()).sum());
+    let mut drops: Vec<Drop> = crate::error::try_with_capacity(
+        "the rain's billboards",
+        columns.iter().map(|c| c.drops.len()).sum(),
+    )?;
     for c in columns {
         drops.extend(c.drops.into_iter().map(|d| Drop {
             diameter_m: d.diameter_m * spread,
             ..d
         }));
     }
-    drops
+    Ok(drops)
 }
 
 #[cfg(test)]
@@ -319,8 +335,8 @@ mod tests {
             Mat3::IDENTITY,
         )
         .unwrap();
-        let b = billboards_in_view(&r, &cam, 1.0 / 30.0, Vec3::ZERO, None, true);
-        let d = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true);
+        let b = billboards_in_view(&r, &cam, 1.0 / 30.0, Vec3::ZERO, None, true).unwrap();
+        let d = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true).unwrap();
         // Over the voxels both draw (billboards keep a few more at the frustum's edge: their
         // streaks reach below the voxel).
         let voxel = |x: &Drop| [x.id[0], x.id[1], x.id[2]];

@@ -184,11 +184,11 @@ fn voxel_drops(
     bin: usize,
     origin_m: DVec3,
     out: &mut Vec<Drop>,
-) {
+) -> bool {
     let (lo, hi) = region.bins[bin];
     let sampler = BinSampler::new(region.rain_rate_mm_h, lo, hi);
     if sampler.expected_per_m3() <= 0.0 {
-        return;
+        return true;
     }
     let key = voxel_seed(
         region.seed,
@@ -197,6 +197,10 @@ fn voxel_drops(
     );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
     let n = sampler.count(&mut rng);
+    // Room for the voxel's drops first, fallibly: the pushes below do not allocate.
+    if out.try_reserve(n).is_err() {
+        return false;
+    }
     let base = DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64);
     for k in 0..n {
         let d_mm = sampler.diameter_mm(rng.random());
@@ -212,6 +216,7 @@ fn voxel_drops(
             id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
         });
     }
+    true
 }
 
 /// How the rain region is filled.
@@ -245,17 +250,17 @@ impl RainMethod {
 
 /// Every drop within `region.near_m` of `center_m` (voxels at or above the ground only when
 /// `ground` is set), in a deterministic order, positioned relative to `center_m`.
-pub fn drops_near(region: &RainRegion, center_m: DVec3, ground: bool) -> Vec<Drop> {
+pub fn drops_near(region: &RainRegion, center_m: DVec3, ground: bool) -> Result<Vec<Drop>> {
     let speeds = BinSpeeds::new(&region.bins);
     voxels_where(
+        "the rain's drops",
         center_m,
         region.near_m,
         ground,
         |_| true,
         |voxel, out| {
-            for bin in 0..region.bins.len() {
-                voxel_drops(region, &speeds, voxel, bin, center_m, out);
-            }
+            (0..region.bins.len())
+                .all(|bin| voxel_drops(region, &speeds, voxel, bin, center_m, out))
         },
     )
 }
@@ -290,7 +295,7 @@ pub fn drops_in_view(
     exposure_s: f64,
     camera_speed_m_s: f64,
     ground: bool,
-) -> Vec<Drop> {
+) -> Result<Vec<Drop>> {
     drops_in_view_where(region, cam, exposure_s, camera_speed_m_s, ground, |_| true)
 }
 
@@ -302,18 +307,18 @@ pub fn drops_in_view_where(
     camera_speed_m_s: f64,
     ground: bool,
     also: impl Fn(Vec3) -> bool + Sync,
-) -> Vec<Drop> {
+) -> Result<Vec<Drop>> {
     let speeds = BinSpeeds::new(&region.bins);
     let in_view = voxel_in_view(region, cam, exposure_s, camera_speed_m_s, 0.0);
     voxels_where(
+        "the rain's drops in view",
         cam.position_m,
         region.near_m,
         ground,
         |c| also(c) && in_view(c),
         |voxel, out| {
-            for bin in 0..region.bins.len() {
-                voxel_drops(region, &speeds, voxel, bin, cam.position_m, out);
-            }
+            (0..region.bins.len())
+                .all(|bin| voxel_drops(region, &speeds, voxel, bin, cam.position_m, out))
         },
     )
 }
@@ -361,8 +366,9 @@ mod tests {
     fn drops_are_world_anchored_and_coherent_in_time() {
         use std::collections::HashMap;
         let (ca, cb) = (DVec3::new(0.0, 1.6, 0.0), DVec3::new(0.5, 1.6, 0.0));
-        let a = drops_near(&region(0.0), ca, true);
+        let a = drops_near(&region(0.0), ca, true).unwrap();
         let b: HashMap<_, _> = drops_near(&region(0.0), cb, true)
+            .unwrap()
             .into_iter()
             .map(|d| (d.id, d))
             .collect();
@@ -381,6 +387,7 @@ mod tests {
         }
         // 10 ms later every drop moved by v dt (no wrap for most)
         let later: HashMap<_, _> = drops_near(&region(0.01), ca, true)
+            .unwrap()
             .into_iter()
             .map(|d| (d.id, d))
             .collect();
@@ -415,8 +422,8 @@ mod tests {
             rot,
         )
         .unwrap();
-        let all = drops_near(&r, cam.position_m, true);
-        let seen = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true);
+        let all = drops_near(&r, cam.position_m, true).unwrap();
+        let seen = drops_in_view(&r, &cam, 1.0 / 30.0, 0.0, true).unwrap();
         assert!(
             seen.len() * 2 < all.len(),
             "{} of {}",
@@ -452,7 +459,7 @@ mod tests {
     #[test]
     fn drop_count_follows_marshall_palmer() {
         let r = region(0.0);
-        let d = drops_near(&r, DVec3::new(0.3, 10.0, 0.7), true);
+        let d = drops_near(&r, DVec3::new(0.3, 10.0, 0.7), true).unwrap();
         let per_m3: f64 = r
             .bins
             .iter()
@@ -465,7 +472,11 @@ mod tests {
             "{} vs {expected}",
             d.len()
         );
-        assert!(drops_near(&r, DVec3::new(0.0, -10.0, 0.0), true).is_empty());
+        assert!(
+            drops_near(&r, DVec3::new(0.0, -10.0, 0.0), true)
+                .unwrap()
+                .is_empty()
+        );
         // the budget's estimate holds them (it grows the sphere by a voxel's diagonal)
         assert!(r.expected_drops(1.0) >= d.len() as f64);
     }

@@ -369,10 +369,15 @@ impl FarRain {
             region.wind_m_s.z as f32,
         );
         use rayon::prelude::*;
-        let lights: Vec<Option<Vec3>> = (0..bw * bh)
+        // Per block, then per shell (block-major), into a list reserved fallibly.
+        let k = radii.len();
+        let mut lights: Vec<Option<Vec3>> =
+            crate::error::try_with_capacity("the far rain's light per block", bw * bh * k)?;
+        (0..bw * bh * k)
             .into_par_iter()
-            .with_min_len(64)
-            .flat_map_iter(|blk| {
+            .with_min_len(64 * k)
+            .map(|i| {
+                let (blk, r) = (i / k, radii[i % k]);
                 let (bx, by) = (blk % bw, blk / bw);
                 // (the block's middle pixel, or the frame's last)
                 let ray = cam.ray_direction(
@@ -380,7 +385,7 @@ impl FarRain {
                     (by * BLOCK_PX + BLOCK_PX / 2).min(cam.height as usize - 1) as u32,
                 );
                 let h = Vec2::new(ray.x, ray.z).length().max(1e-6);
-                radii.iter().map(move |&r| {
+                {
                     let p = ray * (r as f32 / h);
                     let probe = crate::particles::Particle {
                         position_m: p,
@@ -396,9 +401,9 @@ impl FarRain {
                         return None;
                     }
                     Some(light * sh.radiance_scale)
-                })
+                }
             })
-            .collect();
+            .collect_into_vec(&mut lights);
         Ok(Some(FarRain {
             radii: radii.iter().map(|&r| r as f32).collect(),
             spacing_m: dr as f32,

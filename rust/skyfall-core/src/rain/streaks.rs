@@ -22,7 +22,6 @@ use crate::scene::camera::{Camera, Defocus};
 use crate::scene::lights::Light;
 use crate::sky::ambient::AmbientMap;
 use glam::Vec3;
-use rayon::prelude::*;
 use std::sync::Arc;
 
 /// How streaks are lit: I_v = r·I_R + (1 − r)·I_T.
@@ -92,21 +91,18 @@ pub fn prepare(
     exposure_s: f32,
     camera_velocity_m_s: Vec3,
     shading: &RainShading,
-) -> (Vec<ScreenStreak>, RainStats) {
+) -> Result<(Vec<ScreenStreak>, RainStats)> {
     // Lights and the ambient map are in the world; the drops relative to the camera.
     let eye = cam.eye();
-    // Projected and lit in parallel, in the drops' order (rayon's collect keeps it).
-    let mut streaks: Vec<ScreenStreak> = drops
-        .par_iter()
-        .with_min_len(1024)
-        .filter_map(|d| {
+    // Projected and lit in parallel, in the drops' order, into a list grown fallibly.
+    let mut streaks: Vec<ScreenStreak> =
+        crate::error::try_par_filter_map("the particles' streaks", drops, 1024, |d| {
             screen_streak_through(cam, lens, d, exposure_s, camera_velocity_m_s).map(|mut s| {
                 s.light = shading.drop_light(eye + d.position_m);
                 s.reflectance = shading.reflectance;
                 s
             })
-        })
-        .collect();
+        })?;
     let mut stats = RainStats::default();
     if let Some(th) = shading.cull_threshold {
         let before = streaks.len();
@@ -119,9 +115,9 @@ pub fn prepare(
         }
     }
     // Far to near, ties in the drops' order.
-    far_to_near(&mut streaks);
+    far_to_near(&mut streaks)?;
     stats.streaks = streaks.len();
-    (streaks, stats)
+    Ok((streaks, stats))
 }
 
 /// The rain a frame draws.
@@ -164,7 +160,7 @@ impl RainFrame<'_> {
                 let mut d =
                     super::drops::drops_in_view_where(self.region, cam, t, v, self.ground, |c| {
                         f64::from(c.x).hypot(f64::from(c.z)) < reach
-                    });
+                    })?;
                 // The far level of detail draws the rest ([`Self::far`]).
                 let far2 = (far * far) as f32;
                 d.retain(|d| {
@@ -173,7 +169,7 @@ impl RainFrame<'_> {
                 d
             }
             (None, super::drops::RainMethod::Drops) => {
-                super::drops::drops_in_view(self.region, cam, t, v, self.ground)
+                super::drops::drops_in_view(self.region, cam, t, v, self.ground)?
             }
             (None, super::drops::RainMethod::Billboards) => super::billboards::billboards_in_view(
                 self.region,
@@ -182,7 +178,7 @@ impl RainFrame<'_> {
                 self.camera_velocity_m_s,
                 self.lens.as_ref(),
                 self.ground,
-            ),
+            )?,
         };
         super::shelter::remove_sheltered(
             &mut drops,
@@ -197,7 +193,7 @@ impl RainFrame<'_> {
             self.exposure_s,
             self.camera_velocity_m_s,
             self.shading,
-        );
+        )?;
         Ok((streaks, stats, drops.len()))
     }
 
@@ -228,7 +224,7 @@ pub fn composite(
     shading: &RainShading,
     t: RainTargets<'_>,
 ) -> Result<RainStats> {
-    let (streaks, stats) = prepare(cam, None, drops, exposure_s, Vec3::ZERO, shading);
+    let (streaks, stats) = prepare(cam, None, drops, exposure_s, Vec3::ZERO, shading).unwrap();
     composite_streaks(cam, &streaks, t)?;
     Ok(stats)
 }
@@ -279,7 +275,8 @@ mod tests {
             .collect();
         let mut shading = RainShading::open_sky();
         shading.drop_radiance = 1.3;
-        let (mut streaks, _) = prepare(&cam, None, &drops, 1.0 / 30.0, Vec3::ZERO, &shading);
+        let (mut streaks, _) =
+            prepare(&cam, None, &drops, 1.0 / 30.0, Vec3::ZERO, &shading).unwrap();
         // Each particle carries its own r (particles of several effects share one list).
         assert!(streaks.iter().all(|s| s.reflectance == shading.reflectance));
         for s in &mut streaks {

@@ -56,6 +56,7 @@ impl SkyKind {
                 },
                 value: sky_type as f64,
                 range: "1..15 (CIE general sky type) or \"overcast\"".into(),
+                integer: true,
             });
         }
         let p = CIE_TYPES[(sky_type - 1) as usize];
@@ -92,6 +93,7 @@ impl SkyKind {
                 },
                 value: f64::from(sun.y.asin().to_degrees()),
                 range: crate::ranges::SUN_ELEVATION_DEG.range.to_string(),
+                integer: false,
             });
         }
         Ok(SkyKind::General {

@@ -215,11 +215,11 @@ fn voxel_flakes(
     bin: usize,
     origin_m: DVec3,
     out: &mut Vec<Flake>,
-) {
+) -> bool {
     let (lo, hi) = region.bins[bin];
     let sampler = region.snowfall.bin_sampler(lo, hi);
     if sampler.expected_per_m3() <= 0.0 {
-        return;
+        return true;
     }
     let key = voxel_seed(
         region.seed,
@@ -228,6 +228,10 @@ fn voxel_flakes(
     );
     let mut rng = Pcg64Mcg::seed_from_u64(key);
     let n = sampler.count(&mut rng);
+    // Room for the voxel's flakes first, fallibly: the pushes below do not allocate.
+    if out.try_reserve(n).is_err() {
+        return false;
+    }
     let base = DVec3::new(voxel[0] as f64, voxel[1] as f64, voxel[2] as f64);
     let t = region.time_s;
     for k in 0..n {
@@ -249,11 +253,12 @@ fn voxel_flakes(
             id: [voxel[0], voxel[1], voxel[2], bin as i64, k as i64],
         });
     }
+    true
 }
 
 /// Every flake within `region.near_m` of `center_m` (voxels at or above the ground only when
 /// `ground` is set), in a deterministic order, positioned relative to `center_m`.
-pub fn flakes_near(region: &SnowRegion, center_m: DVec3, ground: bool) -> Vec<Flake> {
+pub fn flakes_near(region: &SnowRegion, center_m: DVec3, ground: bool) -> Result<Vec<Flake>> {
     flakes_where(region, center_m, ground, |_| true)
 }
 
@@ -262,12 +267,17 @@ fn flakes_where(
     center_m: DVec3,
     ground: bool,
     keep_voxel: impl Fn(Vec3) -> bool + Sync,
-) -> Vec<Flake> {
-    voxels_where(center_m, region.near_m, ground, keep_voxel, |voxel, out| {
-        for bin in 0..region.bins.len() {
-            voxel_flakes(region, voxel, bin, center_m, out);
-        }
-    })
+) -> Result<Vec<Flake>> {
+    voxels_where(
+        "the snow's flakes",
+        center_m,
+        region.near_m,
+        ground,
+        keep_voxel,
+        |voxel, out| {
+            (0..region.bins.len()).all(|bin| voxel_flakes(region, voxel, bin, center_m, out))
+        },
+    )
 }
 
 /// The flakes of [`flakes_near`] `cam` that can draw into its frame during `exposure_s`: the
@@ -280,7 +290,7 @@ pub fn flakes_in_view(
     exposure_s: f64,
     camera_speed_m_s: f64,
     ground: bool,
-) -> Vec<Flake> {
+) -> Result<Vec<Flake>> {
     let edge =
         2.0 * (region.near_m + 2.0) / f64::from(cam.fx.min(cam.fy)) + 0.5e-3 * FLAKE_SIZE_MAX_MM;
     let margin = ((region.max_speed_m_s() + camera_speed_m_s) * exposure_s + edge) as f32;
@@ -309,7 +319,7 @@ mod tests {
                 for ix in -2..3 {
                     for iz in -2..3 {
                         for bin in 0..r.bins.len() {
-                            voxel_flakes(&r, [ix, 1, iz], bin, DVec3::ZERO, &mut out);
+                            assert!(voxel_flakes(&r, [ix, 1, iz], bin, DVec3::ZERO, &mut out));
                         }
                     }
                 }
@@ -348,7 +358,7 @@ mod tests {
         let center = DVec3::new(0.2, 6.0, -0.4);
         for wind in [[0.0, 0.0, 0.0], [5.0, 0.0, 2.0]] {
             let r = |t: f64| SnowRegion::new(2.0, 3.0, wind, t, 3).unwrap();
-            let a = flakes_near(&r(10.0), center, true);
+            let a = flakes_near(&r(10.0), center, true).unwrap();
             assert!(a.len() > 1000, "{}", a.len());
             let mut mean = DVec3::ZERO;
             for f in &a {
@@ -370,6 +380,7 @@ mod tests {
             // coherent: 1 ms later each flake (but those wrapping) moved by about v·dt
             let dt = 1e-3;
             let later: HashMap<_, _> = flakes_near(&r(10.0 + dt), center, true)
+                .unwrap()
                 .into_iter()
                 .map(|f| (f.id, f))
                 .collect();
@@ -394,9 +405,10 @@ mod tests {
     fn flakes_are_world_anchored_and_deterministic() {
         let r = SnowRegion::new(1.0, 4.0, [2.0, 0.0, 0.0], 3.5, 8).unwrap();
         let (ca, cb) = (DVec3::new(0.0, 2.0, 0.0), DVec3::new(0.7, 2.0, 0.3));
-        let a = flakes_near(&r, ca, true);
-        assert_eq!(a, flakes_near(&r, ca, true));
+        let a = flakes_near(&r, ca, true).unwrap();
+        assert_eq!(a, flakes_near(&r, ca, true).unwrap());
         let b: HashMap<_, _> = flakes_near(&r, cb, true)
+            .unwrap()
             .into_iter()
             .map(|f| (f.id, f))
             .collect();
@@ -410,7 +422,7 @@ mod tests {
         }
         // no snow: no flakes
         let dry = SnowRegion::new(0.0, 4.0, [0.0; 3], 0.0, 8).unwrap();
-        assert!(flakes_near(&dry, ca, true).is_empty());
+        assert!(flakes_near(&dry, ca, true).unwrap().is_empty());
         // sizes within the drawn range
         assert!(a.iter().all(|f| {
             let s = f64::from(f.diameter_m) * 1e3;

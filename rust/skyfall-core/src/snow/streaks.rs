@@ -125,15 +125,13 @@ pub fn flake_opacity(size_mm: f32, d_m: f32, near_m: f32, opacity: SnowOpacity, 
 
 /// Projects, lights, fades and culls the flakes (positioned relative to `cam`), in the flakes'
 /// order (not sorted: the frame sorts every effect's particles together).
-pub fn prepare(cam: &Camera, frame: &SnowFrame<'_>, flakes: &[Flake]) -> Vec<ScreenStreak> {
+pub fn prepare(cam: &Camera, frame: &SnowFrame<'_>, flakes: &[Flake]) -> Result<Vec<ScreenStreak>> {
     let eye = cam.eye();
     let shading = frame.shading;
     let near = frame.region.near_m as f32;
     let seed = frame.region.seed;
-    let mut streaks: Vec<ScreenStreak> = flakes
-        .par_iter()
-        .with_min_len(1024)
-        .filter_map(|f| {
+    let mut streaks: Vec<ScreenStreak> =
+        crate::error::try_par_filter_map("the snow's streaks", flakes, 1024, |f| {
             let s = screen_streak_through(
                 cam,
                 frame.lens.as_ref(),
@@ -157,10 +155,9 @@ pub fn prepare(cam: &Camera, frame: &SnowFrame<'_>, flakes: &[Flake]) -> Vec<Scr
                 1.0,
                 opacity,
             ))
-        })
-        .collect();
+        })?;
     streaks.retain(|s| s.alpha() > 0.0);
-    streaks
+    Ok(streaks)
 }
 
 /// How far back along its path a box shelters a flake, m: under a roof, an awning or a
@@ -219,14 +216,14 @@ impl SnowFrame<'_> {
             f64::from(self.exposure_s),
             f64::from(self.camera_velocity_m_s.length()),
             self.ground,
-        );
+        )?;
         remove_sheltered(
             &mut flakes,
             self.shelter,
             cam.eye(),
             self.region.near_m as f32,
         );
-        let streaks = prepare(cam, self, &flakes);
+        let streaks = prepare(cam, self, &flakes)?;
         let stats = SnowStats {
             flakes: flakes.len(),
             streaks: streaks.len(),
@@ -317,11 +314,12 @@ mod tests {
         let (mut all, _) = crate::rain::streaks::prepare(
             c,
             None,
-            &crate::rain::drops::drops_in_view(&rain, c, 1.0 / 30.0, 0.0, true),
+            &crate::rain::drops::drops_in_view(&rain, c, 1.0 / 30.0, 0.0, true).unwrap(),
             1.0 / 30.0,
             Vec3::ZERO,
             &shading,
-        );
+        )
+        .unwrap();
         let region = SnowRegion::new(snow_rate, 4.0, wind, 0.4, 5).unwrap();
         let snow_shading = RainShading {
             reflectance: 1.0,
@@ -343,7 +341,7 @@ mod tests {
         assert_eq!(stats.streaks, flakes.len());
         let n = flakes.len();
         all.extend(flakes);
-        far_to_near(&mut all);
+        far_to_near(&mut all).unwrap();
         (all, n)
     }
 

@@ -73,13 +73,17 @@ pub fn height_map(
 ) -> Result<Vec<f32>> {
     check_size(width, height)?;
     if centres_px.len() != radii_px.len() {
-        return Err(Error::Length {
+        // Not a broadcast (`Error::Length` says "1 or n"): one radius per centre.
+        return Err(Error::Invalid {
             param: Param {
                 name: "radii_px",
                 index: None,
             },
-            len: radii_px.len(),
-            expected: centres_px.len(),
+            message: format!(
+                "has length {}, expected {} (one radius per row of centers_px)",
+                radii_px.len(),
+                centres_px.len()
+            ),
         });
     }
     for (i, (c, &r)) in centres_px.iter().zip(radii_px).enumerate() {
@@ -91,6 +95,7 @@ pub fn height_map(
                 },
                 value: r as f64,
                 range: "(0, 1e4] px".into(),
+                integer: false,
             });
         }
         if !(c[0].is_finite() && c[1].is_finite()) {
@@ -175,9 +180,21 @@ fn gradient(field: &[f32], width: usize, height: usize, i: usize, j: usize) -> (
 }
 
 /// The unit normals (x, y, z) of the field at every pixel, `slope_px` px of height per unit V.
+/// `slope_px` in [0, 1e5] px, as the refraction's (beyond, its square overflows: NaN normals).
 pub fn normals(field: &[f32], width: usize, height: usize, slope_px: f32) -> Result<Vec<f32>> {
     check_size(width, height)?;
     check_field(field, width, height)?;
+    if !(0.0..=1e5).contains(&slope_px) {
+        return Err(Error::OutOfRange {
+            param: Param {
+                name: "slope_px",
+                index: None,
+            },
+            value: f64::from(slope_px),
+            range: "[0, 1e5] px".into(),
+            integer: false,
+        });
+    }
     let mut out = crate::error::try_filled_par("the normals", width * height * 3, 0.0f32)?;
     out.par_chunks_mut(width * 3)
         .enumerate()
@@ -271,6 +288,7 @@ impl Refraction {
                     param: Param { name, index: None },
                     value: v,
                     range: range.into(),
+                    integer: false,
                 })
             }
         };
@@ -353,16 +371,19 @@ pub fn lookup_copy(
     width: usize,
     height: usize,
     short_px: usize,
-) -> (Vec<f32>, usize, usize, usize) {
+) -> Result<(Vec<f32>, usize, usize, usize)> {
     let s = width
         .min(height)
         .checked_div(short_px)
         .map_or(1, |s| s.max(1));
     if s == 1 {
-        return (frame.to_vec(), width, height, 1);
+        let mut copy =
+            crate::error::try_with_capacity("the refraction's lookup copy", frame.len())?;
+        copy.extend_from_slice(frame);
+        return Ok((copy, width, height, 1));
     }
     let (lw, lh) = (width.div_ceil(s), height.div_ceil(s));
-    let mut out = vec![0.0f32; lw * lh * 3];
+    let mut out = crate::error::try_filled("the refraction's lookup copy", lw * lh * 3, 0.0f32)?;
     out.par_chunks_mut(lw * 3)
         .enumerate()
         .for_each(|(bj, row)| {
@@ -383,7 +404,7 @@ pub fn lookup_copy(
                 }
             }
         });
-    (out, lw, lh, s)
+    Ok((out, lw, lh, s))
 }
 
 /// Bilinear lookup of `img` (w·h·3) at image point (x, y) (pixel centres at +0.5), mirrored.
@@ -441,7 +462,7 @@ pub fn refract_frame(
             });
         }
     }
-    let (look, lw, lh, s) = lookup_copy(frame, width, height, r.lookup_px);
+    let (look, lw, lh, s) = lookup_copy(frame, width, height, r.lookup_px)?;
     let slope = r.slope_px as f32;
     // the drop layer: coverage M and M × refracted light (premultiplied), sharp
     let mut layer = crate::error::try_filled_par("the drop layer", n * 4, 0.0f32)?;
@@ -698,7 +719,14 @@ mod tests {
         let e = height_map(&[[0.0, 0.0]], &[], 4, 4, true)
             .unwrap_err()
             .to_string();
-        assert!(e.starts_with("radii_px has length 0"), "{e}");
+        assert!(e.starts_with("radii_px: has length 0, expected 1"), "{e}");
+        let e = height_map(&[[1.0, 1.0], [2.0, 2.0]], &[5.0], 4, 4, true)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "radii_px: has length 1, expected 2 (one radius per row of centers_px)"
+        );
         assert!(RefractMode::parse("exact").is_err());
     }
 }

@@ -85,7 +85,7 @@ mod local {
     pub const TRAIL_FRACTION: Range = Range::closed(0.0, 0.5, "");
     pub const TRAIL_LIFETIME_S: Range = Range::open_closed(0.0, 1e4, "s");
     pub const HOLD_RADIUS_MM: Range = Range::open_closed(0.0, 100.0, "mm");
-    pub const HOLD_CELLS: Range = Range::closed(1.0, 99.0, "");
+    pub const HOLD_CELLS: Range = Range::closed(1.0, 99.0, "").integers();
     pub const MIN_DIAMETER_MM: Range = Range::closed(0.05, 5.0, "mm");
     pub const DROP_MASS_KG: Range = Range::open_closed(0.0, 1e-2, "kg");
 }
@@ -280,11 +280,21 @@ impl WindshieldConfig {
         let (nx, ny) = self.grid();
         let cells = nx as u128 * ny as u128;
         if cells > MAX_CELLS as u128 {
-            return Err(Error::too_large(
-                format!("a glass of {nx} × {ny} cells"),
-                cells * 4,
-                MAX_CELLS * 4,
-            ));
+            // The ranges of the glass and of cell_mm each allow it; their product is the limit.
+            let least =
+                ((self.width_mm * self.height_mm / MAX_CELLS as f64).sqrt() * 100.0).ceil() / 100.0;
+            return Err(Error::Unusable {
+                param: Param {
+                    name: "cell_mm",
+                    index: None,
+                },
+                value: self.cell_mm,
+                message: format!(
+                    "mm makes a glass of {nx} × {ny} = {cells} cells, over the limit of {MAX_CELLS} cells \
+                     (glass_width_mm / cell_mm × glass_height_mm / cell_mm): use cell_mm ≥ {least} mm for \
+                     this glass, or a smaller glass"
+                ),
+            });
         }
         Ok(())
     }
@@ -395,7 +405,8 @@ impl WindshieldConfig {
     }
 }
 
-/// The most cells a glass may have (a 4 × 4 m glass of 2 mm cells).
+/// The most cells a glass may have (a 4 × 4 m glass of 2 mm cells): glass_width_mm / cell_mm
+/// × glass_height_mm / cell_mm, a limit beyond the three ranges, which each say so.
 pub const MAX_CELLS: u64 = 4_000_000;
 
 /// What a drop is, for plots and the layers.

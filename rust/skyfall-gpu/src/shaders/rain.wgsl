@@ -116,7 +116,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             continue;
         }
         let light = streaks[4u * k + 3u].xyz;
-        let fa = s2.z * cov;
+        // At most 1: a sprite's peak times α can pass it on a short path (as the CPU's).
+        let fa = min(s2.z * cov, 1.0);
         let ar = fa * s2.w;  // r, per streak
         c += ar * (light - c);
         if layer == 1u {

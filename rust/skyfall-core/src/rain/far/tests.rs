@@ -261,6 +261,7 @@ fn the_voxels_skipped_beyond_far_m_hold_none_of_the_near_drops() {
         d.position_m.x * d.position_m.x + d.position_m.z * d.position_m.z < (2.2f32 * 2.2)
     };
     let all: Vec<_> = drops_in_view(&r, &cam, 1.0 / 60.0, 0.0, true)
+        .unwrap()
         .into_iter()
         .filter(within)
         .map(|d| d.id)
@@ -268,6 +269,7 @@ fn the_voxels_skipped_beyond_far_m_hold_none_of_the_near_drops() {
     let fewer: Vec<_> = drops_in_view_where(&r, &cam, 1.0 / 60.0, 0.0, true, |c| {
         f64::from(c.x).hypot(f64::from(c.z)) < reach
     })
+    .unwrap()
     .into_iter()
     .filter(within)
     .map(|d| d.id)

@@ -129,7 +129,7 @@ pub fn accumulate(
         for (t, (&b, &d)) in top.iter_mut().zip(base.iter().zip(depth.iter())) {
             *t = b + d;
         }
-        let shadow = ShadowBuffer::render(&grid, &top, drift);
+        let shadow = ShadowBuffer::render(&grid, &top, drift)?;
         // 1–2: lit cells and their flux, per unit of horizontal area, as a depth of snow.
         a.par_chunks_mut(nx).enumerate().for_each(|(k, row)| {
             for (i, out) in row.iter_mut().enumerate() {

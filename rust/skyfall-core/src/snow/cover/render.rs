@@ -19,7 +19,7 @@
 
 use super::SnowCover;
 use super::heightfield::{PHOTO_RANGE_M, photo_points};
-use crate::error::Result;
+use crate::error::{Result, try_filled, try_with_capacity};
 use crate::scene::boxes::{BoxScene, surface_albedo, trace};
 use crate::scene::camera::Camera;
 use crate::scene::raycast::inverse_direction;
@@ -81,10 +81,14 @@ pub struct SnowRender {
 
 impl SnowRender {
     /// The cover of a box scene.
-    pub fn boxes(cover: &SnowCover) -> Self {
+    /// Its copies of the grid are allocated fallibly ([`crate::Error::OutOfMemory`]).
+    pub fn boxes(cover: &SnowCover) -> Result<Self> {
         let g = cover.field.grid;
-        let base: Vec<f32> = cover.field.base_m.iter().map(|&b| b as f32).collect();
-        let depth: Vec<f32> = cover.depth_m.iter().map(|&d| d as f32).collect();
+        let what = "the snow cover's render grid";
+        let mut base: Vec<f32> = try_with_capacity(what, cover.field.base_m.len())?;
+        base.extend(cover.field.base_m.iter().map(|&b| b as f32));
+        let mut depth: Vec<f32> = try_with_capacity(what, cover.depth_m.len())?;
+        depth.extend(cover.depth_m.iter().map(|&d| d as f32));
         let (mut y_lo, mut y_hi) = (f32::INFINITY, f32::NEG_INFINITY);
         for (&b, &d) in base.iter().zip(depth.iter()) {
             if d > 0.0 && !b.is_nan() {
@@ -93,12 +97,12 @@ impl SnowRender {
             }
         }
         // The heights snow lies at: each cell's [base, top], merged where they overlap.
-        let mut spans: Vec<(f32, f32)> = base
+        let covered = base
             .iter()
             .zip(depth.iter())
-            .filter(|(b, d)| **d > 0.0 && !b.is_nan())
-            .map(|(&b, &d)| (b, b + d))
-            .collect();
+            .filter(|(b, d)| **d > 0.0 && !b.is_nan());
+        let mut spans: Vec<(f32, f32)> = try_with_capacity(what, covered.clone().count())?;
+        spans.extend(covered.map(|(&b, &d)| (b, b + d)));
         spans.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut bands: Vec<(f32, f32)> = Vec::new();
         for (lo, hi) in spans {
@@ -110,7 +114,7 @@ impl SnowRender {
         if bands.len() > MAX_BANDS {
             bands.clear(); // one slab, [y_lo, y_hi]
         }
-        SnowRender {
+        Ok(SnowRender {
             bands,
             origin: [g.origin_m[0] as f32, g.origin_m[1] as f32],
             spacing: g.spacing_m as f32,
@@ -123,7 +127,7 @@ impl SnowRender {
             open_depth: cover.open_depth_m as f32,
             photo_depth_m: None,
             radiance_scale: Vec3::ONE,
-        }
+        })
     }
 
     /// The cover of a photo seen by `cam` with `depth_m`, in the photo's units
@@ -144,8 +148,8 @@ impl SnowRender {
                 expected: cam.pixels(),
             });
         }
-        let mut r = SnowRender::boxes(cover);
-        r.photo_depth_m = Some(photo_depth_m(cover, cam, depth_m));
+        let mut r = SnowRender::boxes(cover)?;
+        r.photo_depth_m = Some(photo_depth_m(cover, cam, depth_m)?);
         r.radiance_scale = radiance_scale;
         // A photo's snow is drawn per pixel, never ray cast.
         r.y_lo = f32::INFINITY;
@@ -447,7 +451,7 @@ impl SnowRender {
 /// depth map's noise) and its normal (from the
 /// depth map through the camera, [`NORMAL_SPAN_FRACTION`] of the width across) faces up, weighted from 0 at 60° from level to 1 at 37°;
 /// pixels beyond [`PHOTO_RANGE_M`] get the open ground's cover, as level ground in the open.
-pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f32> {
+pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Result<Vec<f32>> {
     let g = cover.field.grid;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let points = photo_points(cam, depth_m);
@@ -462,7 +466,7 @@ pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f3
     let k = ((w as f32 * NORMAL_SPAN_FRACTION).round() as usize).max(1);
     let v = cover.fall_velocity_m_s;
     let up_wind = -Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32).normalize_or(Vec3::NEG_Y);
-    let mut out = vec![0.0f32; w * h];
+    let mut out = try_filled("the snow cover's depth per pixel", w * h, 0.0f32)?;
     for y in 0..h {
         for x in 0..w {
             let Some(p) = world(x, y) else { continue };
@@ -533,7 +537,7 @@ pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Vec<f3
             out[y * w + x] = d * up;
         }
     }
-    out
+    Ok(out)
 }
 
 /// How far above a photo's point [`sheltered`] looks for what covers it, m.

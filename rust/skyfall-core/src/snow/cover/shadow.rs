@@ -32,7 +32,8 @@ pub struct ShadowBuffer {
 impl ShadowBuffer {
     /// Renders the surface `top_m` (per cell of `grid`, NaN: none) along the drift `drift`
     /// (horizontal m per m of fall).
-    pub fn render(grid: &Grid, top_m: &[f64], drift: [f64; 2]) -> Self {
+    /// Its texels are allocated fallibly ([`crate::Error::OutOfMemory`]).
+    pub fn render(grid: &Grid, top_m: &[f64], drift: [f64; 2]) -> crate::error::Result<Self> {
         let (mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY);
         for &t in top_m.iter().filter(|t| !t.is_nan()) {
             y0 = y0.min(t);
@@ -66,7 +67,11 @@ impl ShadowBuffer {
             spacing_m: s,
             nx,
             nz,
-            texels: vec![f64::NEG_INFINITY; nx * nz],
+            texels: crate::error::try_filled(
+                "the snow cover's shadow buffer",
+                nx.saturating_mul(nz),
+                f64::NEG_INFINITY,
+            )?,
             drift,
             y0_m: y0,
             bias_m,
@@ -117,7 +122,7 @@ impl ShadowBuffer {
                 }
             }
         }
-        buf
+        Ok(buf)
     }
 
     /// The texel the point (c.x, y, c.z) projects into, or None outside the buffer.

@@ -257,7 +257,7 @@ fn the_cover_is_drawn_lifted_above_its_surface() {
         dt_s: 1.0,
         fall_velocity_m_s: [0.0, -1.0, 0.0],
     };
-    let r = SnowRender::boxes(&cover);
+    let r = SnowRender::boxes(&cover).unwrap();
     let (t, nrm, d) = r
         .trace(
             Vec3::new(2.1, 10.0, 2.1),
