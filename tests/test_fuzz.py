@@ -25,6 +25,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import skyfall
+import skyfall.depth
+import skyfall.photo
 from skyfall import Camera, PhotoScene, Renderer, Weather, cli, clouds, io, physics, rain, sky, windshield
 from skyfall.dataset_sample import DatasetConfig, parse_range
 
@@ -78,6 +80,8 @@ class Target:
 
 _W, _H = 16, 12
 _R = Renderer(_W, _H, backend="cpu")
+_PIXELS = np.random.default_rng(0).integers(0, 255, (_H, _W, 3), dtype=np.uint8)
+_DEPTH = np.full((_H, _W), 4.0, np.float32)
 _PHOTO = PhotoScene(np.full((_H, _W, 3), 0.2, np.float32), np.full((_H, _W), 8.0, np.float32),
                     camera=Camera((0.0, 1.6, 0.0), vertical_fov_deg=60.0), encoding="linear", airlight="sky")
 
@@ -167,6 +171,18 @@ TARGETS = [
     Target("DatasetConfig", _config, _CONFIG_FIELDS, finite=False),
     Target("skyfall render", _cli_render, ("rain-rate", "wind-m-s", "exposure-s", "visibility-m", "seed", "f-number", "rain-near-m"),
            names=("rain_rate_mm_h", "wind_m_s", "exposure_s", "visibility_m", "seed", "f_number", "rain_near_m")),
+    Target("PhotoScene (no depth)", lambda **kw: PhotoScene(kw.pop("image", _PIXELS), **kw).depth_m,
+           ("image", "distance_m", "sky_mask", "camera_height_m", "horizon_row", "vertical_fov_deg", "airlight", "encoding"),
+           names=("RGBA", "depth_m"), finite=False),
+    Target("PhotoScene (depth)", lambda **kw: PhotoScene(_PIXELS, kw.pop("depth_m", _DEPTH), **kw).depth_m,
+           ("depth_m", "depth_scale_m", "sky_mask"), finite=False),
+    Target("photo.estimate_sky_mask", lambda **kw: skyfall.photo.estimate_sky_mask(kw.pop("image", _PIXELS), **kw),
+           ("image", "encoding", "max_gradient", "min_share", "work_px")),
+    Target("skyfall.augment", lambda **kw: skyfall.augment(kw.pop("image", _PIXELS), **kw),
+           ("image", "seed", "rain_rate_mm_h", "visibility_m", "exposure_s", "encoding", "wind_m_s", "snow_rate_mm_h"),
+           names=("shape", "RGBA", "range", "fields", "linear"), skip_values=_heavy_weather),
+    Target("depth.to_metres", lambda **kw: skyfall.depth.to_metres(kw.pop("relative", np.linspace(0.1, 1.0, 12)[:, None] * np.ones((1, 16))), **{"distance_m": 5.0, **kw})[0],
+           ("relative", "distance_m", "sky_mask"), finite=False),
 ]
 
 

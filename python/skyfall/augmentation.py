@@ -24,6 +24,7 @@ from skyfall.camera import Camera
 from skyfall.io import encode_srgb
 from skyfall.photo_scene import PhotoScene
 from skyfall.render import Renderer
+from skyfall.sky_mask import check_encoding
 from skyfall.weather import Weather
 
 __all__ = ["CAMERA_FIELDS", "LOG_UNIFORM", "MAX_RENDERERS", "Layers", "augment", "draw"]
@@ -244,6 +245,7 @@ def augment(
     >>> sorted(layers), 1.0 <= layers.params["rain_rate_mm_h"] <= 50.0
     (['depth_m', 'rain_alpha'], True)
     """
+    check_encoding(encoding)
     base = Weather() if weather is None else weather
     if not isinstance(base, Weather):
         raise TypeError(f"weather must be a skyfall.Weather, got {type(base).__name__}")

@@ -288,7 +288,12 @@ class DatasetConfig:
         if self.depth is not None and self.input is None:
             raise ValueError("depth needs input: depth maps are matched to the input photos by stem")
         set_(self, "input", None if self.input is None else Path(self.input))
+        if self.depth is not None and not isinstance(self.depth, (str, Path)):
+            raise TypeError(f"depth must be a folder (str or Path) or 'estimate', got {type(self.depth).__name__}")
         set_(self, "depth", self.depth if self.depth is None or self.depth == "estimate" else Path(self.depth))
+        for name in ("depth_format", "depth_model"):
+            if getattr(self, name) is not None and not isinstance(getattr(self, name), str):
+                raise TypeError(f"{name} must be a name (str), got {type(getattr(self, name)).__name__}")
         if self.depth_format is not None:
             from skyfall.io import DEPTH_FORMATS
 

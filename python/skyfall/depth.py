@@ -239,9 +239,15 @@ def to_metres(
     s, t : float
         The scale and shift found.
     """
-    r = np.asarray(relative, dtype=np.float64)
-    if r.ndim != 2 or not np.all(np.isfinite(r)):
-        raise ValueError("relative must be a finite (H, W) map")
+    try:
+        raw = np.asarray(relative)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"relative must be an (H, W) array of real numbers: {exc}") from None
+    if raw.dtype.kind not in "iuf":
+        raise TypeError(f"relative must be an (H, W) array of real numbers, got dtype {raw.dtype}")
+    r = raw.astype(np.float64)
+    if r.ndim != 2 or r.size == 0 or not np.all(np.isfinite(r)):
+        raise ValueError(f"relative must be a finite, non-empty (H, W) map, got shape {r.shape}")
     sky = np.zeros(r.shape, bool) if sky_mask is None else np.asarray(sky_mask, dtype=bool)
     if sky.shape != r.shape:
         raise ValueError(f"sky_mask has shape {sky.shape}, relative {r.shape}")
@@ -283,7 +289,8 @@ def to_metres(
         (s, t), *_ = np.linalg.lstsq(a * wt[:, None], b * wt, rcond=None)
         s, t = float(s), float(t)
     if not s > 0.0:
-        raise ValueError(f"the fit found scale s = {s:.4g} <= 0: the network's map does not grow nearer toward the ground; check the camera's height and horizon")
+        why = "does not grow nearer toward the ground; check the camera's height and horizon" if camera is not None else "is not positive outside the sky: nothing in it is nearer than the sky"
+        raise ValueError(f"relative: the fit found scale s = {s:.4g} <= 0: the map {why}")
     inv = (r - t) / s
     with np.errstate(divide="ignore"):
         depth = np.where(inv > 0.0, 1.0 / np.where(inv > 0.0, inv, 1.0), np.inf)

@@ -233,7 +233,7 @@ class PhotoScene:
         img = _array("image", image, "a file: read it with skyfall.io.read_image or PhotoScene.read")
         if img.dtype != np.uint8 and img.dtype.kind != "f":
             raise TypeError(f"image must be uint8 (sRGB codes) or float, got dtype {img.dtype}")
-        if encoding not in (None, "linear", "srgb"):
+        if encoding is not None and not (isinstance(encoding, str) and encoding in ("linear", "srgb")):
             raise ValueError(f"encoding = {encoding!r} must be \"linear\" or \"srgb\"")
         if img.dtype == np.uint8 and encoding == "linear":
             raise ValueError("encoding = 'linear' does not fit a uint8 image: 8-bit images are sRGB codes")

@@ -63,8 +63,15 @@ BRIGHT_SHARE = 0.8
 _LUMA = np.array([0.2126, 0.7152, 0.0722], dtype=np.float64)
 
 
+def check_encoding(encoding: Any) -> None:
+    """Refuse an ``encoding`` that is not None, ``"srgb"`` or ``"linear"``, by name."""
+    if encoding is not None and not (isinstance(encoding, str) and encoding in ("srgb", "linear")):
+        raise ValueError(f"encoding = {encoding!r} must be None, 'srgb' or 'linear'")
+
+
 def _coded(image: Any, encoding: str | None) -> tuple[NDArray[Any], float]:
     """The photo as sRGB-coded values: (uint8 codes, 255) or (float32 in [0, 1], 1)."""
+    check_encoding(encoding)
     a = np.asarray(image)
     if a.ndim != 3 or a.shape[2] not in (3, 4) or a.shape[0] == 0 or a.shape[1] == 0:
         raise ValueError(f"image must have shape (H, W, 3) or (H, W, 4), got {a.shape}")
