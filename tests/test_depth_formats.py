@@ -160,7 +160,7 @@ def test_the_command_line_reads_each_format_and_the_model_without_depth(tmp_path
     out = tmp_path / "kitti"
     assert cli.main(["dataset", "--input", str(photos), "--depth", str(depths), "--depth-format", "kitti", "--rain-rate", "10:10", "--layers", "rain_alpha,rain_depth_m", "--no-progress", "--out", str(out)]) == 0
     row = dataset.read_manifest(out)[0]
-    assert row["status"] == "ok" and row["depth_source"] == "file" and row["depth_format"] == "kitti"
+    assert row["status"] == "ok" and row["depth_source"] == "file" and row["depth_format"] == "kitti" and row["depth_scale_m"] is None
     assert np.nanmax(np.where(np.isinf(d := np.load(out / "items" / "000000.rain_depth_m.npy")), np.nan, d)) <= 5.0
     # no depth: the photo scene model at the distance asked for, recorded in the row
     out = tmp_path / "nodepth"

@@ -19,6 +19,7 @@ pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="RLIMIT_AS and /
 OOM_CHILD = textwrap.dedent(
     """
     import resource, sys
+    import numpy.random  # loaded before the limit (scenes.street draws with it): the frame is what must fail
     from skyfall import Renderer, Weather, scenes
     margin_mib, warm = int(sys.argv[1]), sys.argv[2] == "warm"
     weather = Weather(rain_rate_mm_h=20.0)

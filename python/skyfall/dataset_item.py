@@ -218,6 +218,7 @@ def _photo_scene(worker: Worker, src: ItemSource, p: ItemParams, row: dict[str, 
         depth = read_depth(src.depth, cfg.depth_scale_m, cfg.depth_format)
         row["depth_source"] = "file"
         row["depth_format"] = cfg.depth_format if cfg.depth_format is not None else format_for(src.depth)
+        row["depth_scale_m"] = cfg.depth_scale_m  # the scale the integer map was read with (None: float metres)
         return PhotoScene(image, depth, camera=cam, encoding=encoding)
     assert sky is not None
     row["sky_share"] = float(np.count_nonzero(sky)) / sky.size

@@ -14,13 +14,34 @@
 
 use crate::errors::{CoreError, SkyfallError};
 use pyo3::prelude::*;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
+use std::sync::{Mutex, OnceLock};
 use std::time::Duration;
 
 /// How often the waiting thread runs Python's signal handlers.
 pub const POLL: Duration = Duration::from_millis(50);
+
+/// rayon's global pool, started on the first call that needs it. rayon builds it lazily and
+/// panics when it cannot (its threads refused under a memory limit); built here, a failure is a
+/// `MemoryError` instead, and stays one: rayon cannot try again in this process.
+fn ensure_pool() -> PyResult<()> {
+    static FAILED: OnceLock<Option<String>> = OnceLock::new();
+    let failed = FAILED.get_or_init(|| match rayon::ThreadPoolBuilder::new().build_global() {
+        Ok(()) => None,
+        // Built already (by an earlier call, or another library in this process): fine.
+        Err(e) if rayon::current_thread_index().is_some() || e.to_string().contains("already") => {
+            None
+        }
+        Err(e) => Some(e.to_string()),
+    });
+    match failed {
+        None => Ok(()),
+        Some(msg) => Err(pyo3::exceptions::PyMemoryError::new_err(format!(
+            "skyfall could not start its worker threads (out of memory or of threads): {msg}"
+        ))),
+    }
+}
 
 /// Runs `work` with the GIL released, honouring Ctrl-C (see the module docs). `work` gets the
 /// flag to pass to the core's cancellable functions; its result comes back as it is, unless
@@ -30,15 +51,19 @@ where
     T: Send,
     F: FnOnce(&AtomicBool) -> T + Send,
 {
+    ensure_pool()?;
     let cancel = AtomicBool::new(false);
     let slot = Mutex::new(Some(work));
     let take = || slot.lock().ok().and_then(|mut w| w.take());
     let (done_tx, done_rx) = mpsc::sync_channel::<()>(1);
     std::thread::scope(|s| {
+        let (take, cancel_ref) = (&take, &cancel);
         let spawned = std::thread::Builder::new()
             .name("skyfall-work".into())
-            .spawn_scoped(s, || {
-                let out = take().map(|w| w(&cancel));
+            // `move`: the worker owns the sender, so a panic drops it and the wait below sees
+            // the channel disconnect (borrowed, it outlived a panicking worker: a hang).
+            .spawn_scoped(s, move || {
+                let out = take().map(|w| w(cancel_ref));
                 // The receiver outlives this thread (it is joined below).
                 let _ = done_tx.send(());
                 out
@@ -83,6 +108,12 @@ where
                     .map(|s| s.to_string())
                     .or_else(|| panic.downcast_ref::<String>().cloned())
                     .unwrap_or_else(|| "a panic".into());
+                if msg.contains("ThreadPoolBuildError") {
+                    // rayon could not start its threads: the process is out of memory or threads.
+                    return Err(pyo3::exceptions::PyMemoryError::new_err(format!(
+                        "skyfall could not start its worker threads (out of memory or of threads): {msg}"
+                    )));
+                }
                 Err(SkyfallError::new_err(format!(
                     "internal error in skyfall's core (a bug: please report it): {msg}"
                 )))
@@ -103,6 +134,7 @@ where
     T: Send,
     F: FnOnce(&AtomicBool) -> skyfall_core::Result<T> + Send,
 {
+    ensure_pool()?;
     if steps < INLINE_STEPS {
         let never = AtomicBool::new(false);
         return Ok(py.detach(|| work(&never)).map_err(CoreError)?);
