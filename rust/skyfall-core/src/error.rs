@@ -316,6 +316,11 @@ impl Range {
 
     /// Checks every element of a slice; indices are reported only for slices longer than one.
     pub fn check_all(&self, name: &'static str, values: &[f64]) -> Result<()> {
+        // The common case in one plain pass (no error built per element); the first value
+        // outside is looked for only when there is one.
+        if values.iter().all(|&v| self.contains(v)) {
+            return Ok(());
+        }
         let many = values.len() > 1;
         for (i, &v) in values.iter().enumerate() {
             self.check(name, many.then_some(i), v)?;
