@@ -26,19 +26,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from timing import median_s
 
 import skyfall
 from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
-
-
-def median_s(fn: Callable[[], object], repeat: int) -> float:
-    fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def _photo(width: int, height: int) -> PhotoScene:
