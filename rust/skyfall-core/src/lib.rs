@@ -35,6 +35,7 @@ mod seed;
 pub mod simd;
 pub mod sky;
 pub mod snow;
+pub mod stage;
 pub mod weather;
 pub mod windshield;
 

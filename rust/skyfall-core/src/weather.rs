@@ -333,6 +333,20 @@ pub fn drawn_share(rain_rate_mm_h: f64, diameters_mm: &[f64]) -> f64 {
     bins.iter().map(|&(lo, hi)| below(hi) - below(lo)).sum()
 }
 
+impl TryFrom<&Weather> for crate::snow::cover::CoverWeather {
+    type Error = Error;
+
+    /// What the snow cover takes of `w`, once `w` is valid.
+    fn try_from(w: &Weather) -> Result<Self> {
+        w.validate()?;
+        Ok(crate::snow::cover::CoverWeather {
+            snow_rate_mm_h: w.snow_rate_mm_h,
+            wind_m_s: w.wind_m_s,
+            snow_density_kg_m3: w.snow_density_kg_m3,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

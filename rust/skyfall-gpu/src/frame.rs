@@ -9,10 +9,9 @@ use crate::pool::BufferPool;
 use crate::pool::Pooled;
 use crate::rain::RainPass;
 use crate::scene_raycast::SceneRaycastPass;
-use skyfall_core::cloud::frame::CloudSplats;
 use skyfall_core::frame::layers::{Layer, Layers};
-use skyfall_core::frame::passes::Passes;
 use skyfall_core::frame::scene::SceneLight;
+use skyfall_core::frame::stages::Frame;
 use skyfall_core::frame::{
     FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo,
 };
@@ -20,6 +19,7 @@ use skyfall_core::haze::Haze;
 use skyfall_core::rain::streaks::RainFrame;
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::snow::streaks::{SnowFrame, SnowStats};
+use skyfall_core::stage::Output;
 
 /// A device with every pass compiled, reused across frames.
 #[derive(Debug)]
@@ -69,11 +69,10 @@ impl GpuRenderer {
         rain: Option<&RainFrame<'_>>,
         snow: Option<&SnowFrame<'_>>,
     ) -> Result<FrameBuffers, GpuError> {
-        FrameBuffers::filled(
-            cam,
-            light.drawn(haze.is_some(), rain.is_some(), snow.is_some()),
-            |out| self.render_into(scene, cam, light, haze, rain, snow, out),
-        )
+        let frame = Frame::new(scene, cam, light).with_effects(haze, rain, snow);
+        FrameBuffers::filled(cam, frame.layers(), |out| {
+            self.draw(&frame, out).map(|(rain, _)| rain)
+        })
     }
 
     /// [`Self::render`] read back into the caller's buffers (see [`FrameOut`]); the rain's
@@ -105,21 +104,24 @@ impl GpuRenderer {
         snow: Option<&SnowFrame<'_>>,
         out: FrameOut<'_>,
     ) -> Result<(Option<RainReport>, Option<SnowStats>), GpuError> {
+        self.draw(
+            &Frame::new(scene, cam, light).with_effects(haze, rain, snow),
+            out,
+        )
+    }
+
+    /// Draws `frame` into `out`: its stages (checked to be the GPU's: the plan refuses the
+    /// rain's far level of detail), each recorded as its pass into one encoder, submitted once
+    /// and read back in one mapped copy.
+    pub fn draw(
+        &self,
+        frame: &Frame<'_>,
+        out: FrameOut<'_>,
+    ) -> Result<(Option<RainReport>, Option<SnowStats>), GpuError> {
+        let (scene, cam, light) = (frame.scene, frame.cam, frame.light);
         check_frame_size(cam)?;
-        if rain.is_some_and(|r| r.region.far_m.is_some()) {
-            // The far level of detail is the CPU's (its layers' lookups have no pass here).
-            return Err(skyfall_core::Error::Invalid {
-                param: skyfall_core::error::Param {
-                    name: "rain_far_m",
-                    index: None,
-                },
-                message: "the GPU backend draws every drop one by one: use rain_far_m = None \
-                          with it, or backend=\"cpu\" for the far level of detail"
-                    .into(),
-            }
-            .into());
-        }
-        let drawn = light.drawn(haze.is_some(), rain.is_some(), snow.is_some());
+        frame.plan().check(Output::Gpu)?;
+        let drawn = frame.layers();
         out.check(cam, drawn)?;
         let n = cam.pixels();
         self.ctx.check_buffer(
@@ -128,17 +130,8 @@ impl GpuRenderer {
         )?;
         let ctx = &self.ctx;
         ctx.scoped(|| {
-            // The particles first (on the CPU: they do not depend on the scene).
-            let lit = match scene {
-                SceneRef::Boxes(b) => Some((b, light)),
-                SceneRef::Photo { .. } => None,
-            };
-            let passes = Passes::prepare(cam, lit, haze, rain, snow)?;
-            let clouds = light
-                .clouds
-                .as_ref()
-                .map(|c| CloudSplats::prepare(c, cam))
-                .transpose()?;
+            // The stages made first (the particles on the CPU: they do not depend on the scene).
+            let prepared = frame.prepare(Output::Gpu)?;
             let mut f = FrameEncoder::new(ctx, &self.pool, cam);
             let mut snow_photo = None;
             let (rgb, depth) = match scene {
@@ -168,7 +161,7 @@ impl GpuRenderer {
             // The layers the passes draw, one buffer each.
             let mut layers: Layers<Pooled> = Layers::default();
             for l in Layer::ALL {
-                if l.drawn(drawn) {
+                if drawn.contains(l) {
                     match (l, snow_photo.take()) {
                         (Layer::SnowDepth, Some(b)) => layers.set(l, b),
                         (_, taken) => {
@@ -183,20 +176,22 @@ impl GpuRenderer {
                 depth: &depth,
                 layers: &layers,
             };
-            // The passes in physical order: the scene, haze, the lights' glows, rain.
+            // The stages in the plan's order, each its pass: the scene (a box scene's ray
+            // cast; a photo is its upload), the clouds, the haze, the lights' glows, the
+            // particles.
             if let SceneRef::Boxes(b) = scene {
                 self.raycast.encode(&mut f, &targets, (b, light))?;
             }
-            if let Some(c) = &clouds {
-                self.cloud.encode(&mut f, &targets, c)?;
+            if let Some(c) = &prepared.clouds {
+                self.cloud.encode(&mut f, &targets, &c.splats)?;
             }
-            if let Some(h) = passes.haze {
-                self.haze.encode(&mut f, &targets, h)?;
+            if let Some(h) = &prepared.haze {
+                self.haze.encode(&mut f, &targets, h.haze())?;
             }
-            if let Some(g) = &passes.glow {
-                self.glow.encode(&mut f, &targets, g)?;
+            if let Some(g) = &prepared.glow {
+                self.glow.encode(&mut f, &targets, &g.glow)?;
             }
-            if let Some(p) = &passes.particles {
+            if let Some(p) = prepared.particles() {
                 self.rain.encode(&mut f, &targets, &p.streaks)?;
             }
             // One submission, one readback of every output.
@@ -212,7 +207,7 @@ impl GpuRenderer {
                 }
             }
             f.read_back(outputs)?;
-            Ok((passes.rain_report(), passes.snow_report()))
+            Ok((prepared.rain_report(), prepared.snow_report()))
         })
     }
 

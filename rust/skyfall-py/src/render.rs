@@ -8,13 +8,15 @@ use numpy::ndarray::{Ix2, Ix3};
 use numpy::{PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use skyfall_core::frame::float::render_into_reporting;
+use skyfall_core::frame::float::draw;
 use skyfall_core::frame::layers::Layer;
 use skyfall_core::frame::request::FrameSetup;
 use skyfall_core::frame::srgb8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
+use skyfall_core::frame::stages::Frame;
 use skyfall_core::frame::{FrameOut, RainReport, check_frame_size};
 use skyfall_core::rain::streaks::RainStats;
 use skyfall_core::snow::streaks::SnowStats;
+use skyfall_core::stage::Output;
 use skyfall_gpu::AdapterChoice;
 use skyfall_gpu::frame::GpuRenderer;
 
@@ -77,13 +79,11 @@ pub fn render_frame<'py>(
     let parsed: ParsedRequest<'py> = request.parse(true)?;
     let req = parsed.request()?;
     let setup = FrameSetup::new(&req).map_err(CoreError)?;
-    let (scene, cam, light, haze, rain, snow) = (
-        req.scene_ref(),
-        &req.camera,
-        setup.light(),
+    let (cam, light, rain, snow) = (&req.camera, setup.light(), setup.rain(), setup.snow());
+    let frame = Frame::new(req.scene_ref(), cam, &light).with_effects(
         setup.haze.as_ref(),
-        setup.rain(),
-        setup.snow(),
+        rain.as_ref(),
+        snow.as_ref(),
     );
     // Into numpy's arrays (see `FrameOut`): the caller's (`out`) where given, else new ones,
     // sized once the frame is known to fit.
@@ -98,13 +98,11 @@ pub fn render_frame<'py>(
     let depth = out.take::<f32, Ix2>("depth_m")?.map_or_else(plane, Ok)?;
     // The layers this frame draws, in the order they are declared.
     let mut layers: Vec<(Layer, F2<'py>)> = Vec::new();
-    for layer in Layer::ALL {
-        if layer.drawn(light.drawn(haze.is_some(), rain.is_some(), snow.is_some())) {
-            layers.push((
-                layer,
-                out.take::<f32, Ix2>(layer.name())?.map_or_else(plane, Ok)?,
-            ));
-        }
+    for layer in frame.layers().iter() {
+        layers.push((
+            layer,
+            out.take::<f32, Ix2>(layer.name())?.map_or_else(plane, Ok)?,
+        ));
     }
     let (report, snow_report) = {
         fn busy(name: &'static str) -> impl Fn(numpy::BorrowError) -> PyErr {
@@ -122,32 +120,8 @@ pub fn render_frame<'py>(
             .collect::<Result<Vec<_>, _>>()?;
         let out = FrameOut::from_layers(rgb_w.as_slice_mut()?, depth_w.as_slice_mut()?, slices);
         match device.as_ref().map(|d| &d.get().inner) {
-            Some(gpu) => py
-                .detach(|| {
-                    gpu.render_into_reporting(
-                        scene,
-                        cam,
-                        &light,
-                        haze,
-                        rain.as_ref(),
-                        snow.as_ref(),
-                        out,
-                    )
-                })
-                .map_err(gpu_error)?,
-            None => py
-                .detach(|| {
-                    render_into_reporting(
-                        scene,
-                        cam,
-                        &light,
-                        haze,
-                        rain.as_ref(),
-                        snow.as_ref(),
-                        out,
-                    )
-                })
-                .map_err(CoreError)?,
+            Some(gpu) => py.detach(|| gpu.draw(&frame, out)).map_err(gpu_error)?,
+            None => py.detach(|| draw(&frame, out)).map_err(CoreError)?,
         }
     };
     let named = PyDict::new(py);
@@ -194,13 +168,15 @@ pub fn render_photo8<'py>(
             format!("must have 256 entries, got {}", decode_table.len()),
         )
     })?;
-    if req.clouds.is_some() {
-        return Err(invalid(
-            "clouds",
-            None,
-            "the 8-bit output stage draws no clouds: render the float frame (Renderer.render_srgb8 does)",
-        ));
-    }
+    // Which stages the fused 8-bit output draws is the stages' own declaration.
+    let light = setup.light();
+    let (rain, snow) = (setup.rain(), setup.snow());
+    let frame = Frame::new(req.scene_ref(), &req.camera, &light).with_effects(
+        setup.haze.as_ref(),
+        rain.as_ref(),
+        snow.as_ref(),
+    );
+    frame.plan().check(Output::Srgb8).map_err(CoreError)?;
     let depth_m = match req.scene_ref() {
         skyfall_core::frame::SceneRef::Photo { depth_m, .. } => depth_m,
         skyfall_core::frame::SceneRef::Boxes(_) => {
@@ -222,7 +198,7 @@ pub fn render_photo8<'py>(
         rain_alpha: alpha.as_mut().map(|a| a.as_slice_mut()).transpose()?,
         snow_alpha: snow_alpha.as_mut().map(|a| a.as_slice_mut()).transpose()?,
     };
-    let (cam, haze, rain, snow) = (&req.camera, setup.haze.as_ref(), setup.rain(), setup.snow());
+    let (cam, haze) = (&req.camera, setup.haze.as_ref());
     let report = py
         .detach(|| render_photo8_core(cam, &photo, haze, rain.as_ref(), snow.as_ref(), out))
         .map_err(CoreError)?;

@@ -29,6 +29,7 @@ pub mod harris;
 pub mod light;
 pub mod optics;
 pub mod reference;
+pub mod stage;
 pub mod volume;
 
 use crate::error::{Error, Param, Result};

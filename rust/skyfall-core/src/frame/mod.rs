@@ -1,31 +1,33 @@
-//! A frame is one pipeline: the scene stage (a photo and its depth, or the box scene ray
-//! cast), then the effect passes in physical order (haze, then the particles: rain now,
-//! snow next; the windshield will come last, as a full-frame stage since it refracts what lies
-//! behind the glass), then an output stage. The passes are prepared once per frame
-//! ([`passes::Passes`]: the particles made, lit, projected and sorted far to near), and an
-//! output stage draws them:
+//! A frame is one list of stages (the [`crate::stage::Stage`] seam) in physical order: the
+//! scene stage (a photo and its depth, or the box scene ray cast), then the clouds, the haze,
+//! the lights' glows and the particles. [`stages::Frame`] declares the list ([`stages::Frame::plan`]:
+//! each stage's layers and the outputs that draw it) and makes it once per frame
+//! ([`stages::Frame::prepare`]; the particles of every effect in one far-to-near list,
+//! [`passes::Particles`]); an output draws it:
 //!
-//! - [`float`]: the linear float32 frame with its layers, band by band (16 rows) while the
-//!   band is in cache: scene, haze, particles;
+//! - [`float`]: the linear float32 frame with its layers, through the one generic loop
+//!   [`crate::stage::draw_bands`]: band by band (16 rows) while the band is in cache;
 //! - [`srgb8`]: 8-bit sRGB for 8-bit photos, in tiles: the particles into each pixel's affine
-//!   map first, then each pixel decoded, hazed, mapped and encoded once;
-//! - the GPU backend (`skyfall-gpu`), one pass per effect on the device.
+//!   map first, then each pixel decoded, hazed, mapped and encoded once (the stages that
+//!   declare it: the photo, the haze, the particles);
+//! - the GPU backend (`skyfall-gpu`), each stage a pass recorded into one encoder.
 //!
-//! The layers a frame can carry are declared once, in [`layers`].
+//! The layers a frame can carry are declared once, in [`layers`] (`crate::stage::layers`).
 
 use crate::error::{Error, Param, Result, try_filled_par};
 use crate::haze::check_depth;
 use crate::rain::streaks::RainStats;
 use crate::scene::boxes::BoxScene;
 use crate::scene::camera::Camera;
-use layers::{Drawn, Layer, Layers};
+pub use crate::stage::layers;
+use layers::{Layer, LayerSet, Layers};
 
 pub mod float;
-pub mod layers;
 pub mod passes;
 pub mod request;
 pub mod scene;
 pub mod srgb8;
+pub mod stages;
 
 pub use float::{render, render_into};
 
@@ -116,8 +118,8 @@ pub struct FrameOut<'a> {
     pub rgb: &'a mut [f32],
     /// Depth along the optical axis, m, H·W.
     pub depth_m: &'a mut [f32],
-    /// The layers, H·W each: given exactly when the frame's passes draw them
-    /// ([`Layer::drawn`]).
+    /// The layers, H·W each: given exactly when the frame's stages draw them
+    /// ([`stages::Frame::layers`]).
     pub layers: Layers<&'a mut [f32]>,
 }
 
@@ -142,9 +144,9 @@ impl<'a> FrameOut<'a> {
         out
     }
 
-    /// Checks the buffers against a `cam` frame running the passes `drawn`: every length, and
+    /// Checks the buffers against a `cam` frame drawing the layers `drawn`: every length, and
     /// the layers given exactly when they are drawn.
-    pub fn check(&self, cam: &Camera, drawn: Drawn) -> Result<()> {
+    pub fn check(&self, cam: &Camera, drawn: LayerSet) -> Result<()> {
         let n = cam.pixels();
         let length = |name: &'static str, len: usize, expected: usize| Error::Length {
             param: Param { name, index: None },
@@ -158,7 +160,7 @@ impl<'a> FrameOut<'a> {
             return Err(length("depth_m", self.depth_m.len(), n));
         }
         for l in Layer::ALL {
-            let drawn = l.drawn(drawn);
+            let drawn = drawn.contains(l);
             let want = if drawn { n } else { 0 };
             let got = self.layers.get(l).map_or(0, |b| b.len());
             if got != want || self.layers.get(l).is_some() != drawn {
@@ -170,11 +172,11 @@ impl<'a> FrameOut<'a> {
 }
 
 impl FrameBuffers {
-    /// A `cam` frame's buffers (with each layer the passes `drawn` draw), sized after the frame
+    /// A `cam` frame's buffers (with each layer of `drawn`), sized after the frame
     /// is checked to fit, filled by a backend's `render_into`.
     pub fn filled<E: From<Error>>(
         cam: &Camera,
-        drawn: Drawn,
+        drawn: LayerSet,
         render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
     ) -> std::result::Result<Self, E> {
         check_frame_size(cam)?;
@@ -186,7 +188,7 @@ impl FrameBuffers {
         );
         let mut layers: Layers<Vec<f32>> = Layers::default();
         for l in Layer::ALL {
-            if l.drawn(drawn) {
+            if drawn.contains(l) {
                 layers.set(l, try_filled_par(l.name(), n, 0.0f32)?);
             }
         }

@@ -1,16 +1,16 @@
-//! A frame's effect passes, prepared once for whichever output stage draws them.
+//! The particles of a frame, prepared once for whichever output draws them, and their stage on
+//! the float output.
 
-use super::scene::SceneLight;
 use crate::error::Result;
-use crate::glow::Glow;
-use crate::haze::Haze;
+use crate::particles::composite::{BAND_ROWS, bin_by_bands, composite_band_colour};
 use crate::particles::order::far_to_near;
 use crate::particles::streak::ScreenStreak;
 use crate::rain::far::FarRain;
 use crate::rain::streaks::{RainFrame, RainStats};
-use crate::scene::boxes::BoxScene;
 use crate::scene::camera::Camera;
 use crate::snow::streaks::{SnowFrame, SnowStats};
+use crate::stage::layers::{Layer, LayerSet};
+use crate::stage::{Band, Stage};
 
 /// The particles of a frame: every effect's, lit, projected and sorted far to near in one list
 /// (each carries its own light and r), so they composite in depth order whatever effect made
@@ -31,30 +31,23 @@ pub struct Particles {
     pub far: Option<FarRain>,
 }
 
-/// The effect passes of a frame, in physical order.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Passes<'a> {
-    /// Haze along the view rays.
-    pub haze: Option<&'a Haze>,
-    /// The lights seen by the camera, their discs and glows (after the haze, before the
-    /// particles), when a box scene has lights in view.
-    pub glow: Option<Glow>,
-    /// The particles (rain and snow), when any effect makes them.
-    pub particles: Option<Particles>,
+/// What the particles draw: the rain's layers when it rains, the snow's when it snows.
+pub fn layers(rain: bool, snow: bool) -> LayerSet {
+    LayerSet::EMPTY
+        .with_if(Layer::RainAlpha, rain)
+        .with_if(Layer::RainDepth, rain)
+        .with_if(Layer::SnowAlpha, snow)
 }
 
-impl<'a> Passes<'a> {
-    /// The passes of a `cam` frame with `haze`, `rain` and `snow` and, for a box scene, its
-    /// lights (`lit`: the scene and how it is lit): the drops and flakes made and drawn into
-    /// streaks (one list, far to near, each particle carrying its layer) and the glows' sources
-    /// found here, once, for any output stage.
+impl Particles {
+    /// The particles of a `cam` frame with `rain` and `snow`: the drops and flakes made and
+    /// drawn into streaks (one list, far to near, each particle carrying its layer); None
+    /// when neither falls.
     pub fn prepare(
         cam: &Camera,
-        lit: Option<(&BoxScene, &SceneLight<'_>)>,
-        haze: Option<&'a Haze>,
         rain: Option<&RainFrame<'_>>,
         snow: Option<&SnowFrame<'_>>,
-    ) -> Result<Self> {
+    ) -> Result<Option<Self>> {
         let mut particles = match rain {
             Some(rf) => {
                 let (streaks, rain, rain_drops) = rf.streaks(cam)?;
@@ -82,7 +75,7 @@ impl<'a> Passes<'a> {
             // One list: the rain's (sorted) then the flakes, sorted together far to near
             // (ties in that order).
             p.streaks.try_reserve(flakes.len()).map_err(|_| {
-                crate::Error::out_of_memory::<crate::particles::streak::ScreenStreak>(
+                crate::Error::out_of_memory::<ScreenStreak>(
                     "the particles' streaks",
                     p.streaks.len() + flakes.len(),
                 )
@@ -91,35 +84,76 @@ impl<'a> Passes<'a> {
             far_to_near(&mut p.streaks)?;
             p.snow = Some(stats);
         }
-        let glow = lit.and_then(|(scene, light)| {
-            if light.lights.is_empty() {
-                return None;
-            }
-            let tau = |d: f32| haze.map_or(0.0, |h| h.optical_depth(d));
-            Glow::prepare(cam, scene, light.lights, tau, light.sky_illuminance_lux)
-        });
-        Ok(Passes {
-            haze,
-            glow,
-            particles,
-        })
+        Ok(particles)
     }
 
     /// What the rain reports: streaks drawn and culled, drops generated (when it rains).
     pub fn rain_report(&self) -> Option<(RainStats, usize)> {
-        self.particles
-            .as_ref()
-            .filter(|p| p.raining)
-            .map(|p| (p.rain, p.rain_drops))
+        self.raining.then_some((self.rain, self.rain_drops))
     }
 
-    /// The rain's far layers, when the frame draws them.
-    pub fn far(&self) -> Option<&FarRain> {
-        self.particles.as_ref().and_then(|p| p.far.as_ref())
+    /// The layers these particles draw.
+    pub fn layers(&self) -> LayerSet {
+        layers(self.raining, self.snow.is_some())
+    }
+}
+
+/// The particles as a stage of the float output: each band's streaks (binned once, by bands of
+/// [`BAND_ROWS`]) composited far to near after the rain's far shells, with the depth test.
+pub struct ParticleStage {
+    /// The particles.
+    pub particles: Particles,
+    /// Per band, the start of its run in `indices`; one more at the end.
+    offsets: Vec<u32>,
+    /// Streak indices per band.
+    indices: Vec<u32>,
+}
+
+impl ParticleStage {
+    /// `particles` binned to `cam`'s bands.
+    pub fn new(particles: Particles, cam: &Camera) -> Result<Self> {
+        let (offsets, indices) = bin_by_bands(cam, &particles.streaks)?;
+        Ok(ParticleStage {
+            particles,
+            offsets,
+            indices,
+        })
+    }
+}
+
+impl Stage for ParticleStage {
+    fn layers(&self) -> LayerSet {
+        self.particles.layers()
     }
 
-    /// What the snow reports: flakes generated and streaks drawn (when it snows).
-    pub fn snow_report(&self) -> Option<SnowStats> {
-        self.particles.as_ref().and_then(|p| p.snow)
+    fn band(&self, band: &mut Band<'_>) {
+        let bi = band.y0 / BAND_ROWS;
+        let list = &self.indices[self.offsets[bi] as usize..self.offsets[bi + 1] as usize];
+        let [alpha, depth, snow] = band
+            .layers
+            .0
+            .get_disjoint_mut([
+                Layer::RainAlpha.index(),
+                Layer::RainDepth.index(),
+                Layer::SnowAlpha.index(),
+            ])
+            .unwrap_or_else(|_| unreachable!("three distinct layers"));
+        // A layer the frame does not draw is an empty slice (no streak of that effect).
+        let mut empty = [[0.0f32; 0]; 3];
+        let [e0, e1, e2] = &mut empty;
+        composite_band_colour(
+            &self.particles.streaks,
+            list,
+            self.particles.far.as_ref().map(|f| f as _),
+            band.y0,
+            band.width,
+            band.depth_m,
+            band.rgb,
+            [
+                alpha.as_deref_mut().map_or(&mut e0[..], |s| s),
+                depth.as_deref_mut().map_or(&mut e1[..], |s| s),
+                snow.as_deref_mut().map_or(&mut e2[..], |s| s),
+            ],
+        );
     }
 }

@@ -19,6 +19,8 @@ use crate::scene::lights::Light;
 use crate::scene::raycast::occluded_within;
 use crate::sky::Sky;
 use crate::sky::ambient::AmbientMap;
+use crate::stage::layers::{Layer, LayerSet};
+use crate::stage::{Row, Stage};
 use glam::Vec3;
 
 /// Bound on the relative change of a pixel's radiance by the shadow rays skipped (see the
@@ -150,18 +152,6 @@ impl<'a> SceneLight<'a> {
             sky_lit + a * self.lamp_light(boxes, p, n, a, sky_lit),
             share,
         )
-    }
-
-    /// The passes a frame lit so runs, with or without haze, rain and snowfall (its layers).
-    pub fn drawn(&self, haze: bool, rain: bool, snow: bool) -> crate::frame::layers::Drawn {
-        crate::frame::layers::Drawn {
-            haze,
-            rain,
-            snow,
-            snow_cover: self.snow.is_some(),
-            clouds: self.clouds.is_some(),
-            sun: self.sun.is_some(),
-        }
     }
 
     /// The same with the sun `sun` and the clouds `clouds`.
@@ -296,6 +286,128 @@ pub fn shade_pixel_sun(
             f32::INFINITY,
             1.0,
         ),
+    }
+}
+
+impl crate::scene::SurfaceLight for SceneLight<'_> {
+    #[inline]
+    fn surface_radiance_sun(
+        &self,
+        boxes: &[crate::scene::boxes::SceneBox],
+        p: Vec3,
+        n: Vec3,
+        a: Vec3,
+    ) -> (Vec3, f32) {
+        SceneLight::surface_radiance_sun(self, boxes, p, n, a)
+    }
+
+    #[inline]
+    fn sky_pixel(&self, dir: Vec3) -> f32 {
+        self.sky.sky_pixel(dir)
+    }
+}
+
+/// The scene as the first stage of a frame: each row's box scene ray cast (with its snow cover,
+/// into `snow_depth_m`, and the sun's share, into `sun_transmittance`) or the photo's row
+/// copied (whitened by its snow cover).
+pub struct SceneStage<'a> {
+    /// The photo or the box scene.
+    pub scene: super::SceneRef<'a>,
+    /// The frame's camera.
+    pub cam: &'a Camera,
+    /// How the scene is lit.
+    pub light: &'a SceneLight<'a>,
+}
+
+impl Stage for SceneStage<'_> {
+    fn layers(&self) -> LayerSet {
+        LayerSet::EMPTY
+            .with_if(Layer::SnowDepth, self.light.snow.is_some())
+            .with_if(Layer::SunTransmittance, self.light.sun.is_some())
+    }
+
+    fn row(&self, row: &mut Row<'_>) {
+        let (scene, cam, light, y) = (self.scene, self.cam, self.light, row.y as usize);
+        let [cover, sun] = row
+            .layers
+            .0
+            .get_disjoint_mut([Layer::SnowDepth.index(), Layer::SunTransmittance.index()])
+            .unwrap_or_else(|_| unreachable!("two distinct layers"));
+        let sun_row = sun.as_deref_mut();
+        match (light.snow, cover.as_deref_mut()) {
+            (Some(snow), Some(s_row)) => {
+                let rows = (&mut *row.rgb, &mut *row.depth_m, s_row, sun_row);
+                snow_scene_row(scene, cam, light, snow, y, rows);
+            }
+            _ => scene_row(scene, cam, light, y, row.rgb, row.depth_m, sun_row),
+        }
+    }
+}
+
+/// The scene stage of one row: the box scene ray cast (with each pixel's share of the sun into
+/// `sun_row` when given), or the photo's row copied.
+fn scene_row(
+    scene: super::SceneRef<'_>,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    y: usize,
+    rgb_row: &mut [f32],
+    depth_row: &mut [f32],
+    mut sun_row: Option<&mut [f32]>,
+) {
+    let w = depth_row.len();
+    match scene {
+        super::SceneRef::Boxes(b) => {
+            for x in 0..w {
+                let (c, d, s) = shade_pixel_sun(b, cam, light, x as u32, y as u32);
+                rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
+                depth_row[x] = d;
+                if let Some(r) = sun_row.as_deref_mut() {
+                    r[x] = s;
+                }
+            }
+        }
+        super::SceneRef::Photo { rgb, depth_m } => {
+            rgb_row.copy_from_slice(&rgb[3 * w * y..3 * w * (y + 1)]);
+            depth_row.copy_from_slice(&depth_m[w * y..w * (y + 1)]);
+        }
+    }
+}
+
+/// A row's buffers: rgb, depth, the snow's depth, and the sun's share when the frame has it.
+type SnowRows<'r> = (
+    &'r mut [f32],
+    &'r mut [f32],
+    &'r mut [f32],
+    Option<&'r mut [f32]>,
+);
+
+/// [`scene_row`] with a snow cover on the surfaces, its depth into `snow_row` (and the share of
+/// the sun on the visible surface, the cover's or the one beneath, into `sun_row`).
+fn snow_scene_row(
+    scene: super::SceneRef<'_>,
+    cam: &Camera,
+    light: &SceneLight<'_>,
+    snow: &crate::snow::cover::SnowRender,
+    y: usize,
+    (rgb_row, depth_row, snow_row, mut sun_row): SnowRows<'_>,
+) {
+    match scene {
+        super::SceneRef::Boxes(b) => {
+            for x in 0..depth_row.len() {
+                let (c, d, s, sun) = snow.shade_pixel(b, cam, light, x as u32, y as u32);
+                rgb_row[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
+                depth_row[x] = d;
+                snow_row[x] = s;
+                if let Some(r) = sun_row.as_deref_mut() {
+                    r[x] = sun;
+                }
+            }
+        }
+        super::SceneRef::Photo { .. } => {
+            scene_row(scene, cam, light, y, rgb_row, depth_row, None);
+            snow.photo_row(cam, light.ambient, y, rgb_row, depth_row, Some(snow_row));
+        }
     }
 }
 

@@ -1,5 +1,6 @@
 //! The 8-bit output stage, for 8-bit photos: sRGB bytes in, sRGB bytes out, the frame's
-//! passes (haze and particles, [`super::passes::Passes`]) drawn in one pass: bands of rows in
+//! stages that declare it (the photo, the haze and the particles, [`super::passes::Particles`];
+//! [`super::stages::Frame::plan`]) drawn in one pass: bands of rows in
 //! parallel, each cut into tiles of 128 columns drawn one after the other.
 //!
 //! The rain is composited far to near as in [`crate::particles::composite::composite_streaks`], but
@@ -13,10 +14,10 @@
 //! rounding of the reassociated sums (tests: every byte within 1 code, nearly all identical).
 
 use super::check_frame_size;
-use super::passes::Passes;
+use super::passes::Particles;
 use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
-use crate::haze::{Haze, ViewRays};
+use crate::haze::{Haze, ViewRays, blend};
 use crate::particles::binning::bin_by_tiles;
 use crate::particles::composite::{Accumulator, composite_band};
 use crate::particles::streak::{LAYER_SNOW, ScreenStreak};
@@ -143,17 +144,17 @@ pub fn render_photo8_with(
     }
     crate::haze::check_depth(photo.depth_m)?;
 
-    let passes = Passes::prepare(cam, None, haze, rain, snow)?;
-    let stats = (rain.is_some() || snow.is_some()).then(|| {
-        let (rain, drops) = passes.rain_report().unwrap_or_default();
+    let particles = Particles::prepare(cam, rain, snow)?;
+    let stats = particles.as_ref().map(|p| {
+        let (rain, drops) = p.rain_report().unwrap_or_default();
         Photo8Stats {
             rain,
             drops,
-            snow: passes.snow_report(),
+            snow: p.snow,
         }
     });
-    let streaks: &[ScreenStreak] = passes.particles.as_ref().map_or(&[], |p| &p.streaks);
-    let far = passes.far();
+    let streaks: &[ScreenStreak] = particles.as_ref().map_or(&[], |p| &p.streaks);
+    let far = particles.as_ref().and_then(|p| p.far.as_ref());
     if haze.is_none() && streaks.is_empty() && far.is_none() {
         // Nothing to draw: encode(decode(b)) = b for every byte (tested), so the bytes as they are.
         out.srgb.copy_from_slice(photo.srgb);
@@ -538,7 +539,7 @@ fn shade4(
         )
     });
     for m in 0..3 {
-        let mut h = v[m] * ts[m] + air4[m] * (Vec4::ONE - ts[m]);
+        let mut h = blend(v[m], ts[m], air4[m], Vec4::ONE);
         if let Some((ps, qs)) = &pqs {
             h = h * ps[m] + qs[m];
         }
@@ -566,7 +567,7 @@ fn shade_row_x1<const K: usize>(
     // Zipped iterators, one loop per case: no bounds check and no branch per pixel.
     let pixels = out.chunks_exact_mut(3).zip(src.chunks_exact(3)).zip(t);
     let hazed = |s: &[u8], t: f32| -> [f32; 3] {
-        std::array::from_fn(|ch| decode[usize::from(s[ch])] * t + air[ch] * (1.0 - t))
+        std::array::from_fn(|ch| blend(decode[usize::from(s[ch])], t, air[ch], 1.0))
     };
     match pq {
         None => {

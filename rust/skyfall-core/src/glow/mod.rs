@@ -32,6 +32,8 @@
 //! the haze (it is light that reached the camera) and before the particles (drops in front of
 //! a lamp hide it). [`Glow::apply_row`] is the CPU reference of `skyfall-gpu`'s `glow.wgsl`.
 
+pub mod stage;
+
 use crate::scene::boxes::{BoxScene, trace};
 use crate::scene::camera::Camera;
 use crate::scene::lights::Light;

@@ -24,6 +24,7 @@
 //! (`crate::frame`) calls it row by row.
 
 pub mod airlight;
+pub mod stage;
 
 use crate::error::{Error, Param, Range, Result};
 use crate::scene::camera::Camera;
@@ -320,6 +321,17 @@ pub fn check_depth(depth_m: &[f32]) -> Result<()> {
     })
 }
 
+/// The haze blend C·t + A·(1 − t): colour `c` seen through transmittance `t` with airlight `a`
+/// (`one` the type's 1). Every CPU output's scalar and four-lane code draws the haze through
+/// this one function (the SIMD twins in `simd.rs` and `haze.wgsl` are held to it by tests).
+#[inline(always)]
+pub fn blend<T>(c: T, t: T, a: T, one: T) -> T
+where
+    T: Copy + std::ops::Mul<Output = T> + std::ops::Add<Output = T> + std::ops::Sub<Output = T>,
+{
+    c * t + a * (one - t)
+}
+
 /// Applies haze to one row: `rgb_row` (W·3, in place), `t_row` (W) written, from
 /// `depth_row` (W) seen along `rays` ([`ViewRays::row`]).
 #[inline]
@@ -333,7 +345,7 @@ pub fn apply_row(
     haze.transmittance_row(rays, depth_row, t_row);
     for (px, &t) in rgb_row.chunks_exact_mut(3).zip(t_row.iter()) {
         for (v, a) in px.iter_mut().zip(haze.airlight) {
-            *v = *v * t + a * (1.0 - t);
+            *v = blend(*v, t, a, 1.0);
         }
     }
 }

@@ -247,6 +247,22 @@ pub fn composite_streaks_with_snow(
     Ok(())
 }
 
+/// Particles drawn as a whole into the accumulator before the listed streaks, behind them all
+/// (the rain's far level of detail, `rain::far::FarRain`): a trait here so that the
+/// compositor need not import the effects that import it.
+pub trait Backdrop: Sync {
+    /// Composites rows from `y0` (`rows` of them, `w` wide, every column) into `acc`, with the
+    /// depth test against `depth`.
+    fn composite_colour(
+        &self,
+        y0: usize,
+        rows: usize,
+        w: usize,
+        depth: &[f32],
+        acc: &mut ColourAccumulator<'_>,
+    );
+}
+
 /// One band of the float frame: rows from `y0` (as many as `depth` holds), every column, the
 /// colour `rgb` composited in place (the rain's far layers `far` first, when given), the
 /// layers `[rain_alpha, rain_depth_m, snow_alpha]` overwritten (a layer's buffer empty when
@@ -256,7 +272,7 @@ pub fn composite_streaks_with_snow(
 pub fn composite_band_colour(
     streaks: &[ScreenStreak],
     list: &[u32],
-    far: Option<&crate::rain::far::FarRain>,
+    far: Option<&dyn Backdrop>,
     y0: usize,
     w: usize,
     depth: &[f32],
@@ -273,7 +289,7 @@ pub fn composite_band_colour(
         &mut snow_alpha[..ns],
     );
     if let Some(far) = far {
-        far.composite(y0, px / w, w, 0..w, depth, &mut acc);
+        far.composite_colour(y0, px / w, w, depth, &mut acc);
     }
     composite_band(streaks, list, y0, px / w, w, 0..w, depth, &mut acc);
     acc.finish();

@@ -605,5 +605,18 @@ fn atan2_x4(y: Vec4, x: Vec4) -> Vec4 {
     Vec4::select(y.cmplt(Vec4::ZERO), -p, p)
 }
 
+impl crate::particles::composite::Backdrop for FarRain {
+    fn composite_colour(
+        &self,
+        y0: usize,
+        rows: usize,
+        w: usize,
+        depth: &[f32],
+        acc: &mut crate::particles::composite::ColourAccumulator<'_>,
+    ) {
+        self.composite(y0, rows, w, 0..w, depth, acc);
+    }
+}
+
 #[cfg(test)]
 mod tests;

@@ -7,3 +7,22 @@ pub mod boxes;
 pub mod camera;
 pub mod lights;
 pub mod raycast;
+
+use glam::Vec3;
+
+/// How a frame lights a surface, as the effects that draw surfaces of their own (the snow
+/// cover) see it: the frame's `SceneLight` implements it, so they need not import the frame.
+pub trait SurfaceLight {
+    /// Radiance (relative to E/π) of a Lambertian face of albedo `a` and normal `n` at `p`,
+    /// with the shadows of `boxes`, and the share of the sun's direct light it receives.
+    fn surface_radiance_sun(
+        &self,
+        boxes: &[boxes::SceneBox],
+        p: Vec3,
+        n: Vec3,
+        a: Vec3,
+    ) -> (Vec3, f32);
+
+    /// The sky's radiance seen along the unit direction `dir` (relative).
+    fn sky_pixel(&self, dir: Vec3) -> f32;
+}

@@ -1,6 +1,6 @@
 //! Snowfall drawn through the particle toolkit: a frame's flakes lit, faded with distance,
 //! given their sprites, projected into streaks (their exposure-long paths, motion-blurred as the
-//! drops' are) for the one far-to-near list of [`crate::frame::passes::Passes`].
+//! drops' are) for the one far-to-near list of [`crate::frame::passes::Particles`].
 //!
 //! - **Light**: a flake is an opaque white scatterer (r = 1: where it covers a pixel it
 //!   replaces the background) of albedo [`SNOW_ALBEDO`], lit as the drops are

@@ -7,7 +7,6 @@ use super::shadow::ShadowBuffer;
 use crate::error::{Error, Param, Result, check_cancel, try_filled};
 use crate::physics::snow::{Snowfall, WATER_KG_M3, snow_depth_rate_m_s};
 use crate::ranges;
-use crate::weather::Weather;
 use rayon::prelude::*;
 use std::sync::atomic::AtomicBool;
 
@@ -30,23 +29,36 @@ pub struct CoverParams {
     pub seed: u64,
 }
 
+/// What the cover takes of a frame's weather (`weather::Weather` converts itself, validated,
+/// so this module need not import the weather that imports the snow).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoverWeather {
+    /// Snowfall as liquid water, mm/h.
+    pub snow_rate_mm_h: f64,
+    /// The wind, m/s (x, y, z).
+    pub wind_m_s: [f64; 3],
+    /// The cover's bulk density, kg/m³.
+    pub snow_density_kg_m3: f64,
+}
+
 /// The snow's mean fall velocity under `weather`, m/s: the wind, and the mass-weighted fall
 /// speed of its flakes downward ([`Snowfall::mean_fall_speed_m_s`]).
-pub fn fall_velocity_m_s(weather: &Weather) -> [f64; 3] {
+pub fn fall_velocity_m_s(weather: &CoverWeather) -> [f64; 3] {
     let vf = Snowfall::new(weather.snow_rate_mm_h).mean_fall_speed_m_s();
     let w = weather.wind_m_s;
     [w[0], w[1] - vf, w[2]]
 }
 
 /// The cover `weather`'s snow lays on `field` over `params.duration_s` (see [`super`]);
-/// `cancel` stops it between steps.
-pub fn accumulate(
+/// `cancel` stops it between steps. `weather` is a [`CoverWeather`] or anything that converts
+/// to one, checked (a `&weather::Weather`, validated whole).
+pub fn accumulate<W: TryInto<CoverWeather, Error = Error>>(
     field: HeightField,
-    weather: &Weather,
+    weather: W,
     params: &CoverParams,
     cancel: Option<&AtomicBool>,
 ) -> Result<SnowCover> {
-    weather.validate()?;
+    let weather = &weather.try_into()?;
     ranges::DURATION_S.check(params.duration_s)?;
     ranges::DT_S.check(params.dt_s)?;
     ranges::ROUGHNESS.check(params.roughness)?;

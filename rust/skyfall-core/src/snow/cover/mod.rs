@@ -45,7 +45,7 @@ pub mod heightfield;
 pub mod render;
 pub mod shadow;
 
-pub use accumulate::{CoverParams, accumulate, fall_velocity_m_s};
+pub use accumulate::{CoverParams, CoverWeather, accumulate, fall_velocity_m_s};
 pub use heightfield::{Grid, HeightField};
 pub use render::{SNOW_ALBEDO, SnowRender};
 

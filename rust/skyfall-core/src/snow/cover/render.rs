@@ -356,13 +356,13 @@ impl SnowRender {
 
     /// One pixel of a box scene with the cover: (radiance, depth along the axis, depth of snow
     /// seen there, the sun's share on the surface seen), lit as
-    /// [`crate::frame::scene::shade_pixel`] lights the surfaces.
+    /// the frame's scene stage lights the surfaces (`light`: the frame's `SceneLight`).
     #[inline]
     pub fn shade_pixel(
         &self,
         scene: &BoxScene,
         cam: &Camera,
-        light: &crate::frame::scene::SceneLight<'_>,
+        light: &impl crate::scene::SurfaceLight,
         x: u32,
         y: u32,
     ) -> (Vec3, f32, f32, f32) {
@@ -402,7 +402,7 @@ impl SnowRender {
                     (rad, t, 0.0, sun)
                 }
                 None => (
-                    Vec3::splat(light.sky.sky_pixel(dir.normalize())),
+                    Vec3::splat(light.sky_pixel(dir.normalize())),
                     f32::INFINITY,
                     0.0,
                     1.0,

@@ -100,7 +100,7 @@ fn open_flat_ground_in_still_air_gets_rate_times_time_times_density_ratio() {
 fn a_wall_in_slanted_wind_casts_a_bare_shadow_of_its_height_times_the_fall_slope() {
     let spacing = 0.25;
     let w = weather(2.0, [2.5, 0.0, 0.0]);
-    let v = fall_velocity_m_s(&w);
+    let v = fall_velocity_m_s(&CoverWeather::try_from(&w).unwrap());
     let tan_fall = v[0] / -v[1];
     let length = 4.0 * tan_fall;
     assert!(length > 6.0 && length < 20.0, "{length}");

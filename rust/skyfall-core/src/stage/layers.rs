@@ -1,6 +1,7 @@
 //! The ground-truth layers a frame can carry besides `rgb` and `depth_m`, declared once: every
 //! other list (the CPU and GPU outputs, the Python binding's names, `skyfall._core.LAYERS`, the
-//! Python `Frame.layers` keys) is derived from [`Layer::ALL`].
+//! Python `Frame.layers` keys) is derived from [`Layer::ALL`]; which of them a frame draws is
+//! the union of its stages' [`LayerSet`]s.
 
 /// A layer of a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -28,22 +29,60 @@ pub enum Layer {
     DropHeight,
 }
 
-/// Which passes a frame runs, as far as its layers go: each layer is drawn by one of them
-/// ([`Layer::drawn`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Drawn {
-    /// The haze pass.
-    pub haze: bool,
-    /// The particle pass, rain.
-    pub rain: bool,
-    /// The particle pass, snowfall.
-    pub snow: bool,
-    /// A snow cover in the scene stage.
-    pub snow_cover: bool,
-    /// The cloud pass.
-    pub clouds: bool,
-    /// The sun's direct light in the scene stage.
-    pub sun: bool,
+/// A set of layers: what a stage draws ([`super::Stage::layers`]), and what a frame's stages
+/// draw together (the union, [`super::Plan::layers`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub struct LayerSet(u16);
+
+impl LayerSet {
+    /// No layer.
+    pub const EMPTY: LayerSet = LayerSet(0);
+
+    /// The set of `layers`.
+    pub const fn of(layers: &[Layer]) -> Self {
+        let mut s = LayerSet::EMPTY;
+        let mut i = 0;
+        while i < layers.len() {
+            s = s.with(layers[i]);
+            i += 1;
+        }
+        s
+    }
+
+    /// The set with `layer` added.
+    pub const fn with(self, layer: Layer) -> Self {
+        LayerSet(self.0 | 1 << layer.index())
+    }
+
+    /// The set with `layer` added when `when`.
+    pub const fn with_if(self, layer: Layer, when: bool) -> Self {
+        if when { self.with(layer) } else { self }
+    }
+
+    /// Both sets' layers.
+    pub const fn union(self, other: LayerSet) -> Self {
+        LayerSet(self.0 | other.0)
+    }
+
+    /// Whether `layer` is in the set.
+    pub const fn contains(self, layer: Layer) -> bool {
+        self.0 & 1 << layer.index() != 0
+    }
+
+    /// Whether the two sets share a layer.
+    pub const fn overlaps(self, other: LayerSet) -> bool {
+        self.0 & other.0 != 0
+    }
+
+    /// Whether the set is empty.
+    pub const fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// The set's layers, in the order of [`Layer::ALL`].
+    pub fn iter(self) -> impl Iterator<Item = Layer> {
+        Layer::ALL.into_iter().filter(move |&l| self.contains(l))
+    }
 }
 
 /// How many layers there are.
@@ -112,21 +151,6 @@ impl Layer {
         }
     }
 
-    /// Whether a frame with these passes draws the layer. The windshield's layers are drawn by
-    /// its stage after the frame (`skyfall.windshield.composite`, over either backend's
-    /// frame), never by these passes.
-    pub const fn drawn(self, d: Drawn) -> bool {
-        match self {
-            Layer::Transmittance => d.haze,
-            Layer::RainAlpha | Layer::RainDepth => d.rain,
-            Layer::SnowAlpha => d.snow,
-            Layer::SnowDepth => d.snow_cover,
-            Layer::DropMask | Layer::DropHeight => false,
-            Layer::CloudAlpha => d.clouds,
-            Layer::SunTransmittance => d.sun,
-        }
-    }
-
     /// Its index in [`Layer::ALL`].
     pub const fn index(self) -> usize {
         self as usize
@@ -154,6 +178,11 @@ impl<T> Layers<T> {
         self.0[layer.index()].take()
     }
 
+    /// The layer's value, mutable.
+    pub fn get_mut(&mut self, layer: Layer) -> Option<&mut T> {
+        self.0[layer.index()].as_mut()
+    }
+
     /// Sets the layer's value.
     pub fn set(&mut self, layer: Layer, value: T) {
         self.0[layer.index()] = Some(value);
@@ -170,69 +199,29 @@ mod tests {
             assert_eq!(l.index(), i);
         }
         let mut names: Vec<_> = Layer::ALL.iter().map(|l| l.name()).collect();
+        names.sort_unstable();
         names.dedup();
         assert_eq!(names.len(), LAYER_COUNT);
-        let all = Drawn {
-            haze: true,
-            rain: true,
-            snow: true,
-            snow_cover: true,
-            clouds: true,
-            sun: true,
-        };
-        // Each layer is drawn by its own pass alone.
-        for (l, pass) in [
-            (
-                Layer::Transmittance,
-                Drawn {
-                    haze: true,
-                    ..Drawn::default()
-                },
-            ),
-            (
-                Layer::RainAlpha,
-                Drawn {
-                    rain: true,
-                    ..Drawn::default()
-                },
-            ),
-            (
-                Layer::SnowAlpha,
-                Drawn {
-                    snow: true,
-                    ..Drawn::default()
-                },
-            ),
-            (
-                Layer::SnowDepth,
-                Drawn {
-                    snow_cover: true,
-                    ..Drawn::default()
-                },
-            ),
-            (
-                Layer::CloudAlpha,
-                Drawn {
-                    clouds: true,
-                    ..Drawn::default()
-                },
-            ),
-            (
-                Layer::SunTransmittance,
-                Drawn {
-                    sun: true,
-                    ..Drawn::default()
-                },
-            ),
-        ] {
-            assert!(l.drawn(pass) && !l.drawn(Drawn::default()), "{l:?}");
-            for other in Layer::ALL {
-                if other != l && !(l == Layer::RainAlpha && other == Layer::RainDepth) {
-                    assert!(!other.drawn(pass), "{other:?} by {l:?}'s pass");
-                }
+    }
+
+    #[test]
+    fn a_layer_set_holds_exactly_its_layers() {
+        for (i, &l) in Layer::ALL.iter().enumerate() {
+            let one = LayerSet::of(&[l]);
+            assert!(one.contains(l) && !one.is_empty());
+            assert_eq!(one.iter().collect::<Vec<_>>(), vec![l]);
+            for &other in &Layer::ALL[i + 1..] {
+                assert!(!one.contains(other) && !one.overlaps(LayerSet::of(&[other])));
+                let two = one.union(LayerSet::EMPTY.with(other));
+                assert_eq!(two.iter().collect::<Vec<_>>(), vec![l, other]);
             }
         }
-        assert!(!Layer::DropMask.drawn(all));
+        assert_eq!(LayerSet::of(&Layer::ALL).iter().count(), LAYER_COUNT);
+        assert_eq!(
+            LayerSet::EMPTY.with_if(Layer::RainAlpha, false),
+            LayerSet::EMPTY
+        );
+        assert!(LayerSet::EMPTY.iter().next().is_none());
     }
 
     #[test]
