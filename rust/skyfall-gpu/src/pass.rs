@@ -11,6 +11,38 @@ use skyfall_core::scene::camera::Camera;
 /// The WGSL every pass is prepended with (camera block and rays).
 pub const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
 
+/// The constants the shaders share with the core, generated from the core's own values (so a
+/// change there reaches the GPU): WGSL `const` declarations.
+pub fn shared_constants() -> String {
+    use skyfall_core::frame::scene::{SHADOW_OFFSET_M, SKIP_LEVELS, SUN_RAY_M};
+    let f = |name: &str, v: f32| format!("const {name}: f32 = {v:?};\n");
+    let u = |name: &str, v: usize| format!("const {name}: u32 = {v}u;\n");
+    [
+        f("PI", std::f32::consts::PI),
+        f("HALF_PI", std::f32::consts::FRAC_PI_2),
+        f("CUTOFF_RADII", skyfall_core::cloud::CUTOFF_RADII as f32),
+        f(
+            "MIN_TRANSMITTANCE",
+            skyfall_core::cloud::frame::MIN_TRANSMITTANCE,
+        ),
+        u("CHANNELS", skyfall_core::sky::illuminance::CHANNELS),
+        f(
+            "WINDOW_ALBEDO_FACTOR",
+            skyfall_core::scene::boxes::WINDOW_ALBEDO_FACTOR,
+        ),
+        f("T_MIN", skyfall_core::scene::raycast::T_MIN),
+        u("SKIP_LEVELS", SKIP_LEVELS),
+        f("SHADOW_OFFSET_M", SHADOW_OFFSET_M),
+        f("SUN_RAY_M", SUN_RAY_M),
+    ]
+    .concat()
+}
+
+/// A pass's whole WGSL: [`COMMON_WGSL`], the [`shared_constants`], then its `source`.
+pub fn assemble(source: &str) -> String {
+    format!("{COMMON_WGSL}\n{}\n{source}", shared_constants())
+}
+
 /// One compute pipeline with its bind-group layout (bindings in order, all in group 0).
 #[derive(Debug)]
 pub struct ComputePass {
@@ -31,7 +63,7 @@ pub enum Binding {
 }
 
 impl ComputePass {
-    /// Compiles `COMMON_WGSL + source` with entry point `main`.
+    /// Compiles [`assemble`]`(source)` with entry point `main`.
     pub fn new(ctx: &GpuContext, label: &'static str, source: &str, bindings: &[Binding]) -> Self {
         Self::with_constants(ctx, label, source, bindings, &[])
     }
@@ -46,7 +78,7 @@ impl ComputePass {
         bindings: &[Binding],
         constants: &[(&str, f64)],
     ) -> Self {
-        let code = format!("{COMMON_WGSL}\n{source}");
+        let code = assemble(source);
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {

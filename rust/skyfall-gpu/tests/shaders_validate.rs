@@ -1,12 +1,12 @@
 //! Every WGSL file in `src/shaders/` parses and validates with naga (no device needed), as the
-//! passes compile it: `common.wgsl` prepended. The folder is walked, so a new stage's shader
+//! passes compile it: `common.wgsl` and the constants shared with the core prepended. The folder is walked, so a new stage's shader
 //! is checked without being listed here.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use std::path::Path;
 
 fn validate(name: &str, source: &str) {
-    let code = format!("{}\n{}", skyfall_gpu::pass::COMMON_WGSL, source);
+    let code = skyfall_gpu::pass::assemble(source);
     let module = naga::front::wgsl::parse_str(&code)
         .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&code)));
     naga::valid::Validator::new(
@@ -46,4 +46,46 @@ fn every_shader_in_the_folder_is_valid() {
 fn a_broken_shader_is_refused() {
     let caught = std::panic::catch_unwind(|| validate("broken", "fn main() { let x: f32 = ; }"));
     assert!(caught.is_err());
+}
+
+#[test]
+fn the_shared_constants_are_the_cores_values_to_the_bit() {
+    let code = skyfall_gpu::pass::shared_constants();
+    let module = naga::front::wgsl::parse_str(&code).unwrap();
+    let mut seen = std::collections::BTreeMap::new();
+    for (_, c) in module.constants.iter() {
+        let value = match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::F32(v)) => f64::from(v.to_bits()),
+            naga::Expression::Literal(naga::Literal::U32(v)) => f64::from(v),
+            ref other => panic!("{other:?}"),
+        };
+        seen.insert(c.name.clone().unwrap(), value);
+    }
+    let bits = |v: f32| f64::from(v.to_bits());
+    use skyfall_core::frame::scene::{SHADOW_OFFSET_M, SKIP_LEVELS, SUN_RAY_M};
+    let want = [
+        ("PI", bits(std::f32::consts::PI)),
+        ("HALF_PI", bits(std::f32::consts::FRAC_PI_2)),
+        (
+            "CUTOFF_RADII",
+            bits(skyfall_core::cloud::CUTOFF_RADII as f32),
+        ),
+        (
+            "MIN_TRANSMITTANCE",
+            bits(skyfall_core::cloud::frame::MIN_TRANSMITTANCE),
+        ),
+        ("CHANNELS", skyfall_core::sky::illuminance::CHANNELS as f64),
+        (
+            "WINDOW_ALBEDO_FACTOR",
+            bits(skyfall_core::scene::boxes::WINDOW_ALBEDO_FACTOR),
+        ),
+        ("T_MIN", bits(skyfall_core::scene::raycast::T_MIN)),
+        ("SKIP_LEVELS", SKIP_LEVELS as f64),
+        ("SHADOW_OFFSET_M", bits(SHADOW_OFFSET_M)),
+        ("SUN_RAY_M", bits(SUN_RAY_M)),
+    ];
+    assert_eq!(seen.len(), want.len(), "{seen:?}");
+    for (name, v) in want {
+        assert_eq!(seen.get(name), Some(&v), "{name}");
+    }
 }

@@ -28,7 +28,7 @@ use glam::Vec3;
 pub const SHADOW_SKIP_RELATIVE: f32 = 0.01;
 
 /// Surfaces are lifted off their face by this before a shadow ray, m.
-const SHADOW_OFFSET_M: f32 = 1e-3;
+pub const SHADOW_OFFSET_M: f32 = 1e-3;
 
 /// How a frame's scene is lit: the sky seen by sky pixels and the map surfaces read, and the
 /// scene's lights.
@@ -89,7 +89,7 @@ impl SunLight<'_> {
 }
 
 /// How far a sun shadow ray looks for boxes, m (beyond every scene's boxes).
-const SUN_RAY_M: f32 = 1e5;
+pub const SUN_RAY_M: f32 = 1e5;
 
 impl<'a> SceneLight<'a> {
     /// The sky and its map, no lights.
@@ -242,7 +242,7 @@ impl<'a> SceneLight<'a> {
 const KEPT: usize = 32;
 
 /// Levels of the skip rule: ε·S/2ʲ for j < this.
-const SKIP_LEVELS: usize = 8;
+pub const SKIP_LEVELS: usize = 8;
 
 /// ε·S/2ʲ.
 #[inline]

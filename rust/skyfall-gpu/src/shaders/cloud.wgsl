@@ -22,9 +22,7 @@ struct CloudInfo {
 @group(0) @binding(7) var<storage, read> depth: array<f32>;
 @group(0) @binding(8) var<storage, read_write> alpha_out: array<f32>;
 
-const CUTOFF_RADII: f32 = 2.5;
-const MIN_TRANSMITTANCE: f32 = 1.0 / 1024.0;
-const PI: f32 = 3.141592653589793;
+// CUTOFF_RADII, MIN_TRANSMITTANCE and PI come from the core (pass::shared_constants).
 
 // VolumeView::sample_with_exit: (Γ at p, Γ where the light leaves) of volume `v`.
 fn sample_volume(v: VolumeBox, p: vec3<f32>) -> vec2<f32> {

@@ -22,7 +22,7 @@ struct GlowSource {
 @group(0) @binding(2) var<storage, read> sources: array<GlowSource>;
 @group(0) @binding(3) var<storage, read_write> rgb: array<f32>;
 
-const PI: f32 = 3.14159265358979;
+// PI comes from the core (pass::shared_constants).
 
 // skyfall_core::glow::henyey_greenstein.
 fn henyey_greenstein(g: f32, one_minus_cos: f32) -> f32 {

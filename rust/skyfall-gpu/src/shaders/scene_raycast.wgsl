@@ -77,8 +77,7 @@ struct AmbientInfo {
     dims: vec4<u32>,             // nodes along x, y, z
 }
 
-const CHANNELS: u32 = 5u;
-const HALF_PI: f32 = 1.5707963267948966;
+// CHANNELS and HALF_PI come from the core (pass::shared_constants).
 
 // L/Lz of the sky along unit `dir` (skyfall_core::sky::cie::SkyKind::relative_to_zenith).
 fn relative_to_zenith(dir: vec3<f32>) -> f32 {
@@ -161,8 +160,7 @@ fn ambient_channel(n: vec3<f32>) -> u32 {
     return 4u;
 }
 
-const WINDOW_ALBEDO_FACTOR: f32 = 0.2;
-const T_MIN: f32 = 1e-4;
+// WINDOW_ALBEDO_FACTOR and T_MIN come from the core (pass::shared_constants).
 
 fn surface_albedo(albedo: vec3<f32>, n: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
     if abs(n.y) < 0.5 {
@@ -250,8 +248,7 @@ fn occluded_within(p: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
     return false;
 }
 
-const SKIP_LEVELS: u32 = 8u;
-const SHADOW_OFFSET_M: f32 = 1e-3;
+// SKIP_LEVELS and SHADOW_OFFSET_M come from the core (pass::shared_constants).
 
 // SceneLight::lamp_light: the lights' illuminance relative to E on the face, shadowed, the
 // faintest (together at most SHADOW_SKIP_RELATIVE of the pixel) without a shadow ray.
@@ -474,7 +471,7 @@ fn sun_volume(p: vec3<f32>) -> f32 {
     return pl[0] + (pl[1] - pl[0]) * a.f;
 }
 
-const SUN_RAY_M: f32 = 1e5;
+// SUN_RAY_M comes from the core (pass::shared_constants).
 
 // SunLight::share: 0 facing away or behind a box, else the clouds' Γ at p.
 fn sun_share(p: vec3<f32>, n: vec3<f32>) -> f32 {
