@@ -231,8 +231,8 @@ def _dataset(args: argparse.Namespace) -> int:
 
 def _render(args: argparse.Namespace) -> int:
     from skyfall import io
-    from skyfall.dataset_item import ItemSource, Worker, prepare
-    from skyfall.dataset_sample import DatasetConfig, ItemParams
+    from skyfall.dataset.item import ItemSource, Worker, prepare
+    from skyfall.dataset.sample import DatasetConfig, ItemParams
 
     opts = _merge(args, _RENDER_OPTIONS, "render")
     if "out" not in opts:

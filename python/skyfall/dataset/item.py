@@ -19,8 +19,8 @@ from numpy.typing import NDArray
 import skyfall
 from skyfall import io, scenes
 from skyfall.camera import Camera
-from skyfall.dataset_io import DEPTH_EXTENSIONS, NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
-from skyfall.dataset_sample import DatasetConfig, ItemParams, sample_item
+from skyfall.dataset.io import DEPTH_EXTENSIONS, NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
+from skyfall.dataset.sample import DatasetConfig, ItemParams, sample_item
 from skyfall.io import encode_srgb
 from skyfall.photo import assumed_depth, estimate_sky_mask, exif_vertical_fov_deg, level_camera, sky_level_camera
 from skyfall.photo_scene import DEFAULT_DISTANCE_M
@@ -485,7 +485,7 @@ def _render_clip(
     """Write an item's clip: frame k at ``time_s = k / fps`` streamed to the encoder as it is
     rendered (one frame in memory, never N), the clean clip (the photo, or the street rendered
     once without weather, repeated) and each layer as one preallocated (N, H, W) float32 stack,
-    a memory map of its temporary ``.npy`` file (:class:`~skyfall.dataset_io.NpyStack`), so an
+    a memory map of its temporary ``.npy`` file (:class:`~skyfall.dataset.io.NpyStack`), so an
     item's memory is one frame's however long the clip. ``row`` gets the files' sha256, the
     clip's frames and fps; ``t`` the cost (``render``: the frames, ``encode``: the video encoder,
     ``write``: the stacks' checksums and renames)."""
