@@ -27,3 +27,29 @@ def test_every_exported_name_exists(name: str) -> None:
     mod = importlib.import_module(name)
     missing = [n for n in getattr(mod, "__all__", []) if not hasattr(mod, n)]
     assert not missing, f"{name}.__all__ lists {missing}"
+
+
+def test_the_demos_and_references_are_outside_the_public_namespace() -> None:
+    # The demo (its scenes, photos and plots) and the bundled references are private modules:
+    # no public module is named for them, and `make demo` / `skyfall demo` reach the demo as
+    # skyfall._demo.
+    assert not [m for m in MODULES if "demo" in m or "reference" in m]
+    for name in ("demo", "demo_photo", "demo_snow", "reference"):
+        with pytest.raises(ImportError):
+            importlib.import_module(f"skyfall.{name}")
+    demo = importlib.import_module("skyfall._demo")
+    assert callable(demo.main) and demo.DEMO_FRAMES
+
+
+def test_python_m_skyfall_demo_and_the_command_reach_the_demo() -> None:
+    import subprocess
+    import sys
+
+    from skyfall import cli
+
+    done = subprocess.run([sys.executable, "-m", "skyfall._demo", "--help"], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert "--out" in done.stdout
+    with pytest.raises(SystemExit) as e:
+        cli.main(["demo", "--help"])
+    assert e.value.code == 0

@@ -176,7 +176,7 @@ def test_the_demo_shows_clouds_and_their_shadow_on_the_street() -> None:
     # near street while the far street lies in the sun (the sun reaches both without clouds).
     import dataclasses
 
-    from skyfall.demo import STREET_CLOUDS
+    from skyfall._demo import STREET_CLOUDS
 
     r = Renderer(320, 180, backend="cpu")
     f = STREET_CLOUDS.render(r)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "python" / "skyfall"
-# Imported, deliberately not declared: skyfall.reference.canyon_illuminance is a test and
+# Imported, deliberately not declared: skyfall._reference.canyon_illuminance is a test and
 # bench reference that says `pip install scipy` when scipy is missing.
 UNDECLARED = {"scipy"}
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
-from skyfall.reference import path_to_cloud_base_m
+from skyfall._reference import path_to_cloud_base_m
 
 W, H = 160, 101  # 101 rows: the last band of rows is short
 

@@ -51,7 +51,7 @@ def motorcycle(width: int | None = None) -> PhotoScene:
     depth = (_F_PX * scale * _BASELINE_M / (disp + _DOFFS_PX * scale)).astype(np.float32)
     img = np.asarray(left, dtype=np.uint8)
     if width is not None and width != w0:
-        from skyfall.demo_photo import _resized
+        from skyfall._demo.photo import _resized
 
         img = _resized(img, width)
         h, w = img.shape[:2]
