@@ -182,7 +182,7 @@ def test_fuses_srgb8_says_which_path_render_srgb8_takes():
     glass = windshield.Windshield(5.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
     assert not r.fuses_srgb8(photo8, Weather(windshield=glass))
     cover = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0), duration_s=600.0, dt_s=600.0, resolution_m=10.0)
-    assert not r.fuses_srgb8(photo8, Weather(), cover)
+    assert not r.fuses_srgb8(photo8, Weather(snow_cover=cover))
 
 
 @pytest.mark.parametrize("level", ["scalar", "avx2"])

@@ -8,9 +8,11 @@ otherwise: on a software-only machine the CPU backend is much faster than lavapi
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import tempfile
 import threading
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from collections.abc import Iterator
@@ -46,6 +48,25 @@ def _gpu_device(require_hardware: bool) -> _core.GpuDevice:
                 os.environ["XDG_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="skyfall-xdg-")
             _devices[require_hardware] = _core.GpuDevice(require_hardware=require_hardware)
         return _devices[require_hardware]
+
+
+def _with_cover(weather: Weather | None, snow_cover: SnowCover | None) -> Weather:
+    """The call's weather (clear when None) with a cover given the deprecated way
+    (``snow_cover=``) folded in, warning the caller's line (an entry point's own call)."""
+    weather = weather if weather is not None else Weather()
+    if not isinstance(weather, Weather):
+        raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
+    if snow_cover is None:
+        return weather
+    warnings.warn(
+        "snow_cover= is deprecated: the cover is part of the weather, Weather(snow_cover=cover) "
+        "(or dataclasses.replace(weather, snow_cover=cover))",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    if weather.snow_cover is not None and weather.snow_cover is not snow_cover:
+        raise ValueError("snow_cover= and weather.snow_cover are two covers: give one, as Weather(snow_cover=...)")
+    return dataclasses.replace(weather, snow_cover=snow_cover)
 
 
 def _check_apart(scene: BoxScene | PhotoScene, outputs: dict[str, NDArray[Any] | None]) -> None:
@@ -93,7 +114,7 @@ class Frame:
     layers : dict of str to ndarray of float32, shape (H, W)
         Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d)); rain adds
         ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
-        nearest visible streak, inf where none); a snow cover (``snow_cover=``) adds
+        nearest visible streak, inf where none); a snow cover (``Weather(snow_cover=...)``) adds
         ``snow_depth_m`` (the depth of snow on each pixel's surface, 0 where none); clouds
         (``Weather(clouds=...)``) add ``cloud_alpha`` (their coverage 1 - prod(1 - alpha_i)); a
         sky with a sun adds ``sun_transmittance`` on box scenes (the share of the sun's direct
@@ -307,17 +328,14 @@ class Renderer:
             it draws that ``out`` lacks are new arrays). Fresh arrays cost the kernel's zeroing
             of every page (58 MB per 1080p frame with its layers); reusing them saves that.
         snow_cover : SnowCover, optional
-            Snow lying on the scene (:func:`skyfall.snow.accumulate` of this scene): its
-            surfaces whiten and lift by the depth on them, and the frame carries
-            ``layers["snow_depth_m"]`` (the depth on each pixel's surface, 0 where none).
-            None (default): no cover, and the frame is exactly the one without it.
+            Deprecated (it warns): the cover is part of the weather, ``Weather(snow_cover=...)``.
 
         Returns
         -------
         Frame
         """
-        weather = weather if weather is not None else Weather()
-        request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, snow_cover)
+        weather = _with_cover(weather, snow_cover)
+        request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
         arrays = self._out_arrays(out) if out is not None else None
         # One core call: the core derives the sky, the haze and its airlight, the rain and its
         # light from the request, and names the layers it drew (skyfall._core.LAYERS).
@@ -341,29 +359,30 @@ class Renderer:
 
     def fuses_srgb8(self, scene: BoxScene | PhotoScene, weather: Weather | None = None, snow_cover: SnowCover | None = None) -> bool:
         """Whether :meth:`render_srgb8` of these takes the fused 8-bit path (an 8-bit photo on
-        the CPU backend, no windshield, no clouds, no snow cover: stages that path does not
-        draw) rather than rendering the float frame and encoding it.
+        the CPU backend, no windshield, no clouds, no snow cover in the weather: stages that
+        path does not draw) rather than rendering the float frame and encoding it.
 
         Parameters
         ----------
         scene : BoxScene or PhotoScene
             The scene.
         weather : Weather, optional
-            The weather (its ``windshield`` and ``clouds``).
+            The weather (its ``windshield``, ``clouds`` and ``snow_cover``).
         snow_cover : SnowCover, optional
-            A cover to draw.
+            Deprecated (it warns): the cover is part of the weather, ``Weather(snow_cover=...)``.
 
         Returns
         -------
         bool
         """
+        weather = _with_cover(weather, snow_cover)
         return (
             self._device is None
             and isinstance(scene, PhotoScene)
             and scene.srgb8 is not None
-            and getattr(weather, "windshield", None) is None
-            and getattr(weather, "clouds", None) is None
-            and snow_cover is None
+            and weather.windshield is None
+            and weather.clouds is None
+            and weather.snow_cover is None
         )
 
     def render_srgb8(
@@ -405,8 +424,8 @@ class Renderer:
             Filled with the snowflakes' coverage (``frame.layers["snow_alpha"]``; zeros
             without snow) when given.
         snow_cover : SnowCover, optional
-            As for :meth:`render`. A frame with a cover is rendered on the float path and
-            encoded (the fused 8-bit path does not draw covers).
+            Deprecated (it warns): the cover is part of the weather, ``Weather(snow_cover=...)``
+            (a frame with a cover is rendered on the float path and encoded).
 
         Raises
         ------
@@ -422,12 +441,12 @@ class Renderer:
         ndarray of uint8, shape (H, W, 3)
             The image (``out`` when given).
         """
-        weather = weather if weather is not None else Weather()
+        weather = _with_cover(weather, snow_cover)
         self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
         # A windshield or a snow cover is a stage the fused path does not draw: float, then encode.
-        if self.fuses_srgb8(scene, weather, snow_cover):
+        if self.fuses_srgb8(scene, weather):
             assert isinstance(scene, PhotoScene) and scene.srgb8 is not None
             request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
             _core.render_photo8(
@@ -443,7 +462,6 @@ class Renderer:
             cull_threshold=cull_threshold,
             ambient_spacing_m=ambient_spacing_m,
             ambient_samples=ambient_samples,
-            snow_cover=snow_cover,
         )
         out[...] = io.to_srgb8(frame.rgb)
         if rain_alpha_out is not None:
@@ -494,7 +512,6 @@ class Renderer:
         cull_threshold: float | None,
         ambient_spacing_m: float,
         ambient_samples: int,
-        snow_cover: SnowCover | None = None,
     ) -> _Request:
         """The frame's request for ``_core.render_frame`` and ``_core.render_photo8``: the
         frame's own objects (the core reads them attribute by attribute), with the scene's
@@ -526,11 +543,8 @@ class Renderer:
             from skyfall import clouds as _clouds
 
             request["clouds"] = _clouds.frame_field(weather.clouds, weather.sun_direction)
-        if snow_cover is not None:
-            core_cover = getattr(snow_cover, "core", None)
-            if not isinstance(core_cover, _core.SnowCoverGrid):
-                raise TypeError(f"snow_cover must be a skyfall.snow.SnowCover, got {type(snow_cover).__name__}")
-            request["snow_cover"] = core_cover
+        if weather.snow_cover is not None:
+            request["snow_cover"] = weather.snow_cover.core
         return request
 
     @staticmethod
@@ -599,7 +613,7 @@ class Renderer:
         progress : bool
             Show a tqdm progress bar while the frames are rendered.
         snow_cover : SnowCover, optional
-            Snow lying on the scene in every frame (see :meth:`render`).
+            Deprecated (it warns): the cover is part of the weather, ``Weather(snow_cover=...)``.
 
         Returns
         -------
@@ -610,10 +624,11 @@ class Renderer:
         ValueError, TypeError
             Every argument is checked when this is called, before the first frame.
         """
+        weather = _with_cover(weather, snow_cover)
         if out is not None:
             self._out_arrays(out)
-        weather, times, options = self._sequence_args(
-            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
+        times, options = self._sequence_args(
+            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
         )
 
         def frames() -> Iterator[Frame]:
@@ -651,7 +666,7 @@ class Renderer:
         Parameters
         ----------
         scene, weather, n_frames, fps, seed, camera, start_s, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
-            As for :meth:`render_sequence`.
+            As for :meth:`render_sequence` (``snow_cover`` deprecated).
         out : ndarray of uint8, shape (H, W, 3), optional
             Where to write every frame: each array yielded is then ``out``, overwritten by
             the next frame. None: a new array per frame.
@@ -671,9 +686,10 @@ class Renderer:
             Every argument is checked when this is called, before the first frame (see
             :meth:`render_srgb8`).
         """
+        weather = _with_cover(weather, snow_cover)
         self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
-        weather, times, options = self._sequence_args(
-            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
+        times, options = self._sequence_args(
+            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress
         )
 
         def frames() -> Iterator[NDArray[np.uint8]]:
@@ -687,7 +703,7 @@ class Renderer:
     def _sequence_args(
         self,
         scene: BoxScene | PhotoScene,
-        weather: Weather | None,
+        weather: Weather,
         camera: Camera | None,
         n_frames: int,
         fps: float,
@@ -697,21 +713,17 @@ class Renderer:
         ambient_spacing_m: float,
         ambient_samples: int,
         progress: bool,
-        snow_cover: SnowCover | None = None,
-    ) -> tuple[Weather, Iterator[float], dict[str, Any]]:
-        """A sequence's arguments, all checked now (as :meth:`render` checks them): its
-        weather, its frame times (behind a progress bar, started at the first frame) and the
-        keyword arguments every frame is rendered with."""
-        weather = weather if weather is not None else Weather()
+    ) -> tuple[Iterator[float], dict[str, Any]]:
+        """A sequence's arguments, all checked now (as :meth:`render` checks them): its frame
+        times (behind a progress bar, started at the first frame) and the keyword arguments
+        every frame is rendered with."""
         times = _frame_times(n_frames, fps, start_s)
         show = flag("progress", progress)
-        self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples, snow_cover)
+        self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples)
         options: dict[str, Any] = dict(
             camera=camera, seed=seed, cull_threshold=cull_threshold, ambient_spacing_m=ambient_spacing_m, ambient_samples=ambient_samples
         )
-        if snow_cover is not None:
-            options["snow_cover"] = snow_cover
-        return weather, _progress(times, show), options
+        return _progress(times, show), options
 
 
 class _FrameTimes:

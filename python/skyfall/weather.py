@@ -8,10 +8,13 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from skyfall import _core
 from skyfall._validate import all_in_range, choice, flag, float_array, in_range, inside
+
+if TYPE_CHECKING:
+    from skyfall.snow import SnowCover
 
 __all__ = ["Weather"]
 
@@ -124,6 +127,14 @@ class Weather:
         drawn by :func:`skyfall.windshield.warm` at the frame's time and seed). Its drops
         refract the frame as the last stage and draw the layers ``drop_mask`` and
         ``drop_height``. None (default): no glass, the frame's bits unchanged.
+    snow_cover : skyfall.snow.SnowCover, optional
+        Snow lying on the scene (:func:`skyfall.snow.accumulate` of the scene rendered): its
+        surfaces whiten and lift by the depth on them, and the frame carries
+        ``layers["snow_depth_m"]`` (the depth on each pixel's surface, m, 0 where none). A
+        weather that made the cover and the weather that shows it may differ
+        (``dataclasses.replace(weather, snow_cover=cover)``). The fused 8-bit path does not
+        draw a cover: :meth:`skyfall.Renderer.render_srgb8` renders the float frame and
+        encodes it. None (default): no cover, the frame's bits unchanged.
     """
 
     rain_rate_mm_h: float = 0.0
@@ -147,6 +158,7 @@ class Weather:
     windshield: Any = None
     sun_illuminance_lux: float | None = None
     clouds: Any = None
+    snow_cover: SnowCover | None = None
 
     def __post_init__(self) -> None:
         r = in_range("rain_rate_mm_h", self.rain_rate_mm_h)
@@ -214,6 +226,11 @@ class Weather:
                     raise ValueError(f"windshield = {self.windshield!r} is not a preset: use one of {', '.join(map(repr, _ws.PRESETS))}")
             elif not isinstance(self.windshield, _ws.Windshield):
                 raise TypeError(f"windshield must be a skyfall.windshield.Windshield or a preset's name, got {type(self.windshield).__name__}")
+        if self.snow_cover is not None:
+            from skyfall import snow as _snow
+
+            if not isinstance(self.snow_cover, _snow.SnowCover):
+                raise TypeError(f"snow_cover must be a skyfall.snow.SnowCover (skyfall.snow.accumulate's), got {type(self.snow_cover).__name__}")
 
     @cached_property
     def _optics(self) -> tuple[float, float, float, float, float, float]:
