@@ -148,7 +148,7 @@ def test_bad_clouds_are_refused_by_name() -> None:
 
     scene = scenes.street()
     r = Renderer(W, H, backend="cpu")
-    req = r._request(scene, Weather(**SUNNY), None, 0.0, 0, None, 1.0, 64)
+    req = r._request(scene, Weather(**SUNNY))
     req["clouds"] = clouds.frame_field("cumulus", None)
     with pytest.raises(ValueError, match="built for another sun"):
         _core.render_frame(req)
@@ -196,7 +196,7 @@ def _sun_light(r: Renderer, scene, w: Weather, cloud: clouds.Cloud, diffuse: boo
 
     out = []
     for weather in (w, Weather(sky=w.sky, sun_elevation_deg=w.sun_elevation_deg, sun_azimuth_deg=w.sun_azimuth_deg, sun_illuminance_lux=0.0)):
-        req = r._request(scene, weather, None, 0.0, 0, None, 1.0, 64)
+        req = r._request(scene, weather)
         req["clouds"] = clouds.frame_field(cloud, weather.sun_direction, diffuse=diffuse)
         out.append(_core.render_frame(req)[0].astype(np.float64))
     return out[0] - out[1], out[1]

@@ -31,7 +31,7 @@ def test_the_upper_half_keeps_its_structure_and_the_rain_shows(name, rate):
     assert scene.depth_source == "distance" and not scene.sky_mask.any()  # no sky in these
     r = Renderer(w, h, backend="cpu")
     alpha = np.empty((h, w), np.float32)
-    rainy = r.render_srgb8(scene, Weather(rain_rate_mm_h=rate), seed=1, rain_alpha_out=alpha)
+    rainy = r.render_srgb8(scene, Weather(rain_rate_mm_h=rate), seed=1, layers={"rain_alpha": alpha}).image
     # the issue measured 0.40-0.49 here at 25 mm/h with the old ground-plane default
     assert top_ssim(photo, rainy) >= 0.8
     top = slice(0, h // 2)

@@ -4,8 +4,8 @@ public API (Python's checks) and through ``_core`` (the core's)."""
 
 from __future__ import annotations
 
-import inspect
 import dataclasses
+import inspect
 import math
 import re
 from types import SimpleNamespace
@@ -377,7 +377,7 @@ def _render_core(**changes: Any) -> object:
     """A rainy street frame through ``_core.render_frame`` with one value changed past the
     Python checks: the request's camera and weather are stand-ins with the same attributes
     (the core reads them attribute by attribute), so only the core's own checks run."""
-    req = _tiny._request(_street, Weather(rain_rate_mm_h=5.0), None, 0.0, 0, None, 1.0, 64)
+    req = _tiny._request(_street, Weather(rain_rate_mm_h=5.0))
     cam, w = req["camera"], req["weather"]
     camera = SimpleNamespace(
         width=cam.width,

@@ -59,7 +59,7 @@ def test_the_core_reads_the_objects_and_names_what_is_wrong() -> None:
     # A stand-in weather past Python's checks: the core's own check names the field.
     r = Renderer(16, 12, backend="cpu")
     street = scenes.street()
-    req = r._request(street, Weather(rain_rate_mm_h=5.0), None, 0.0, 0, None, 1.0, 64)
+    req = r._request(street, Weather(rain_rate_mm_h=5.0))
 
     class Stand:
         def __init__(self, w: Weather, **changes: Any) -> None:

@@ -157,7 +157,7 @@ def test_the_8bit_path_is_the_float_frame_encoded_with_snow(cpu):
     want = io.to_srgb8(frame.rgb)
     snow_a = np.full((H, W), -1.0, np.float32)
     rain_a = np.full((H, W), -1.0, np.float32)
-    got = cpu.render_srgb8(scene, weather, seed=3, rain_alpha_out=rain_a, snow_alpha_out=snow_a)
+    got = cpu.render_srgb8(scene, weather, seed=3, layers={"rain_alpha": rain_a, "snow_alpha": snow_a}).image
     diff = np.abs(got.astype(int) - want)
     assert diff.max() <= 1 and np.mean(diff > 0) < 1e-3
     np.testing.assert_allclose(snow_a, frame.layers["snow_alpha"], atol=1e-6)
@@ -165,7 +165,7 @@ def test_the_8bit_path_is_the_float_frame_encoded_with_snow(cpu):
     assert frame.layers["snow_alpha"].max() > 0.05
     # without snow the 8-bit snow layer is zeros
     none = np.full((H, W), -1.0, np.float32)
-    cpu.render_srgb8(scene, Weather(rain_rate_mm_h=5.0), seed=3, snow_alpha_out=none)
+    cpu.render_srgb8(scene, Weather(rain_rate_mm_h=5.0), seed=3, layers={"snow_alpha": none})
     np.testing.assert_array_equal(none, 0.0)
 
 
@@ -220,9 +220,9 @@ def test_an_8bit_clip_fills_the_snow_layer_frame_by_frame(cpu):
     scene = photo8(2)
     weather = Weather(snow_rate_mm_h=2.0, wind_m_s=(1.0, 0.0, 0.0))
     alpha = np.full((H, W), -1.0, np.float32)
-    for k, img in enumerate(cpu.render_sequence_srgb8(scene, weather, n_frames=2, fps=10.0, seed=4, snow_alpha_out=alpha)):
+    for k, (img, _) in enumerate(cpu.render_sequence_srgb8(scene, weather, n_frames=2, fps=10.0, seed=4, layers={"snow_alpha": alpha})):
         want = np.full((H, W), -1.0, np.float32)
-        assert img.tobytes() == cpu.render_srgb8(scene, weather, seed=4, time_s=k / 10.0, snow_alpha_out=want).tobytes()
+        assert img.tobytes() == cpu.render_srgb8(scene, weather, seed=4, time_s=k / 10.0, layers={"snow_alpha": want}).image.tobytes()
         np.testing.assert_array_equal(alpha, want)
         assert alpha.max() > 0.0
 
@@ -244,6 +244,7 @@ def test_snow_alpha_is_a_coverage_at_most_1_at_short_shutters(exposure_s, cpu, g
             assert a.min() >= 0.0 and a.max() <= 1.0, (r.backend, seed, a.max())
             peaks.append(a.max())
         out = np.full((H, W), -1.0, np.float32)
-        cpu.render_srgb8(scene8, weather, seed=seed, snow_alpha_out=out)
+        cpu.render_srgb8(scene8, weather, seed=seed, layers={"snow_alpha": out})
         assert out.min() >= 0.0 and out.max() <= 1.0, (seed, out.max())
     assert max(peaks) > 0.99  # the flakes that passed 1 are opaque, not gone
+

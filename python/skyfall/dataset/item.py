@@ -168,7 +168,7 @@ def _cover(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather
 def _fast(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer) -> bool:
     """Whether the fused 8-bit path makes the item: the renderer fuses it
     (:meth:`Renderer.fuses_srgb8`), only the layers that path fills are asked for, no EXR."""
-    return renderer.fuses_srgb8(scene, weather) and set(config.layers) <= {"rain_alpha", "snow_alpha"} and not config.exr
+    return renderer.fuses_srgb8(scene, weather, layers=config.layers) and not config.exr
 
 
 def _lens(p: ItemParams) -> dict[str, Any]:
@@ -411,9 +411,8 @@ def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None
         if cover is not None:
             row["snow_cover"] = {"mean_depth_m": float(np.mean(cover.depth_m)), "spacing_m": float(cover.spacing_m)}
         if fast:
-            outs = {name: np.empty((h, w), np.float32) for name in cfg.layers}
-            staged.rainy = renderer.render_srgb8(scene, weather, rain_alpha_out=outs.get("rain_alpha"), snow_alpha_out=outs.get("snow_alpha"), **kw)
-            staged.layers.update(outs)
+            staged.rainy, drawn = renderer.render_srgb8(scene, weather, layers=cfg.layers, **kw)
+            staged.layers.update(drawn)
         else:
             frame = renderer.render(scene, weather, camera=camera, **kw)
             staged.layers = {name: frame.layer(name) for name in cfg.layers}
@@ -536,10 +535,8 @@ def _write_clip(
         t0 = time.perf_counter()
         if fast:
             bufs = {name: np.empty((h, w), np.float32) for name in stacks}
-            images = renderer.render_sequence_srgb8(
-                scene, weather, out=np.empty((h, w, 3), np.uint8), rain_alpha_out=bufs.get("rain_alpha"), snow_alpha_out=bufs.get("snow_alpha"), **kw
-            )
-            for k, image in enumerate(images):
+            images = renderer.render_sequence_srgb8(scene, weather, out=np.empty((h, w, 3), np.uint8), layers=bufs, **kw)
+            for k, (image, _) in enumerate(images):
                 for name, buf in bufs.items():
                     stacks[name][k] = buf
                 render_s[0] += time.perf_counter() - t0
