@@ -248,3 +248,37 @@ def test_snow_alpha_is_a_coverage_at_most_1_at_short_shutters(exposure_s, cpu, g
         assert out.min() >= 0.0 and out.max() <= 1.0, (seed, out.max())
     assert max(peaks) > 0.99  # the flakes that passed 1 are opaque, not gone
 
+
+def _map_bounds(renderer: Renderer, scene: PhotoScene | scenes.BoxScene, weather: Weather) -> tuple[np.ndarray, np.ndarray]:
+    """The world box the frame's ambient-light map spans, m."""
+    m = renderer._request(scene, weather)["ambient"]
+    lo = np.asarray(m.origin_m, dtype=np.float64)
+    return lo, lo + m.spacing_m * (np.asarray(m.dims, dtype=np.float64) - 1.0)
+
+
+def test_the_ambient_map_spans_the_flakes_region_without_rain() -> None:
+    # The flakes read their sky light from the ambient-light map as the drops do, out to
+    # snow_near_m (8 m by default). The map's extent used to follow the rain alone, so snow
+    # without rain got a map of +-1 m around the camera and every flake beyond it read the
+    # map's edge: here, an awning 2-6 m ahead would not shade the flakes beneath it.
+    cam = Camera((0.0, 1.6, 0.0))
+    awning = [{"min": (-3.0, 3.0, -6.0), "max": (3.0, 3.2, -2.0)}]
+    photo = PhotoScene(np.full((18, 32, 3), 90, np.uint8), np.full((18, 32), 20.0, np.float32), camera=cam, occluders=awning)
+    r = Renderer(32, 18, backend="cpu")
+    eye = np.asarray(cam.position_m, dtype=np.float64)
+    for weather, reach in (
+        (Weather(snow_rate_mm_h=2.0), 8.0),
+        (Weather(snow_rate_mm_h=2.0, snow_near_m=12.0), 12.0),
+        (Weather(snow_rate_mm_h=2.0, snow_near_m=3.0, rain_rate_mm_h=5.0, rain_near_m=6.0), 6.0),  # the wider of the two
+        (Weather(rain_rate_mm_h=5.0, rain_near_m=4.0), 4.0),
+    ):
+        lo, hi = _map_bounds(r, photo, weather)
+        assert np.all(lo <= eye - reach) and np.all(hi >= eye + reach), (weather, lo, hi)
+    # without particles, a metre around the camera is enough
+    lo, hi = _map_bounds(r, photo, Weather())
+    assert np.all(hi - lo <= 2.0 + 1e-9)
+    # the awning now shades the flakes under it: a flake 4 m ahead under it receives less sky
+    # light than one in the open beside it (read from the map the frame uses)
+    amb = r._request(photo, Weather(snow_rate_mm_h=2.0))["ambient"]
+    under, beside = amb.sample(np.array([[0.0, 2.0, -4.0], [0.0, 2.0, 4.0]], np.float32))[:, 0]
+    assert under < 0.8 * beside

@@ -757,10 +757,9 @@ class Renderer:
         occluders = np.ascontiguousarray(scene.boxes if isinstance(scene, BoxScene) else scene.occluders, dtype=np.float32)
         if len(occluders) == 0:
             return sky.cached_core_map(occluders, weather, np.zeros(3), np.zeros(3), s, n, "ambient_spacing_m")
-        reach = weather.rain_near_m + 1.0 if weather.rain_rate_mm_h > 0 and weather.rain_streaks else 1.0
-        lo, hi = sky.default_bounds(scene, s, around_m=cam.position_m, radius_m=reach)
-        # The map spans the scene's boxes and the rain region around the camera: say so in the
-        # user's terms when that cannot be built (the map's own message names its internals).
+        lo, hi = sky.default_bounds(scene, s, around_m=cam.position_m, radius_m=_particle_reach_m(weather))
+        # The map spans the scene's boxes and the particles' regions around the camera: say so
+        # in the user's terms when that cannot be built (the map's own message names its internals).
         limit = _core.AMBIENT_EXTENT_M
         if not (np.all(np.abs(lo) <= limit) and np.all(np.abs(hi) <= limit)):
             pos = ", ".join(f"{v:g}" for v in cam.position_m)
@@ -955,6 +954,18 @@ class Renderer:
         show = flag("progress", progress)
         self._request(scene, weather, options, times(0))
         return _progress(times, show)
+
+
+def _particle_reach_m(weather: Weather) -> float:
+    """How far from the camera the ambient-light map must reach, m: a metre beyond the
+    farthest drawn particle (the rain's ``rain_near_m`` when its streaks are drawn, the
+    snow's ``snow_near_m`` when it snows), and a metre around the camera without any."""
+    reach = 1.0
+    if weather.rain_rate_mm_h > 0 and weather.rain_streaks:
+        reach = max(reach, weather.rain_near_m + 1.0)
+    if weather.snow_rate_mm_h > 0:
+        reach = max(reach, weather.snow_near_m + 1.0)
+    return reach
 
 
 class _FrameTimes:
