@@ -139,7 +139,7 @@ def test_bad_clouds_are_refused_by_name() -> None:
         Weather(clouds="nimbus")
     with pytest.raises(TypeError, match="clouds must be a skyfall.clouds.Cloud"):
         Weather(clouds=3)
-    with pytest.raises(ValueError, match="sun_illuminance_lux needs a sun position"):
+    with pytest.raises(ValueError, match="sun_illuminance_lux: a sun needs a position: give sun_elevation_deg and sun_azimuth_deg"):
         Weather(sun_illuminance_lux=1000.0)
     with pytest.raises(ValueError, match="sun_illuminance_lux"):
         Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=0.0, sun_illuminance_lux=-1.0)

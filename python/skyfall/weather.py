@@ -177,13 +177,7 @@ class Weather:
         object.__setattr__(self, "wind_m_s", (float(wind[0]), float(wind[1]), float(wind[2])))
         object.__setattr__(self, "rain_near_m", near)
         if self.rain_far_m is not None:
-            far = in_range("rain_far_m", self.rain_far_m)
-            if far >= near:
-                raise ValueError(
-                    f"rain_far_m = {far} m must be less than rain_near_m = {near} m "
-                    "(the far level of detail draws the drops between them)"
-                )
-            object.__setattr__(self, "rain_far_m", far)
+            object.__setattr__(self, "rain_far_m", in_range("rain_far_m", self.rain_far_m))
         object.__setattr__(self, "rain_diameters_mm", diams)
         choice("rain_method", self.rain_method, ("drops", "billboards"))
         object.__setattr__(self, "snow_near_m", in_range("snow_near_m", self.snow_near_m))
@@ -205,11 +199,12 @@ class Weather:
         for name in ("sun_elevation_deg", "sun_azimuth_deg", "cloud_base_m", "sun_illuminance_lux"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, in_range(name, getattr(self, name)))
-        if (self.sun_elevation_deg is None) != (self.sun_azimuth_deg is None):
-            raise ValueError("give both sun_elevation_deg and sun_azimuth_deg, or neither")
-        if self.sun_illuminance_lux is not None and self.sun_illuminance_lux > 0 and self.sun_elevation_deg is None:
-            raise ValueError("sun_illuminance_lux needs a sun position: give sun_elevation_deg and sun_azimuth_deg")
-        self.sky_model()  # the sky's own checks (a sun for the types that need one)
+        # The checks across fields (rain_far_m below rain_near_m, the sun's elevation and
+        # azimuth given together, a sun's illuminance with its position) are the core's alone
+        # (`weather::Weather::validate`): reading the weather's optics runs them, naming the
+        # parameter. Then the sky's own (a sun for the types that need one).
+        _ = self._optics
+        self.sky_model()
         if self.clouds is not None:
             from skyfall import clouds as _clouds
 
