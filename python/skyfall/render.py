@@ -221,7 +221,8 @@ class Frame:
         (``Weather(clouds=...)``) add ``cloud_alpha`` (their coverage 1 - prod(1 - alpha_i)); a
         sky with a sun adds ``sun_transmittance`` on box scenes (the share of the sun's direct
         light reaching each pixel's surface: 0 behind a box, the clouds' Gamma elsewhere, 1 for
-        sky): only the layers this frame's passes drew.
+        sky): only the layers this frame's passes drew, or with ``layers=`` (:meth:`Renderer.render`)
+        exactly the layers asked for, each neutral where no pass drew it.
         :meth:`layer` gives any layer, with its neutral value where it was not drawn. The
         clean frame is the same render without rain.
     backend : str

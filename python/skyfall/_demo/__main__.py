@@ -2,4 +2,5 @@
 
 from skyfall._demo import main
 
-raise SystemExit(main())
+if __name__ == "__main__":  # importing the module (the doctests walk the package) runs nothing
+    raise SystemExit(main())
