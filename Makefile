@@ -65,7 +65,7 @@ device: wheel vulkan
 	PYTHON=$(abspath $(PY)) bash benches/device.sh
 
 demo: build
-	$(PY) -m skyfall.demo --out $(OUT)
+	$(PY) -m skyfall._demo --out $(OUT)
 
 test-rust: setup vulkan
 	cargo fmt --all --check

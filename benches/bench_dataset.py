@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from skyfall import Renderer, dataset, io, scenes
-from skyfall.dataset_io import PNG_FILTER_SUB
+from skyfall.dataset.io import PNG_FILTER_SUB
 
 RESULTS = Path(__file__).parent / "results"
 W, H = 1920, 1080
@@ -75,7 +75,7 @@ def cpu_s() -> float:
 def one_at_a_time(img: Path, dep: Path, out: Path) -> dict[str, object]:
     """The items in this process without the pipeline: each rendered, then written
     (``render_item`` in a loop: what ``generate`` did before), the same run's baseline."""
-    from skyfall.dataset_item import Worker, render_item
+    from skyfall.dataset.item import Worker, render_item
 
     shutil.rmtree(out, ignore_errors=True)
     config = dataset.DatasetConfig(out=out, input=img, depth=dep, variants=VARIANTS, seed=1, rain_rate_mm_h="1:50", visibility_m="300:3000")

@@ -15,7 +15,7 @@ import numpy as np
 from timing import median_s
 
 from skyfall import physics, rain
-from skyfall.reference import gunn_kinzer_1949
+from skyfall._reference import gunn_kinzer_1949
 
 RESULTS = Path(__file__).parent / "results"
 G = 9.80665

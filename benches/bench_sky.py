@@ -16,7 +16,7 @@ import numpy as np
 from timing import median_s
 
 from skyfall import Renderer, Weather, scenes, sky
-from skyfall.reference import canyon_illuminance
+from skyfall._reference import canyon_illuminance
 
 RESULTS = Path(__file__).parent / "results"
 E = 10000.0
@@ -98,7 +98,7 @@ def main() -> None:
         "",
         "`samples` azimuths, each integrated exactly over the elevations the boxes leave visible (cumulative",
         "sky tables, 512 steps). Canyon floors (H/W = 1, 2.5 and an off-centre point 1 m from a wall, walls",
-        "2 km long) against skyfall.reference.canyon_illuminance (scipy adaptive quadrature, overcast sky,",
+        "2 km long) against skyfall._reference.canyon_illuminance (scipy adaptive quadrature, overcast sky,",
         "infinite walls); the open CIE clear sky (type 12, sun 35° up) against E. Time: 1000 random points",
         "in the default street (17 boxes), after the sky table is built.",
         "",

@@ -47,7 +47,7 @@ def frame_rows() -> dict[str, object]:
     backend (the volumes built once and cached, as frames reuse them), and the build."""
     import dataclasses
 
-    from skyfall.demo import STREET_CLOUDS
+    from skyfall._demo import STREET_CLOUDS
 
     street, cam, w = scenes.street(), STREET_CLOUDS.camera(), STREET_CLOUDS.weather
     bare = dataclasses.replace(w, clouds=None)
@@ -133,7 +133,7 @@ def main() -> None:
         "",
         "## The cloud pass in frames",
         "",
-        f"The demo's street (`skyfall.demo.STREET_CLOUDS`: the `broken` preset, {frames['particles']:,} particles, a sun",
+        f"The demo's street (`skyfall._demo.STREET_CLOUDS`: the `broken` preset, {frames['particles']:,} particles, a sun",
         "50 deg up behind the camera) at 1920 x 1080, medians of 3 frames after one that builds and",
         "caches the cloud's volumes; 'without' is the same frame with `clouds=None` (the sun and its",
         "box shadows still drawn). The cloud pass: splats sorted far to near on the CPU, listed per",

@@ -37,7 +37,7 @@ def sun_light(r: Renderer, scene: scenes.BoxScene, w: Weather, cloud: clouds.Clo
     less the frame without it (the sky behind, dimmed alike, and the sky's light cancel)."""
     out = []
     for weather in (w, Weather(sky=w.sky, sun_elevation_deg=w.sun_elevation_deg, sun_azimuth_deg=w.sun_azimuth_deg, sun_illuminance_lux=0.0)):
-        req = r._request(scene, weather, None, 0.0, 0, None, 1.0, 64)
+        req = r._request(scene, weather)
         req["clouds"] = clouds.frame_field(cloud, weather.sun_direction, diffuse=diffuse)
         rgb, _, _, _ = _core.render_frame(req)
         out.append(rgb[..., 1].astype(np.float64))

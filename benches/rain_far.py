@@ -57,7 +57,7 @@ def far_lod(cpu: Renderer, photo8: np.ndarray, depth: np.ndarray, camera: Camera
 
         def layer(weather: Weather, seed: int) -> np.ndarray:
             alpha = np.empty((h, w), np.float32)
-            cpu.render_srgb8(scene, weather, seed=seed, rain_alpha_out=alpha)
+            cpu.render_srgb8(scene, weather, seed=seed, layers={"rain_alpha": alpha})
             return alpha.astype(np.float64)
 
         def timed(weather: Weather) -> Callable[[], object]:

@@ -7,6 +7,7 @@ Writes benches/results/snow_cover.md and snow_cover.json. Run with `make bench`.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -65,7 +66,7 @@ def main() -> None:
     cover = snow.accumulate(street, WEATHER, duration_s=3600.0, dt_s=300.0, resolution_m=0.25)
     r = Renderer(640, 360, backend="cpu")
     bare = median_s(lambda: r.render(street, WEATHER), 5)
-    covered = median_s(lambda: r.render(street, WEATHER, snow_cover=cover), 5)
+    covered = median_s(lambda: r.render(street, dataclasses.replace(WEATHER, snow_cover=cover)), 5)
     t0 = time.perf_counter()
     snow.accumulate(street, WEATHER, duration_s=3600.0, dt_s=120.0, resolution_m=0.25)
     hour = time.perf_counter() - t0

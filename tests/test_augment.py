@@ -85,7 +85,7 @@ def test_the_layers_are_the_frames():
     h, w = CAT.shape[:2]
     out, layers = augment(CAT, rain_rate_mm_h=30.0, visibility_m=500.0, seed=5, return_layers=True)
     direct = np.empty((h, w), np.float32)
-    Renderer(w, h, backend="cpu").render_srgb8(PhotoScene(CAT), Weather(rain_rate_mm_h=30.0, visibility_m=500.0), seed=5, rain_alpha_out=direct)
+    Renderer(w, h, backend="cpu").render_srgb8(PhotoScene(CAT), Weather(rain_rate_mm_h=30.0, visibility_m=500.0), seed=5, layers={"rain_alpha": direct})
     np.testing.assert_array_equal(layers["rain_alpha"], direct)
     np.testing.assert_array_equal(layers["depth_m"], PhotoScene(CAT).depth_m)
 

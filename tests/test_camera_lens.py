@@ -109,7 +109,7 @@ def test_the_8_bit_path_through_a_lens_is_the_float_frame_encoded(cpu):
     scene = photo8(Camera(**LENS))
     frame = cpu.render(scene, RAIN, seed=3)
     alpha = np.zeros((H, W), np.float32)
-    got = cpu.render_srgb8(scene, RAIN, seed=3, rain_alpha_out=alpha)
+    got = cpu.render_srgb8(scene, RAIN, seed=3, layers={"rain_alpha": alpha}).image
     diff = np.abs(got.astype(int) - io.to_srgb8(frame.rgb))
     assert diff.max() <= 1 and np.mean(diff > 0) < 1e-3
     np.testing.assert_allclose(alpha, frame.layers["rain_alpha"], atol=1e-6)

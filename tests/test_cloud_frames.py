@@ -8,6 +8,7 @@ clear-sky direct illuminance written out here from its published constants (Navv
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -138,7 +139,7 @@ def test_bad_clouds_are_refused_by_name() -> None:
         Weather(clouds="nimbus")
     with pytest.raises(TypeError, match="clouds must be a skyfall.clouds.Cloud"):
         Weather(clouds=3)
-    with pytest.raises(ValueError, match="sun_illuminance_lux needs a sun position"):
+    with pytest.raises(ValueError, match="sun_illuminance_lux: a sun needs a position: give sun_elevation_deg and sun_azimuth_deg"):
         Weather(sun_illuminance_lux=1000.0)
     with pytest.raises(ValueError, match="sun_illuminance_lux"):
         Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=0.0, sun_illuminance_lux=-1.0)
@@ -147,7 +148,7 @@ def test_bad_clouds_are_refused_by_name() -> None:
 
     scene = scenes.street()
     r = Renderer(W, H, backend="cpu")
-    req = r._request(scene, Weather(**SUNNY), None, 0.0, 0, None, 1.0, 64)
+    req = r._request(scene, Weather(**SUNNY))
     req["clouds"] = clouds.frame_field("cumulus", None)
     with pytest.raises(ValueError, match="built for another sun"):
         _core.render_frame(req)
@@ -174,9 +175,7 @@ def test_gpu_draws_the_clouds_as_the_cpu(weather: dict) -> None:
 def test_the_demo_shows_clouds_and_their_shadow_on_the_street() -> None:
     # What out/street_clouds.png is for: clouds in the sky, and a cloud's shadow over the
     # near street while the far street lies in the sun (the sun reaches both without clouds).
-    import dataclasses
-
-    from skyfall.demo import STREET_CLOUDS
+    from skyfall._demo import STREET_CLOUDS
 
     r = Renderer(320, 180, backend="cpu")
     f = STREET_CLOUDS.render(r)
@@ -197,7 +196,7 @@ def _sun_light(r: Renderer, scene, w: Weather, cloud: clouds.Cloud, diffuse: boo
 
     out = []
     for weather in (w, Weather(sky=w.sky, sun_elevation_deg=w.sun_elevation_deg, sun_azimuth_deg=w.sun_azimuth_deg, sun_illuminance_lux=0.0)):
-        req = r._request(scene, weather, None, 0.0, 0, None, 1.0, 64)
+        req = r._request(scene, weather)
         req["clouds"] = clouds.frame_field(cloud, weather.sun_direction, diffuse=diffuse)
         out.append(_core.render_frame(req)[0].astype(np.float64))
     return out[0] - out[1], out[1]
@@ -262,14 +261,14 @@ def test_the_sun_on_a_snow_cover_is_its_surfaces_share_on_both_backends() -> Non
     cam = Camera(position_m=(1.5, 1.6, 0.0), pitch_deg=8.0)
     cpu_r, gpu_r = Renderer(96, 54, backend="cpu"), Renderer(96, 54, backend="gpu")
     for weather in (Weather(**sunny), Weather(**sunny, clouds="broken")):
-        cpu = cpu_r.render(scene, weather, camera=cam, snow_cover=cover)
-        gpu = gpu_r.render(scene, weather, camera=cam, snow_cover=cover)
+        cpu = cpu_r.render(scene, dataclasses.replace(weather, snow_cover=cover), camera=cam)
+        gpu = gpu_r.render(scene, dataclasses.replace(weather, snow_cover=cover), camera=cam)
         np.testing.assert_allclose(gpu.layers["sun_transmittance"], cpu.layers["sun_transmittance"], atol=2e-3)
-    clear = cpu_r.render(scene, Weather(**sunny), camera=cam, snow_cover=cover)
+    clear = cpu_r.render(scene, Weather(**sunny, snow_cover=cover), camera=cam)
     st = clear.layers["sun_transmittance"]
     covered = clear.layers["snow_depth_m"] > 0.0
     assert covered.any() and st[covered].min() < 0.5 and st[covered].max() > 0.9
-    dark = cpu_r.render(scene, Weather(**sunny, sun_illuminance_lux=0.0), camera=cam, snow_cover=cover)
+    dark = cpu_r.render(scene, Weather(**sunny, sun_illuminance_lux=0.0, snow_cover=cover), camera=cam)
     lit, shaded = covered & (st > 0.9), covered & (st == 0.0)
     assert (clear.rgb[lit][:, 1] > dark.rgb[lit][:, 1] + 1.0).all()  # the sun on the snow
     np.testing.assert_array_equal(clear.rgb[shaded], dark.rgb[shaded])  # none in the shadow

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from skyfall import Renderer, dataset, io, scenes
-from skyfall.dataset_sample import DatasetConfig, sample_item
+from skyfall.dataset.sample import DatasetConfig, sample_item
 
 W, H = 64, 48
 

@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 from skyfall import io
-from skyfall.dataset import _chunks, generate
-from skyfall.dataset_item import ItemSource, Worker, render_item, render_items, verify_item
-from skyfall.dataset_sample import DatasetConfig
+from skyfall.dataset import generate
+from skyfall.dataset.run import _chunks
+from skyfall.dataset.item import ItemSource, Worker, render_item, render_items, verify_item
+from skyfall.dataset.sample import DatasetConfig
 
 from test_dataset import tree
 
@@ -144,7 +145,7 @@ def test_png_strategies_keep_the_pixels(tmp_path):
 def test_a_snow_range_is_drawn_last_and_moves_no_other_parameter(tmp_path):
     from dataclasses import replace
 
-    from skyfall.dataset_sample import sample_item
+    from skyfall.dataset.sample import sample_item
 
     rain = config(tmp_path, rain_rate_mm_h="1:50", wind_m_s="-5:5")
     both = config(tmp_path, rain_rate_mm_h="1:50", wind_m_s="-5:5", snow_rate_mm_h="0.5:4")

@@ -72,7 +72,7 @@ def test_photo_clips_are_the_photo_with_rain_rendered_at_k_over_fps(photos, tmp_
         assert alpha.shape == (N, H, W) and alpha.dtype == np.float32
         for k in range(N):
             a = np.empty((H, W), np.float32)
-            direct = r.render_srgb8(scene, weather(row), time_s=k / FPS, seed=row["params"]["render_seed"], rain_alpha_out=a)
+            direct = r.render_srgb8(scene, weather(row), time_s=k / FPS, seed=row["params"]["render_seed"], layers={"rain_alpha": a}).image
             np.testing.assert_array_equal(rainy[k], direct)
             np.testing.assert_array_equal(alpha[k], a)
             np.testing.assert_array_equal(clean[k], pixels[row["image"]])

@@ -34,7 +34,7 @@ MODULES = sorted(
     m.name for m in pkgutil.walk_packages(skyfall.__path__, prefix="skyfall.") if not m.name.startswith("skyfall._core")
 )
 # Modules whose public functions carry examples: an example lost from any of them fails below.
-WITH_EXAMPLES = {"skyfall.physics", "skyfall.io", "skyfall.rain", "skyfall.reference", "skyfall.render", "skyfall.scenes", "skyfall.testing"}
+WITH_EXAMPLES = {"skyfall.physics", "skyfall.io", "skyfall.rain", "skyfall._reference", "skyfall.render", "skyfall.scenes", "skyfall.testing"}
 
 
 def _examples(name: str) -> list[doctest.DocTest]:

@@ -28,7 +28,7 @@ import skyfall
 import skyfall.depth
 import skyfall.photo
 from skyfall import Camera, PhotoScene, Renderer, Weather, cli, clouds, io, physics, rain, sky, windshield
-from skyfall.dataset_sample import DatasetConfig, parse_range
+from skyfall.dataset.sample import DatasetConfig, parse_range
 
 EXAMPLES = int(os.environ.get("SKYFALL_FUZZ_EXAMPLES", "12"))
 CASES: dict[str, int] = {}

@@ -1,7 +1,7 @@
 """Golden images: the demo's street frames, small, against PNGs made from the code on purpose.
 
-The demo (``python -m skyfall.demo``) renders its three street frames at 1280 x 720; here the
-same scenes, weathers and seeds (:data:`skyfall.demo.DEMO_FRAMES`) render at 320 x 180 on the
+The demo (``python -m skyfall._demo``) renders its three street frames at 1280 x 720; here the
+same scenes, weathers and seeds (:data:`skyfall._demo.DEMO_FRAMES`) render at 320 x 180 on the
 CPU backend, with the day rain's ``rain_alpha`` PNG and the 8-bit photo path (render_srgb8 of
 the clear street as an 8-bit photo with its depth, in 10 mm/h rain: the augmentation path the
 rain bench times at 1080p). Each is compared, as 8-bit sRGB, with its PNG in tests/data/golden/
@@ -40,9 +40,9 @@ from numpy.typing import NDArray
 from skimage.metrics import structural_similarity
 
 from skyfall import PhotoScene, Renderer, Weather, io, scenes
-from skyfall.demo import DEMO_FRAMES, STREET_RAIN_DAY, rain_alpha_png
-from skyfall.demo_photo import PHOTO_FRAMES
-from skyfall.demo_snow import SNOW_DEMOS, png8
+from skyfall._demo import DEMO_FRAMES, STREET_RAIN_DAY, rain_alpha_png
+from skyfall._demo.photo import PHOTO_FRAMES
+from skyfall._demo.snow import SNOW_DEMOS, png8
 
 GOLDEN = Path(__file__).parent / "data" / "golden"
 UPDATE = os.environ.get("SKYFALL_UPDATE_GOLDEN") == "1"
@@ -50,7 +50,7 @@ W, H = 320, 180
 PHOTO_RAIN = Weather(rain_rate_mm_h=10.0)
 NAMES = [*(d.name for d in DEMO_FRAMES), "street_rain_day_alpha", "street_photo8_rain"]
 PHOTO_W = 160
-"""The demo's photos (skyfall.demo_photo) are guarded at 160 px wide (their own aspect)."""
+"""The demo's photos (skyfall._demo.photo) are guarded at 160 px wide (their own aspect)."""
 # (min SSIM, max mean |difference| in codes, max fraction of values > 1 code off)
 BOUNDS = {"cpu": (0.995, 0.25, 0.001), "gpu": (0.99, 0.25, 0.005)}
 
@@ -162,7 +162,7 @@ def snow_golden(demo) -> Path:
 @pytest.mark.parametrize("backend", ["cpu", "gpu"])
 @pytest.mark.parametrize("demo", SNOW_DEMOS, ids=[d.name for d in SNOW_DEMOS])
 def test_the_snow_demos_match_their_goldens(demo, backend):
-    # skyfall.demo_snow's frames under their covers, on both backends against the CPU's
+    # skyfall._demo.snow's frames under their covers, on both backends against the CPU's
     # goldens (SKYFALL_UPDATE_GOLDEN=1 with -k snow_demos writes these two alone, from the CPU).
     path = snow_golden(demo)
     bare, snowy = demo.render(PHOTO_W if demo.name.startswith("photo") else W, H, backend=backend)

@@ -1,4 +1,4 @@
-"""The windshield's golden image: the demo's in-car view (``skyfall.demo.windshield_still``:
+"""The windshield's golden image: the demo's in-car view (``skyfall._demo.windshield_still``:
 the street in 10 mm/h rain through the "rain" preset's windshield a minute in, the wipers
 mid-sweep), small, against a PNG made from the code on purpose, with the bounds of
 ``tests/test_golden.py`` (SSIM, mean |difference|, share of values more than one code off).
@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from skimage.metrics import structural_similarity
 
 from skyfall import Renderer, io
-from skyfall.demo import windshield_still
+from skyfall._demo import windshield_still
 
 GOLDEN = Path(__file__).parent / "data" / "golden" / "windshield"
 UPDATE = os.environ.get("SKYFALL_UPDATE_GOLDEN") == "1"
@@ -55,7 +55,7 @@ def test_the_golden_shows_drops_and_blades(golden: NDArray[np.uint8]) -> None:
     # against the same street and camera without the glass: the blades are where the golden is
     # much darker (a thin share of the frame), the drops change much of the rest a little
     from skyfall import Weather, scenes
-    from skyfall.demo import WINDSHIELD_TIME_S, windshield_camera
+    from skyfall._demo import WINDSHIELD_TIME_S, windshield_camera
 
     weather = Weather(rain_rate_mm_h=10.0, visibility_m=2000.0)
     plain = io.to_srgb8(Renderer(W, H, backend="cpu").render(scenes.street(), weather, camera=windshield_camera(), time_s=WINDSHIELD_TIME_S).rgb)

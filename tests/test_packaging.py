@@ -11,7 +11,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "python" / "skyfall"
-# Imported, deliberately not declared: skyfall.reference.canyon_illuminance is a test and
+# Imported, deliberately not declared: skyfall._reference.canyon_illuminance is a test and
 # bench reference that says `pip install scipy` when scipy is missing.
 UNDECLARED = {"scipy"}
 
@@ -43,11 +43,11 @@ def test_every_import_is_a_declared_dependency():
     required, optional = declared()
     dists = packages_distributions()
     missing = []
-    for path in sorted(PACKAGE.glob("*.py")):
+    for path in sorted(PACKAGE.rglob("*.py")):  # subpackages (dataset/, _demo/) included
         for module in sorted(imported_modules(path) - UNDECLARED):
             names = {_name(d) for d in dists.get(module, [module])}
             if not names & (required | optional):
-                missing.append(f"{path.name} imports {module} ({', '.join(sorted(names))})")
+                missing.append(f"{path.relative_to(PACKAGE)} imports {module} ({', '.join(sorted(names))})")
     assert not missing, "undeclared in pyproject.toml: " + "; ".join(missing)
 
 

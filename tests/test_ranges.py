@@ -4,8 +4,8 @@ public API (Python's checks) and through ``_core`` (the core's)."""
 
 from __future__ import annotations
 
-import inspect
 import dataclasses
+import inspect
 import math
 import re
 from types import SimpleNamespace
@@ -17,7 +17,9 @@ import numpy as np
 import pytest
 
 from skyfall import Camera, PhotoScene, PointLight, Renderer, SpotLight, Weather, _core, clouds, physics, rain, scenes, sky, snow
+from skyfall import weather as weather_module
 from skyfall import windshield as ws
+from skyfall.dataset import DatasetConfig
 
 RANGES = _core.RANGES
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -373,11 +375,38 @@ def test_python_messages_are_the_cores() -> None:
     assert str(core_err.value) == "vertical_fov_deg = 179.0 is outside the valid range [0.001, 179) deg"
 
 
+def test_the_checks_across_weather_fields_are_the_cores_alone() -> None:
+    # rain_far_m below rain_near_m, the sun's position whole, a sun's illuminance with a
+    # position: checked once, in the core (weather::Weather::validate and the binding's read of
+    # the sun), whose messages name the parameter; weather.py holds no copy of them.
+    cases: list[tuple[Callable[[], object], str]] = [
+        (lambda: Weather(rain_near_m=5.0, rain_far_m=5.0), "rain_far_m: rain_far_m = 5 m must be less than rain_near_m = 5 m"),
+        (lambda: Weather(sun_elevation_deg=30.0), "sun_elevation_deg: give both sun_elevation_deg and sun_azimuth_deg, or neither"),
+        (lambda: Weather(sun_azimuth_deg=30.0), "sun_elevation_deg: give both sun_elevation_deg and sun_azimuth_deg, or neither"),
+        (lambda: Weather(sun_illuminance_lux=1000.0), "sun_illuminance_lux: a sun needs a position: give sun_elevation_deg and sun_azimuth_deg"),
+    ]
+    for call, message in cases:
+        with pytest.raises(ValueError) as e:
+            call()
+        assert str(e.value).startswith(message)
+    # the same through the core's own read of a weather-like object, past every Python check
+    w = Weather(rain_near_m=5.0, rain_far_m=4.0)
+    fields = {f.name: getattr(w, f.name) for f in dataclasses.fields(w)}
+    with pytest.raises(ValueError, match=r"^rain_far_m: rain_far_m = 6 m must be less than rain_near_m = 5 m"):
+        _core.weather_optics(SimpleNamespace(**{**fields, "rain_far_m": 6.0}))  # type: ignore[arg-type]
+    assert Weather(sun_illuminance_lux=0.0).sun_direction is None  # no sun: no position needed
+    source = inspect.getsource(weather_module)
+    for text in ("must be less than rain_near_m", "or neither", "needs a sun position", "needs a position"):
+        assert text not in source
+    with pytest.raises(ValueError, match="rain_far_m: rain_far_m = 6 m must be less than rain_near_m = 5 m"):
+        DatasetConfig(out=Path("unused"), scene="street", rain_near_m=5.0, rain_far_m=6.0)
+
+
 def _render_core(**changes: Any) -> object:
     """A rainy street frame through ``_core.render_frame`` with one value changed past the
     Python checks: the request's camera and weather are stand-ins with the same attributes
     (the core reads them attribute by attribute), so only the core's own checks run."""
-    req = _tiny._request(_street, Weather(rain_rate_mm_h=5.0), None, 0.0, 0, None, 1.0, 64)
+    req = _tiny._request(_street, Weather(rain_rate_mm_h=5.0))
     cam, w = req["camera"], req["weather"]
     camera = SimpleNamespace(
         width=cam.width,

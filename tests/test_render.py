@@ -10,7 +10,7 @@ from skimage.metrics import structural_similarity
 
 import skyfall
 from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
-from skyfall.reference import path_to_cloud_base_m
+from skyfall._reference import path_to_cloud_base_m
 
 W, H = 160, 96
 

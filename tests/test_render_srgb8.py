@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
-from skyfall.reference import path_to_cloud_base_m
+from skyfall._reference import path_to_cloud_base_m
 
 W, H = 160, 101  # 101 rows: the last band of rows is short
 
@@ -36,7 +36,7 @@ def test_the_fused_path_is_the_float_frame_encoded(cpu):
     frame = cpu.render(scene, weather, seed=3)
     want = io.to_srgb8(frame.rgb)
     alpha = np.full((H, W), -1.0, np.float32)
-    got = cpu.render_srgb8(scene, weather, seed=3, rain_alpha_out=alpha)
+    got = cpu.render_srgb8(scene, weather, seed=3, layers={"rain_alpha": alpha}).image
     assert got.dtype == np.uint8 and got.shape == (H, W, 3)
     # the same bits again (bands run in parallel; the streak order is a total order)
     assert cpu.render_srgb8(scene, weather, seed=3).tobytes() == got.tobytes()
@@ -81,7 +81,7 @@ def test_clear_weather_gives_the_bytes_back(cpu):
     scene = photo8(3)
     out = np.zeros((H, W, 3), np.uint8)
     alpha = np.ones((H, W), np.float32)
-    got = cpu.render_srgb8(scene, Weather(), out=out, rain_alpha_out=alpha)
+    got = cpu.render_srgb8(scene, Weather(), out=out, layers={"rain_alpha": alpha}).image
     assert got is out
     assert got.tobytes() == scene.srgb8.tobytes()
     assert not alpha.any()
@@ -95,7 +95,7 @@ def test_other_scenes_and_float_photos_render_then_encode(cpu):
     assert cpu.render_srgb8(street, weather, seed=1).tobytes() == want.tobytes()
     lin = PhotoScene(photo8(4).image, photo8(4).depth_m, camera=photo8(4).camera, encoding="linear")
     alpha = np.empty((H, W), np.float32)
-    got = cpu.render_srgb8(lin, weather, seed=1, rain_alpha_out=alpha)
+    got = cpu.render_srgb8(lin, weather, seed=1, layers={"rain_alpha": alpha}).image
     frame = cpu.render(lin, weather, seed=1)
     assert got.tobytes() == io.to_srgb8(frame.rgb).tobytes()
     assert alpha.tobytes() == frame.layers["rain_alpha"].tobytes()
@@ -118,18 +118,18 @@ def test_bad_outputs_are_refused(cpu):
     with pytest.raises(ValueError, match="the photo is"):
         Renderer(W + 2, H, backend="cpu").render_srgb8(scene)
     # what is wrong is named: the dtype, the shape, the layout, the type
-    with pytest.raises(ValueError, match=r"rain_alpha_out must be .* shape \(101, 160\), got dtype float64"):
-        cpu.render_srgb8(scene, rain_alpha_out=np.zeros((H, W), np.float64))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"layers\['rain_alpha'\] must be .* shape \(101, 160\), got dtype float64"):
+        cpu.render_srgb8(scene, layers={"rain_alpha": np.zeros((H, W), np.float64)})  # type: ignore[arg-type]
     with pytest.raises(ValueError, match=r"out must be .*, got shape \(101, 161, 3\)"):
         cpu.render_srgb8(scene, out=np.zeros((H, W + 1, 3), np.uint8))
-    with pytest.raises(ValueError, match="rain_alpha_out .* got an array that is not C-contiguous"):
-        cpu.render_srgb8(scene, rain_alpha_out=np.zeros((W, H), np.float32).T)
+    with pytest.raises(ValueError, match=r"layers\['rain_alpha'\] .* got an array that is not C-contiguous"):
+        cpu.render_srgb8(scene, layers={"rain_alpha": np.zeros((W, H), np.float32).T})
     read_only = np.zeros((H, W, 3), np.uint8)
     read_only.flags.writeable = False
     with pytest.raises(ValueError, match="out .* got a read-only array"):
         cpu.render_srgb8(scene, out=read_only)
-    with pytest.raises(TypeError, match="rain_alpha_out must be .* got list"):
-        cpu.render_srgb8(scene, rain_alpha_out=[[0.0] * W] * H)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=r"layers\['rain_alpha'\] must be .* got list"):
+        cpu.render_srgb8(scene, layers={"rain_alpha": [[0.0] * W] * H})  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="weather"):
         cpu.render_srgb8(scene, "rain")  # type: ignore[arg-type]
 
@@ -144,7 +144,7 @@ def test_a_photo_of_another_size_is_named_before_the_outputs_made_for_it():
     for backend in ("cpu", "gpu"):
         other = Renderer(2 * W, 2 * H, backend=backend)
         with pytest.raises(ValueError, match=r"the photo is 160x101 px, the renderer 320x202 px: .*Renderer\(160, 101\)"):
-            other.render_srgb8(scene, Weather(rain_rate_mm_h=10.0), rain_alpha_out=alpha, out=image)
+            other.render_srgb8(scene, Weather(rain_rate_mm_h=10.0), out=image, layers={"rain_alpha": alpha})
         with pytest.raises(ValueError, match="the photo is 160x101 px"):
             other.render(scene, Weather(rain_rate_mm_h=10.0))
 
@@ -161,15 +161,15 @@ def test_outputs_that_overlap_the_inputs_are_refused(backend):
     before = (img.copy(), depth.copy())
     with pytest.raises(ValueError, match="out overlaps the scene's image"):
         r.render_srgb8(scene, rain, out=img)
-    with pytest.raises(ValueError, match="rain_alpha_out overlaps the scene's depth_m"):
-        r.render_srgb8(scene, rain, rain_alpha_out=depth)
+    with pytest.raises(ValueError, match=r"layers\['rain_alpha'\] overlaps the scene's depth_m"):
+        r.render_srgb8(scene, rain, layers={"rain_alpha": depth})
     buf = np.empty(H * W * 4, np.float32)
-    with pytest.raises(ValueError, match="out overlaps rain_alpha_out"):
-        r.render_srgb8(scene, rain, out=buf.view(np.uint8)[: H * W * 3].reshape(H, W, 3), rain_alpha_out=buf[: H * W].reshape(H, W))
+    with pytest.raises(ValueError, match=r"out overlaps layers\['rain_alpha'\]"):
+        r.render_srgb8(scene, rain, out=buf.view(np.uint8)[: H * W * 3].reshape(H, W, 3), layers={"rain_alpha": buf[: H * W].reshape(H, W)})
     assert np.array_equal(img, before[0]) and np.array_equal(depth, before[1])
     float_scene = PhotoScene(io.decode_srgb8(img), depth, camera=Camera((0.0, 1.6, 0.0)), encoding="linear")
-    with pytest.raises(ValueError, match="rain_alpha_out overlaps the scene's image"):
-        r.render_srgb8(float_scene, rain, rain_alpha_out=float_scene.image.reshape(-1)[: H * W].reshape(H, W))
+    with pytest.raises(ValueError, match=r"layers\['rain_alpha'\] overlaps the scene's image"):
+        r.render_srgb8(float_scene, rain, layers={"rain_alpha": float_scene.image.reshape(-1)[: H * W].reshape(H, W)})
 
 
 def test_fuses_srgb8_says_which_path_render_srgb8_takes():
@@ -182,7 +182,7 @@ def test_fuses_srgb8_says_which_path_render_srgb8_takes():
     glass = windshield.Windshield(5.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
     assert not r.fuses_srgb8(photo8, Weather(windshield=glass))
     cover = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0), duration_s=600.0, dt_s=600.0, resolution_m=10.0)
-    assert not r.fuses_srgb8(photo8, Weather(), cover)
+    assert not r.fuses_srgb8(photo8, Weather(snow_cover=cover))
 
 
 @pytest.mark.parametrize("level", ["scalar", "avx2"])
@@ -193,12 +193,12 @@ def test_every_simd_level_gives_the_same_bytes(cpu, monkeypatch, level):
     scene = photo8(4)
     weather = Weather(rain_rate_mm_h=40.0, visibility_m=300.0, wind_m_s=(2.0, 0.0, 0.0))
     alpha_best = np.empty((H, W), np.float32)
-    best = cpu.render_srgb8(scene, weather, seed=5, rain_alpha_out=alpha_best)
+    best = cpu.render_srgb8(scene, weather, seed=5, layers={"rain_alpha": alpha_best}).image
     linear = np.linspace(-0.1, 1.1, 3 * W * H, dtype=np.float32).reshape(H, W, 3)
     encoded = io.to_srgb8(linear)
     monkeypatch.setenv("SKYFALL_SIMD", level)
     alpha = np.empty((H, W), np.float32)
-    capped = cpu.render_srgb8(scene, weather, seed=5, rain_alpha_out=alpha)
+    capped = cpu.render_srgb8(scene, weather, seed=5, layers={"rain_alpha": alpha}).image
     np.testing.assert_array_equal(capped, best)
     np.testing.assert_array_equal(alpha, alpha_best)
     np.testing.assert_array_equal(io.to_srgb8(linear), encoded)

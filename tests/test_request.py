@@ -59,7 +59,7 @@ def test_the_core_reads_the_objects_and_names_what_is_wrong() -> None:
     # A stand-in weather past Python's checks: the core's own check names the field.
     r = Renderer(16, 12, backend="cpu")
     street = scenes.street()
-    req = r._request(street, Weather(rain_rate_mm_h=5.0), None, 0.0, 0, None, 1.0, 64)
+    req = r._request(street, Weather(rain_rate_mm_h=5.0))
 
     class Stand:
         def __init__(self, w: Weather, **changes: Any) -> None:
@@ -99,9 +99,9 @@ def test_layers_are_the_cores() -> None:
     snowy = Weather(rain_rate_mm_h=5.0, snow_rate_mm_h=0.5, visibility_m=500.0, windshield=glass)
     cover = snow.accumulate(scenes.street(), snowy, duration_s=600.0, dt_s=600.0, resolution_m=4.0)
     sunny = dataclasses.replace(snowy, sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=200.0, clouds="cumulus")
-    f = r.render(scenes.street(), sunny, snow_cover=cover)
+    f = r.render(scenes.street(), dataclasses.replace(sunny, snow_cover=cover))
     assert list(f.layers) == list(_core.LAYERS)
-    assert "cloud_alpha" not in r.render(scenes.street(), snowy, snow_cover=cover).layers
+    assert "cloud_alpha" not in r.render(scenes.street(), dataclasses.replace(snowy, snow_cover=cover)).layers
     rain_only = r.render(scenes.street(), Weather(rain_rate_mm_h=5.0, visibility_m=500.0))
     assert list(rain_only.layers) == ["transmittance", "rain_alpha", "rain_depth_m"]
     snow_only = r.render(scenes.street(), Weather(snow_rate_mm_h=0.5))

@@ -91,8 +91,8 @@ def test_srgb8_frames_are_render_srgb8_at_their_times(renderer):
     assert len({id(f) for f in fresh}) == 3  # a new array per frame without out=
     out = np.empty((H, W, 3), np.uint8)
     alpha = np.full((H, W), -1.0, np.float32)
-    for k, img in enumerate(renderer.render_sequence_srgb8(scene, RAIN, n_frames=3, seed=2, start_s=1.0, out=out, rain_alpha_out=alpha)):
-        assert img is out and img.tobytes() == want[k].tobytes()
+    for k, (img, layers) in enumerate(renderer.render_sequence_srgb8(scene, RAIN, n_frames=3, seed=2, start_s=1.0, out=out, layers={"rain_alpha": alpha})):
+        assert img is out and img.tobytes() == want[k].tobytes() and layers["rain_alpha"] is alpha
         np.testing.assert_allclose(alpha, alpha_want[k], atol=1e-6)
     # box scenes take the float path and encode it, the same as render_srgb8
     street = next(renderer.render_sequence_srgb8(scenes.street(), RAIN, n_frames=1, seed=2))
@@ -132,8 +132,8 @@ def test_bad_outputs_raise_at_the_call():
         r.render_sequence(scenes.street(), RAIN, n_frames=2, out=Renderer(W + 1, H, backend="cpu").render(scenes.street()))
     with pytest.raises(TypeError, match="out must be a skyfall.Frame"):
         r.render_sequence(scenes.street(), RAIN, n_frames=2, out=np.zeros((H, W, 3), np.float32))  # type: ignore[arg-type]
-    with pytest.raises(ValueError, match=r"rain_alpha_out must be .* got dtype float64"):
-        r.render_sequence_srgb8(photo8(), RAIN, n_frames=2, rain_alpha_out=np.zeros((H, W)))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"layers\['rain_alpha'\] must be .* got dtype float64"):
+        r.render_sequence_srgb8(photo8(), RAIN, n_frames=2, layers={"rain_alpha": np.zeros((H, W))})  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="the photo is"):
         Renderer(W + 2, H, backend="cpu").render_sequence_srgb8(photo8(), RAIN, n_frames=2, out=np.empty((H, W, 3), np.uint8))
 

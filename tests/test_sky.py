@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from skyfall import Camera, PhotoScene, Renderer, Weather, rain, scenes, sky
-from skyfall.reference import canyon_illuminance, path_to_cloud_base_m
+from skyfall._reference import canyon_illuminance, path_to_cloud_base_m
 from conftest import DATA
 
 E = 10000.0

@@ -4,6 +4,7 @@ open level ground R * t * rho_water / rho_snow, the geometry of a box's wind sha
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import subprocess
@@ -110,8 +111,8 @@ def test_hard_cases_are_finite_or_refused_naming_the_parameter() -> None:
         snow.accumulate(scenes.empty(), Weather(), duration_s=60.0, extent_m=(0, 0, -1, 1))
     with pytest.raises(TypeError, match="weather"):
         snow.accumulate(scenes.empty(), None, duration_s=60.0)  # type: ignore[arg-type]
-    with pytest.raises(TypeError, match="snow_cover"):
-        Renderer(8, 6, backend="cpu").render(scenes.empty(), snow_cover="deep")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="snow_cover must be a skyfall.snow.SnowCover"):
+        Weather(snow_cover="deep")  # type: ignore[arg-type]
 
 
 def _ground_cell_depth(cover: snow.SnowCover, frame_depth: np.ndarray, renderer: Renderer, cam) -> np.ndarray:
@@ -136,7 +137,7 @@ def test_a_frame_shows_the_cover_white_and_its_depth_layer() -> None:
     # drawn once the snow has stopped: no flakes nor their haze over the cover
     after = Weather(wind_m_s=w.wind_m_s)
     bare = r.render(street, after)
-    white = r.render(street, after, snow_cover=cover)
+    white = r.render(street, dataclasses.replace(after, snow_cover=cover))
     layer = white.layers["snow_depth_m"]
     want = _ground_cell_depth(cover, white.depth_m, r, street.camera)
     ground = np.isfinite(want)
@@ -158,10 +159,10 @@ def test_a_frame_shows_the_cover_white_and_its_depth_layer() -> None:
     # Sky and walls carry no snow; a cover of no snow is no cover, bit for bit.
     assert np.all(layer[np.isinf(white.depth_m)] == 0.0)
     empty = snow.accumulate(street, Weather(), duration_s=HOUR, resolution_m=0.5)
-    same = r.render(street, after, snow_cover=empty)
+    same = r.render(street, dataclasses.replace(after, snow_cover=empty))
     assert np.array_equal(same.rgb, bare.rgb) and np.array_equal(same.depth_m, bare.depth_m)
     # The 8-bit path draws it too (through the float frame).
-    np.testing.assert_array_equal(r.render_srgb8(street, after, snow_cover=cover), io.to_srgb8(white.rgb))
+    np.testing.assert_array_equal(r.render_srgb8(street, dataclasses.replace(after, snow_cover=cover)), io.to_srgb8(white.rgb))
 
 
 def test_snow_lies_on_a_photos_upward_surfaces_and_not_in_its_wind_shadow() -> None:
@@ -174,7 +175,7 @@ def test_snow_lies_on_a_photos_upward_surfaces_and_not_in_its_wind_shadow() -> N
     shot = r.render(scene)
     photo = PhotoScene(shot.rgb, shot.depth_m, camera=scene.camera, encoding="linear", airlight="sky")
     still = snow.accumulate(photo, Weather(snow_rate_mm_h=2.0), duration_s=HOUR, resolution_m=0.5, roughness=0.0)
-    frame = r.render(photo, Weather(snow_rate_mm_h=2.0), snow_cover=still)
+    frame = r.render(photo, Weather(snow_rate_mm_h=2.0, snow_cover=still))
     d = frame.layers["snow_depth_m"]
     normal_up = _photo_ground(shot.depth_m, scene.camera, r)
     # Level ground and the wall's top: the open depth (2 cm); the wall's face: none.
@@ -227,11 +228,11 @@ def test_the_gpu_backend_draws_the_cover_as_the_cpu_does() -> None:
     w = Weather(snow_rate_mm_h=3.0, wind_m_s=(0.3, 0.0, 1.5))
     cover = snow.accumulate(street, w, duration_s=HOUR, resolution_m=0.5)
     after = Weather(wind_m_s=w.wind_m_s)  # the snow has stopped: the cover alone
-    cpu = Renderer(160, 90, backend="cpu").render(street, after, snow_cover=cover)
-    gpu = Renderer(160, 90, backend="gpu").render(street, after, snow_cover=cover)
+    cpu = Renderer(160, 90, backend="cpu").render(street, dataclasses.replace(after, snow_cover=cover))
+    gpu = Renderer(160, 90, backend="gpu").render(street, dataclasses.replace(after, snow_cover=cover))
     assert sorted(gpu.layers) == ["snow_depth_m"]
     # while it snows, the flakes and their haze are drawn over it too
-    falling = Renderer(160, 90, backend="gpu").render(street, w, snow_cover=cover)
+    falling = Renderer(160, 90, backend="gpu").render(street, dataclasses.replace(w, snow_cover=cover))
     assert sorted(falling.layers) == ["snow_alpha", "snow_depth_m", "transmittance"]
     # f32 rounding may move a silhouette by a pixel (as tests/test_render.py allows)
     assert np.mean(np.abs(cpu.rgb - gpu.rgb) > 1e-3) <= 0.005
@@ -243,8 +244,41 @@ def test_a_sequence_carries_the_cover_in_every_frame() -> None:
     r = Renderer(48, 27, backend="cpu")
     w = Weather(snow_rate_mm_h=2.0)
     cover = snow.accumulate(scenes.street(), w, duration_s=HOUR, resolution_m=1.0)
-    one = r.render(scenes.street(), w, time_s=0.5, snow_cover=cover)
-    frames = list(r.render_sequence(scenes.street(), w, n_frames=2, fps=2.0, snow_cover=cover))
+    one = r.render(scenes.street(), dataclasses.replace(w, snow_cover=cover), time_s=0.5)
+    frames = list(r.render_sequence(scenes.street(), dataclasses.replace(w, snow_cover=cover), n_frames=2, fps=2.0))
     assert np.array_equal(frames[1].rgb, one.rgb) and np.array_equal(frames[1].layers["snow_depth_m"], one.layers["snow_depth_m"])
-    codes = list(r.render_sequence_srgb8(scenes.street(), w, n_frames=2, fps=2.0, snow_cover=cover))
+    codes = list(r.render_sequence_srgb8(scenes.street(), dataclasses.replace(w, snow_cover=cover), n_frames=2, fps=2.0))
     np.testing.assert_array_equal(codes[1], io.to_srgb8(one.rgb))
+
+
+def test_the_cover_is_a_weather_field_and_the_old_keyword_warns() -> None:
+    # Weather(snow_cover=...) is the way; the render calls' snow_cover= keyword still works for
+    # one release, with a DeprecationWarning naming the new way at the caller's line.
+    r = Renderer(48, 27, backend="cpu")
+    street = scenes.street()
+    w = Weather(snow_rate_mm_h=2.0)
+    cover = snow.accumulate(street, w, duration_s=HOUR, resolution_m=1.0)
+    covered = dataclasses.replace(w, snow_cover=cover)
+    assert covered.snow_cover is cover and covered == dataclasses.replace(w, snow_cover=cover)
+    want = r.render(street, covered)
+    assert want.layers["snow_depth_m"].max() > 0.0
+    with pytest.warns(DeprecationWarning, match=r"snow_cover= is deprecated: .*Weather\(snow_cover=cover\)") as record:
+        got = r.render(street, w, snow_cover=cover)
+    assert [x.filename for x in record] == [__file__]
+    np.testing.assert_array_equal(got.rgb, want.rgb)
+    np.testing.assert_array_equal(got.layers["snow_depth_m"], want.layers["snow_depth_m"])
+    with pytest.warns(DeprecationWarning, match="snow_cover= is deprecated"):
+        np.testing.assert_array_equal(r.render_srgb8(street, w, snow_cover=cover), r.render_srgb8(street, covered))
+    with pytest.warns(DeprecationWarning, match="snow_cover= is deprecated"):
+        frames = list(r.render_sequence(street, w, n_frames=1, snow_cover=cover))
+    np.testing.assert_array_equal(frames[0].rgb, want.rgb)
+    with pytest.warns(DeprecationWarning, match="snow_cover= is deprecated"):
+        codes = list(r.render_sequence_srgb8(street, w, n_frames=1, snow_cover=cover))
+    np.testing.assert_array_equal(codes[0], io.to_srgb8(want.rgb))
+    photo8 = PhotoScene(np.full((27, 48, 3), 120, np.uint8), depth_m=np.full((27, 48), 30.0, np.float32))
+    assert r.fuses_srgb8(photo8, w) and not r.fuses_srgb8(photo8, covered)
+    with pytest.warns(DeprecationWarning, match="snow_cover= is deprecated"):
+        assert not r.fuses_srgb8(photo8, w, cover)
+    other = snow.accumulate(street, w, duration_s=HOUR, resolution_m=2.0)
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="two covers"):
+        r.render(street, covered, snow_cover=other)

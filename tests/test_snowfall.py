@@ -157,7 +157,7 @@ def test_the_8bit_path_is_the_float_frame_encoded_with_snow(cpu):
     want = io.to_srgb8(frame.rgb)
     snow_a = np.full((H, W), -1.0, np.float32)
     rain_a = np.full((H, W), -1.0, np.float32)
-    got = cpu.render_srgb8(scene, weather, seed=3, rain_alpha_out=rain_a, snow_alpha_out=snow_a)
+    got = cpu.render_srgb8(scene, weather, seed=3, layers={"rain_alpha": rain_a, "snow_alpha": snow_a}).image
     diff = np.abs(got.astype(int) - want)
     assert diff.max() <= 1 and np.mean(diff > 0) < 1e-3
     np.testing.assert_allclose(snow_a, frame.layers["snow_alpha"], atol=1e-6)
@@ -165,7 +165,7 @@ def test_the_8bit_path_is_the_float_frame_encoded_with_snow(cpu):
     assert frame.layers["snow_alpha"].max() > 0.05
     # without snow the 8-bit snow layer is zeros
     none = np.full((H, W), -1.0, np.float32)
-    cpu.render_srgb8(scene, Weather(rain_rate_mm_h=5.0), seed=3, snow_alpha_out=none)
+    cpu.render_srgb8(scene, Weather(rain_rate_mm_h=5.0), seed=3, layers={"snow_alpha": none})
     np.testing.assert_array_equal(none, 0.0)
 
 
@@ -220,9 +220,9 @@ def test_an_8bit_clip_fills_the_snow_layer_frame_by_frame(cpu):
     scene = photo8(2)
     weather = Weather(snow_rate_mm_h=2.0, wind_m_s=(1.0, 0.0, 0.0))
     alpha = np.full((H, W), -1.0, np.float32)
-    for k, img in enumerate(cpu.render_sequence_srgb8(scene, weather, n_frames=2, fps=10.0, seed=4, snow_alpha_out=alpha)):
+    for k, (img, _) in enumerate(cpu.render_sequence_srgb8(scene, weather, n_frames=2, fps=10.0, seed=4, layers={"snow_alpha": alpha})):
         want = np.full((H, W), -1.0, np.float32)
-        assert img.tobytes() == cpu.render_srgb8(scene, weather, seed=4, time_s=k / 10.0, snow_alpha_out=want).tobytes()
+        assert img.tobytes() == cpu.render_srgb8(scene, weather, seed=4, time_s=k / 10.0, layers={"snow_alpha": want}).image.tobytes()
         np.testing.assert_array_equal(alpha, want)
         assert alpha.max() > 0.0
 
@@ -244,6 +244,41 @@ def test_snow_alpha_is_a_coverage_at_most_1_at_short_shutters(exposure_s, cpu, g
             assert a.min() >= 0.0 and a.max() <= 1.0, (r.backend, seed, a.max())
             peaks.append(a.max())
         out = np.full((H, W), -1.0, np.float32)
-        cpu.render_srgb8(scene8, weather, seed=seed, snow_alpha_out=out)
+        cpu.render_srgb8(scene8, weather, seed=seed, layers={"snow_alpha": out})
         assert out.min() >= 0.0 and out.max() <= 1.0, (seed, out.max())
     assert max(peaks) > 0.99  # the flakes that passed 1 are opaque, not gone
+
+
+def _map_bounds(renderer: Renderer, scene: PhotoScene | scenes.BoxScene, weather: Weather) -> tuple[np.ndarray, np.ndarray]:
+    """The world box the frame's ambient-light map spans, m."""
+    m = renderer._request(scene, weather)["ambient"]
+    lo = np.asarray(m.origin_m, dtype=np.float64)
+    return lo, lo + m.spacing_m * (np.asarray(m.dims, dtype=np.float64) - 1.0)
+
+
+def test_the_ambient_map_spans_the_flakes_region_without_rain() -> None:
+    # The flakes read their sky light from the ambient-light map as the drops do, out to
+    # snow_near_m (8 m by default). The map's extent used to follow the rain alone, so snow
+    # without rain got a map of +-1 m around the camera and every flake beyond it read the
+    # map's edge: here, an awning 2-6 m ahead would not shade the flakes beneath it.
+    cam = Camera((0.0, 1.6, 0.0))
+    awning = [{"min": (-3.0, 3.0, -6.0), "max": (3.0, 3.2, -2.0)}]
+    photo = PhotoScene(np.full((18, 32, 3), 90, np.uint8), np.full((18, 32), 20.0, np.float32), camera=cam, occluders=awning)
+    r = Renderer(32, 18, backend="cpu")
+    eye = np.asarray(cam.position_m, dtype=np.float64)
+    for weather, reach in (
+        (Weather(snow_rate_mm_h=2.0), 8.0),
+        (Weather(snow_rate_mm_h=2.0, snow_near_m=12.0), 12.0),
+        (Weather(snow_rate_mm_h=2.0, snow_near_m=3.0, rain_rate_mm_h=5.0, rain_near_m=6.0), 6.0),  # the wider of the two
+        (Weather(rain_rate_mm_h=5.0, rain_near_m=4.0), 4.0),
+    ):
+        lo, hi = _map_bounds(r, photo, weather)
+        assert np.all(lo <= eye - reach) and np.all(hi >= eye + reach), (weather, lo, hi)
+    # without particles, a metre around the camera is enough
+    lo, hi = _map_bounds(r, photo, Weather())
+    assert np.all(hi - lo <= 2.0 + 1e-9)
+    # the awning now shades the flakes under it: a flake 4 m ahead under it receives less sky
+    # light than one in the open beside it (read from the map the frame uses)
+    amb = r._request(photo, Weather(snow_rate_mm_h=2.0))["ambient"]
+    under, beside = amb.sample(np.array([[0.0, 2.0, -4.0], [0.0, 2.0, 4.0]], np.float32))[:, 0]
+    assert under < 0.8 * beside

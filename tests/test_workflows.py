@@ -55,7 +55,7 @@ def test_drawn_layers_are_the_frames_own_arrays(renderer):
         sun_azimuth_deg=200.0,
         clouds="cumulus",
     )
-    frame = renderer.render(scenes.street(), weather, snow_cover=cover)
+    frame = renderer.render(scenes.street(), dataclasses.replace(weather, snow_cover=cover))
     assert set(frame.layers) == set(_core.LAYERS)
     for name in _core.LAYERS:
         assert frame.layer(name) is frame.layers[name]
@@ -75,7 +75,7 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
     snowy = renderer.render(scenes.street(), Weather(snow_rate_mm_h=0.2, snow_near_m=0.5), seed=3)
     haze = renderer.render(scenes.street(), Weather(visibility_m=1e12))
     bare = snow.accumulate(scenes.street(), Weather(), duration_s=0.0, resolution_m=4.0)  # no snow: depth 0
-    cover = renderer.render(scenes.street(), Weather(), snow_cover=bare).layers["snow_depth_m"]
+    cover = renderer.render(scenes.street(), Weather(snow_cover=bare)).layers["snow_depth_m"]
     empty = rain.layers["rain_alpha"] == 0.0
     assert empty.any() and (~empty).any()
     clear_of_flakes = snowy.layers["snow_alpha"] == 0.0

@@ -16,6 +16,10 @@ clouds
     Shiraishi & Harada).
 sky
     CIE skies, sky illuminance with occlusion and the ambient-light map (Yamamoto & Tadamura).
+snow
+    The snow cover (Koitabashi, Matsubara, Moriya & Takahashi): ``Weather(snow_cover=...)``.
+dataset
+    Datasets of weather variants with ground truth (imported on use: ``from skyfall import dataset``).
 
 Rendering: ``Renderer(width, height).render(scene, Weather(...))`` gives a :class:`Frame`;
 ``augment(image, rain_rate_mm_h=25.0)`` puts weather on any image and gives it back.

@@ -151,19 +151,19 @@ def _one(
         if encoding not in (None, "srgb"):
             raise ValueError("encoding = 'linear' does not fit a uint8 image: 8-bit images are sRGB codes")
         scene = _scene(np.ascontiguousarray(rgb), depth_m, camera, cam_changes, None)
+        fused = ("rain_alpha", "snow_alpha") if weather.snow_rate_mm_h > 0 else ("rain_alpha",)
+        layers: dict[str, NDArray[Any]] = {}
         if return_layers and not r.fuses_srgb8(scene, weather):
             frame = r.render(scene, weather, seed=seed)
             from skyfall.io import to_srgb8
 
             out_rgb: NDArray[Any] = to_srgb8(frame.rgb)
-            layers: dict[str, NDArray[Any]] = {**frame.layers, "depth_m": frame.depth_m}
+            layers = {**frame.layers, "depth_m": frame.depth_m}
+        elif return_layers:
+            out_rgb, fused_layers = r.render_srgb8(scene, weather, seed=seed, layers=fused)
+            layers = {**fused_layers, "depth_m": scene.depth_m}
         else:
-            rain = np.empty((h, w), np.float32) if return_layers else None
-            snow = np.empty((h, w), np.float32) if return_layers and weather.snow_rate_mm_h > 0 else None
-            out_rgb = r.render_srgb8(scene, weather, seed=seed, rain_alpha_out=rain, snow_alpha_out=snow)
-            layers = {k: v for k, v in (("rain_alpha", rain), ("snow_alpha", snow)) if v is not None}
-            if return_layers:
-                layers["depth_m"] = scene.depth_m
+            out_rgb = r.render_srgb8(scene, weather, seed=seed)
     elif image.dtype.kind == "f":
         if encoding not in ("srgb", "linear"):
             raise ValueError(f"image is {image.dtype}: say how it is encoded, encoding='srgb' (values in [0, 1]) or encoding='linear'")

@@ -145,7 +145,7 @@ def _parser() -> argparse.ArgumentParser:
     rd.add_argument("--config", type=Path, metavar="FILE", help="read options from a TOML file, or YAML (.yaml, .yml) (command-line options win)")
     rd.add_argument("--alpha-out", type=Path, metavar="FILE", default=None, help="also write the rain_alpha layer (.npy float32, or .png 8-bit)")
     _add(rd, _RENDER_OPTIONS)
-    dm = sub.add_parser("demo", help="render the demo outputs (what make demo runs)", description="Render the demo outputs into --out (python -m skyfall.demo).")
+    dm = sub.add_parser("demo", help="render the demo outputs (what make demo runs)", description="Render the demo outputs into --out (python -m skyfall._demo).")
     dm.add_argument("--out", default="out", help="output folder (created); default out")
     return top
 
@@ -231,8 +231,8 @@ def _dataset(args: argparse.Namespace) -> int:
 
 def _render(args: argparse.Namespace) -> int:
     from skyfall import io
-    from skyfall.dataset_item import ItemSource, Worker, prepare
-    from skyfall.dataset_sample import DatasetConfig, ItemParams
+    from skyfall.dataset.item import ItemSource, Worker, prepare
+    from skyfall.dataset.sample import DatasetConfig, ItemParams
 
     opts = _merge(args, _RENDER_OPTIONS, "render")
     if "out" not in opts:
@@ -341,7 +341,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(_join_negative_values(list(sys.argv[1:] if argv is None else argv)))
     if args.command == "demo":
-        from skyfall import demo
+        from skyfall import _demo as demo
 
         return demo.main(["--out", str(args.out)])
     try:

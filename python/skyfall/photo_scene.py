@@ -346,7 +346,7 @@ class PhotoScene:
         -------
         PhotoScene
         """
-        from skyfall.dataset_io import read_photo
+        from skyfall.dataset.io import read_photo
         from skyfall.depth_io import read_depth
         from skyfall.photo import exif_vertical_fov_deg
 

@@ -8,13 +8,15 @@ otherwise: on a software-only machine the CPU backend is much faster than lavapi
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import tempfile
 import threading
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, NamedTuple, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,7 +31,7 @@ if TYPE_CHECKING:
     from skyfall._core import _Request
     from skyfall.snow import SnowCover
 
-__all__ = ["BACKENDS", "Frame", "Renderer"]
+__all__ = ["BACKENDS", "FUSED_LAYERS", "Frame", "Renderer", "Srgb8Frame"]
 
 BACKENDS = ("auto", "cpu", "gpu")
 
@@ -46,6 +48,127 @@ def _gpu_device(require_hardware: bool) -> _core.GpuDevice:
                 os.environ["XDG_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="skyfall-xdg-")
             _devices[require_hardware] = _core.GpuDevice(require_hardware=require_hardware)
         return _devices[require_hardware]
+
+
+FUSED_LAYERS = ("rain_alpha", "snow_alpha")
+"""The layers the fused 8-bit path fills (:meth:`Renderer.fuses_srgb8`); asking
+:meth:`Renderer.render_srgb8` for any other takes the float path."""
+
+
+class Srgb8Frame(NamedTuple):
+    """:meth:`Renderer.render_srgb8` with ``layers``: the image and the layers asked for
+    (unpack it as ``image, layers = ...``).
+
+    Attributes
+    ----------
+    image : ndarray of uint8, shape (H, W, 3)
+        The 8-bit sRGB image (the call's ``out`` when given).
+    layers : dict of str to ndarray of float32, shape (H, W)
+        Each asked layer, in the order asked, with its neutral value where no pass drew it
+        (the call's own arrays when ``layers`` was a dict of them).
+    """
+
+    image: NDArray[np.uint8]
+    layers: dict[str, NDArray[np.float32]]
+
+
+@dataclass(frozen=True)
+class _Options:
+    """A render call's options that hold for every frame of it, checked once
+    (:meth:`checked`): what the four entry points share (a sequence checks them before its
+    first frame). The defaults are the entry points'."""
+
+    camera: Camera | None = None
+    seed: int = 0
+    cull_threshold: float | None = None
+    ambient_spacing_m: float = 1.0
+    ambient_samples: int = sky.MAP_SAMPLES
+    layers: tuple[str, ...] | None = None
+
+    @classmethod
+    def checked(
+        cls,
+        camera: Any,
+        seed: Any,
+        cull_threshold: Any,
+        ambient_spacing_m: Any,
+        ambient_samples: Any,
+        layers: Any,
+    ) -> _Options:
+        """The options, each checked (TypeError or ValueError naming the parameter)."""
+        if camera is not None and not isinstance(camera, Camera):
+            raise TypeError(f"camera must be a skyfall.Camera, got {type(camera).__name__}")
+        return cls(
+            camera=camera,
+            seed=integer("seed", seed, 0, 2**64 - 1),
+            cull_threshold=None if cull_threshold is None else in_range("cull_threshold", cull_threshold),
+            ambient_spacing_m=in_range("ambient_spacing_m", ambient_spacing_m),
+            ambient_samples=integer("ambient_samples", ambient_samples, 4, 65_536),
+            layers=_layer_names(layers),
+        )
+
+
+def _layer_names(layers: Any) -> tuple[str, ...] | None:
+    """``layers`` (names, or a dict keyed by them) as a tuple of layer names in the order
+    given, duplicates dropped; None stays None. ValueError names the valid layers."""
+    if layers is None:
+        return None
+    if isinstance(layers, (str, bytes)) or not isinstance(layers, Iterable):
+        raise TypeError(f"layers must be a sequence of layer names, such as ('rain_alpha',), or a dict of them to arrays; got {type(layers).__name__}")
+    names = tuple(dict.fromkeys(layers))
+    for name in names:
+        if not isinstance(name, str):
+            raise TypeError(f"layers must hold layer names (str), got {type(name).__name__}")
+        if name not in _core.LAYERS:
+            raise ValueError(f"layers: {name!r} is not a layer; the layers are {', '.join(map(repr, _core.LAYERS))}")
+    return names
+
+
+def _deprecated_outs(rain_alpha_out: Any, snow_alpha_out: Any, layers: Any) -> dict[str, Any] | None:
+    """The arrays given the deprecated way (``rain_alpha_out``, ``snow_alpha_out``) as a
+    ``layers`` dict, warning the caller's line (an entry point's own call); None if none."""
+    given = {name: a for name, a in (("rain_alpha", rain_alpha_out), ("snow_alpha", snow_alpha_out)) if a is not None}
+    if not given:
+        return None
+    keywords = " and ".join(f"{name}_out=" for name in given)
+    warnings.warn(
+        f"{keywords} deprecated: ask for the layers, layers={{{', '.join(f'{n!r}: array' for n in given)}}} fills "
+        f"the arrays (layers={tuple(given)!r} returns new ones), and the call returns (image, layers)",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    if layers is not None:
+        raise ValueError(f"give the layers once: layers= or the deprecated {keywords}, not both")
+    return given
+
+
+def _neutral(name: str, shape: tuple[int, ...], into: NDArray[np.float32] | None) -> NDArray[np.float32]:
+    """Layer ``name``'s neutral value everywhere (``_core.LAYER_NEUTRAL``): written into
+    ``into`` (an ``out`` frame's array for it) when given, else a new array."""
+    value = np.float32(_core.LAYER_NEUTRAL[name])
+    if into is None:
+        return np.full(shape, value, np.float32)
+    into[...] = value
+    return into
+
+
+def _with_cover(weather: Weather | None, snow_cover: SnowCover | None) -> Weather:
+    """The call's weather (clear when None) with a cover given the deprecated way
+    (``snow_cover=``) folded in, warning the caller's line (an entry point's own call)."""
+    weather = weather if weather is not None else Weather()
+    if not isinstance(weather, Weather):
+        raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
+    if snow_cover is None:
+        return weather
+    warnings.warn(
+        "snow_cover= is deprecated: the cover is part of the weather, Weather(snow_cover=cover) "
+        "(or dataclasses.replace(weather, snow_cover=cover))",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    if weather.snow_cover is not None and weather.snow_cover is not snow_cover:
+        raise ValueError("snow_cover= and weather.snow_cover are two covers: give one, as Weather(snow_cover=...)")
+    return dataclasses.replace(weather, snow_cover=snow_cover)
 
 
 def _check_apart(scene: BoxScene | PhotoScene, outputs: dict[str, NDArray[Any] | None]) -> None:
@@ -93,12 +216,13 @@ class Frame:
     layers : dict of str to ndarray of float32, shape (H, W)
         Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d)); rain adds
         ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
-        nearest visible streak, inf where none); a snow cover (``snow_cover=``) adds
+        nearest visible streak, inf where none); a snow cover (``Weather(snow_cover=...)``) adds
         ``snow_depth_m`` (the depth of snow on each pixel's surface, 0 where none); clouds
         (``Weather(clouds=...)``) add ``cloud_alpha`` (their coverage 1 - prod(1 - alpha_i)); a
         sky with a sun adds ``sun_transmittance`` on box scenes (the share of the sun's direct
         light reaching each pixel's surface: 0 behind a box, the clouds' Gamma elsewhere, 1 for
-        sky): only the layers this frame's passes drew.
+        sky): only the layers this frame's passes drew, or with ``layers=`` (:meth:`Renderer.render`)
+        exactly the layers asked for, each neutral where no pass drew it.
         :meth:`layer` gives any layer, with its neutral value where it was not drawn. The
         clean frame is the same render without rain.
     backend : str
@@ -271,6 +395,7 @@ class Renderer:
         cull_threshold: float | None = None,
         ambient_spacing_m: float = 1.0,
         ambient_samples: int = sky.MAP_SAMPLES,
+        layers: Sequence[str] | None = None,
         out: Frame | None = None,
         snow_cover: SnowCover | None = None,
     ) -> Frame:
@@ -281,7 +406,8 @@ class Renderer:
         scene : BoxScene or PhotoScene
             What to show. A photo's size must equal the renderer's.
         weather : Weather, optional
-            Default: clear (no rain, infinite visibility): the scene unchanged.
+            Default: clear (no rain, infinite visibility): the scene unchanged. Every effect
+            (rain, snow, clouds, a windshield, a snow cover) is configured in it.
         camera : Camera, optional
             Overrides a box scene's camera (photos keep the camera that took them).
         time_s : float
@@ -301,70 +427,138 @@ class Renderer:
             the sky light from it; it is built once per scene, sky and spacing and cached.
         ambient_samples : int
             Azimuths per map node, in [4, 65536] (default 64).
+        layers : sequence of str, optional
+            The ground-truth layers the frame carries, by name (:data:`skyfall._core.LAYERS`):
+            ``frame.layers`` then holds exactly these, in this order, each a float32 (H, W)
+            array, with its neutral value (``_core.LAYER_NEUTRAL``) where no pass drew it.
+            None (default): the layers this frame's passes drew.
         out : Frame, optional
             A previous frame of this size to render into: its arrays are overwritten and come
-            back in the new frame (layers this frame does not draw are left out of it; layers
-            it draws that ``out`` lacks are new arrays). Fresh arrays cost the kernel's zeroing
-            of every page (58 MB per 1080p frame with its layers); reusing them saves that.
+            back in the new frame (layers this frame does not draw are left out of it, unless
+            ``layers`` asks for them; layers it draws that ``out`` lacks are new arrays). Fresh
+            arrays cost the kernel's zeroing of every page (58 MB per 1080p frame with its
+            layers); reusing them saves that.
         snow_cover : SnowCover, optional
-            Snow lying on the scene (:func:`skyfall.snow.accumulate` of this scene): its
-            surfaces whiten and lift by the depth on them, and the frame carries
-            ``layers["snow_depth_m"]`` (the depth on each pixel's surface, 0 where none).
-            None (default): no cover, and the frame is exactly the one without it.
+            Deprecated (it warns): the cover is part of the weather, ``Weather(snow_cover=...)``.
 
         Returns
         -------
         Frame
+
+        Raises
+        ------
+        ValueError
+            For a value outside its range, a photo of another size, or a name in ``layers``
+            that is not a layer (the message lists the layers).
+        TypeError
+            For an argument of the wrong type.
         """
-        weather = weather if weather is not None else Weather()
-        request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, snow_cover)
+        weather = _with_cover(weather, snow_cover)
+        options = _Options.checked(camera, seed, cull_threshold, ambient_spacing_m, ambient_samples, layers)
+        return self._render(scene, weather, options, time_s, out)
+
+    def _render(self, scene: BoxScene | PhotoScene, weather: Weather, options: _Options, time_s: float, out: Frame | None) -> Frame:
+        """:meth:`render` with its options checked: one core call, then the windshield."""
+        request = self._request(scene, weather, options, time_s)
         arrays = self._out_arrays(out) if out is not None else None
         # One core call: the core derives the sky, the haze and its airlight, the rain and its
         # light from the request, and names the layers it drew (skyfall._core.LAYERS).
-        rgb, depth, layers, stats = _core.render_frame(request, device=self._device, out=arrays)
+        rgb, depth, drawn, stats = _core.render_frame(request, device=self._device, out=arrays)
         if weather.windshield is not None:
             # The windshield: a full-frame stage after the particles, over either backend's frame.
             from skyfall import windshield as _ws
 
-            glass, drop_layers = _ws.frame_stage(rgb, weather.windshield, request["camera"], time_s=time_s, seed=seed, device=self._device)
+            glass, drop_layers = _ws.frame_stage(rgb, weather.windshield, request["camera"], time_s=time_s, seed=options.seed, device=self._device)
             rgb[...] = glass
-            layers = {**layers, **drop_layers}
+            drawn = {**drawn, **drop_layers}
+        if options.layers is not None:
+            reuse = out.layers if out is not None else {}
+            drawn = {name: drawn[name] if name in drawn else _neutral(name, depth.shape, reuse.get(name)) for name in options.layers}
         return Frame(
             rgb=rgb,
             depth_m=depth,
-            layers=layers,
+            layers=drawn,
             backend=self.backend,
             adapter_info=self.adapter_info,
             luminance_scale_cd_m2=weather.luminance_scale_cd_m2,
             stats=stats,
         )
 
-    def fuses_srgb8(self, scene: BoxScene | PhotoScene, weather: Weather | None = None, snow_cover: SnowCover | None = None) -> bool:
+    def fuses_srgb8(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        snow_cover: SnowCover | None = None,
+        *,
+        layers: Sequence[str] | Mapping[str, Any] | None = None,
+    ) -> bool:
         """Whether :meth:`render_srgb8` of these takes the fused 8-bit path (an 8-bit photo on
-        the CPU backend, no windshield, no clouds, no snow cover: stages that path does not
-        draw) rather than rendering the float frame and encoding it.
+        the CPU backend, no windshield, no clouds, no snow cover in the weather, and no layer
+        asked for but ``rain_alpha`` and ``snow_alpha``: what that path does not draw) rather
+        than rendering the float frame and encoding it.
 
         Parameters
         ----------
         scene : BoxScene or PhotoScene
             The scene.
         weather : Weather, optional
-            The weather (its ``windshield`` and ``clouds``).
+            The weather (its ``windshield``, ``clouds`` and ``snow_cover``).
         snow_cover : SnowCover, optional
-            A cover to draw.
+            Deprecated (it warns): the cover is part of the weather, ``Weather(snow_cover=...)``.
+        layers : sequence of str or dict, optional
+            The layers the call asks for (``render_srgb8``'s ``layers``).
 
         Returns
         -------
         bool
         """
+        weather = _with_cover(weather, snow_cover)
+        names = _layer_names(layers) or ()
         return (
             self._device is None
             and isinstance(scene, PhotoScene)
             and scene.srgb8 is not None
-            and getattr(weather, "windshield", None) is None
-            and getattr(weather, "clouds", None) is None
-            and snow_cover is None
+            and weather.windshield is None
+            and weather.clouds is None
+            and weather.snow_cover is None
+            and set(names) <= set(FUSED_LAYERS)
         )
+
+    @overload
+    def render_srgb8(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        camera: Camera | None = None,
+        time_s: float = 0.0,
+        seed: int = 0,
+        cull_threshold: float | None = None,
+        ambient_spacing_m: float = 1.0,
+        ambient_samples: int = sky.MAP_SAMPLES,
+        layers: None = None,
+        out: NDArray[np.uint8] | None = None,
+        rain_alpha_out: NDArray[np.float32] | None = None,
+        snow_alpha_out: NDArray[np.float32] | None = None,
+        snow_cover: SnowCover | None = None,
+    ) -> NDArray[np.uint8]: ...
+
+    @overload
+    def render_srgb8(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        camera: Camera | None = None,
+        time_s: float = 0.0,
+        seed: int = 0,
+        cull_threshold: float | None = None,
+        ambient_spacing_m: float = 1.0,
+        ambient_samples: int = sky.MAP_SAMPLES,
+        layers: Sequence[str] | Mapping[str, NDArray[np.float32]],
+        out: NDArray[np.uint8] | None = None,
+        snow_cover: SnowCover | None = None,
+    ) -> Srgb8Frame: ...
 
     def render_srgb8(
         self,
@@ -377,80 +571,104 @@ class Renderer:
         cull_threshold: float | None = None,
         ambient_spacing_m: float = 1.0,
         ambient_samples: int = sky.MAP_SAMPLES,
+        layers: Sequence[str] | Mapping[str, NDArray[np.float32]] | None = None,
         out: NDArray[np.uint8] | None = None,
         rain_alpha_out: NDArray[np.float32] | None = None,
         snow_alpha_out: NDArray[np.float32] | None = None,
         snow_cover: SnowCover | None = None,
-    ) -> NDArray[np.uint8]:
+    ) -> NDArray[np.uint8] | Srgb8Frame:
         """Render one frame straight to 8-bit sRGB: the augmentation path.
 
         The same frame as :meth:`render` followed by :func:`skyfall.io.to_srgb8`, every byte
         within 1 code of it (nearly all equal). For an 8-bit :class:`PhotoScene` on the CPU
         backend the haze and the rain are fused into one pass over bands of rows that decodes,
         hazes, composites and encodes each pixel once, with no frame-sized float buffers: the
-        fast way to put rain on a dataset of photos. Other scenes, the GPU backend and weather
-        with a windshield render the float frame and encode it.
+        fast way to put rain on a dataset of photos. Other scenes, the GPU backend, weather
+        with a windshield, clouds or a snow cover, and layers other than ``rain_alpha`` and
+        ``snow_alpha`` render the float frame and encode it (:meth:`fuses_srgb8` says which).
 
         Parameters
         ----------
         scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples
             As for :meth:`render`.
+        layers : sequence of str, or dict of str to ndarray, optional
+            The ground-truth layers to return with the image, by name
+            (:data:`skyfall._core.LAYERS`), each a float32 (H, W) array with its neutral value
+            where no pass drew it (``rain_alpha`` is the ground truth of a deraining
+            dataset). A dict names the arrays to fill (writable, C-contiguous float32 of shape
+            (H, W)): reusing them across frames saves their allocation. When given, the call
+            returns a :class:`Srgb8Frame` (image, layers) instead of the image alone.
         out : ndarray of uint8, shape (H, W, 3), optional
             Where to write the image (C-contiguous); a new array when None. Reusing one
             across frames saves its allocation.
-        rain_alpha_out : ndarray of float32, shape (H, W), optional
-            Filled with the rain's coverage (``frame.layers["rain_alpha"]``; zeros without
-            rain) when given: the ground truth of a deraining dataset.
-        snow_alpha_out : ndarray of float32, shape (H, W), optional
-            Filled with the snowflakes' coverage (``frame.layers["snow_alpha"]``; zeros
-            without snow) when given.
+        rain_alpha_out, snow_alpha_out : ndarray of float32, shape (H, W), optional
+            Deprecated (they warn): ``layers={"rain_alpha": array}`` fills the same arrays.
+            Filled with the rain's (the snowflakes') coverage; the call still returns the
+            image alone.
         snow_cover : SnowCover, optional
-            As for :meth:`render`. A frame with a cover is rendered on the float path and
-            encoded (the fused 8-bit path does not draw covers).
+            Deprecated (it warns): the cover is part of the weather, ``Weather(snow_cover=...)``.
 
         Raises
         ------
         ValueError
-            When a photo is not the renderer's size (checked first), when ``out`` or
-            ``rain_alpha_out`` has the wrong dtype, shape or layout, or overlaps the scene's
-            photo, its depth map or the other output.
+            When a photo is not the renderer's size (checked first), when ``out`` or a layer's
+            array has the wrong dtype, shape or layout, or overlaps the scene's photo, its
+            depth map or another output, or when ``layers`` names a layer that does not exist
+            (the message lists them).
         TypeError
-            When ``out`` or ``rain_alpha_out`` is not a numpy array.
+            When ``out`` or a layer's array is not a numpy array.
 
         Returns
         -------
-        ndarray of uint8, shape (H, W, 3)
-            The image (``out`` when given).
+        ndarray of uint8, shape (H, W, 3), or Srgb8Frame
+            The image (``out`` when given); with ``layers``, the image and the layers.
+
+        Examples
+        --------
+        >>> from skyfall import Weather, scenes
+        >>> image, layers = Renderer(32, 18, backend="cpu").render_srgb8(
+        ...     scenes.street(), Weather(rain_rate_mm_h=10.0), layers=("rain_alpha", "snow_alpha"))
+        >>> image.shape, sorted(layers), float(layers["snow_alpha"].max())
+        ((18, 32, 3), ['rain_alpha', 'snow_alpha'], 0.0)
         """
-        weather = weather if weather is not None else Weather()
-        self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
-        if out is None:
-            out = np.empty((self.height, self.width, 3), np.uint8)
-        # A windshield or a snow cover is a stage the fused path does not draw: float, then encode.
-        if self.fuses_srgb8(scene, weather, snow_cover):
+        weather = _with_cover(weather, snow_cover)
+        fills = _deprecated_outs(rain_alpha_out, snow_alpha_out, layers)
+        options = _Options.checked(camera, seed, cull_threshold, ambient_spacing_m, ambient_samples, fills if fills is not None else layers)
+        targets = self._srgb8_targets(scene, out, fills if fills is not None else layers, deprecated=fills is not None)
+        image, filled = self._srgb8(scene, weather, options, time_s, out, targets)
+        return image if layers is None else Srgb8Frame(image, filled)
+
+    def _srgb8(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather,
+        options: _Options,
+        time_s: float,
+        out: NDArray[np.uint8] | None,
+        targets: dict[str, NDArray[np.float32] | None],
+    ) -> tuple[NDArray[np.uint8], dict[str, NDArray[np.float32]]]:
+        """:meth:`render_srgb8` with its options and outputs checked: the image and each
+        target layer (its given array filled, or a new one)."""
+        image = out if out is not None else np.empty((self.height, self.width, 3), np.uint8)
+        if self.fuses_srgb8(scene, weather, layers=targets):
             assert isinstance(scene, PhotoScene) and scene.srgb8 is not None
-            request = self._request(scene, weather, camera, time_s, seed, cull_threshold, ambient_spacing_m, ambient_samples)
+            filled = {name: a if a is not None else np.empty((self.height, self.width), np.float32) for name, a in targets.items()}
+            request = self._request(scene, weather, options, time_s)
             _core.render_photo8(
-                request, scene.srgb8, io.srgb8_table(), out, rain_alpha_out=rain_alpha_out, snow_alpha_out=snow_alpha_out
+                request, scene.srgb8, io.srgb8_table(), image, rain_alpha_out=filled.get("rain_alpha"), snow_alpha_out=filled.get("snow_alpha")
             )
-            return out
-        frame = self.render(
-            scene,
-            weather,
-            camera=camera,
-            time_s=time_s,
-            seed=seed,
-            cull_threshold=cull_threshold,
-            ambient_spacing_m=ambient_spacing_m,
-            ambient_samples=ambient_samples,
-            snow_cover=snow_cover,
-        )
-        out[...] = io.to_srgb8(frame.rgb)
-        if rain_alpha_out is not None:
-            rain_alpha_out[...] = frame.layer("rain_alpha")
-        if snow_alpha_out is not None:
-            snow_alpha_out[...] = frame.layer("snow_alpha")
-        return out
+            return image, filled
+        # A stage the fused path does not draw (or a layer it does not fill): float, then encode.
+        frame = self._render(scene, weather, dataclasses.replace(options, layers=tuple(targets)), time_s, None)
+        image[...] = io.to_srgb8(frame.rgb)
+        filled = {}
+        for name, a in targets.items():
+            if a is None:
+                filled[name] = frame.layers[name]
+            else:
+                a[...] = frame.layers[name]
+                filled[name] = a
+        return image, filled
 
     def _out_arrays(self, out: Frame) -> dict[str, NDArray[np.float32] | None]:
         """``out``'s arrays for ``_core.render_frame``, each checked (None: not in ``out``)."""
@@ -463,17 +681,30 @@ class Renderer:
                 _check_writable(f"out's {name}", a, np.float32, (*shape, 3) if name == "rgb" else shape)
         return arrays
 
-    def _check_srgb8_outputs(self, scene: Any, out: Any, rain_alpha_out: Any, snow_alpha_out: Any = None) -> None:
-        """render_srgb8's outputs, checked after the photo's size (their shapes follow from it)."""
+    def _srgb8_targets(
+        self, scene: Any, out: Any, layers: Sequence[str] | Mapping[str, Any] | None, *, deprecated: bool = False
+    ) -> dict[str, NDArray[np.float32] | None]:
+        """render_srgb8's outputs, checked after the photo's size (their shapes follow from it):
+        each asked layer's array to fill (None: a new one). ``deprecated``: the arrays came as
+        ``rain_alpha_out`` / ``snow_alpha_out`` and messages name them so."""
         self._check_photo_size(scene)
+        names = _layer_names(layers) or ()
+        given: Mapping[str, Any] = layers if isinstance(layers, Mapping) else {}
+
+        def label(name: str) -> str:
+            return f"{name}_out" if deprecated else f"layers[{name!r}]"
+
         shape = (self.height, self.width)
         if out is not None:
             _check_writable("out", out, np.uint8, (*shape, 3))
-        if rain_alpha_out is not None:
-            _check_writable("rain_alpha_out", rain_alpha_out, np.float32, shape)
-        if snow_alpha_out is not None:
-            _check_writable("snow_alpha_out", snow_alpha_out, np.float32, shape)
-        _check_apart(scene, {"out": out, "rain_alpha_out": rain_alpha_out, "snow_alpha_out": snow_alpha_out})
+        targets: dict[str, NDArray[np.float32] | None] = {}
+        for name in names:
+            a = given.get(name)
+            if a is not None:
+                _check_writable(label(name), a, np.float32, shape)
+            targets[name] = a
+        _check_apart(scene, {"out": out, **{label(name): a for name, a in targets.items()}})
+        return targets
 
     def _check_photo_size(self, scene: Any) -> None:
         """A photo must be the renderer's size (a box scene is rendered at any size)."""
@@ -484,53 +715,37 @@ class Renderer:
                 f"render it with a renderer of its size, Renderer({w}, {h})"
             )
 
-    def _request(
-        self,
-        scene: BoxScene | PhotoScene,
-        weather: Weather,
-        camera: Camera | None,
-        time_s: float,
-        seed: int,
-        cull_threshold: float | None,
-        ambient_spacing_m: float,
-        ambient_samples: int,
-        snow_cover: SnowCover | None = None,
-    ) -> _Request:
+    def _request(self, scene: BoxScene | PhotoScene, weather: Weather, options: _Options | None = None, time_s: float = 0.0) -> _Request:
         """The frame's request for ``_core.render_frame`` and ``_core.render_photo8``: the
         frame's own objects (the core reads them attribute by attribute), with the scene's
-        ambient-light map (built once per scene, sky and spacing, and cached)."""
+        ambient-light map (built once per scene, sky and spacing, and cached). ``options``
+        None: the entry points' defaults."""
         if not isinstance(weather, Weather):
             raise TypeError(f"weather must be a skyfall.Weather, got {type(weather).__name__}")
+        opts = options if options is not None else _Options()
         t = in_range("time_s", time_s)
-        integer("seed", seed, 0, 2**64 - 1)
         if isinstance(scene, PhotoScene):
             self._check_photo_size(scene)
             cam = scene.camera
         elif isinstance(scene, BoxScene):
-            if camera is not None and not isinstance(camera, Camera):
-                raise TypeError(f"camera must be a skyfall.Camera, got {type(camera).__name__}")
-            cam = (camera if camera is not None else scene.camera).with_resolution(self.width, self.height)
+            cam = (opts.camera if opts.camera is not None else scene.camera).with_resolution(self.width, self.height)
         else:
             raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
-        cull = None if cull_threshold is None else in_range("cull_threshold", cull_threshold)
         request: _Request = {
             "camera": cam,
             "weather": weather,
             "scene": scene,
             "time_s": t,
-            "seed": int(seed),
-            "cull_threshold": cull,
-            "ambient": self._ambient(scene, weather, cam, ambient_spacing_m, ambient_samples),
+            "seed": opts.seed,
+            "cull_threshold": opts.cull_threshold,
+            "ambient": self._ambient(scene, weather, cam, opts.ambient_spacing_m, opts.ambient_samples),
         }
         if weather.clouds is not None:
             from skyfall import clouds as _clouds
 
             request["clouds"] = _clouds.frame_field(weather.clouds, weather.sun_direction)
-        if snow_cover is not None:
-            core_cover = getattr(snow_cover, "core", None)
-            if not isinstance(core_cover, _core.SnowCoverGrid):
-                raise TypeError(f"snow_cover must be a skyfall.snow.SnowCover, got {type(snow_cover).__name__}")
-            request["snow_cover"] = core_cover
+        if weather.snow_cover is not None:
+            request["snow_cover"] = weather.snow_cover.core
         return request
 
     @staticmethod
@@ -543,10 +758,9 @@ class Renderer:
         occluders = np.ascontiguousarray(scene.boxes if isinstance(scene, BoxScene) else scene.occluders, dtype=np.float32)
         if len(occluders) == 0:
             return sky.cached_core_map(occluders, weather, np.zeros(3), np.zeros(3), s, n, "ambient_spacing_m")
-        reach = weather.rain_near_m + 1.0 if weather.rain_rate_mm_h > 0 and weather.rain_streaks else 1.0
-        lo, hi = sky.default_bounds(scene, s, around_m=cam.position_m, radius_m=reach)
-        # The map spans the scene's boxes and the rain region around the camera: say so in the
-        # user's terms when that cannot be built (the map's own message names its internals).
+        lo, hi = sky.default_bounds(scene, s, around_m=cam.position_m, radius_m=_particle_reach_m(weather))
+        # The map spans the scene's boxes and the particles' regions around the camera: say so
+        # in the user's terms when that cannot be built (the map's own message names its internals).
         limit = _core.AMBIENT_EXTENT_M
         if not (np.all(np.abs(lo) <= limit) and np.all(np.abs(hi) <= limit)):
             pos = ", ".join(f"{v:g}" for v in cam.position_m)
@@ -570,6 +784,7 @@ class Renderer:
         cull_threshold: float | None = None,
         ambient_spacing_m: float = 1.0,
         ambient_samples: int = sky.MAP_SAMPLES,
+        layers: Sequence[str] | None = None,
         out: Frame | None = None,
         progress: bool = False,
         snow_cover: SnowCover | None = None,
@@ -584,7 +799,7 @@ class Renderer:
 
         Parameters
         ----------
-        scene, weather, camera, seed, cull_threshold, ambient_spacing_m, ambient_samples
+        scene, weather, camera, seed, cull_threshold, ambient_spacing_m, ambient_samples, layers
             As for :meth:`render`.
         n_frames : int
             Number of frames, in [1, 1e6].
@@ -599,7 +814,7 @@ class Renderer:
         progress : bool
             Show a tqdm progress bar while the frames are rendered.
         snow_cover : SnowCover, optional
-            Snow lying on the scene in every frame (see :meth:`render`).
+            Deprecated (it warns): the cover is part of the weather, ``Weather(snow_cover=...)``.
 
         Returns
         -------
@@ -610,21 +825,63 @@ class Renderer:
         ValueError, TypeError
             Every argument is checked when this is called, before the first frame.
         """
+        weather = _with_cover(weather, snow_cover)
+        options = _Options.checked(camera, seed, cull_threshold, ambient_spacing_m, ambient_samples, layers)
         if out is not None:
             self._out_arrays(out)
-        weather, times, options = self._sequence_args(
-            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
-        )
+        times = self._sequence_times(scene, weather, options, n_frames, fps, start_s, progress)
 
         def frames() -> Iterator[Frame]:
             into = out
             for t in times:
-                frame = self.render(scene, weather, time_s=t, out=into, **options)
+                frame = self._render(scene, weather, options, t, into)
                 if out is not None:
                     into = frame  # out's arrays, and any layer the first frame added to them
                 yield frame
 
         return frames()
+
+    @overload
+    def render_sequence_srgb8(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        n_frames: int,
+        fps: float = 30.0,
+        seed: int = 0,
+        camera: Camera | None = None,
+        start_s: float = 0.0,
+        cull_threshold: float | None = None,
+        ambient_spacing_m: float = 1.0,
+        ambient_samples: int = sky.MAP_SAMPLES,
+        layers: None = None,
+        out: NDArray[np.uint8] | None = None,
+        progress: bool = False,
+        rain_alpha_out: NDArray[np.float32] | None = None,
+        snow_alpha_out: NDArray[np.float32] | None = None,
+        snow_cover: SnowCover | None = None,
+    ) -> Iterator[NDArray[np.uint8]]: ...
+
+    @overload
+    def render_sequence_srgb8(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        n_frames: int,
+        fps: float = 30.0,
+        seed: int = 0,
+        camera: Camera | None = None,
+        start_s: float = 0.0,
+        cull_threshold: float | None = None,
+        ambient_spacing_m: float = 1.0,
+        ambient_samples: int = sky.MAP_SAMPLES,
+        layers: Sequence[str] | Mapping[str, NDArray[np.float32]],
+        out: NDArray[np.uint8] | None = None,
+        progress: bool = False,
+        snow_cover: SnowCover | None = None,
+    ) -> Iterator[Srgb8Frame]: ...
 
     def render_sequence_srgb8(
         self,
@@ -639,31 +896,33 @@ class Renderer:
         cull_threshold: float | None = None,
         ambient_spacing_m: float = 1.0,
         ambient_samples: int = sky.MAP_SAMPLES,
+        layers: Sequence[str] | Mapping[str, NDArray[np.float32]] | None = None,
         out: NDArray[np.uint8] | None = None,
-        rain_alpha_out: NDArray[np.float32] | None = None,
         progress: bool = False,
+        rain_alpha_out: NDArray[np.float32] | None = None,
         snow_alpha_out: NDArray[np.float32] | None = None,
         snow_cover: SnowCover | None = None,
-    ) -> Iterator[NDArray[np.uint8]]:
+    ) -> Iterator[NDArray[np.uint8]] | Iterator[Srgb8Frame]:
         """:meth:`render_sequence` in 8-bit sRGB: each frame is :meth:`render_srgb8` at
         ``time_s = start_s + k / fps``, byte for byte.
 
         Parameters
         ----------
-        scene, weather, n_frames, fps, seed, camera, start_s, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
+        scene, weather, n_frames, fps, seed, camera, start_s, cull_threshold, ambient_spacing_m, ambient_samples, progress
             As for :meth:`render_sequence`.
+        layers : sequence of str, or dict of str to ndarray, optional
+            As for :meth:`render_srgb8`: each frame is then a :class:`Srgb8Frame`. A dict's
+            arrays are filled anew for every frame (overwritten by the next); names alone give
+            new arrays per frame.
         out : ndarray of uint8, shape (H, W, 3), optional
             Where to write every frame: each array yielded is then ``out``, overwritten by
             the next frame. None: a new array per frame.
-        rain_alpha_out : ndarray of float32, shape (H, W), optional
-            Filled with each frame's rain coverage as its image is yielded (overwritten by
-            the next frame).
-        snow_alpha_out : ndarray of float32, shape (H, W), optional
-            The same for the snowflakes' coverage.
+        rain_alpha_out, snow_alpha_out, snow_cover
+            Deprecated (they warn), as for :meth:`render_srgb8`.
 
         Returns
         -------
-        iterator of ndarray of uint8, shape (H, W, 3)
+        iterator of ndarray of uint8, shape (H, W, 3), or of Srgb8Frame (with ``layers``)
 
         Raises
         ------
@@ -671,47 +930,43 @@ class Renderer:
             Every argument is checked when this is called, before the first frame (see
             :meth:`render_srgb8`).
         """
-        self._check_srgb8_outputs(scene, out, rain_alpha_out, snow_alpha_out)
-        weather, times, options = self._sequence_args(
-            scene, weather, camera, n_frames, fps, start_s, seed, cull_threshold, ambient_spacing_m, ambient_samples, progress, snow_cover
-        )
+        weather = _with_cover(weather, snow_cover)
+        fills = _deprecated_outs(rain_alpha_out, snow_alpha_out, layers)
+        options = _Options.checked(camera, seed, cull_threshold, ambient_spacing_m, ambient_samples, fills if fills is not None else layers)
+        targets = self._srgb8_targets(scene, out, fills if fills is not None else layers, deprecated=fills is not None)
+        times = self._sequence_times(scene, weather, options, n_frames, fps, start_s, progress)
 
-        def frames() -> Iterator[NDArray[np.uint8]]:
+        def images() -> Iterator[NDArray[np.uint8]]:
             for t in times:
-                yield self.render_srgb8(
-                    scene, weather, time_s=t, out=out, rain_alpha_out=rain_alpha_out, snow_alpha_out=snow_alpha_out, **options
-                )
+                yield self._srgb8(scene, weather, options, t, out, targets)[0]
 
-        return frames()
+        def frames() -> Iterator[Srgb8Frame]:
+            for t in times:
+                yield Srgb8Frame(*self._srgb8(scene, weather, options, t, out, targets))
 
-    def _sequence_args(
-        self,
-        scene: BoxScene | PhotoScene,
-        weather: Weather | None,
-        camera: Camera | None,
-        n_frames: int,
-        fps: float,
-        start_s: float,
-        seed: int,
-        cull_threshold: float | None,
-        ambient_spacing_m: float,
-        ambient_samples: int,
-        progress: bool,
-        snow_cover: SnowCover | None = None,
-    ) -> tuple[Weather, Iterator[float], dict[str, Any]]:
-        """A sequence's arguments, all checked now (as :meth:`render` checks them): its
-        weather, its frame times (behind a progress bar, started at the first frame) and the
-        keyword arguments every frame is rendered with."""
-        weather = weather if weather is not None else Weather()
+        return images() if layers is None else frames()
+
+    def _sequence_times(
+        self, scene: BoxScene | PhotoScene, weather: Weather, options: _Options, n_frames: int, fps: float, start_s: float, progress: bool
+    ) -> Iterator[float]:
+        """A sequence's frame times (behind a progress bar, started at the first frame), with
+        every argument checked now, as :meth:`render` checks them (the first frame's request)."""
         times = _frame_times(n_frames, fps, start_s)
         show = flag("progress", progress)
-        self._request(scene, weather, camera, times(0), seed, cull_threshold, ambient_spacing_m, ambient_samples, snow_cover)
-        options: dict[str, Any] = dict(
-            camera=camera, seed=seed, cull_threshold=cull_threshold, ambient_spacing_m=ambient_spacing_m, ambient_samples=ambient_samples
-        )
-        if snow_cover is not None:
-            options["snow_cover"] = snow_cover
-        return weather, _progress(times, show), options
+        self._request(scene, weather, options, times(0))
+        return _progress(times, show)
+
+
+def _particle_reach_m(weather: Weather) -> float:
+    """How far from the camera the ambient-light map must reach, m: a metre beyond the
+    farthest drawn particle (the rain's ``rain_near_m`` when its streaks are drawn, the
+    snow's ``snow_near_m`` when it snows), and a metre around the camera without any."""
+    reach = 1.0
+    if weather.rain_rate_mm_h > 0 and weather.rain_streaks:
+        reach = max(reach, weather.rain_near_m + 1.0)
+    if weather.snow_rate_mm_h > 0:
+        reach = max(reach, weather.snow_near_m + 1.0)
+    return reach
 
 
 class _FrameTimes:

@@ -16,7 +16,8 @@ Mass is kept: the snow that fell on the catchment's lit cells (``fallen_kg``) is
 on it (``lying_kg``); the open sky's share over the same area (``open_sky_kg``) differs from it
 by the wind's shadows and what it carried across the catchment's sides.
 
-Rendering: pass the cover to :meth:`skyfall.Renderer.render` (``snow_cover=``): the surfaces
+Rendering: the cover is part of the weather, ``Weather(snow_cover=cover)`` (or
+``dataclasses.replace(weather, snow_cover=cover)``), as every effect is: the surfaces
 whiten (albedo 0.85, fresh snow) and lift by the depth lying on them, lit by the sky and the
 lamps as the surfaces are, and the frame carries ``layers["snow_depth_m"]``.
 """
@@ -45,9 +46,12 @@ MARGIN_M = 10.0
 """How far a box scene's default grid reaches beyond its boxes and its camera, m."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SnowCover:
-    """The snow lying on a scene after :func:`accumulate`.
+    """The snow lying on a scene after :func:`accumulate`; ``Weather(snow_cover=...)`` draws it.
+
+    Two covers are equal when they are the same object (their arrays are not compared), so a
+    :class:`~skyfall.Weather` holding one compares and hashes as its other fields do.
 
     Attributes
     ----------

@@ -8,10 +8,13 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from skyfall import _core
 from skyfall._validate import all_in_range, choice, flag, float_array, in_range, inside
+
+if TYPE_CHECKING:
+    from skyfall.snow import SnowCover
 
 __all__ = ["Weather"]
 
@@ -124,6 +127,14 @@ class Weather:
         drawn by :func:`skyfall.windshield.warm` at the frame's time and seed). Its drops
         refract the frame as the last stage and draw the layers ``drop_mask`` and
         ``drop_height``. None (default): no glass, the frame's bits unchanged.
+    snow_cover : skyfall.snow.SnowCover, optional
+        Snow lying on the scene (:func:`skyfall.snow.accumulate` of the scene rendered): its
+        surfaces whiten and lift by the depth on them, and the frame carries
+        ``layers["snow_depth_m"]`` (the depth on each pixel's surface, m, 0 where none). A
+        weather that made the cover and the weather that shows it may differ
+        (``dataclasses.replace(weather, snow_cover=cover)``). The fused 8-bit path does not
+        draw a cover: :meth:`skyfall.Renderer.render_srgb8` renders the float frame and
+        encodes it. None (default): no cover, the frame's bits unchanged.
     """
 
     rain_rate_mm_h: float = 0.0
@@ -147,6 +158,7 @@ class Weather:
     windshield: Any = None
     sun_illuminance_lux: float | None = None
     clouds: Any = None
+    snow_cover: SnowCover | None = None
 
     def __post_init__(self) -> None:
         r = in_range("rain_rate_mm_h", self.rain_rate_mm_h)
@@ -165,13 +177,7 @@ class Weather:
         object.__setattr__(self, "wind_m_s", (float(wind[0]), float(wind[1]), float(wind[2])))
         object.__setattr__(self, "rain_near_m", near)
         if self.rain_far_m is not None:
-            far = in_range("rain_far_m", self.rain_far_m)
-            if far >= near:
-                raise ValueError(
-                    f"rain_far_m = {far} m must be less than rain_near_m = {near} m "
-                    "(the far level of detail draws the drops between them)"
-                )
-            object.__setattr__(self, "rain_far_m", far)
+            object.__setattr__(self, "rain_far_m", in_range("rain_far_m", self.rain_far_m))
         object.__setattr__(self, "rain_diameters_mm", diams)
         choice("rain_method", self.rain_method, ("drops", "billboards"))
         object.__setattr__(self, "snow_near_m", in_range("snow_near_m", self.snow_near_m))
@@ -193,11 +199,12 @@ class Weather:
         for name in ("sun_elevation_deg", "sun_azimuth_deg", "cloud_base_m", "sun_illuminance_lux"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, in_range(name, getattr(self, name)))
-        if (self.sun_elevation_deg is None) != (self.sun_azimuth_deg is None):
-            raise ValueError("give both sun_elevation_deg and sun_azimuth_deg, or neither")
-        if self.sun_illuminance_lux is not None and self.sun_illuminance_lux > 0 and self.sun_elevation_deg is None:
-            raise ValueError("sun_illuminance_lux needs a sun position: give sun_elevation_deg and sun_azimuth_deg")
-        self.sky_model()  # the sky's own checks (a sun for the types that need one)
+        # The checks across fields (rain_far_m below rain_near_m, the sun's elevation and
+        # azimuth given together, a sun's illuminance with its position) are the core's alone
+        # (`weather::Weather::validate`): reading the weather's optics runs them, naming the
+        # parameter. Then the sky's own (a sun for the types that need one).
+        _ = self._optics
+        self.sky_model()
         if self.clouds is not None:
             from skyfall import clouds as _clouds
 
@@ -214,6 +221,11 @@ class Weather:
                     raise ValueError(f"windshield = {self.windshield!r} is not a preset: use one of {', '.join(map(repr, _ws.PRESETS))}")
             elif not isinstance(self.windshield, _ws.Windshield):
                 raise TypeError(f"windshield must be a skyfall.windshield.Windshield or a preset's name, got {type(self.windshield).__name__}")
+        if self.snow_cover is not None:
+            from skyfall import snow as _snow
+
+            if not isinstance(self.snow_cover, _snow.SnowCover):
+                raise TypeError(f"snow_cover must be a skyfall.snow.SnowCover (skyfall.snow.accumulate's), got {type(self.snow_cover).__name__}")
 
     @cached_property
     def _optics(self) -> tuple[float, float, float, float, float, float]:

@@ -84,7 +84,8 @@ class Explorer:
 
     def render(self) -> NDArray[np.uint8]:
         """The frame the sliders stand at, uint8 sRGB (H, W, 3)."""
-        return self.renderer.render_srgb8(self.scene, **self.parameters())
+        image: NDArray[np.uint8] = self.renderer.render_srgb8(self.scene, **self.parameters())  # no layers: the image
+        return image
 
     def update(self) -> None:
         """Render the frame the sliders stand at into ``image``."""

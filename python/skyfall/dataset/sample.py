@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from skyfall._validate import in_range, integer, real
+from skyfall.weather import Weather
 
 __all__ = ["DatasetConfig", "EXR_COMPRESSIONS", "PNG_STRATEGIES", "ItemParams", "parse_range", "sample_item", "LAYER_NAMES", "RANGE_OPTIONS"]
 
@@ -324,8 +325,7 @@ class DatasetConfig:
         set_(self, "rain_near_m", in_range("rain_near_m", self.rain_near_m))
         if self.rain_far_m is not None:
             set_(self, "rain_far_m", in_range("rain_far_m", self.rain_far_m))
-            if self.rain_far_m >= self.rain_near_m:
-                raise ValueError(f"rain_far_m = {self.rain_far_m} m must be less than rain_near_m = {self.rain_near_m} m")
+            Weather(rain_near_m=self.rain_near_m, rain_far_m=self.rain_far_m)  # the core's check: rain_far_m below rain_near_m
             if self.f_number is not None:
                 raise ValueError("rain_far_m draws its layers in focus: it cannot be used with f_number (a thin lens)")
             if self.backend != "cpu":

@@ -22,6 +22,7 @@ and a real photo with a measured depth map under snow.
 from __future__ import annotations
 
 from collections.abc import Callable
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -51,7 +52,7 @@ def motorcycle(width: int | None = None) -> PhotoScene:
     depth = (_F_PX * scale * _BASELINE_M / (disp + _DOFFS_PX * scale)).astype(np.float32)
     img = np.asarray(left, dtype=np.uint8)
     if width is not None and width != w0:
-        from skyfall.demo_photo import _resized
+        from skyfall._demo.photo import _resized
 
         img = _resized(img, width)
         h, w = img.shape[:2]
@@ -90,7 +91,7 @@ class SnowDemo:
             height, width = scene.shape
         r = Renderer(width, height, backend=backend)
         bare = r.render(scene, Weather(), seed=self.seed)
-        return bare, r.render(scene, self.weather, seed=self.seed, snow_cover=self.cover(scene))
+        return bare, r.render(scene, dataclasses.replace(self.weather, snow_cover=self.cover(scene)), seed=self.seed)
 
 
 STREET_SNOW = SnowDemo("street_snow", lambda _w: scenes.street(), Weather(snow_rate_mm_h=4.0, wind_m_s=(0.3, 0.0, 1.5)))

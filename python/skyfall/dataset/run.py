@@ -1,32 +1,5 @@
-"""Datasets: many weather variants of photos or of the bundled street, with ground truth.
-
-``generate(out=..., input=... | scene="street", variants=N, seed=S, rain_rate_mm_h="1:50", ...)``
-(and ``skyfall dataset`` on the command line) writes, per item, into ``out/items/``:
-
-- ``NNNNNN.rain.png``: the weather image (8-bit sRGB; ``NNNNNN.rain.exr`` too with ``exr``),
-- ``NNNNNN.clean.png``: the same view without weather (a photo's own pixels),
-- ``NNNNNN.<layer>.npy``: each ground-truth layer asked for (``rain_alpha``, ``rain_depth_m``,
-  ``transmittance``), float32 (H, W),
-- ``NNNNNN.json``: its manifest row: every sampled parameter, the master seed, the skyfall
-  version, the depth source (file, ground plane or scene) and the sha256 of each file; for an
-  item whose input is missing, unreadable or mismatched, ``status`` "error" and the error,
-
-or, with ``sequence=N`` (``--sequence N --fps F``), a clip per item: ``NNNNNN.rain.mp4`` and
-``NNNNNN.clean.mp4`` (:func:`skyfall.video.write_video`; ``video_lossless`` keeps every byte)
-of N frames rendered at ``time_s = k / fps`` (world-anchored rain falling over the static photo
-or street), each layer as one float32 (N, H, W) ``.npy`` stack, and the row's ``sequence`` and
-``fps``. Frames are streamed to the encoder one at a time (the layer stacks aside, an item holds
-one frame, however long the clip),
-
-and, once every item is done, ``out/manifest.jsonl`` (the rows in index order; also
-``out/manifest.parquet`` with ``parquet=True``, through pyarrow) and
-``out/config.json`` (the options). Item ``i``'s parameters come from
-``SeedSequence([seed, i])`` alone (:mod:`skyfall.dataset_sample`), so any item can be
-regenerated alone (``indices=[i]``) and the bytes do not depend on ``workers``. Files are
-written atomically (:mod:`skyfall.dataset_io`); ``resume=True`` regenerates only the items
-whose files are missing or fail their checksum, so a run killed with ``kill -9`` and resumed
-writes the same bytes as one never interrupted.
-"""
+"""A dataset run: :func:`generate` (the items, those to make, run in this process, in spawned
+worker processes or on a Dask cluster), the progress and the manifest (see :mod:`skyfall.dataset`)."""
 
 from __future__ import annotations
 
@@ -47,9 +20,9 @@ from typing import Any
 from tqdm import tqdm  # type: ignore[import-untyped]
 
 import skyfall
-from skyfall.dataset_io import atomic_write, find_depth, list_images, remove_temporaries, write_json
-from skyfall.dataset_item import COSTS, ItemSource, Worker, item_name, render_items, verify_item
-from skyfall.dataset_sample import DatasetConfig, sample_item
+from skyfall.dataset.io import atomic_write, find_depth, list_images, remove_temporaries, write_json
+from skyfall.dataset.item import COSTS, ItemSource, Worker, item_name, render_items, verify_item
+from skyfall.dataset.sample import DatasetConfig, sample_item
 
 __all__ = ["DatasetConfig", "Summary", "generate", "sample_item", "sources"]
 
@@ -75,7 +48,7 @@ class Summary:
         Time from the first item's completion to the last's, s (see ``steady_items_per_s``).
     cost_s : dict of str to float
         Summed per-item cost of the generated items, s, by part (see
-        :data:`skyfall.dataset_item.COSTS`): read, render, encode, write.
+        :data:`skyfall.dataset.item.COSTS`): read, render, encode, write.
     workers : int
         Worker processes.
     """
@@ -139,7 +112,7 @@ def sources(config: DatasetConfig) -> list[ItemSource]:
 
 
 def _exts() -> frozenset[str]:
-    from skyfall.dataset_io import IMAGE_EXTENSIONS
+    from skyfall.dataset.io import IMAGE_EXTENSIONS
 
     return IMAGE_EXTENSIONS
 
@@ -198,7 +171,7 @@ def _work(chunk: list[ItemSource]) -> list[tuple[dict[str, Any], dict[str, float
 
 CHUNK_ITEMS = 4
 """Items per task of a worker process, at most: within a chunk each item's encoding and writing
-overlap the next one's rendering (:func:`skyfall.dataset_item.render_items`), so 3 of 4 do."""
+overlap the next one's rendering (:func:`skyfall.dataset.item.render_items`), so 3 of 4 do."""
 
 
 def _chunks(todo: list[ItemSource], workers: int) -> list[list[ItemSource]]:
@@ -226,7 +199,7 @@ def generate(
     config : DatasetConfig, optional
         The options; or give them as keywords (``out=``, ``input=`` or ``scene=``,
         ``variants=``, ``seed=``, ranges such as ``rain_rate_mm_h="1:50"``: every field of
-        :class:`~skyfall.dataset_sample.DatasetConfig`).
+        :class:`~skyfall.dataset.sample.DatasetConfig`).
     workers : int
         Worker processes, in [1, 256], each holding its own renderer made once. 1 (without
         ``threads_per_worker``) renders in this process. The bytes written do not depend on it.

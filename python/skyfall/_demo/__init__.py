@@ -1,4 +1,5 @@
-"""The bundled demo: ``python -m skyfall.demo --out out`` (what ``make demo`` runs).
+"""The bundled demo: ``python -m skyfall._demo --out out`` (what ``make demo`` and ``skyfall demo``
+run). Private: the demo's scenes, photos and plots are not part of the API.
 
 Writes
 ------
@@ -30,7 +31,7 @@ windshield.png, windshield.mp4
     rain through a windshield a minute into the rain, its two wipers mid-sweep, the drops
     refracting the street; and 3 s of the wipers at 24 fps, 640 x 360 (the video extra).
 photo_rain.png, photo_rain_portrait.png
-    Real photos through the 8-bit path, before and after (:mod:`skyfall.demo_photo`):
+    Real photos through the 8-bit path, before and after (:mod:`skyfall._demo.photo`):
     scikit-image's rocket at dusk in 15 mm/h rain with a made depth map (the sky keeps its
     dusk, the towers fade into the photo's own airlight), its astronaut in 25 mm/h.
 street_clouds.exr, street_clouds.png
@@ -41,7 +42,7 @@ street_clouds.exr, street_clouds.png
 street_snow.png, photo_snow.png
     The street after an hour of snow in a light wind along it (bare in the lee of the
     buildings), and a photo with a measured depth map under snow, before and after
-    (:mod:`skyfall.demo_snow`).
+    (:mod:`skyfall._demo.snow`).
 """
 
 from __future__ import annotations
@@ -58,7 +59,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skyfall import Camera, Frame, Renderer, Weather, io, physics, rain, scenes, sky
-from skyfall.reference import gunn_kinzer_1949
+from skyfall._reference import gunn_kinzer_1949
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -231,7 +232,7 @@ def ambient_plot(weather: Weather) -> Figure:
 
 def main(argv: list[str] | None = None) -> int:
     """Render the demo outputs into ``--out``."""
-    parser = argparse.ArgumentParser(prog="python -m skyfall.demo", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m skyfall._demo", description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (created)")
     args = parser.parse_args(argv)
     out: Path = args.out
@@ -269,10 +270,10 @@ def main(argv: list[str] | None = None) -> int:
         windshield_files.append(windshield_clip(out).name)
     except ImportError as e:  # PyAV is the video extra
         print(f"no windshield clip: {e}")
-    from skyfall import demo_photo
+    from skyfall._demo import photo as demo_photo
 
     photos = demo_photo.write(out)
-    from skyfall import demo_snow
+    from skyfall._demo import snow as demo_snow
 
     photos += demo_snow.write(out)
     names = ["rain_textures.exr", "rain_textures.png", "terminal_velocity.png", "street_rain_day_alpha.png", "ambient_light.png"]
@@ -285,6 +286,3 @@ def main(argv: list[str] | None = None) -> int:
         print(f"wrote {path}")
     return 0
 
-
-if __name__ == "__main__":
-    raise SystemExit(main())

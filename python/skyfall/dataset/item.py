@@ -6,6 +6,7 @@ worker process, the main process or a later resumed run all write the same bytes
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -19,8 +20,8 @@ from numpy.typing import NDArray
 import skyfall
 from skyfall import io, scenes
 from skyfall.camera import Camera
-from skyfall.dataset_io import DEPTH_EXTENSIONS, NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
-from skyfall.dataset_sample import DatasetConfig, ItemParams, sample_item
+from skyfall.dataset.io import DEPTH_EXTENSIONS, NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
+from skyfall.dataset.sample import DatasetConfig, ItemParams, sample_item
 from skyfall.io import encode_srgb
 from skyfall.photo import assumed_depth, estimate_sky_mask, exif_vertical_fov_deg, level_camera, sky_level_camera
 from skyfall.photo_scene import DEFAULT_DISTANCE_M
@@ -164,10 +165,10 @@ def _cover(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather
     return snow.accumulate(scene, weather, duration_s=p.snow_hours * 3600.0, dt_s=COVER_DT_S, resolution_m=config.snow_resolution_m, seed=p.render_seed)
 
 
-def _fast(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer, cover: SnowCover | None) -> bool:
+def _fast(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer) -> bool:
     """Whether the fused 8-bit path makes the item: the renderer fuses it
     (:meth:`Renderer.fuses_srgb8`), only the layers that path fills are asked for, no EXR."""
-    return renderer.fuses_srgb8(scene, weather, cover) and set(config.layers) <= {"rain_alpha", "snow_alpha"} and not config.exr
+    return renderer.fuses_srgb8(scene, weather, layers=config.layers) and not config.exr
 
 
 def _lens(p: ItemParams) -> dict[str, Any]:
@@ -399,19 +400,19 @@ def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None
         t1 = time.perf_counter()
         t["read"] += t1 - t0
         cover = _cover(cfg, scene, weather, p)
+        if cover is not None:
+            weather = dataclasses.replace(weather, snow_cover=cover)
         if cfg.sequence is not None:
-            _render_clip(worker, renderer, scene, camera, weather, p, row, t, cover)
+            _render_clip(worker, renderer, scene, camera, weather, p, row, t)
             return staged
-        fast = _fast(cfg, scene, weather, renderer, cover)
+        fast = _fast(cfg, scene, weather, renderer)
         row["path"] = "srgb8" if fast else "float"
         kw: dict[str, Any] = {"seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
         if cover is not None:
-            kw["snow_cover"] = cover
             row["snow_cover"] = {"mean_depth_m": float(np.mean(cover.depth_m)), "spacing_m": float(cover.spacing_m)}
         if fast:
-            outs = {name: np.empty((h, w), np.float32) for name in cfg.layers}
-            staged.rainy = renderer.render_srgb8(scene, weather, rain_alpha_out=outs.get("rain_alpha"), snow_alpha_out=outs.get("snow_alpha"), **kw)
-            staged.layers.update(outs)
+            staged.rainy, drawn = renderer.render_srgb8(scene, weather, layers=cfg.layers, **kw)
+            staged.layers.update(drawn)
         else:
             frame = renderer.render(scene, weather, camera=camera, **kw)
             staged.layers = {name: frame.layer(name) for name in cfg.layers}
@@ -480,12 +481,11 @@ def _render_clip(
     p: ItemParams,
     row: dict[str, Any],
     t: dict[str, float],
-    cover: SnowCover | None = None,
 ) -> None:
     """Write an item's clip: frame k at ``time_s = k / fps`` streamed to the encoder as it is
     rendered (one frame in memory, never N), the clean clip (the photo, or the street rendered
     once without weather, repeated) and each layer as one preallocated (N, H, W) float32 stack,
-    a memory map of its temporary ``.npy`` file (:class:`~skyfall.dataset_io.NpyStack`), so an
+    a memory map of its temporary ``.npy`` file (:class:`~skyfall.dataset.io.NpyStack`), so an
     item's memory is one frame's however long the clip. ``row`` gets the files' sha256, the
     clip's frames and fps; ``t`` the cost (``render``: the frames, ``encode``: the video encoder,
     ``write``: the stacks' checksums and renames)."""
@@ -498,7 +498,7 @@ def _render_clip(
     # each layer's (N, H, W) stack mapped from its temporary file, filled frame by frame
     files_out = {name: NpyStack(folder / f"{stem}.{name}.npy", (cfg.sequence, h, w)) for name in cfg.layers}
     try:
-        _write_clip(worker, renderer, scene, camera, weather, p, row, t, files_out, cover)
+        _write_clip(worker, renderer, scene, camera, weather, p, row, t, files_out)
     except BaseException:
         for f in files_out.values():
             f.discard()
@@ -515,7 +515,6 @@ def _write_clip(
     row: dict[str, Any],
     t: dict[str, float],
     files_out: dict[str, NpyStack],
-    cover: SnowCover | None = None,
 ) -> None:
     """:func:`_render_clip`'s work, the layer stacks given."""
     from skyfall import video
@@ -526,11 +525,9 @@ def _write_clip(
     h, w = int(row["height"]), int(row["width"])
     folder = cfg.out / "items"
     stacks = {name: f.array for name, f in files_out.items()}
-    fast = _fast(cfg, scene, weather, renderer, cover)
+    fast = _fast(cfg, scene, weather, renderer)
     row["path"] = "srgb8" if fast else "float"
     kw: dict[str, Any] = {"n_frames": n, "fps": fps, "seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
-    if cover is not None:
-        kw["snow_cover"] = cover
     render_s = [0.0]
 
     def rainy() -> Iterator[NDArray[np.uint8]]:
@@ -538,10 +535,8 @@ def _write_clip(
         t0 = time.perf_counter()
         if fast:
             bufs = {name: np.empty((h, w), np.float32) for name in stacks}
-            images = renderer.render_sequence_srgb8(
-                scene, weather, out=np.empty((h, w, 3), np.uint8), rain_alpha_out=bufs.get("rain_alpha"), snow_alpha_out=bufs.get("snow_alpha"), **kw
-            )
-            for k, image in enumerate(images):
+            images = renderer.render_sequence_srgb8(scene, weather, out=np.empty((h, w, 3), np.uint8), layers=bufs, **kw)
+            for k, (image, _) in enumerate(images):
                 for name, buf in bufs.items():
                     stacks[name][k] = buf
                 render_s[0] += time.perf_counter() - t0

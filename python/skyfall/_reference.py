@@ -1,4 +1,5 @@
-"""Published data bundled with skyfall (for plots and comparisons; tests keep their own copies)."""
+"""Published data and independent references bundled with skyfall, private: for the demo's plots,
+the tests and the benches (tests keep their own copies of measured data)."""
 
 from __future__ import annotations
 
@@ -67,7 +68,7 @@ def canyon_illuminance(
     try:
         from scipy import integrate  # type: ignore[import-untyped]
     except ImportError as exc:  # pragma: no cover - scipy is a test and bench dependency
-        raise ImportError("skyfall.reference.canyon_illuminance needs scipy: pip install scipy") from exc
+        raise ImportError("skyfall._reference.canyon_illuminance needs scipy: pip install scipy") from exc
 
     def radiance(g: float) -> float:
         tau = float(np.exp(-extinction_per_m * path_to_cloud_base_m(np.sin(g), cloud_base_m))) if extinction_per_m > 0 else 1.0
