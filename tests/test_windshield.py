@@ -244,22 +244,23 @@ def _state(drops: list[tuple[float, float, float]]) -> dict[str, object]:
     }
 
 
-def test_a_drop_above_furmidges_critical_size_slides_off_and_one_below_stays() -> None:
+def test_a_drop_above_furmidges_critical_size_slides_and_one_below_stays() -> None:
     # Furmidge's critical base radius on 40/20 glass at 30 deg: 3.467 mm (the reference table)
     a_c = next(c["critical_base_radius_mm"] for c in _furmidge_cases() if (c["theta_adv_deg"], c["theta_rec_deg"], c["glass_tilt_deg"]) == (40, 20, 30))
     big, small = _cap_mass_kg(1.15 * a_c), _cap_mass_kg(0.9 * a_c)
     s = _state([(60.0, 30.0, big), (240.0, 30.0, small)])
     w = ws.Windshield(0.0, glass_width_mm=300.0, glass_height_mm=200.0, wipers=0, state=s)
-    w.step(3.0)
+    w.step(2.0)
     xy, r, kind = w.drops()
     main = kind == 0
-    # the small one has not moved; the big one ran down and off the lower edge (trails behind)
-    assert main.sum() == 1
-    np.testing.assert_array_equal(xy[main][0], [240.0, 30.0])
+    # the small one has not moved; the big one slid down the slope (shedding trail drops on
+    # the way, so it slows as it nears the critical size)
+    assert main.sum() == 2
+    np.testing.assert_array_equal(xy[main][1], [240.0, 30.0])
+    assert xy[main][0][1] > 45.0 and abs(xy[main][0][0] - 60.0) < 15.0
+    assert (kind == 1).any() and (xy[kind == 1][:, 1] >= 30.0).all()
     b = w.water_kg()
-    assert b["swept_off"] > 0.8 * big
     assert b["on_glass"] + b["swept_off"] + b["evaporated"] == pytest.approx(b["arrived"], rel=1e-12)
-    assert (xy[kind == 1][:, 1] > 30.0).all()  # its trail lies below where it started
 
 
 def test_after_ten_minutes_on_parked_glass_no_two_drops_overlap() -> None:
@@ -281,4 +282,16 @@ def test_after_ten_minutes_on_parked_glass_no_two_drops_overlap() -> None:
     assert np.sum(np.pi * a**2) < (200.0 + 2 * a.max()) * (150.0 + 2 * a.max())
     # and the glass holds a thin layer: water runs off the lower edge
     assert b["swept_off"] > 0.3 * b["arrived"]
+    assert b["on_glass"] + b["swept_off"] + b["evaporated"] == pytest.approx(b["arrived"], rel=1e-12)
+
+
+def test_at_14_m_s_without_wipers_water_leaves_the_glass_within_120_s() -> None:
+    # issue 27: nothing left the glass in 120 s, drops grew to 6 mm base radius. Now the big
+    # drops slide (down where gravity beats the airflow and the retention, up where the airflow
+    # beats both) and run off an edge; the water balance holds to rounding
+    p = dict(ws.PRESETS["rain"], wipers=0, glass_width_mm=300.0, glass_height_mm=250.0)
+    w = ws.Windshield(**p, seed=2)
+    w.step(120.0)
+    b = w.water_kg()
+    assert b["swept_off"] > 0.2 * b["arrived"]
     assert b["on_glass"] + b["swept_off"] + b["evaporated"] == pytest.approx(b["arrived"], rel=1e-12)

@@ -263,7 +263,10 @@ mod tests {
             for q in &drops[i + 1..] {
                 let d = ((p.x_mm - q.x_mm).powi(2) + (p.y_mm - q.y_mm).powi(2)).sqrt();
                 let sum = base_radius_mm(p.mass_kg) + base_radius_mm(q.mass_kg);
-                assert!(d >= sum * (1.0 - 1e-9), "{p:?} and {q:?} overlap: {d} < {sum}");
+                assert!(
+                    d >= sum * (1.0 - 1e-9),
+                    "{p:?} and {q:?} overlap: {d} < {sum}"
+                );
             }
         }
         let s = w.state();

@@ -12,7 +12,7 @@
 //!    [`min_diameter_mm`, 6 mm]; the water of the drops below and above arrives as drops of
 //!    those end sizes with the same mass flux, so the whole distribution's water arrives; each
 //!    lands at a uniform point as a mesh drop with three sub-metaballs, or fuses with the drop
-//!    there.
+//!    there; then it merges with every drop its base touches (`merge.rs`).
 //! 2. **mesh model**: trail drops shrink (e-folding `trail_lifetime_s`) and vanish below
 //!    [`TRAIL_VANISH_KG`] (the mass evaporated); other drops feel gravity along the slope
 //!    (m g sin α, down) and the airflow (½ ρ_air C_d (κ v_car)² A_front, up the slope) against
@@ -21,7 +21,9 @@
 //!    wedge, λ = 1 nm), cell by cell to the cell ahead or a side neighbour, drawn with weights
 //!    affinity × cos(step angle), leaving a trail drop in the cell left (probability
 //!    `trail_probability`, a `trail_fraction` of the mass); one drop per cell, entering an
-//!    occupied cell fuses the two.
+//!    occupied cell fuses the two, and at each cell it enters the slider merges with every drop
+//!    its base touches. A drop slides up the glass where the airflow beats gravity and the
+//!    retention, and down where gravity beats both; across the top or bottom edge it runs off.
 //! 3. **wipers**: a mesh drop the wiper touches or sweeps over becomes round(m/m_p) ≥ 1
 //!    equal particles (jittered by a particle radius); a particle the wiper sweeps over is
 //!    put in front of it, touching its edge; overlapping particles are pushed apart by half the
@@ -29,6 +31,12 @@
 //!    wiper's rectangle widened by four particle diameters on each side) becomes a mesh drop,
 //!    unless a drop of base radius ≥ `hold_radius_mm` lies within the `hold_cells`² cells
 //!    around its destination (then it waits).
+//!
+//! **Merging** (`merge.rs`): a mesh drop whose base disc touches another's (centres closer
+//! than the sum of their base radii; trail drops and particles aside) merges with it, the
+//! summed mass at the mass-weighted centre, again until it touches none, for every drop that
+//! changed (arrived, fused, converted from particles, or entered a cell), so no two mesh drops
+//! on the glass overlap after a step.
 //!
 //! Water leaving the glass across an edge (run off or swept off) is counted in
 //! `swept_off_kg`, so on glass + swept off + evaporated = arrived, to rounding.
@@ -614,11 +622,7 @@ impl Windshield {
             .par_iter()
             .map(|d| d.mass_kg)
             .reduce(|| 0.0, f64::max);
-        if m > 0.0 {
-            self.base_radius_mm(m)
-        } else {
-            0.0
-        }
+        if m > 0.0 { self.base_radius_mm(m) } else { 0.0 }
     }
 
     fn particle_mass_kg(&self) -> f64 {
