@@ -39,6 +39,7 @@ from skyfall import windshield as ws
 
 RHO_W = 998.2  # kg/m^3, the simulation's water at 20 degC
 PERIODS = 60  # the table shows 10 and 40, and the mean of 41-60 where measured
+GLASS: dict[str, float] = {}  # glass_width_mm / glass_height_mm over the presets' (--glass)
 
 
 def overlap_share(xy: np.ndarray, a: np.ndarray) -> float:
@@ -58,7 +59,7 @@ def overlap_share(xy: np.ndarray, a: np.ndarray) -> float:
 
 
 def parked() -> dict[str, float]:
-    w = ws.preset("parked", seed=0)
+    w = ws.Windshield(**dict(ws.PRESETS["parked"], **GLASS), seed=0)
     t0 = time.perf_counter()
     for _ in range(60):
         w.step(10.0)
@@ -82,7 +83,7 @@ def parked() -> dict[str, float]:
 
 
 def speed14() -> dict[str, float]:
-    p = dict(ws.PRESETS["rain"], wipers=0)
+    p = dict(ws.PRESETS["rain"], wipers=0, **GLASS)
     w = ws.Windshield(**p, seed=0)
     out: dict[str, float] = {}
     first = None
@@ -103,13 +104,14 @@ def speed14() -> dict[str, float]:
 
 
 def rain_periods() -> dict[str, object]:
-    w = ws.preset("rain", seed=0)
+    w = ws.Windshield(**dict(ws.PRESETS["rain"], **GLASS), seed=0)
     period = w.params["wiper_period_s"]
     held = []
     t0 = time.perf_counter()
-    for _ in range(PERIODS):
+    for k in range(PERIODS):
         w.step(period)
         held.append(w.water_kg()["on_glass"])
+        print(f"  period {k + 1}: {held[-1] * 1e3:.2f} g", file=sys.stderr, flush=True)
     wall = time.perf_counter() - t0
     water = w.water_kg()
     arrival = w.arrival_kg_per_s()
@@ -136,13 +138,18 @@ def step_time(width_mm: float, height_mm: float) -> dict[str, float]:
     return {"drops": n, "step_s": median_s(lambda: w.step(1.0 / 30.0), 9)}
 
 
-def measure() -> dict[str, object]:
+def measure(path: Path | None, sections: list[str]) -> dict[str, object]:
+    """Measures ``sections`` in turn, rewriting ``path`` after each."""
     rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=Path(__file__).parent).stdout.strip()
     dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True, cwd=Path(__file__).parent).stdout.strip()
-    return {
-        "env": {"rev": rev + ("+" if dirty else ""), "cpus": os.cpu_count(), "machine": platform.machine(), "date": time.strftime("%Y-%m-%d %H:%M")},
-        **{k: progress(k, f) for k, f in SECTIONS.items()},
+    out: dict[str, object] = {
+        "env": {"rev": rev + ("+" if dirty else ""), "cpus": os.cpu_count(), "machine": platform.machine(), "date": time.strftime("%Y-%m-%d %H:%M"), "glass": GLASS or "the presets'"},
     }
+    for k in sections:
+        out[k] = progress(k, SECTIONS[k])
+        if path is not None:
+            path.write_text(json.dumps(out, indent=2))
+    return out
 
 
 SECTIONS = {
@@ -202,7 +209,7 @@ def fmt(v: object, f: str) -> str:
 def table(before: dict, after: dict) -> str:
     lines = ["| case | quantity | before | after |", "|---|---|---|---|"]
     for case, what, group, key, f in ROWS:
-        lines.append(f"| {case} | {what} | {fmt(before[group].get(key), f)} | {fmt(after[group].get(key), f)} |")
+        lines.append(f"| {case} | {what} | {fmt(before.get(group, {}).get(key), f)} | {fmt(after.get(group, {}).get(key), f)} |")
     lines.append("")
     lines.append("Held water (g) at the end of wiper periods 1-40, rain preset:")
     lines.append("")
@@ -210,7 +217,7 @@ def table(before: dict, after: dict) -> str:
     lines.append("| periods | " + " | ".join(str(k) for k in ks) + " |")
     lines.append("|---|" + "---|" * len(ks))
     for name, d in (("before", before), ("after", after)):
-        held = d["rain"]["held_kg"]
+        held = d.get("rain", {}).get("held_kg", [])
         lines.append(f"| {name} | " + " | ".join(f"{held[k - 1] * 1e3:.1f}" if k <= len(held) else "-" for k in ks) + " |")
     return "\n".join(lines)
 
@@ -219,16 +226,17 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--json", type=Path)
     ap.add_argument("--md", nargs=2, type=Path)
+    ap.add_argument("--glass", nargs=2, type=float, metavar=("WIDTH_MM", "HEIGHT_MM"), help="a glass other than the presets' 1400 x 800 mm")
+    ap.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, of {','.join(SECTIONS)}")
     args = ap.parse_args()
+    if args.glass:
+        GLASS.update(glass_width_mm=args.glass[0], glass_height_mm=args.glass[1])
     if args.md:
         before, after = (json.loads(p.read_text()) for p in args.md)
         print(table(before, after))
         return
-    out = measure()
-    text = json.dumps(out, indent=2)
-    if args.json:
-        args.json.write_text(text)
-    print(text)
+    out = measure(args.json, args.sections.split(","))
+    print(json.dumps(out, indent=2))
 
 
 if __name__ == "__main__":
