@@ -23,7 +23,7 @@
 //!    `trail_probability`, a `trail_fraction` of the mass); one drop per cell, entering an
 //!    occupied cell fuses the two, and at each cell it enters the slider merges with every drop
 //!    its base touches. A drop slides up the glass where the airflow beats gravity and the
-//!    retention, and down where gravity beats both; across the top or bottom edge it runs off.
+//!    retention, and down where gravity beats both; across an edge it runs off.
 //! 3. **wipers**: a mesh drop the wiper touches or sweeps over becomes round(m/m_p) ≥ 1
 //!    equal particles (jittered by a particle radius); a particle the wiper sweeps over is
 //!    put in front of it, touching its edge; overlapping particles are pushed apart by half the
