@@ -319,8 +319,11 @@ def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int = WARM_UP
     they slide (Furmidge's criterion with the airflow), which at the ``rain`` preset's 14 m/s
     takes some 30 periods, and overshoots once before it settles; from
     :data:`WARM_UP_PERIODS` on, the held water stays within its steady band
-    (``benches/results/windshield_27.md``). The warm-up costs those periods of stepping once
-    per (name, seed) and process.
+    (``benches/results/windshield_27.md``). The ``drizzle`` glass (a fifth of the rain) and
+    the ``parked`` one (no wipers, 2 s "periods") fill more slowly, in proportion to their
+    smaller arrival, and are not yet settled after 40 (not measured here): raise
+    ``warm_up_periods`` for them. The warm-up costs those periods of stepping once per
+    (name, seed) and process (minutes of a 2-core machine for the ``rain`` preset's glass).
 
     Parameters
     ----------
