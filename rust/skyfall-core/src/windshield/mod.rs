@@ -4,6 +4,7 @@
 //! drop slides ([`furmidge`]), and their drawing as refracting 2D metaballs ([`render`]).
 
 pub mod furmidge;
+mod merge;
 pub mod render;
 pub mod sim;
 

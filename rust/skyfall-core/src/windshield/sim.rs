@@ -12,7 +12,7 @@
 //!    [`min_diameter_mm`, 6 mm]; the water of the drops below and above arrives as drops of
 //!    those end sizes with the same mass flux, so the whole distribution's water arrives; each
 //!    lands at a uniform point as a mesh drop with three sub-metaballs, or fuses with the drop
-//!    there.
+//!    there; then it merges with every drop its base touches (`merge.rs`).
 //! 2. **mesh model**: trail drops shrink (e-folding `trail_lifetime_s`) and vanish below
 //!    [`TRAIL_VANISH_KG`] (the mass evaporated); other drops feel gravity along the slope
 //!    (m g sin α, down) and the airflow (½ ρ_air C_d (κ v_car)² A_front, up the slope) against
@@ -21,7 +21,9 @@
 //!    wedge, λ = 1 nm), cell by cell to the cell ahead or a side neighbour, drawn with weights
 //!    affinity × cos(step angle), leaving a trail drop in the cell left (probability
 //!    `trail_probability`, a `trail_fraction` of the mass); one drop per cell, entering an
-//!    occupied cell fuses the two.
+//!    occupied cell fuses the two, and at each cell it enters the slider merges with every drop
+//!    its base touches. A drop slides up the glass where the airflow beats gravity and the
+//!    retention, and down where gravity beats both; across an edge it runs off.
 //! 3. **wipers**: a mesh drop the wiper touches or sweeps over becomes round(m/m_p) ≥ 1
 //!    equal particles (jittered by a particle radius); a particle the wiper sweeps over is
 //!    put in front of it, touching its edge; overlapping particles are pushed apart by half the
@@ -29,6 +31,12 @@
 //!    wiper's rectangle widened by four particle diameters on each side) becomes a mesh drop,
 //!    unless a drop of base radius ≥ `hold_radius_mm` lies within the `hold_cells`² cells
 //!    around its destination (then it waits).
+//!
+//! **Merging** (`merge.rs`): a mesh drop whose base disc touches another's (centres closer
+//! than the sum of their base radii; trail drops and particles aside) merges with it, the
+//! summed mass at the mass-weighted centre, again until it touches none, for every drop that
+//! changed (arrived, fused, converted from particles, or entered a cell), so no two mesh drops
+//! on the glass overlap after a step.
 //!
 //! Water leaving the glass across an edge (run off or swept off) is counted in
 //! `swept_off_kg`, so on glass + swept off + evaporated = arrived, to rounding.
@@ -484,16 +492,18 @@ pub struct Metaball {
 /// A simulated windshield.
 #[derive(Debug, Clone)]
 pub struct Windshield {
-    config: WindshieldConfig,
+    pub(super) config: WindshieldConfig,
     wetting: Wetting,
-    nx: usize,
-    ny: usize,
+    pub(super) nx: usize,
+    pub(super) ny: usize,
     affinity: Vec<f32>,
     /// Index into `state.drops` per cell; `EMPTY` where none.
-    grid: Vec<u32>,
+    pub(super) grid: Vec<u32>,
     bins: Vec<(BinSampler, f64)>,
     lumps: Vec<Lump>,
-    state: WindshieldState,
+    pub(super) state: WindshieldState,
+    /// An upper bound on every mesh drop's base radius, mm (the merge's search reach).
+    pub(super) a_max_mm: f64,
 }
 
 /// Drops of one diameter that carry the water of those outside the arrival's bins.
@@ -510,7 +520,8 @@ fn drop_mass_kg(diameter_mm: f64) -> f64 {
     WATER_DENSITY_KG_M3 * std::f64::consts::PI * d * d * d / 6.0
 }
 
-const EMPTY: u32 = u32::MAX;
+/// A cell without a drop.
+pub(super) const EMPTY: u32 = u32::MAX;
 
 impl Windshield {
     /// A dry windshield at t = 0.
@@ -539,6 +550,7 @@ impl Windshield {
             grid: crate::error::try_filled("the windshield's grid", nx * ny, EMPTY)?,
             config,
             state,
+            a_max_mm: 0.0,
         };
         for (i, d) in w.state.drops.iter().enumerate() {
             let fine = d.mass_kg.is_finite() && d.mass_kg > 0.0;
@@ -559,6 +571,7 @@ impl Windshield {
                 }
             }
         }
+        w.a_max_mm = w.largest_base_radius_mm();
         Ok(w)
     }
 
@@ -579,7 +592,7 @@ impl Windshield {
     }
 
     /// The cell under (x, y) mm, None off the glass.
-    fn cell_of(&self, x_mm: f64, y_mm: f64) -> Option<usize> {
+    pub(super) fn cell_of(&self, x_mm: f64, y_mm: f64) -> Option<usize> {
         let (i, j) = (x_mm / self.config.cell_mm, y_mm / self.config.cell_mm);
         if i >= 0.0 && j >= 0.0 && (i as usize) < self.nx && (j as usize) < self.ny {
             Some(j as usize * self.nx + i as usize)
@@ -599,6 +612,17 @@ impl Windshield {
     /// A drop's base radius, mm.
     pub fn base_radius_mm(&self, mass_kg: f64) -> f64 {
         self.wetting.base_radius_m(mass_kg / WATER_DENSITY_KG_M3) * 1e3
+    }
+
+    /// The largest mesh drop's base radius, mm (0 on dry glass).
+    fn largest_base_radius_mm(&self) -> f64 {
+        let m = self
+            .state
+            .drops
+            .par_iter()
+            .map(|d| d.mass_kg)
+            .reduce(|| 0.0, f64::max);
+        if m > 0.0 { self.base_radius_mm(m) } else { 0.0 }
     }
 
     fn particle_mass_kg(&self) -> f64 {
@@ -730,14 +754,19 @@ impl Windshield {
         }
     }
 
-    /// Puts `mass` at (x, y): a new drop, or fused into the drop of that cell. Off the glass
-    /// it is swept off.
+    /// Puts `mass` at (x, y): a new drop, or fused into the drop of that cell; then it merges
+    /// with the drops it touches. Off the glass it is swept off.
     fn add_drop(&mut self, x: f64, y: f64, mass: f64, age_s: f64, angle: f64) {
         let Some(c) = self.cell_of(x, y) else {
             self.state.swept_off_kg += mass;
             return;
         };
         let at = self.grid[c];
+        let i = if at == EMPTY {
+            self.state.drops.len()
+        } else {
+            at as usize
+        };
         if at == EMPTY {
             self.grid[c] = self.state.drops.len() as u32;
             self.state.drops.push(MeshDrop {
@@ -750,10 +779,18 @@ impl Windshield {
                 sub_angle_rad: angle,
             });
         } else {
+            // fused at the mass-weighted centre (in the same cell: a cell is convex)
             let d = &mut self.state.drops[at as usize];
-            d.mass_kg += mass;
+            let m = d.mass_kg + mass;
+            d.x_mm = (d.mass_kg * d.x_mm + mass * x) / m;
+            d.y_mm = (d.mass_kg * d.y_mm + mass * y) / m;
+            d.mass_kg = m;
             d.trail = false;
         }
+        self.a_max_mm = self
+            .a_max_mm
+            .max(self.base_radius_mm(self.state.drops[i].mass_kg));
+        self.merge_touching(i);
     }
 
     /// The driving force along y (down the slope), N, on a drop of `mass` and base radius `a_m`.
@@ -784,6 +821,8 @@ impl Windshield {
     fn mesh_step(&mut self, dt: f64, rng: &mut rand_pcg::Pcg64Mcg) {
         let decay = (-dt / self.config.trail_lifetime_s).exp();
         let n = self.state.drops.len();
+        // the merge's reach, exact again (merges only raise it within a step)
+        self.a_max_mm = self.largest_base_radius_mm();
         // speeds first, in parallel (they read only each drop's own mass)
         let speeds: Vec<f64> = self
             .state
@@ -911,11 +950,16 @@ impl Windshield {
                 self.state.drops[j].mass_kg = 0.0;
                 self.state.drops[i].mass_kg += absorbed;
                 self.grid[t] = i as u32;
+                self.a_max_mm = self
+                    .a_max_mm
+                    .max(self.base_radius_mm(self.state.drops[i].mass_kg));
             }
+            // and with every drop it now touches
+            self.merge_touching(i);
         }
     }
 
-    fn kill(&mut self, i: usize) {
+    pub(super) fn kill(&mut self, i: usize) {
         let d = self.state.drops[i];
         if let Some(c) = self.cell_of(d.x_mm, d.y_mm)
             && self.grid[c] == i as u32
@@ -1202,6 +1246,8 @@ impl Windshield {
         }
         self.state.arrived_kg += mass_kg;
         self.add_drop(x_mm, y_mm, mass_kg, SUB_METABALL_S, 0.0);
+        // the drops it merged with leave the list
+        self.compact();
         Ok(())
     }
 
