@@ -37,6 +37,8 @@ from skyfall._validate import in_range, integer, real, values
 
 __all__ = [
     "PRESETS",
+    "SETTLED_PERIODS",
+    "WARM_UP_PERIODS",
     "GlassView",
     "Windshield",
     "composite",
@@ -293,9 +295,14 @@ def preset(name: str, *, seed: int = 0) -> Windshield:
     return Windshield(**PRESETS[name], seed=seed)
 
 
-WARM_UP_PERIODS: Final = 40
-"""The wiper periods :func:`warm` steps before its cached state: past the glass's settling
-(measured in ``benches/results/windshield_27.md``)."""
+WARM_UP_PERIODS: Final = 4
+"""The wiper periods :func:`warm` steps by default before its cached state: a glass still filling
+(about 12 s of stepping for the ``rain`` preset on 2 cores)."""
+
+SETTLED_PERIODS: Final = 40
+"""The wiper periods after which the ``rain`` preset's glass has settled: its held water stays in
+a steady band from there (``benches/results/windshield_27.md``); ``warm(...,
+warm_up_periods=SETTLED_PERIODS)`` draws from that steady state, at minutes of stepping."""
 
 
 @lru_cache(maxsize=16)
@@ -312,18 +319,19 @@ def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int = WARM_UP
 
     The state after ``warm_up_periods`` wiper periods (2 s each without wipers) is computed
     once per (name, seed) and cached; from it only ``t_s mod period`` is stepped, so the
-    wipers stand where they would at ``t_s`` and the drops are a draw from the glass's steady
-    state (not the one exact history of ``t_s`` seconds of rain). The default is past the
-    glass's settling: the swept glass is clear after a sweep, but the glass the blades do not
-    reach (half of the presets' glass) fills with drops until they grow past the size at which
-    they slide (Furmidge's criterion with the airflow), which at the ``rain`` preset's 14 m/s
-    takes some 30 periods, and overshoots once before it settles; from
-    :data:`WARM_UP_PERIODS` on, the held water stays within its steady band
-    (``benches/results/windshield_27.md``). The ``drizzle`` glass (a fifth of the rain) and
-    the ``parked`` one (no wipers, 2 s "periods") fill more slowly, in proportion to their
-    smaller arrival, and are not yet settled after 40 (not measured here): raise
-    ``warm_up_periods`` for them. The warm-up costs those periods of stepping once per
-    (name, seed) and process (minutes of a 2-core machine for the ``rain`` preset's glass).
+    wipers stand where they would at ``t_s`` and the drops are the glass after those periods
+    (not the one exact history of ``t_s`` seconds of rain). The swept glass is clear after a
+    sweep, but the glass the blades do not reach (half of the presets' glass) fills with drops
+    until they grow past the size at which they slide (Furmidge's criterion with the airflow),
+    which at the ``rain`` preset's 14 m/s takes some 30 periods, overshoots once and then
+    settles: from :data:`SETTLED_PERIODS` (40) on, the held water stays within its steady band
+    (``benches/results/windshield_27.md``). The default, :data:`WARM_UP_PERIODS` (4), is a
+    glass still filling, chosen for its cost: the warm-up is paid once per (name, seed) and
+    process, about 12 s for the ``rain`` preset on 2 cores, while 10 periods take about 77 s
+    and 40 several minutes (the step's cost grows with the drops held). Pass
+    ``warm_up_periods=SETTLED_PERIODS`` for a draw from the steady state. The ``drizzle``
+    glass (a fifth of the rain) and the ``parked`` one (no wipers, 2 s "periods") fill more
+    slowly and are not settled after 40 either (not measured).
 
     Parameters
     ----------
@@ -335,7 +343,7 @@ def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int = WARM_UP
         The windshield's seed.
     warm_up_periods : int
         Periods stepped once before the cache, in [1, 100] (default :data:`WARM_UP_PERIODS`);
-        fewer give a glass still filling.
+        fewer than :data:`SETTLED_PERIODS` give a glass still filling.
     """
     integer("warm_up_periods", warm_up_periods, 1, 100)
     t = in_range("time_s", t_s)
