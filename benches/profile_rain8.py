@@ -36,7 +36,7 @@ STAGES: dict[str, tuple[str, ...]] = {
     ),
     "raster: streaks into each tile's P, Q": ("skyfall_core::frame::srgb8::raster_tile",),
     "binning streaks by tile": ("skyfall_core::particles::binning::bin_by_tiles",),
-    "drops: generation, light, projection, sort": ("skyfall_core::frame::passes::Passes::prepare",),
+    "drops: generation, light, projection, sort": ("skyfall_core::frame::passes::Particles::prepare",),
     "depth map check": ("skyfall_core::haze::check_depth",),
 }
 # stage -> regex over perf's "dso symbol", self time; the first that matches

@@ -184,8 +184,8 @@ class Windshield:
         Parameters
         ----------
         dt_s : float
-            Time step, s, in (0, 1e7]; split internally into steps of at most 1/120 s (so a
-            step's cost grows with it: an hour of glass is 432 000 internal steps).
+            Time step, s, in (0, 1e7]; split internally into steps of at most 1/60 s (so a
+            step's cost grows with it: an hour of glass is 216 000 internal steps).
         """
         self._core.step(in_range("dt_s", dt_s))
 
