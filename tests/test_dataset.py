@@ -359,7 +359,7 @@ def test_ctrl_c_stops_the_workers_cleanly_and_resume_finishes(tmp_path):
 def environ_restored():
     """os.environ as it was before the test: a Dask LocalCluster leaves MALLOC_TRIM_THRESHOLD_,
     PYTHONHASHSEED and OMP_NUM_THREADS set in this process, and later tests' worker processes
-    inherit them (with MALLOC_TRIM_THRESHOLD_ the lossy clips' x264 bytes changed)."""
+    inherit them."""
     saved = dict(os.environ)
     yield
     os.environ.clear()

@@ -232,9 +232,10 @@ class DatasetConfig:
     video_lossless : bool
         Write the clips losslessly (x264 RGB, quality 0: every decoded byte is the frame
         rendered, about ten times larger); default lossy 4:2:0 at crf 18, which needs an even
-        width and height. Only with ``sequence``. Clips (lossy or lossless), the layer stacks
-        and the rows are the same bytes on any number of workers and after a resume
-        (:mod:`skyfall.video` converts RGB to YUV itself and encodes on one thread).
+        width and height. Only with ``sequence``. Lossless clips, the layer stacks and the
+        rows are the same bytes on any number of workers and after a resume; lossy clips
+        encode the same frames but x264's bytes can differ between processes (see
+        :mod:`skyfall.video`).
     """
 
     out: Path
