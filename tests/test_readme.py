@@ -4,7 +4,6 @@ folder (the files they write land there), as a new user would paste them."""
 from __future__ import annotations
 
 import re
-import time
 from pathlib import Path
 
 import numpy as np
@@ -24,11 +23,9 @@ def test_every_readme_block_runs_in_order(tmp_path, monkeypatch):
     blocks = python_blocks()
     assert len(blocks) >= 5  # the tour, frames, rain, 8-bit, sky
     namespace: dict[str, object] = {"__name__": "__readme__"}
-    start = time.perf_counter()
     for line, code in blocks:
         # padded with blank lines so a traceback points at the README's own line numbers
         exec(compile("\n" * (line - 1) + code, str(README), "exec"), namespace)
-    seconds = time.perf_counter() - start
     # what the blocks say they write, and the photo the later blocks take from a frame
     for name in ("rain.exr", "streaks.png", "street.exr", "street.png", "rain_00.png", "rainy_0.png"):
         assert (tmp_path / name).stat().st_size > 0, name
@@ -37,5 +34,3 @@ def test_every_readme_block_runs_in_order(tmp_path, monkeypatch):
     assert isinstance(depth, np.ndarray) and depth.shape == (720, 1280) and np.isinf(depth).any()
     alpha = np.load(tmp_path / "rain_alpha_0.npy")
     assert alpha.shape == depth.shape and 0.0 < float(alpha.max()) <= 1.0
-    # 8.8 s on the shared 2-core machine; twice the 30 s budget is a regression, not noise
-    assert seconds < 60.0, f"the README's blocks took {seconds:.1f} s"
