@@ -206,3 +206,72 @@ def test_every_simd_level_gives_the_same_bytes(cpu, monkeypatch, level):
     monkeypatch.setenv("SKYFALL_SIMD", "")
     monkeypatch.setenv("SKYFALL_SCALAR_KERNELS", "shade,transmittance")
     np.testing.assert_array_equal(cpu.render_srgb8(scene, weather, seed=5), best)
+
+
+def _float_then_encode(r: Renderer, scene, weather, layers, **kw):
+    frame = r.render(scene, weather, layers=layers, **kw)
+    return io.to_srgb8(frame.rgb), frame.layers
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["clouds over a photo", "snow cover on a photo", "box scene with lamps at dusk", "snowfall on a box scene", "a layer the fused path does not fill"],
+)
+def test_every_stage_is_drawn_by_the_8_bit_output_as_the_float_frame_encoded(cpu, case):
+    """What the fused path does not draw goes band by band through the stages, each band
+    encoded as it is finished (_core.render_frame8): the bytes of the float frame encoded by
+    io.to_srgb8, and the same layers, on every row (101 rows: the last band is short)."""
+    from skyfall import snow
+
+    layers: tuple[str, ...] = ("rain_alpha",)
+    kw: dict = {"seed": 3, "ambient_spacing_m": 8.0}
+    if case == "clouds over a photo":
+        scene, weather = photo8(5), Weather(clouds="broken", sun_elevation_deg=30.0, sun_azimuth_deg=180.0, rain_rate_mm_h=5.0)
+        layers = ("cloud_alpha", "rain_alpha")
+    elif case == "snow cover on a photo":
+        cover = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=2.0), duration_s=1800.0, dt_s=600.0, resolution_m=2.0)
+        # a photo of flat ground (depth from the camera's height, 1.6 m) under a sky
+        flat = photo8(6)
+        fx, fy, cx, cy = flat.camera.intrinsics()
+        rows = np.arange(H) + 0.5 - cy
+        depth = np.where(rows > 0, 1.6 * fy / np.maximum(rows, 1e-6), np.inf)[:, None].repeat(W, 1).astype(np.float32)
+        scene = PhotoScene(flat.srgb8, depth, camera=flat.camera)
+        weather = Weather(snow_cover=cover, visibility_m=400.0)
+        layers = ("snow_depth_m", "transmittance")
+    elif case == "box scene with lamps at dusk":
+        scene, weather = scenes.street(lamps=True), Weather(rain_rate_mm_h=20.0, visibility_m=300.0)
+        layers = ("rain_alpha", "transmittance", "snow_alpha")  # snow_alpha: no stage draws it, neutral
+    elif case == "snowfall on a box scene":
+        scene, weather = scenes.street(), Weather(snow_rate_mm_h=3.0)
+        layers = ("snow_alpha",)
+    else:
+        scene, weather = photo8(7), Weather(rain_rate_mm_h=30.0, visibility_m=200.0)
+        layers = ("rain_alpha", "transmittance", "rain_depth_m")
+    assert not cpu.fuses_srgb8(scene, weather, layers=layers)
+    got = cpu.render_srgb8(scene, weather, layers=layers, **kw)
+    want, want_layers = _float_then_encode(cpu, scene, weather, layers, **kw)
+    assert got.image.tobytes() == want.tobytes()
+    assert list(got.layers) == list(layers)
+    for name in layers:
+        np.testing.assert_array_equal(got.layers[name], want_layers[name], err_msg=name)
+    # the effect drew: its first layer is not neutral everywhere (snow_alpha on the street at
+    # dusk is the layer no stage draws: its neutral 0 everywhere)
+    first = got.layers[layers[0]]
+    assert np.ptp(first) > 0 or case == "box scene with lamps at dusk", case
+
+
+def test_the_banded_8_bit_output_hazes_as_numpy_and_colour_science_do(cpu):
+    # The haze of test_haze_matches_numpy_and_colour_science through the banded path (a
+    # transmittance layer asked for, which the fused path does not fill), against the same
+    # independent reference, and its transmittance layer against exp(-sigma d) on ground pixels.
+    scene = photo8(2, near_wall=False)
+    weather = Weather(visibility_m=80.0)
+    got = cpu.render_srgb8(scene, weather, layers=("transmittance",))
+    fused = cpu.render_srgb8(scene, weather)
+    diff = np.abs(got.image.astype(int) - fused.astype(int))
+    assert diff.max() <= 1 and np.mean(diff > 0) < 1e-3
+    fx, fy, cx, cy = scene.camera.intrinsics()
+    y, x = np.mgrid[0:H, 0:W] + 0.5
+    dist = scene.depth_m.astype(np.float64) * np.sqrt(((x - cx) / fx) ** 2 + ((y - cy) / fy) ** 2 + 1)
+    ground = np.isfinite(dist)
+    np.testing.assert_allclose(got.layers["transmittance"][ground], np.exp(-weather.extinction_per_m * dist[ground]), rtol=1e-4)

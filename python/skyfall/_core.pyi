@@ -34,6 +34,7 @@ __all__ = [
     "snow_cover_photo",
     "GpuUnavailableError",
     "render_frame",
+    "render_frame8",
     "render_photo8",
     "weather_optics",
     "weather_sun",
@@ -112,6 +113,9 @@ LAYER_NEUTRAL: dict[str, float]
 def render_frame(
     request: _Request, *, device: GpuDevice | None = None, out: dict[str, NDArray[np.float32] | None] | None = None
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], dict[str, NDArray[np.float32]], dict[str, int]]: ...
+def render_frame8(
+    request: _Request, out_srgb8: NDArray[np.uint8], *, layers: dict[str, NDArray[np.float32]] | None = None
+) -> dict[str, int]: ...
 def render_photo8(
     request: _Request,
     photo_srgb8: NDArray[np.uint8],

@@ -495,7 +495,8 @@ class Renderer:
         """Whether :meth:`render_srgb8` of these takes the fused 8-bit path (an 8-bit photo on
         the CPU backend, no windshield, no clouds, no snow cover in the weather, and no layer
         asked for but ``rain_alpha`` and ``snow_alpha``: what that path does not draw) rather
-        than rendering the float frame and encoding it.
+        than drawing the stages band by band and encoding each band (the same bytes as the
+        float frame encoded; the GPU backend and a windshield encode the float frame).
 
         Parameters
         ----------
@@ -583,9 +584,11 @@ class Renderer:
         within 1 code of it (nearly all equal). For an 8-bit :class:`PhotoScene` on the CPU
         backend the haze and the rain are fused into one pass over bands of rows that decodes,
         hazes, composites and encodes each pixel once, with no frame-sized float buffers: the
-        fast way to put rain on a dataset of photos. Other scenes, the GPU backend, weather
-        with a windshield, clouds or a snow cover, and layers other than ``rain_alpha`` and
-        ``snow_alpha`` render the float frame and encode it (:meth:`fuses_srgb8` says which).
+        fast way to put rain on a dataset of photos. Other scenes, clouds, a snow cover and
+        layers other than ``rain_alpha`` and ``snow_alpha`` are drawn band by band, each band
+        encoded as it is finished (the float frame's bytes, with no frame-sized float buffer;
+        :meth:`fuses_srgb8` says which path a call takes); the GPU backend and a windshield
+        render the float frame and encode it.
 
         Parameters
         ----------
@@ -658,7 +661,14 @@ class Renderer:
                 request, scene.srgb8, io.srgb8_table(), image, rain_alpha_out=filled.get("rain_alpha"), snow_alpha_out=filled.get("snow_alpha")
             )
             return image, filled
-        # A stage the fused path does not draw (or a layer it does not fill): float, then encode.
+        if self._device is None and weather.windshield is None:
+            filled = {name: a if a is not None else np.empty((self.height, self.width), np.float32) for name, a in targets.items()}
+            # A stage the fused path does not draw (clouds, a snow cover, a box scene and its
+            # glows) or a layer it does not fill: the stages band by band, each band encoded as
+            # it is finished (the float frame's bytes, no frame-sized float buffer).
+            _core.render_frame8(self._request(scene, weather, options, time_s), image, layers=filled)
+            return image, filled
+        # The GPU backend or a windshield (a stage over the whole frame): float, then encode.
         frame = self._render(scene, weather, dataclasses.replace(options, layers=tuple(targets)), time_s, None)
         image[...] = io.to_srgb8(frame.rgb)
         filled = {}

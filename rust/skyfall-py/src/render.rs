@@ -8,8 +8,9 @@ use numpy::ndarray::{Ix2, Ix3};
 use numpy::{PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use skyfall_core::frame::encoded::draw_srgb8;
 use skyfall_core::frame::float::draw;
-use skyfall_core::frame::layers::Layer;
+use skyfall_core::frame::layers::{Layer, Layers};
 use skyfall_core::frame::request::FrameSetup;
 use skyfall_core::frame::srgb8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
 use skyfall_core::frame::stages::Frame;
@@ -129,6 +130,65 @@ pub fn render_frame<'py>(
         named.set_item(l.name(), a)?;
     }
     Ok((rgb, depth, named, stats(py, report, snow_report)?))
+}
+
+/// Renders the frame of `request` as 8-bit sRGB into `out_srgb8` on the CPU, any frame (the
+/// stages band by band, each band encoded as it is finished: the float frame's bytes, see
+/// `skyfall_core::frame::encoded`), filling the arrays of `layers` (name to (H, W) float32)
+/// with the frame's layers (their neutral value where no stage draws one). Returns the passes'
+/// counters.
+#[pyfunction]
+#[pyo3(signature = (request, out_srgb8, *, layers=None))]
+pub fn render_frame8<'py>(
+    py: Python<'py>,
+    request: RequestArgs<'py>,
+    out_srgb8: Bound<'py, PyArray3<u8>>,
+    layers: Option<OutArrays<'py>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut out_w = out_srgb8.try_readwrite().map_err(|_| in_use("out"))?;
+    let mut given = layers.unwrap_or_default();
+    let mut arrays: Vec<(Layer, F2<'py>)> = Vec::new();
+    for layer in Layer::ALL {
+        if let Some(a) = given.take::<f32, Ix2>(layer.name())? {
+            arrays.push((layer, a));
+        }
+    }
+    if let Some(name) = given.0.keys().next() {
+        return Err(invalid(
+            "layers",
+            None,
+            format!(
+                "names no layer {name:?}; the layers are {:?}",
+                Layer::ALL.map(Layer::name)
+            ),
+        ));
+    }
+    let mut writers = arrays
+        .iter()
+        .map(|(l, a)| {
+            a.try_readwrite()
+                .map_err(|_| in_use(l.name()))
+                .map(|w| (*l, w))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let mut slices: Layers<&mut [f32]> = Layers::default();
+    for (l, w) in writers.iter_mut() {
+        slices.set(*l, w.as_slice_mut()?);
+    }
+    let parsed: ParsedRequest<'py> = request.parse(true)?;
+    let req = parsed.request()?;
+    let setup = FrameSetup::new(&req).map_err(CoreError)?;
+    let (light, rain, snow) = (setup.light(), setup.rain(), setup.snow());
+    let frame = Frame::new(req.scene_ref(), &req.camera, &light).with_effects(
+        setup.haze.as_ref(),
+        rain.as_ref(),
+        snow.as_ref(),
+    );
+    let out = out_w.as_slice_mut()?;
+    let (report, snow_report) = py
+        .detach(|| draw_srgb8(&frame, out, slices))
+        .map_err(CoreError)?;
+    stats(py, report, snow_report)
 }
 
 /// Renders the frame of `request` over its 8-bit sRGB photo `photo_srgb8` into `out_srgb8` on

@@ -114,15 +114,19 @@ pub fn encode_srgb8(linear: &[f32], out: &mut [u8]) {
 
 /// [`encode_srgb8`] with its kernel at `level` (the same bits at every level).
 pub fn encode_srgb8_at(level: crate::simd::Level, linear: &[f32], out: &mut [u8]) {
-    let e = Srgb8Encoder::new();
     out.par_chunks_mut(1 << 16)
         .zip(linear.par_chunks(1 << 16))
-        .for_each(|(o, l)| {
-            let done = crate::simd::encode_row(level, e.thresholds(), l, o);
-            for (b, &x) in o[done..].iter_mut().zip(&l[done..]) {
-                *b = e.encode(x);
-            }
-        });
+        .for_each(|(o, l)| encode_srgb8_serial(level, l, o));
+}
+
+/// [`encode_srgb8_at`] on the calling thread (for callers already in parallel, as the 8-bit
+/// output's bands are): the same bits.
+pub fn encode_srgb8_serial(level: crate::simd::Level, linear: &[f32], out: &mut [u8]) {
+    let e = Srgb8Encoder::new();
+    let done = crate::simd::encode_row(level, e.thresholds(), linear, out);
+    for (b, &x) in out[done..].iter_mut().zip(&linear[done..]) {
+        *b = e.encode(x);
+    }
 }
 
 /// Maps bytes through a 256-entry table (8-bit decoding), in parallel.

@@ -101,8 +101,7 @@ pub fn draw(
 mod tests {
     use super::*;
     use crate::error::{Error, Param};
-    use crate::scene::boxes;
-    use crate::scene::boxes::BoxScene;
+    use crate::frame::fixture::one_box;
     use crate::sky::ambient::AmbientMap;
     use crate::sky::{Sky, cie::SkyKind};
     use crate::stage::layers::Layer;
@@ -110,23 +109,7 @@ mod tests {
 
     #[test]
     fn fused_frame_is_the_ray_cast_then_eq_2_per_pixel() {
-        let cam = Camera::new(
-            40,
-            30,
-            [30.0, 30.0, 20.0, 15.0],
-            Vec3::new(0.0, 1.6, 0.0),
-            Mat3::IDENTITY,
-        )
-        .unwrap();
-        let b = boxes::SceneBox {
-            min_m: Vec3::new(-3.0, 0.0, -12.0),
-            max_m: Vec3::new(3.0, 6.0, -8.0),
-            albedo: Vec3::new(0.6, 0.5, 0.4),
-        };
-        let scene = BoxScene::new(vec![b], true, Vec3::splat(0.1)).unwrap();
-        let h = Haze::new(0.02, [0.43; 3], 700.0).unwrap();
-        let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
-        let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
+        let (cam, scene, h, sky, amb) = one_box(40, 30);
         let light = SceneLight::new(&sky, &amb);
         let fused = render(SceneRef::Boxes(&scene), &cam, &light, Some(&h), None, None).unwrap();
         let t_layer = fused.layer(Layer::Transmittance).unwrap().to_vec();

@@ -7,7 +7,9 @@
 //!
 //! - [`float`]: the linear float32 frame with its layers, through the one generic loop
 //!   [`crate::stage::draw_bands`]: band by band (16 rows) while the band is in cache;
-//! - [`srgb8`]: 8-bit sRGB for 8-bit photos, in tiles: the particles into each pixel's affine
+//! - [`encoded`]: 8-bit sRGB of any frame, the same loop with each band encoded as it is
+//!   finished (the float frame's bytes, no frame-sized float buffer);
+//! - [`srgb8`]: 8-bit sRGB for 8-bit photos, fused, in tiles: the particles into each pixel's affine
 //!   map first, then each pixel decoded, hazed, mapped and encoded once (the stages that
 //!   declare it: the photo, the haze, the particles);
 //! - the GPU backend (`skyfall-gpu`), each stage a pass recorded into one encoder.
@@ -22,6 +24,7 @@ use crate::scene::camera::Camera;
 pub use crate::stage::layers;
 use layers::{Layer, LayerSet, Layers};
 
+pub mod encoded;
 pub mod float;
 pub mod passes;
 pub mod request;
@@ -205,5 +208,41 @@ impl FrameBuffers {
             layers,
             rain,
         })
+    }
+}
+
+/// The frame the output stages' tests draw: one box in front of a level camera `width` ×
+/// `height` px, under an overcast sky with a uniform ambient map, and a haze.
+#[cfg(test)]
+pub(crate) mod fixture {
+    use crate::haze::Haze;
+    use crate::scene::boxes::{BoxScene, SceneBox};
+    use crate::scene::camera::Camera;
+    use crate::sky::ambient::AmbientMap;
+    use crate::sky::{Sky, cie::SkyKind};
+    use glam::{Mat3, Vec3};
+
+    /// (camera, scene, haze, sky, ambient map).
+    #[allow(clippy::unwrap_used)]
+    pub(crate) fn one_box(width: u32, height: u32) -> (Camera, BoxScene, Haze, Sky, AmbientMap) {
+        let (cx, cy) = (width as f32 / 2.0, height as f32 / 2.0);
+        let cam = Camera::new(
+            width,
+            height,
+            [30.0, 30.0, cx, cy],
+            Vec3::new(0.0, 1.6, 0.0),
+            Mat3::IDENTITY,
+        )
+        .unwrap();
+        let b = SceneBox {
+            min_m: Vec3::new(-3.0, 0.0, -12.0),
+            max_m: Vec3::new(3.0, 6.0, -8.0),
+            albedo: Vec3::new(0.6, 0.5, 0.4),
+        };
+        let scene = BoxScene::new(vec![b], true, Vec3::splat(0.1)).unwrap();
+        let h = Haze::new(0.02, [0.43; 3], 700.0).unwrap();
+        let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+        let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
+        (cam, scene, h, sky, amb)
     }
 }

@@ -91,9 +91,9 @@ impl<'a> Frame<'a> {
             gpu: true,
             param: if photo { "snow_cover" } else { "scene" },
             why_not: if photo {
-                "a photo under a snow cover is drawn by the float output (render_srgb8 encodes it)"
+                "a photo under a snow cover is drawn by the banded 8-bit output (frame::encoded)"
             } else {
-                "it draws 8-bit photos; a box scene is drawn by the float output and encoded"
+                "it draws 8-bit photos; a box scene is drawn by the banded 8-bit output (frame::encoded)"
             },
         }];
         if light.clouds.is_some() {
@@ -103,7 +103,7 @@ impl<'a> Frame<'a> {
                 srgb8: false,
                 gpu: true,
                 param: "clouds",
-                why_not: "clouds are drawn by the float output (render_srgb8 encodes it)",
+                why_not: "clouds are drawn by the banded 8-bit output (frame::encoded)",
             });
         }
         if self.haze.is_some() {
@@ -123,7 +123,7 @@ impl<'a> Frame<'a> {
                 srgb8: false,
                 gpu: true,
                 param: "lights",
-                why_not: "the lights' glows are drawn on box scenes by the float output",
+                why_not: "the lights' glows are drawn by the banded 8-bit output (frame::encoded)",
             });
         }
         if self.rain.is_some() || self.snow.is_some() {

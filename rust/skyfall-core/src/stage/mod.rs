@@ -108,23 +108,106 @@ pub fn draw_bands(
         .zip(layer_bands.into_par_iter())
         .enumerate()
         .for_each(|(bi, ((rgb, depth_m), layers))| {
-            let mut band = Band {
-                y0: bi * band_rows,
-                width,
-                rgb,
-                depth_m,
-                layers,
-            };
-            for k in 0..band.rows() {
-                let mut row = band.row(k);
-                for s in stages {
-                    s.row(&mut row);
-                }
-            }
-            for s in stages {
-                s.band(&mut band);
-            }
+            draw_band(
+                stages,
+                &mut Band {
+                    y0: bi * band_rows,
+                    width,
+                    rgb,
+                    depth_m,
+                    layers,
+                },
+            );
         });
+}
+
+/// One band through `stages`: each row through every [`Stage::row`], then the band through
+/// every [`Stage::band`].
+fn draw_band(stages: &[&dyn Stage], band: &mut Band<'_>) {
+    for k in 0..band.rows() {
+        let mut row = band.row(k);
+        for s in stages {
+            s.row(&mut row);
+        }
+    }
+    for s in stages {
+        s.band(band);
+    }
+}
+
+/// [`draw_bands`] for an output that keeps only a band's encoding: each band is drawn into
+/// scratch buffers (its linear RGB, its depth, and each layer of `drawn` that `layers` lacks;
+/// one set per worker thread), then handed to `finish` with its part of `out`
+/// (`out_per_px` values a pixel). The frame is `depth_len / width` rows; `layers` are the
+/// caller's full-frame buffers of the layers it keeps.
+#[allow(clippy::too_many_arguments)]
+pub fn draw_bands_then<T: Send>(
+    stages: &[&dyn Stage],
+    width: usize,
+    band_rows: usize,
+    drawn: LayerSet,
+    out: &mut [T],
+    out_per_px: usize,
+    layers: Layers<&mut [f32]>,
+    finish: impl Fn(&Band<'_>, &mut [T]) + Sync,
+) {
+    let band = band_rows * width;
+    if band == 0 || out_per_px == 0 {
+        return;
+    }
+    let pixels = out.len() / out_per_px;
+    let bands = pixels.div_ceil(band);
+    let mut kept: Vec<Layers<&mut [f32]>> = (0..bands).map(|_| Layers::default()).collect();
+    for (slot, l) in layers.0.into_iter().zip(Layer::ALL) {
+        if let Some(buf) = slot {
+            for (b, chunk) in kept.iter_mut().zip(buf.chunks_mut(band)) {
+                b.set(l, chunk);
+            }
+        }
+    }
+    out.par_chunks_mut(out_per_px * band)
+        .zip(kept.into_par_iter())
+        .enumerate()
+        .for_each_init(
+            || {
+                (
+                    vec![0.0f32; 3 * band],
+                    vec![0.0f32; band],
+                    Layers::<Vec<f32>>::default(),
+                )
+            },
+            |(rgb, depth_m, scratch), (bi, (out, kept))| {
+                let n = out.len() / out_per_px;
+                let mut layers: Layers<&mut [f32]> = Layers::default();
+                for (slot, l) in kept.0.into_iter().zip(Layer::ALL) {
+                    if let Some(b) = slot {
+                        layers.set(l, b);
+                    }
+                }
+                for l in drawn.iter() {
+                    if layers.get(l).is_none() && scratch.get(l).is_none() {
+                        scratch.set(l, vec![0.0f32; band]);
+                    }
+                }
+                for (slot, l) in scratch.0.iter_mut().zip(Layer::ALL) {
+                    if let Some(buf) = slot
+                        && drawn.contains(l)
+                        && layers.get(l).is_none()
+                    {
+                        layers.set(l, &mut buf[..n]);
+                    }
+                }
+                let mut b = Band {
+                    y0: bi * band_rows,
+                    width,
+                    rgb: &mut rgb[..3 * n],
+                    depth_m: &mut depth_m[..n],
+                    layers,
+                };
+                draw_band(stages, &mut b);
+                finish(&b, out);
+            },
+        );
 }
 
 /// The outputs a frame can be drawn by.
