@@ -109,6 +109,8 @@ LAYERS: dict[str, str]
 """The layers a frame can carry, name -> meaning, in the order frames list them."""
 LAYER_NEUTRAL: dict[str, float]
 """Each layer's value where its pass drew nothing, name -> value (rain_alpha 0, transmittance 1)."""
+SNOW_ALBEDO: float
+"""Albedo of fresh snow (flakes and cover), 0.85 as float32."""
 
 def render_frame(
     request: _Request, *, device: GpuDevice | None = None, out: dict[str, NDArray[np.float32] | None] | None = None

@@ -38,9 +38,10 @@ from skyfall.weather import Weather
 
 __all__ = ["SNOW_ALBEDO", "SnowCover", "accumulate", "open_depth_m"]
 
-SNOW_ALBEDO = 0.85
-"""Albedo of the drawn snow (fresh dry snow reflects 0.80-0.90 of visible light: Cuffey &
-Paterson, *The Physics of Glaciers*, 4th ed., 2010, Table 5.2)."""
+SNOW_ALBEDO: float = _core.SNOW_ALBEDO
+"""Albedo of the drawn snow, the cover and the falling flakes alike (the core's one constant,
+0.85 as float32: fresh dry snow reflects 0.80-0.90 of visible light: Cuffey & Paterson, *The
+Physics of Glaciers*, 4th ed., 2010, Table 5.2)."""
 
 MARGIN_M = 10.0
 """How far a box scene's default grid reaches beyond its boxes and its camera, m."""

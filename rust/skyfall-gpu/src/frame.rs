@@ -120,8 +120,9 @@ impl GpuRenderer {
     ) -> Result<(Option<RainReport>, Option<SnowStats>), GpuError> {
         let (scene, cam, light) = (frame.scene, frame.cam, frame.light);
         check_frame_size(cam)?;
-        frame.plan().check(Output::Gpu)?;
-        let drawn = frame.layers();
+        let plan = frame.plan();
+        plan.check(Output::Gpu)?;
+        let drawn = plan.layers();
         out.check(cam, drawn)?;
         let n = cam.pixels();
         self.ctx.check_buffer(
@@ -131,7 +132,7 @@ impl GpuRenderer {
         let ctx = &self.ctx;
         ctx.scoped(|| {
             // The stages made first (the particles on the CPU: they do not depend on the scene).
-            let prepared = frame.prepare(Output::Gpu)?;
+            let prepared = frame.prepare_planned(&plan, Output::Gpu)?;
             let mut f = FrameEncoder::new(ctx, &self.pool, cam);
             let mut snow_photo = None;
             let (rgb, depth) = match scene {

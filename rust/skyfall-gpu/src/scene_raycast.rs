@@ -130,7 +130,7 @@ impl FramePass for SceneRaycastPass {
                     range: [
                         g[3],
                         g[4],
-                        skyfall_core::snow::cover::SNOW_ALBEDO,
+                        skyfall_core::snow::SNOW_ALBEDO,
                         skyfall_core::snow::cover::render::COVER_EFOLD_M,
                     ],
                     dims: [dims[0], dims[1], 0, 0],

@@ -474,8 +474,9 @@ fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
     // Flakes (every sprite, near ones several pixels wide) and drops in one far-to-near list
     // over a photo of the CPU's box frame: the same counts, rgb and each effect's layers.
     use skyfall_core::frame::float::render_into_reporting;
+    use skyfall_core::snow::SNOW_ALBEDO;
     use skyfall_core::snow::flakes::SnowRegion;
-    use skyfall_core::snow::streaks::{SNOW_ALBEDO, SnowFrame, SnowOpacity};
+    use skyfall_core::snow::streaks::{SnowFrame, SnowOpacity};
     let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
     let (scene, cam) = street();
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();

@@ -67,6 +67,7 @@ mod _core {
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        m.add("SNOW_ALBEDO", skyfall_core::snow::SNOW_ALBEDO)?;
         m.add("RANGES", super::ranges::table(m.py())?)?;
         // The frame layers, name -> meaning, in the order frames list them.
         let layers = pyo3::types::PyDict::new(m.py());

@@ -13,7 +13,7 @@ use pyo3::types::PyDict;
 use skyfall_core::ranges;
 use skyfall_core::windshield::furmidge::Wetting;
 use skyfall_core::windshield::render::{self, RefractMode, Refraction};
-use skyfall_core::windshield::sim::{MeshDrop, Particle};
+use skyfall_core::windshield::sim::{MeshDrop, ParticleDrop};
 use skyfall_core::windshield::{Windshield as Sim, WindshieldConfig, WindshieldState};
 use std::sync::Mutex;
 
@@ -64,7 +64,7 @@ fn state_from_dict(d: &Bound<'_, PyDict>) -> PyResult<WindshieldState> {
         particles: pv
             .rows()
             .into_iter()
-            .map(|r| Particle {
+            .map(|r| ParticleDrop {
                 x_mm: r[0],
                 y_mm: r[1],
                 mass_kg: r[2],

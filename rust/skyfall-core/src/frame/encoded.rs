@@ -44,7 +44,7 @@ pub fn draw_srgb8(
     }
     let plan = frame.plan();
     let drawn = plan.layers();
-    let prepared = frame.prepare(Output::Float)?;
+    let prepared = frame.prepare_planned(&plan, Output::Float)?;
     // The kept layers no stage draws hold their neutral value; the others go to the stages.
     let mut kept: Layers<&mut [f32]> = Layers::default();
     for (slot, l) in layers.0.into_iter().zip(Layer::ALL) {

@@ -75,8 +75,9 @@ pub fn draw(
     if let SceneRef::Photo { rgb, depth_m } = frame.scene {
         check_photo(cam, rgb, depth_m)?;
     }
-    out.check(cam, frame.layers())?;
-    let prepared = frame.prepare(Output::Float)?;
+    let plan = frame.plan();
+    out.check(cam, plan.layers())?;
+    let prepared = frame.prepare_planned(&plan, Output::Float)?;
     let FrameOut {
         rgb,
         depth_m,

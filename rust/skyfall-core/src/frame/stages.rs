@@ -150,7 +150,13 @@ impl<'a> Frame<'a> {
     /// sorted and binned, the glows' sources in view found, the particles made, lit, projected
     /// and sorted far to near (binned by bands for the float output).
     pub fn prepare(&self, output: Output) -> Result<Prepared<'a>> {
-        self.plan().check(output)?;
+        self.prepare_planned(&self.plan(), output)
+    }
+
+    /// [`Self::prepare`] with the frame's [`Self::plan`] already made (an output that checked
+    /// its buffers against the plan's layers first makes it once).
+    pub fn prepare_planned(&self, plan: &Plan, output: Output) -> Result<Prepared<'a>> {
+        plan.check(output)?;
         let cam = self.cam;
         let light = self.light;
         let clouds = light

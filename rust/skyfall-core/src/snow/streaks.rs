@@ -25,11 +25,10 @@ use crate::particles::streak::{
 use crate::physics::snow::flake_area_mm2;
 use crate::rain::streaks::RainShading;
 use crate::scene::camera::{Camera, Defocus};
+use crate::snow::SNOW_ALBEDO;
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// Albedo of a snowflake (fresh snow reflects 0.8–0.9 of visible light; Warren 1982).
-pub const SNOW_ALBEDO: f32 = 0.9;
 /// Koitabashi et al.'s flake opacities, near to far, by thirds of the snow region.
 pub const OPACITY_LEVELS: [f32; 3] = [0.75, 0.5, 0.25];
 

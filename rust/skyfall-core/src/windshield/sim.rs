@@ -450,7 +450,7 @@ pub struct MeshDrop {
 
 /// A particle-model drop.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Particle {
+pub struct ParticleDrop {
     /// Position, glass mm.
     pub x_mm: f64,
     /// Position, glass mm.
@@ -469,7 +469,7 @@ pub struct WindshieldState {
     /// The mesh drops.
     pub drops: Vec<MeshDrop>,
     /// The particles.
-    pub particles: Vec<Particle>,
+    pub particles: Vec<ParticleDrop>,
     /// Water that arrived, kg.
     pub arrived_kg: f64,
     /// Water that left across an edge, kg.
@@ -1056,7 +1056,7 @@ impl Windshield {
                         (2.0 * rng.random::<f64>() - 1.0) * r,
                     )
                 };
-                self.state.particles.push(Particle {
+                self.state.particles.push(ParticleDrop {
                     x_mm: d.x_mm + jx,
                     y_mm: d.y_mm + jy,
                     mass_kg: share,
@@ -1066,7 +1066,7 @@ impl Windshield {
         }
         // the blades push the particles they swept over in front of them
         let dir = if theta1 >= theta0 { 1.0 } else { -1.0 };
-        let blade = |p: &mut Particle| {
+        let blade = |p: &mut ParticleDrop| {
             for w in &wipers {
                 if Self::swept(w, p.x_mm, p.y_mm, theta0, theta1, r) {
                     let (rho, _) = Self::polar(w, p.x_mm, p.y_mm);
@@ -1166,7 +1166,7 @@ impl Windshield {
             return;
         }
         // bucket by cells of one diameter
-        let key = |p: &Particle| ((p.x_mm / d0).floor() as i64, (p.y_mm / d0).floor() as i64);
+        let key = |p: &ParticleDrop| ((p.x_mm / d0).floor() as i64, (p.y_mm / d0).floor() as i64);
         let mut order: Vec<(i64, i64, u32)> = ps
             .iter()
             .enumerate()
@@ -1255,7 +1255,7 @@ impl Windshield {
     pub fn place_particle(&mut self, x_mm: f64, y_mm: f64, mass_kg: f64) -> Result<()> {
         local::DROP_MASS_KG.check("mass_kg", None, mass_kg)?;
         self.state.arrived_kg += mass_kg;
-        self.state.particles.push(Particle {
+        self.state.particles.push(ParticleDrop {
             x_mm,
             y_mm,
             mass_kg,

@@ -47,7 +47,7 @@ pub mod shadow;
 
 pub use accumulate::{CoverParams, CoverWeather, accumulate, fall_velocity_m_s};
 pub use heightfield::{Grid, HeightField};
-pub use render::{SNOW_ALBEDO, SnowRender};
+pub use render::SnowRender;
 
 /// The cover a run left: the height field it lay on, the depth of snow per cell and its
 /// bookkeeping.

@@ -26,11 +26,7 @@ use crate::scene::raycast::inverse_direction;
 use crate::sky::ambient::AmbientMap;
 use glam::Vec3;
 
-/// Albedo of fresh snow in the visible, 0.85: fresh dry snow reflects 0.80–0.90 of the
-/// visible sunlight (Cuffey & Paterson, *The Physics of Glaciers*, 4th ed., 2010, Table 5.2,
-/// fresh dry snow 0.75–0.98; Warren, *Optical properties of snow*, Rev. Geophys. 1982: above
-/// 0.9 at 0.4–0.7 µm for deep fine-grained snow, less for the broadband and older snow).
-pub const SNOW_ALBEDO: f32 = 0.85;
+use crate::snow::SNOW_ALBEDO;
 
 /// Most height bands [`SnowRender::trace`] keeps apart (more: one).
 const MAX_BANDS: usize = 64;
