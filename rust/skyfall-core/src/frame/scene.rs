@@ -13,6 +13,7 @@
 //! most [`SHADOW_SKIP_RELATIVE`] of its radiance (and only where a skipped light is hidden).
 
 use crate::cloud::frame::{CloudPass, VolumeView};
+use crate::scene::SurfaceLight;
 use crate::scene::boxes::{BoxScene, surface_albedo, trace};
 use crate::scene::camera::Camera;
 use crate::scene::lights::Light;
@@ -126,32 +127,6 @@ impl<'a> SceneLight<'a> {
         a: Vec3,
     ) -> Vec3 {
         self.surface_radiance_sun(boxes, p, n, a).0
-    }
-
-    /// [`SceneLight::surface_radiance`] with the share of the sun's direct light the face
-    /// receives (1 without a sun: `sun_transmittance`).
-    #[inline]
-    pub fn surface_radiance_sun(
-        &self,
-        boxes: &[crate::scene::boxes::SceneBox],
-        p: Vec3,
-        n: Vec3,
-        a: Vec3,
-    ) -> (Vec3, f32) {
-        let e = AmbientMap::channel(n).map_or(0.0, |c| self.ambient.sample(p)[c]);
-        let mut sky_lit = a * e;
-        let mut share = 1.0;
-        if let Some(sun) = &self.sun {
-            share = sun.share(boxes, p, n);
-            sky_lit += a * sun.illuminance(n, share);
-        }
-        if self.lights.is_empty() {
-            return (sky_lit, share);
-        }
-        (
-            sky_lit + a * self.lamp_light(boxes, p, n, a, sky_lit),
-            share,
-        )
     }
 
     /// The same with the sun `sun` and the clouds `clouds`.
@@ -289,6 +264,9 @@ pub fn shade_pixel_sun(
     }
 }
 
+/// The one definition of a surface's light (the boxes', through [`SceneLight::surface_radiance`],
+/// and the snow cover's): the sky light of the map on the face's normal, the sun with the share
+/// of it the face receives (1 without a sun: `sun_transmittance`), and the lights.
 impl crate::scene::SurfaceLight for SceneLight<'_> {
     #[inline]
     fn surface_radiance_sun(
@@ -298,7 +276,20 @@ impl crate::scene::SurfaceLight for SceneLight<'_> {
         n: Vec3,
         a: Vec3,
     ) -> (Vec3, f32) {
-        SceneLight::surface_radiance_sun(self, boxes, p, n, a)
+        let e = AmbientMap::channel(n).map_or(0.0, |c| self.ambient.sample(p)[c]);
+        let mut sky_lit = a * e;
+        let mut share = 1.0;
+        if let Some(sun) = &self.sun {
+            share = sun.share(boxes, p, n);
+            sky_lit += a * sun.illuminance(n, share);
+        }
+        if self.lights.is_empty() {
+            return (sky_lit, share);
+        }
+        (
+            sky_lit + a * self.lamp_light(boxes, p, n, a, sky_lit),
+            share,
+        )
     }
 
     #[inline]

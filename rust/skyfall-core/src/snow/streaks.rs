@@ -3,7 +3,7 @@
 //! drops' are) for the one far-to-near list of [`crate::frame::passes::Particles`].
 //!
 //! - **Light**: a flake is an opaque white scatterer (r = 1: where it covers a pixel it
-//!   replaces the background) of albedo [`SNOW_ALBEDO`], lit as the drops are
+//!   replaces the background) of albedo [`crate::snow::SNOW_ALBEDO`], lit as the drops are
 //!   ([`RainShading::drop_light`]: the sky's light at the flake from the ambient-light map,
 //!   plus the lamps' I·cone/d²), so its radiance is ρ·I_R.
 //! - **Silhouette**: a streak carries (π/4)·w² of opacity-area, a disc's; a flake's projected
@@ -25,7 +25,6 @@ use crate::particles::streak::{
 use crate::physics::snow::flake_area_mm2;
 use crate::rain::streaks::RainShading;
 use crate::scene::camera::{Camera, Defocus};
-use crate::snow::SNOW_ALBEDO;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -322,7 +321,7 @@ mod tests {
         let region = SnowRegion::new(snow_rate, 4.0, wind, 0.4, 5).unwrap();
         let snow_shading = RainShading {
             reflectance: 1.0,
-            drop_radiance: SNOW_ALBEDO,
+            drop_radiance: crate::snow::SNOW_ALBEDO,
             ..RainShading::open_sky()
         };
         let frame = SnowFrame {
