@@ -92,7 +92,7 @@ def test_a_folder_of_photos_with_depth_maps_in_every_format(photos, tmp_path):
             if row["status"] != "ok":
                 assert not any((out / "items").glob(f"{row['index']:06d}.*.png"))  # nothing for a failed item
                 continue
-            assert row["depth_source"] == "file" and row["path"] == "float"
+            assert row["depth_source"] == "file" and row["path"] == "banded"  # layers the fused path does not fill
             p = row["params"]
             assert 1.0 <= p["rain_rate_mm_h"] <= 50.0 and 300.0 <= p["visibility_m"] <= 3000.0
             stem = out / "items" / f"{row['index']:06d}"

@@ -183,6 +183,12 @@ def test_fuses_srgb8_says_which_path_render_srgb8_takes():
     assert not r.fuses_srgb8(photo8, Weather(windshield=glass))
     cover = snow.accumulate(scenes.empty(), Weather(snow_rate_mm_h=1.0), duration_s=600.0, dt_s=600.0, resolution_m=10.0)
     assert not r.fuses_srgb8(photo8, Weather(snow_cover=cover))
+    # srgb8_path names the three paths
+    assert r.srgb8_path(photo8, Weather(rain_rate_mm_h=5.0), layers=("rain_alpha",)) == "fused"
+    assert r.srgb8_path(photo8, Weather(rain_rate_mm_h=5.0), layers=("transmittance",)) == "banded"
+    assert r.srgb8_path(photo8, Weather(snow_cover=cover)) == "banded"
+    assert r.srgb8_path(scenes.street(), Weather()) == "banded"
+    assert r.srgb8_path(photo8, Weather(windshield=glass)) == "float"
 
 
 @pytest.mark.parametrize("level", ["scalar", "avx2"])

@@ -42,6 +42,7 @@ __all__ = [
     "cloud_path_traced",
     "LAYERS",
     "LAYER_NEUTRAL",
+    "SNOW_ALBEDO",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
     "RANGES",

@@ -492,11 +492,8 @@ class Renderer:
         *,
         layers: Sequence[str] | Mapping[str, Any] | None = None,
     ) -> bool:
-        """Whether :meth:`render_srgb8` of these takes the fused 8-bit path (an 8-bit photo on
-        the CPU backend, no windshield, no clouds, no snow cover in the weather, and no layer
-        asked for but ``rain_alpha`` and ``snow_alpha``: what that path does not draw) rather
-        than drawing the stages band by band and encoding each band (the same bytes as the
-        float frame encoded; the GPU backend and a windshield encode the float frame).
+        """Whether :meth:`render_srgb8` of these takes the fused 8-bit path:
+        ``srgb8_path(...) == "fused"`` (see :meth:`srgb8_path`).
 
         Parameters
         ----------
@@ -513,17 +510,62 @@ class Renderer:
         -------
         bool
         """
-        weather = _with_cover(weather, snow_cover)
+        return self.srgb8_path(scene, _with_cover(weather, snow_cover), layers=layers) == "fused"
+
+    def srgb8_path(
+        self,
+        scene: BoxScene | PhotoScene,
+        weather: Weather | None = None,
+        *,
+        layers: Sequence[str] | Mapping[str, Any] | None = None,
+    ) -> str:
+        """Which path :meth:`render_srgb8` of these takes; every path gives the float frame's
+        bytes within 1 code (``"banded"`` and ``"float"``: exactly).
+
+        - ``"fused"``: an 8-bit photo on the CPU backend, no windshield, no clouds, no snow
+          cover in the weather, and no layer asked for but ``rain_alpha`` and ``snow_alpha``:
+          each pixel decoded, hazed, composited and encoded once (the fastest);
+        - ``"banded"``: on the CPU backend without a windshield, anything else (box scenes and
+          their glows, clouds, a snow cover, any layer): the frame's stages band by band, each
+          band encoded as it is finished, with no frame-sized float buffer;
+        - ``"float"``: the GPU backend, or a windshield (a stage over the whole frame): the
+          float frame rendered, then encoded.
+
+        Parameters
+        ----------
+        scene : BoxScene or PhotoScene
+            The scene.
+        weather : Weather, optional
+            The weather (its ``windshield``, ``clouds`` and ``snow_cover``).
+        layers : sequence of str or dict, optional
+            The layers the call asks for (``render_srgb8``'s ``layers``).
+
+        Returns
+        -------
+        str
+            ``"fused"``, ``"banded"`` or ``"float"``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from skyfall import PhotoScene, Weather, scenes
+        >>> r = Renderer(32, 24, backend="cpu")
+        >>> photo = PhotoScene(np.full((24, 32, 3), 120, np.uint8), depth_m=np.full((24, 32), 30.0, np.float32))
+        >>> r.srgb8_path(photo, Weather(rain_rate_mm_h=5.0)), r.srgb8_path(scenes.street(), Weather())
+        ('fused', 'banded')
+        """
+        weather = weather if weather is not None else Weather()
+        if self._device is not None or weather.windshield is not None:
+            return "float"
         names = _layer_names(layers) or ()
-        return (
-            self._device is None
-            and isinstance(scene, PhotoScene)
+        fused = (
+            isinstance(scene, PhotoScene)
             and scene.srgb8 is not None
-            and weather.windshield is None
             and weather.clouds is None
             and weather.snow_cover is None
             and set(names) <= set(FUSED_LAYERS)
         )
+        return "fused" if fused else "banded"
 
     @overload
     def render_srgb8(
@@ -586,9 +628,9 @@ class Renderer:
         hazes, composites and encodes each pixel once, with no frame-sized float buffers: the
         fast way to put rain on a dataset of photos. Other scenes, clouds, a snow cover and
         layers other than ``rain_alpha`` and ``snow_alpha`` are drawn band by band, each band
-        encoded as it is finished (the float frame's bytes, with no frame-sized float buffer;
-        :meth:`fuses_srgb8` says which path a call takes); the GPU backend and a windshield
-        render the float frame and encode it.
+        encoded as it is finished (the float frame's bytes, with no frame-sized float buffer);
+        the GPU backend and a windshield render the float frame and encode it
+        (:meth:`srgb8_path` says which path a call takes).
 
         Parameters
         ----------
@@ -653,7 +695,8 @@ class Renderer:
         """:meth:`render_srgb8` with its options and outputs checked: the image and each
         target layer (its given array filled, or a new one)."""
         image = out if out is not None else np.empty((self.height, self.width, 3), np.uint8)
-        if self.fuses_srgb8(scene, weather, layers=targets):
+        path = self.srgb8_path(scene, weather, layers=targets)
+        if path == "fused":
             assert isinstance(scene, PhotoScene) and scene.srgb8 is not None
             filled = {name: a if a is not None else np.empty((self.height, self.width), np.float32) for name, a in targets.items()}
             request = self._request(scene, weather, options, time_s)
@@ -661,7 +704,7 @@ class Renderer:
                 request, scene.srgb8, io.srgb8_table(), image, rain_alpha_out=filled.get("rain_alpha"), snow_alpha_out=filled.get("snow_alpha")
             )
             return image, filled
-        if self._device is None and weather.windshield is None:
+        if path == "banded":
             filled = {name: a if a is not None else np.empty((self.height, self.width), np.float32) for name, a in targets.items()}
             # A stage the fused path does not draw (clouds, a snow cover, a box scene and its
             # glows) or a layer it does not fill: the stages band by band, each band encoded as

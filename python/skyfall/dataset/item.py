@@ -165,6 +165,18 @@ def _cover(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather
     return snow.accumulate(scene, weather, duration_s=p.snow_hours * 3600.0, dt_s=COVER_DT_S, resolution_m=config.snow_resolution_m, seed=p.render_seed)
 
 
+def _still_path(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer) -> str:
+    """Which path makes a still (the row's ``path``): ``"float"`` when the EXR is asked for
+    (it needs the float frame: rendered, then encoded), else :meth:`Renderer.render_srgb8`'s
+    own (:meth:`Renderer.srgb8_path`): ``"srgb8"`` for its fused path, ``"banded"`` for its
+    stages band by band (or ``"float"`` on the GPU backend or through a windshield). The
+    bytes are the float frame's either way (the fused path's within 1 code)."""
+    if config.exr:
+        return "float"
+    path = renderer.srgb8_path(scene, weather, layers=config.layers)
+    return "srgb8" if path == "fused" else path
+
+
 def _fast(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer) -> bool:
     """Whether the fused 8-bit path makes the item: the renderer fuses it
     (:meth:`Renderer.fuses_srgb8`), only the layers that path fills are asked for, no EXR."""
@@ -405,13 +417,13 @@ def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None
         if cfg.sequence is not None:
             _render_clip(worker, renderer, scene, camera, weather, p, row, t)
             return staged
-        fast = _fast(cfg, scene, weather, renderer)
-        row["path"] = "srgb8" if fast else "float"
+        path = _still_path(cfg, scene, weather, renderer)
+        row["path"] = path
         kw: dict[str, Any] = {"seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
         if cover is not None:
             row["snow_cover"] = {"mean_depth_m": float(np.mean(cover.depth_m)), "spacing_m": float(cover.spacing_m)}
-        if fast:
-            staged.rainy, drawn = renderer.render_srgb8(scene, weather, layers=cfg.layers, **kw)
+        if path != "float":
+            staged.rainy, drawn = renderer.render_srgb8(scene, weather, camera=camera, layers=cfg.layers, **kw)
             staged.layers.update(drawn)
         else:
             frame = renderer.render(scene, weather, camera=camera, **kw)
@@ -420,8 +432,8 @@ def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None
         if isinstance(scene, PhotoScene):
             staged.clean = scene.srgb8 if scene.srgb8 is not None else io.to_srgb8(scene.image)
         else:
-            clean_linear = renderer.render(scene, Weather(), camera=camera, ambient_spacing_m=cfg.ambient_spacing_m).rgb  # no weather, no cover
-            staged.clean = io.to_srgb8(clean_linear)
+            # no weather, no cover: the 8-bit output's bytes are the float frame's, encoded
+            staged.clean = renderer.render_srgb8(scene, Weather(), camera=camera, ambient_spacing_m=cfg.ambient_spacing_m)
         if staged.frame is not None:
             staged.rainy = io.to_srgb8(staged.frame.rgb)
         t["render"] += time.perf_counter() - t1
