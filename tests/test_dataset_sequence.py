@@ -92,7 +92,7 @@ def test_street_clips_and_layer_stacks_equal_direct_renders(tmp_path):
     assert len(got) == 2
     for row in got:
         check_row(out, row, layers)
-        assert row["path"] == "float"
+        assert row["path"] == "banded"
         stem = out / "items" / f"{row['index']:06d}"
         cam = Camera(tuple(row["camera_position_m"]), yaw_deg=row["camera_yaw_deg"], pitch_deg=row["camera_pitch_deg"],
                      vertical_fov_deg=street.camera.vertical_fov_deg, exposure_s=row["params"]["exposure_s"])

@@ -165,22 +165,17 @@ def _cover(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather
     return snow.accumulate(scene, weather, duration_s=p.snow_hours * 3600.0, dt_s=COVER_DT_S, resolution_m=config.snow_resolution_m, seed=p.render_seed)
 
 
-def _still_path(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer) -> str:
-    """Which path makes a still (the row's ``path``): ``"float"`` when the EXR is asked for
-    (it needs the float frame: rendered, then encoded), else :meth:`Renderer.render_srgb8`'s
-    own (:meth:`Renderer.srgb8_path`): ``"srgb8"`` for its fused path, ``"banded"`` for its
-    stages band by band (or ``"float"`` on the GPU backend or through a windshield). The
-    bytes are the float frame's either way (the fused path's within 1 code)."""
+def _item_path(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer) -> str:
+    """Which path makes a still or a clip's frames (the row's ``path``): ``"float"`` when the
+    EXR is asked for (it needs the float frame: rendered, then encoded), else
+    :meth:`Renderer.render_srgb8`'s own (:meth:`Renderer.srgb8_path`): ``"srgb8"`` for its
+    fused path, ``"banded"`` for its stages band by band (or ``"float"`` on the GPU backend or
+    through a windshield). The bytes are the float frame's either way (the fused path's
+    within 1 code)."""
     if config.exr:
         return "float"
     path = renderer.srgb8_path(scene, weather, layers=config.layers)
     return "srgb8" if path == "fused" else path
-
-
-def _fast(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Weather, renderer: Renderer) -> bool:
-    """Whether the fused 8-bit path makes the item: the renderer fuses it
-    (:meth:`Renderer.fuses_srgb8`), only the layers that path fills are asked for, no EXR."""
-    return renderer.fuses_srgb8(scene, weather, layers=config.layers) and not config.exr
 
 
 def _lens(p: ItemParams) -> dict[str, Any]:
@@ -417,7 +412,7 @@ def render_stage(worker: Worker, src: ItemSource, times: dict[str, float] | None
         if cfg.sequence is not None:
             _render_clip(worker, renderer, scene, camera, weather, p, row, t)
             return staged
-        path = _still_path(cfg, scene, weather, renderer)
+        path = _item_path(cfg, scene, weather, renderer)
         row["path"] = path
         kw: dict[str, Any] = {"seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
         if cover is not None:
@@ -537,17 +532,17 @@ def _write_clip(
     h, w = int(row["height"]), int(row["width"])
     folder = cfg.out / "items"
     stacks = {name: f.array for name, f in files_out.items()}
-    fast = _fast(cfg, scene, weather, renderer)
-    row["path"] = "srgb8" if fast else "float"
+    path = _item_path(cfg, scene, weather, renderer)  # a clip has no EXR: render_srgb8's path
+    row["path"] = path
     kw: dict[str, Any] = {"n_frames": n, "fps": fps, "seed": p.render_seed, "ambient_spacing_m": cfg.ambient_spacing_m}
     render_s = [0.0]
 
     def rainy() -> Iterator[NDArray[np.uint8]]:
         """The rainy frames in order, each filling its slice of the layer stacks."""
         t0 = time.perf_counter()
-        if fast:
+        if path != "float":
             bufs = {name: np.empty((h, w), np.float32) for name in stacks}
-            images = renderer.render_sequence_srgb8(scene, weather, out=np.empty((h, w, 3), np.uint8), layers=bufs, **kw)
+            images = renderer.render_sequence_srgb8(scene, weather, camera=camera, out=np.empty((h, w, 3), np.uint8), layers=bufs, **kw)
             for k, (image, _) in enumerate(images):
                 for name, buf in bufs.items():
                     stacks[name][k] = buf

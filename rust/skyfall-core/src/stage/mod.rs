@@ -138,8 +138,9 @@ fn draw_band(stages: &[&dyn Stage], band: &mut Band<'_>) {
 /// [`draw_bands`] for an output that keeps only a band's encoding: each band is drawn into
 /// scratch buffers (its linear RGB, its depth, and each layer of `drawn` that `layers` lacks;
 /// one set per worker thread), then handed to `finish` with its part of `out`
-/// (`out_per_px` values a pixel). The frame is `depth_len / width` rows; `layers` are the
-/// caller's full-frame buffers of the layers it keeps.
+/// (`out_per_px` values a pixel). The frame has `out.len() / out_per_px` pixels; `layers` are
+/// the caller's full-frame buffers of the layers it keeps. Every stage writes every value of
+/// what it draws, so the scratch is reused across bands without clearing.
 #[allow(clippy::too_many_arguments)]
 pub fn draw_bands_then<T: Send>(
     stages: &[&dyn Stage],
