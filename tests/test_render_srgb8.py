@@ -188,7 +188,7 @@ def test_fuses_srgb8_says_which_path_render_srgb8_takes():
     assert r.srgb8_path(photo8, Weather(rain_rate_mm_h=5.0), layers=("transmittance",)) == "banded"
     assert r.srgb8_path(photo8, Weather(snow_cover=cover)) == "banded"
     assert r.srgb8_path(scenes.street(), Weather()) == "banded"
-    assert r.srgb8_path(photo8, Weather(windshield=glass)) == "float"
+    assert r.srgb8_path(photo8, Weather(windshield=glass)) == "banded"
 
 
 @pytest.mark.parametrize("level", ["scalar", "avx2"])
@@ -221,7 +221,14 @@ def _float_then_encode(r: Renderer, scene, weather, layers, **kw):
 
 @pytest.mark.parametrize(
     "case",
-    ["clouds over a photo", "snow cover on a photo", "box scene with lamps at dusk", "snowfall on a box scene", "a layer the fused path does not fill"],
+    [
+        "clouds over a photo",
+        "snow cover on a photo",
+        "box scene with lamps at dusk",
+        "snowfall on a box scene",
+        "a layer the fused path does not fill",
+        "a photo through a windshield",
+    ],
 )
 def test_every_stage_is_drawn_by_the_8_bit_output_as_the_float_frame_encoded(cpu, case):
     """What the fused path does not draw goes band by band through the stages, each band
@@ -250,6 +257,13 @@ def test_every_stage_is_drawn_by_the_8_bit_output_as_the_float_frame_encoded(cpu
     elif case == "snowfall on a box scene":
         scene, weather = scenes.street(), Weather(snow_rate_mm_h=3.0)
         layers = ("snow_alpha",)
+    elif case == "a photo through a windshield":
+        from skyfall import windshield
+
+        glass = windshield.Windshield(30.0, glass_width_mm=300.0, glass_height_mm=250.0, wipers=1, wiper_period_s=1.0, seed=2)
+        glass.step(0.7)
+        scene, weather = photo8(8), Weather(rain_rate_mm_h=10.0, visibility_m=300.0, windshield=glass)
+        layers = ("drop_mask", "rain_alpha", "drop_height")
     else:
         scene, weather = photo8(7), Weather(rain_rate_mm_h=30.0, visibility_m=200.0)
         layers = ("rain_alpha", "transmittance", "rain_depth_m")

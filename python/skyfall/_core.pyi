@@ -10,6 +10,7 @@ from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.weather import Weather
 
 __all__ = [
+    "GlassClock",
     "Windshield",
     "furmidge_critical",
     "metaball_height_map",
@@ -105,6 +106,7 @@ class _Request(TypedDict):
     ambient: AmbientLightMap
     snow_cover: NotRequired[SnowCoverGrid]
     clouds: NotRequired[CloudField]
+    windshield: NotRequired[Windshield | GlassClock]
 
 LAYERS: dict[str, str]
 """The layers a frame can carry, name -> meaning, in the order frames list them."""
@@ -359,6 +361,13 @@ class Windshield:
     def t_s(self) -> float: ...
     def arrival_kg_per_s(self) -> float: ...
     def state(self) -> dict[str, object]: ...
+
+@final
+class GlassClock:
+    def __new__(cls, warm: Windshield, period_s: float, epoch_periods: int) -> GlassClock: ...
+    def at(self, t_s: float) -> Windshield: ...
+    @property
+    def epoch_s(self) -> float: ...
 
 def furmidge_critical(advancing_deg: float, receding_deg: float, glass_tilt_deg: float) -> tuple[float, float]: ...
 def metaball_height_map(

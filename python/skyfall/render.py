@@ -458,19 +458,13 @@ class Renderer:
         return self._render(scene, weather, options, time_s, out)
 
     def _render(self, scene: BoxScene | PhotoScene, weather: Weather, options: _Options, time_s: float, out: Frame | None) -> Frame:
-        """:meth:`render` with its options checked: one core call, then the windshield."""
+        """:meth:`render` with its options checked: one core call."""
         request = self._request(scene, weather, options, time_s)
         arrays = self._out_arrays(out) if out is not None else None
         # One core call: the core derives the sky, the haze and its airlight, the rain and its
-        # light from the request, and names the layers it drew (skyfall._core.LAYERS).
+        # light from the request, draws every stage (the windshield last), and names the layers
+        # it drew (skyfall._core.LAYERS).
         rgb, depth, drawn, stats = _core.render_frame(request, device=self._device, out=arrays)
-        if weather.windshield is not None:
-            # The windshield: a full-frame stage after the particles, over either backend's frame.
-            from skyfall import windshield as _ws
-
-            glass, drop_layers = _ws.frame_stage(rgb, weather.windshield, request["camera"], time_s=time_s, seed=options.seed, device=self._device)
-            rgb[...] = glass
-            drawn = {**drawn, **drop_layers}
         if options.layers is not None:
             reuse = out.layers if out is not None else {}
             drawn = {name: drawn[name] if name in drawn else _neutral(name, depth.shape, reuse.get(name)) for name in options.layers}
@@ -525,11 +519,12 @@ class Renderer:
         - ``"fused"``: an 8-bit photo on the CPU backend, no windshield, no clouds, no snow
           cover in the weather, and no layer asked for but ``rain_alpha`` and ``snow_alpha``:
           each pixel decoded, hazed, composited and encoded once (the fastest);
-        - ``"banded"``: on the CPU backend without a windshield, anything else (box scenes and
-          their glows, clouds, a snow cover, any layer): the frame's stages band by band, each
-          band encoded as it is finished, with no frame-sized float buffer;
-        - ``"float"``: the GPU backend, or a windshield (a stage over the whole frame): the
-          float frame rendered, then encoded.
+        - ``"banded"``: on the CPU backend, anything else (box scenes and their glows, clouds,
+          a snow cover, a windshield, any layer), in one core call: the frame's stages band by
+          band, each band encoded as it is finished, with no frame-sized float buffer (with a
+          windshield, whose drops refract other rows, the float frame is drawn first, then the
+          glass, then the encoding);
+        - ``"float"``: the GPU backend: the float frame rendered, then encoded.
 
         Parameters
         ----------
@@ -555,12 +550,13 @@ class Renderer:
         ('fused', 'banded')
         """
         weather = weather if weather is not None else Weather()
-        if self._device is not None or weather.windshield is not None:
+        if self._device is not None:
             return "float"
         names = _layer_names(layers) or ()
         fused = (
             isinstance(scene, PhotoScene)
             and scene.srgb8 is not None
+            and weather.windshield is None
             and weather.clouds is None
             and weather.snow_cover is None
             and set(names) <= set(FUSED_LAYERS)
@@ -628,9 +624,10 @@ class Renderer:
         hazes, composites and encodes each pixel once, with no frame-sized float buffers: the
         fast way to put rain on a dataset of photos. Other scenes, clouds, a snow cover and
         layers other than ``rain_alpha`` and ``snow_alpha`` are drawn band by band, each band
-        encoded as it is finished (the float frame's bytes, with no frame-sized float buffer);
-        the GPU backend and a windshield render the float frame and encode it
-        (:meth:`srgb8_path` says which path a call takes).
+        encoded as it is finished (the float frame's bytes, with no frame-sized float buffer;
+        a windshield's frame is drawn whole before its glass, then encoded, in the same core
+        call); the GPU backend renders the float frame and encodes it (:meth:`srgb8_path` says
+        which path a call takes).
 
         Parameters
         ----------
@@ -707,11 +704,11 @@ class Renderer:
         if path == "banded":
             filled = {name: a if a is not None else np.empty((self.height, self.width), np.float32) for name, a in targets.items()}
             # A stage the fused path does not draw (clouds, a snow cover, a box scene and its
-            # glows) or a layer it does not fill: the stages band by band, each band encoded as
+            # glows, a windshield) or a layer it does not fill: the stages band by band, each band encoded as
             # it is finished (the float frame's bytes, no frame-sized float buffer).
             _core.render_frame8(self._request(scene, weather, options, time_s), image, layers=filled)
             return image, filled
-        # The GPU backend or a windshield (a stage over the whole frame): float, then encode.
+        # The GPU backend: float, then encode.
         frame = self._render(scene, weather, dataclasses.replace(options, layers=tuple(targets)), time_s, None)
         image[...] = io.to_srgb8(frame.rgb)
         filled = {}
@@ -799,6 +796,10 @@ class Renderer:
             request["clouds"] = _clouds.frame_field(weather.clouds, weather.sun_direction)
         if weather.snow_cover is not None:
             request["snow_cover"] = weather.snow_cover.core
+        if weather.windshield is not None:
+            from skyfall import windshield as _ws
+
+            request["windshield"] = _ws.frame_glass(weather.windshield, opts.seed)
         return request
 
     @staticmethod

@@ -13,18 +13,18 @@ Marshall-Palmer drops times their fall speed (and the car's speed) through the g
 Glass coordinates are millimetres: x across the glass from its left edge, y down its slope from
 its top edge.
 
-A dataset item at t = 60 s need not step 60 s of rain: :func:`warm` steps ``warm_up_periods`` periods once per (preset, seed), keeps the state
-(:meth:`Windshield.state`, in memory here or saved with :meth:`Windshield.save`) and steps
-from it only the item's phase within a period: ``t mod T`` of work at most, per item. By then
-the glass is statistically stationary: the water it holds goes up and down around a steady
-level, what leaves matching what arrives (see :func:`warm`).
+The renderer draws the glass in the core, as the last stage of the frame
+(``Weather(windshield=...)``): the drops refract everything behind them and the blades are drawn
+over them, on every output, in the one core call of the frame. A preset's glass is drawn at the
+frame's ``time_s`` from its warm state (:func:`clock`): :data:`WARM_UP_PERIODS` wiper periods
+stepped once per (preset, seed), then advanced by ``time_s`` modulo :data:`EPOCH_PERIODS`
+periods, so the frames of a clip show the drops arriving, sliding and being swept, and any frame
+costs at most a period of stepping once the epoch's checkpoints are made.
 """
 
 from __future__ import annotations
 
-import math
 import os
-from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Final, Literal
@@ -36,14 +36,14 @@ from skyfall import _core
 from skyfall._validate import in_range, integer, real, values
 
 __all__ = [
+    "EPOCH_PERIODS",
     "PRESETS",
     "SETTLED_PERIODS",
     "WARM_UP_PERIODS",
-    "GlassView",
     "Windshield",
-    "composite",
+    "clock",
     "draw_gpu",
-    "frame_stage",
+    "frame_glass",
     "furmidge_critical",
     "metaball_height_map",
     "normals",
@@ -305,30 +305,67 @@ a steady band from there (``benches/results/windshield_27.md``); ``warm(...,
 warm_up_periods=SETTLED_PERIODS)`` draws from that steady state, at minutes of stepping."""
 
 
-@lru_cache(maxsize=16)
-def _warm_state(name: str, seed: int, warm_up_periods: int) -> tuple[dict[str, Any], float]:
+EPOCH_PERIODS: Final = 4
+"""A preset's frames repeat every this many wiper periods (6 s for the ``rain`` preset): within
+it a clip's frames show the same glass moving on; each frame costs at most one period of
+stepping once the epoch's checkpoints are made (``skyfall_core::windshield::clock``)."""
+
+
+def _period_s(w: Windshield) -> float:
+    return float(w.params.get("wiper_period_s", 1.5)) if w.params["wipers"] else 2.0
+
+
+@lru_cache(maxsize=4)
+def _clock(name: str, seed: int, warm_up_periods: int) -> _core.GlassClock:
     w = preset(name, seed=seed)
-    period = float(w.params.get("wiper_period_s", 1.5)) if w.params["wipers"] else 2.0
+    period = _period_s(w)
     for _ in range(warm_up_periods):
         w.step(period)
-    return w.state(), period
+    return _core.GlassClock(w._core, period, EPOCH_PERIODS)
+
+
+def clock(name: str, *, seed: int = 0, warm_up_periods: int = WARM_UP_PERIODS) -> _core.GlassClock:
+    """A preset's glass on the frames' clock: ``clock(...).at(t_s)`` is the glass at frame time
+    ``t_s``, the same bits whatever frames were drawn before.
+
+    The state after ``warm_up_periods`` wiper periods (2 s each without wipers) is computed
+    once per (name, seed, warm_up_periods) and cached (4 clocks); the glass at ``t_s`` is that
+    state advanced by ``t_s`` modulo :data:`EPOCH_PERIODS` periods, on a fixed grid of steps
+    (at most 1/60 s) from each period's start: the state at each period's start is made once and
+    kept, and the last state a frame reached, so the next frame of a clip steps only the time
+    between them.
+
+    Parameters
+    ----------
+    name : str
+        A preset, :data:`PRESETS`.
+    seed : int
+        The windshield's seed, in [0, 2^64).
+    warm_up_periods : int
+        Periods stepped once before the clock, in [1, 100] (default :data:`WARM_UP_PERIODS`).
+    """
+    if name not in PRESETS:
+        raise ValueError(f"windshield = {name!r} is not a preset: use one of {', '.join(map(repr, PRESETS))}")
+    integer("warm_up_periods", warm_up_periods, 1, 100)
+    integer("seed", seed, 0, 2**64 - 1)
+    return _clock(name, int(seed), int(warm_up_periods))
 
 
 def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int = WARM_UP_PERIODS) -> Windshield:
-    """A preset's windshield as it is at ``t_s`` into steady rain, cheaply.
+    """A preset's windshield as a frame at ``t_s`` draws it: ``clock(name, ...).at(t_s)``.
 
-    The state after ``warm_up_periods`` wiper periods (2 s each without wipers) is computed
-    once per (name, seed) and cached; from it only ``t_s mod period`` is stepped, so the
-    wipers stand where they would at ``t_s`` and the drops are the glass after those periods
-    (not the one exact history of ``t_s`` seconds of rain). The swept glass is clear after a
-    sweep, but the glass the blades do not reach (half of the presets' glass) fills with drops
-    until they grow past the size at which they slide (Furmidge's criterion with the airflow),
-    which at the ``rain`` preset's 14 m/s takes some 30 periods, overshoots once and then
-    settles: from :data:`SETTLED_PERIODS` (40) on, the held water stays within its steady band
-    (``benches/results/windshield_27.md``). The default, :data:`WARM_UP_PERIODS` (4), is a
-    glass still filling, chosen for its cost: the warm-up is paid once per (name, seed) and
-    process, about 12 s for the ``rain`` preset on 2 cores, while 10 periods take about 77 s
-    and 40 several minutes (the step's cost grows with the drops held). Pass
+    The glass is the warm state (``warm_up_periods`` wiper periods, 2 s each without wipers,
+    stepped once per (name, seed) and cached) advanced by ``t_s`` modulo :data:`EPOCH_PERIODS`
+    periods (see :func:`clock`): the wipers stand where they would at ``t_s``, and the drops
+    are the glass after those periods (not the one exact history of ``t_s`` seconds of rain).
+    The swept glass is clear after a sweep, but the glass the blades do not reach (half of the
+    presets' glass) fills with drops until they grow past the size at which they slide
+    (Furmidge's criterion with the airflow), which at the ``rain`` preset's 14 m/s takes some
+    30 periods, overshoots once and then settles: from :data:`SETTLED_PERIODS` (40) on, the
+    held water stays within its steady band (``benches/results/windshield_27.md``). The
+    default, :data:`WARM_UP_PERIODS` (4), is a glass still filling, at about 12 s of stepping
+    once per process for the ``rain`` preset on 2 cores, while 10 periods take about 77 s and
+    40 several minutes (the step's cost grows with the drops held). Pass
     ``warm_up_periods=SETTLED_PERIODS`` for a draw from the steady state. The ``drizzle``
     glass (a fifth of the rain) and the ``parked`` one (no wipers, 2 s "periods") fill more
     slowly and are not settled after 40 either (not measured).
@@ -338,21 +375,18 @@ def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int = WARM_UP
     name : str
         A preset, :data:`PRESETS`.
     t_s : float
-        Time into the rain, s, in [-1e7, 1e7] (taken modulo the period).
+        Time into the rain, s, in [-1e7, 1e7].
     seed : int
         The windshield's seed.
     warm_up_periods : int
         Periods stepped once before the cache, in [1, 100] (default :data:`WARM_UP_PERIODS`);
         fewer than :data:`SETTLED_PERIODS` give a glass still filling.
     """
-    integer("warm_up_periods", warm_up_periods, 1, 100)
     t = in_range("time_s", t_s)
-    state, period = _warm_state(name, int(seed), int(warm_up_periods))
-    w = preset(name, seed=seed)
-    w = Windshield(**w.params, state={k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in state.items()})
-    phase = math.fmod(t, period) % period
-    if phase > 0.0:
-        w.step(phase)
+    c = clock(name, seed=seed, warm_up_periods=warm_up_periods)
+    w = Windshield.__new__(Windshield)
+    w.params = dict(preset(name, seed=seed).params)
+    w._core = c.at(t)
     return w
 
 
@@ -456,150 +490,6 @@ def refract(
     )
 
 
-@dataclass(frozen=True)
-class GlassView:
-    """How the camera sees the glass: a plane ``distance_m`` in front of it, the glass's centre
-    on the optical axis, its slope foreshortened by sin(tilt) (the camera looks horizontally).
-
-    Parameters
-    ----------
-    focal_px : float
-        The camera's focal length, px.
-    width, height : int
-        The frame, px.
-    distance_m : float
-        From the camera to the glass, m (default 0.8).
-    blur_px : float
-        The drops' blur circle, px (0: in focus).
-    principal_px : (float, float), optional
-        The principal point, px (default the frame's centre).
-    """
-
-    focal_px: float
-    width: int
-    height: int
-    distance_m: float = 0.8
-    blur_px: float = 0.0
-    principal_px: tuple[float, float] | None = None
-
-    @staticmethod
-    def covering(windshield: Windshield, focal_px: float, width: int, height: int) -> float:
-        """The distance, m, at which the glass just covers a ``width`` x ``height`` frame (a
-        driver's view: the windshield fills it), at least 0.2 m."""
-        p = windshield.params
-        fore = math.sin(math.radians(max(p["glass_tilt_deg"], 1.0)))
-        d_mm = min(p["glass_width_mm"] * focal_px / width, p["glass_height_mm"] * fore * focal_px / height)
-        return max(float(d_mm) * 1e-3, 0.2)
-
-    def px_per_mm(self) -> float:
-        """Image px per glass mm across the glass."""
-        return self.focal_px / (self.distance_m * 1e3)
-
-    def to_px(self, windshield: Windshield, xy_mm: NDArray[np.float64]) -> NDArray[np.float32]:
-        """Glass mm to image px (x, y)."""
-        s = self.px_per_mm()
-        p = windshield.params
-        fore = math.sin(math.radians(max(p["glass_tilt_deg"], 1.0)))
-        x = self.width / 2.0 + (xy_mm[:, 0] - p["glass_width_mm"] / 2.0) * s
-        y = self.height / 2.0 + (xy_mm[:, 1] - p["glass_height_mm"] / 2.0) * s * fore
-        return np.stack([x, y], axis=1).astype(np.float32)
-
-
-def blur_circle_px(
-    focal_length_mm: float, f_number: float, focus_distance_m: float, sensor_width_mm: float, width: int, distance_m: float
-) -> float:
-    """The thin lens's blur circle, px, of the glass at ``distance_m`` m when focused at
-    ``focus_distance_m`` m (inf: at infinity): c = (f/N) · f/(s − f) · |z − s|/z on a sensor
-    ``sensor_width_mm`` wide imaged on ``width`` px, f = ``focal_length_mm``."""
-    f = focal_length_mm * 1e-3
-    s = focus_distance_m
-    if not math.isfinite(s):
-        c_m = (f / f_number) * f / distance_m
-    else:
-        c_m = (f / f_number) * f / max(s - f, 1e-9) * abs(distance_m - s) / distance_m
-    return float(c_m * 1e3 / sensor_width_mm * width)
-
-
-def composite(
-    frame_rgb: NDArray[np.float32],
-    windshield: Windshield,
-    view: GlassView,
-    *,
-    refraction: Literal["offset", "snell"] = "offset",
-    blades: bool = True,
-    device: Any = None,
-) -> tuple[NDArray[np.float32], dict[str, NDArray[np.float32]]]:
-    """``frame_rgb`` seen through ``windshield``'s drops as ``view`` places the glass, with
-    the wipers' blades drawn over it (``blades``, :func:`draw_blades`); on a GPU ``device``
-    (``Renderer(backend="gpu")``'s) the drops in focus are drawn by the GPU pass.
-
-    Returns
-    -------
-    (ndarray of float32 (H, W, 3), dict)
-        The frame and its layers ``drop_mask`` (the drops' coverage, 0-1) and ``drop_height``
-        (the compressed metaball field above the 0.5 threshold, 0 off the drops).
-    """
-    centres_mm, radii_mm = windshield.metaballs()
-    s = view.px_per_mm()
-    centres = view.to_px(windshield, centres_mm) if len(centres_mm) else np.zeros((0, 2), np.float32)
-    radii = (radii_mm * s).astype(np.float32)
-    keep = radii > 0.05
-    # a cap of the mean contact angle: edge slope tan(theta) for a drop of the typical 1.5 mm
-    theta = math.radians(0.5 * (windshield.params["advancing_deg"] + windshield.params["receding_deg"]))
-    slope = 1.5 * s * math.tan(min(theta, math.radians(80.0)))
-    if device is not None and view.blur_px == 0.0:
-        field, rgb, mask = draw_gpu(
-            device, centres[keep], radii[keep], frame_rgb, focal_px=view.focal_px, slope_px=slope, refraction=refraction, principal_px=view.principal_px
-        )
-    else:
-        field = metaball_height_map(centres[keep], radii[keep], (view.height, view.width))
-        rgb, mask = refract(
-            frame_rgb, field, focal_px=view.focal_px, slope_px=slope, refraction=refraction, blur_px=view.blur_px, principal_px=view.principal_px
-        )
-    height = np.maximum(field - np.float32(0.5), np.float32(0.0))
-    if blades:
-        draw_blades(rgb, windshield, view)
-    return rgb, {"drop_mask": mask, "drop_height": height}
-
-
-BLADE_ALBEDO: Final = 0.04
-"""The blades' rubber and arm, relative to a white surface under the same sky."""
-
-
-def draw_blades(rgb: NDArray[np.float32], windshield: Windshield, view: GlassView) -> None:
-    """Draws the wipers' blades into ``rgb`` in place: dark (:data:`BLADE_ALBEDO`, in the
-    frame's units: 1.0 is a white surface under the open sky), anti-aliased over one pixel across their edges, sharp (not defocused)."""
-    p = windshield.params
-    s = view.px_per_mm()
-    fore = math.sin(math.radians(max(p["glass_tilt_deg"], 1.0)))
-    h, w = rgb.shape[:2]
-    for (px0, py0), angle, length, width in windshield.blades():
-        ends = np.array([[px0, py0], [px0 + length * math.cos(angle), py0 - length * math.sin(angle)]])
-        pe = view.to_px(windshield, ends)
-        lo = np.floor(pe.min(axis=0) - width * s).astype(int)
-        hi = np.ceil(pe.max(axis=0) + width * s).astype(int)
-        x0, y0 = max(lo[0], 0), max(lo[1], 0)
-        x1, y1 = min(hi[0], w), min(hi[1], h)
-        if x0 >= x1 or y0 >= y1:
-            continue
-        yy, xx = np.mgrid[y0:y1, x0:x1].astype(np.float64) + 0.5
-        # back to glass mm, then along and across the blade
-        gx = (xx - view.width / 2.0) / s + p["glass_width_mm"] / 2.0
-        gy = (yy - view.height / 2.0) / (s * fore) + p["glass_height_mm"] / 2.0
-        dx, dy = gx - px0, py0 - gy
-        c, sn = math.cos(angle), math.sin(angle)
-        along = dx * c + dy * sn
-        across = -dx * sn + dy * c
-        # one pixel of edge, measured in the blade's across direction on screen
-        px_across = s * math.hypot(sn, c * fore)
-        cover = np.clip((0.5 * width - np.abs(across)) * px_across + 0.5, 0.0, 1.0)
-        cover *= np.clip((length - along) * s + 0.5, 0.0, 1.0) * (along >= 0.0)
-        cover = cover.astype(np.float32)[..., None]
-        region = rgb[y0:y1, x0:x1]
-        region *= 1.0 - cover
-        region += cover * np.float32(BLADE_ALBEDO)
-
-
 def draw_gpu(
     device: Any,
     centers_px: Any,
@@ -636,24 +526,9 @@ def draw_gpu(
     return field, rgb, mask
 
 
-def frame_stage(
-    rgb: NDArray[np.float32], windshield: Windshield | str, camera: Any, *, time_s: float, seed: int, device: Any = None
-) -> tuple[NDArray[np.float32], dict[str, NDArray[np.float32]]]:
-    """The renderer's windshield stage: ``rgb`` seen through the glass of ``Weather(windshield=...)``.
-
-    A preset's name is drawn by :func:`warm` at ``time_s`` and ``seed``; a :class:`Windshield`
-    is used as it stands. The glass lies in front of ``camera`` (a :class:`skyfall.Camera` at
-    the frame's resolution) where it just covers the frame (:meth:`GlassView.covering`); a thin-lens camera (``f_number``) focused beyond it blurs the
-    drops by their blur circle (:func:`blur_circle_px`). On a GPU renderer's ``device`` the
-    height map and the refraction run in the GPU pass (:func:`draw_gpu`) when the drops are in
-    focus; defocused drops, and the blades, are drawn on the CPU.
-    """
-    w = windshield if isinstance(windshield, Windshield) else warm(windshield, time_s, seed=seed)
-    fx, _fy, cx, cy = camera.intrinsics()
-    distance_m = GlassView.covering(w, float(fx), int(camera.width), int(camera.height))
-    blur = 0.0
-    if getattr(camera, "f_number", None) is not None:
-        f_mm = camera.focal_length_mm if camera.focal_length_mm is not None else fx * camera.sensor_width_mm / camera.width
-        blur = min(blur_circle_px(f_mm, camera.f_number, camera.focus_distance_m, camera.sensor_width_mm, camera.width, distance_m), 1024.0)
-    view = GlassView(focal_px=float(fx), width=int(camera.width), height=int(camera.height), distance_m=distance_m, blur_px=blur, principal_px=(float(cx), float(cy)))
-    return composite(rgb, w, view, device=device)
+def frame_glass(windshield: Windshield | str, seed: int) -> _core.Windshield | _core.GlassClock:
+    """The glass a frame's request carries (``Weather(windshield=...)``): a :class:`Windshield`
+    drawn as it stands, or a preset's :func:`clock`, drawn at the frame's ``time_s``."""
+    if isinstance(windshield, Windshield):
+        return windshield._core
+    return clock(windshield, seed=seed)

@@ -134,20 +134,19 @@ def windshield_still(renderer: Renderer) -> Frame:
 
 
 def windshield_clip(out: Path, width: int = 640, height: int = 360, seconds: float = 3.0, fps: int = 24) -> Path:
-    """A wiper clip: the windshield warmed up (:func:`skyfall.windshield.warm`), then stepped
-    frame by frame, over the street in 10 mm/h rain; H.264 through :func:`skyfall.video.write_video`."""
+    """A wiper clip: the street in 10 mm/h rain through the ``"rain"`` preset's windshield, frame
+    k at ``WINDSHIELD_TIME_S + k / fps`` (the preset's glass on the frames' clock,
+    :func:`skyfall.windshield.clock`: the drops arrive, slide and are swept from frame to
+    frame); H.264 through :func:`skyfall.video.write_video`."""
     from skyfall import video
-    from skyfall import windshield as ws
 
-    glass = ws.warm(WINDSHIELD_PRESET, WINDSHIELD_TIME_S, seed=0)
     renderer = Renderer(width, height)
-    street = scenes.street()
-    frames = []
-    for k in range(int(seconds * fps)):
-        t = WINDSHIELD_TIME_S + k / fps
-        weather = Weather(rain_rate_mm_h=10.0, visibility_m=2000.0, windshield=glass)
-        frames.append(io.to_srgb8(renderer.render(street, weather, camera=windshield_camera(), time_s=t, seed=0).rgb))
-        glass.step(1.0 / fps)
+    frames = [
+        io.to_srgb8(f.rgb)
+        for f in renderer.render_sequence(
+            scenes.street(), WINDSHIELD_WEATHER, n_frames=int(seconds * fps), fps=fps, camera=windshield_camera(), start_s=WINDSHIELD_TIME_S, seed=0
+        )
+    ]
     path = out / "windshield.mp4"
     video.write_video(path, frames, fps=fps)
     return path

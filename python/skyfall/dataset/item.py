@@ -169,8 +169,8 @@ def _item_path(config: DatasetConfig, scene: BoxScene | PhotoScene, weather: Wea
     """Which path makes a still or a clip's frames (the row's ``path``): ``"float"`` when the
     EXR is asked for (it needs the float frame: rendered, then encoded), else
     :meth:`Renderer.render_srgb8`'s own (:meth:`Renderer.srgb8_path`): ``"srgb8"`` for its
-    fused path, ``"banded"`` for its stages band by band (or ``"float"`` on the GPU backend or
-    through a windshield). The bytes are the float frame's either way (the fused path's
+    fused path, ``"banded"`` for its stages band by band (or ``"float"`` on the GPU backend).
+    The bytes are the float frame's either way (the fused path's
     within 1 code)."""
     if config.exr:
         return "float"

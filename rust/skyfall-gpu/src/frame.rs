@@ -9,6 +9,7 @@ use crate::pool::BufferPool;
 use crate::pool::Pooled;
 use crate::rain::RainPass;
 use crate::scene_raycast::SceneRaycastPass;
+use crate::windshield::WindshieldPass;
 use skyfall_core::frame::layers::{Layer, Layers};
 use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::frame::stages::Frame;
@@ -19,7 +20,8 @@ use skyfall_core::haze::Haze;
 use skyfall_core::rain::streaks::RainFrame;
 use skyfall_core::scene::camera::Camera;
 use skyfall_core::snow::streaks::{SnowFrame, SnowStats};
-use skyfall_core::stage::Output;
+use skyfall_core::stage::{Output, Stage, Whole};
+use skyfall_core::windshield::stage::WindshieldStage;
 
 /// A device with every pass compiled, reused across frames.
 #[derive(Debug)]
@@ -31,6 +33,7 @@ pub struct GpuRenderer {
     glow: GlowPass,
     rain: RainPass,
     cloud: CloudPass,
+    windshield: WindshieldPass,
     pool: BufferPool,
 }
 
@@ -47,6 +50,7 @@ impl GpuRenderer {
                 CloudPass::new(&ctx),
             ))
         })?;
+        let windshield = WindshieldPass::new(&ctx)?;
         Ok(GpuRenderer {
             ctx,
             raycast,
@@ -54,6 +58,7 @@ impl GpuRenderer {
             glow,
             rain,
             cloud,
+            windshield,
             pool: BufferPool::default(),
         })
     }
@@ -159,10 +164,11 @@ impl GpuRenderer {
                     }
                 }
             };
-            // The layers the passes draw, one buffer each.
+            // The layers the passes draw, one buffer each (the windshield's are drawn after
+            // the readback).
             let mut layers: Layers<Pooled> = Layers::default();
             for l in Layer::ALL {
-                if drawn.contains(l) {
+                if drawn.contains(l) && !skyfall_core::windshield::stage::LAYERS.contains(l) {
                     match (l, snow_photo.take()) {
                         (Layer::SnowDepth, Some(b)) => layers.set(l, b),
                         (_, taken) => {
@@ -201,15 +207,59 @@ impl GpuRenderer {
                 depth_m: depth_out,
                 layers: mut layers_out,
             } = out;
-            let mut outputs = vec![(rgb, rgb_out), (depth, depth_out)];
+            let mut glass_layers = Layers::default();
+            for l in skyfall_core::windshield::stage::LAYERS.iter() {
+                if let Some(o) = layers_out.take(l) {
+                    glass_layers.set(l, o);
+                }
+            }
+            let mut outputs = vec![(rgb, &mut *rgb_out), (depth, &mut *depth_out)];
             for l in Layer::ALL {
                 if let (Some(b), Some(o)) = (layers.take(l), layers_out.take(l)) {
                     outputs.push((b, o));
                 }
             }
             f.read_back(outputs)?;
+            // The windshield, over the frame read back: its in-focus drops by the GPU pass.
+            if let Some(ws) = &prepared.windshield {
+                let mut whole = Whole {
+                    width: cam.width as usize,
+                    rgb: rgb_out,
+                    depth_m: depth_out,
+                    layers: glass_layers,
+                };
+                self.draw_windshield(ws, &mut whole)?;
+            }
             Ok((prepared.rain_report(), prepared.snow_report()))
         })
+    }
+
+    /// The windshield over the frame read back: in focus, its height map and refraction in the
+    /// GPU pass (`WindshieldPass`, the CPU's within f32 rounding), then the blades on the CPU;
+    /// defocused, the CPU's stage.
+    fn draw_windshield(&self, ws: &WindshieldStage, frame: &mut Whole<'_>) -> Result<(), GpuError> {
+        if !ws.in_focus() {
+            return Ok(ws.whole(frame)?);
+        }
+        let (w, h) = (frame.width, frame.height());
+        let (centres, radii) = ws.metaballs_px();
+        let out = self.windshield.draw(
+            &self.ctx,
+            centres,
+            radii,
+            w,
+            h,
+            true,
+            frame.rgb,
+            ws.refraction(),
+        )?;
+        frame.rgb.copy_from_slice(&out.rgb);
+        if let Some(m) = frame.layers.get_mut(Layer::DropMask) {
+            m.copy_from_slice(&out.mask);
+        }
+        let height = frame.layers.get_mut(Layer::DropHeight).map(|b| &mut **b);
+        ws.finish(frame.rgb, &out.field, height);
+        Ok(())
     }
 
     /// Bytes of device memory the renderer keeps pooled between frames.

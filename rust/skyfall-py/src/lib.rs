@@ -58,7 +58,7 @@ mod _core {
     use super::weather::{weather_optics, weather_sun};
     #[pymodule_export]
     use super::windshield::{
-        Windshield, furmidge_critical, metaball_height_map, metaball_normals,
+        GlassClock, Windshield, furmidge_critical, metaball_height_map, metaball_normals,
         refract_through_drops, windshield_gpu,
     };
 

@@ -81,11 +81,9 @@ pub fn render_frame<'py>(
     let req = parsed.request()?;
     let setup = FrameSetup::new(&req).map_err(CoreError)?;
     let (cam, light, rain, snow) = (&req.camera, setup.light(), setup.rain(), setup.snow());
-    let frame = Frame::new(req.scene_ref(), cam, &light).with_effects(
-        setup.haze.as_ref(),
-        rain.as_ref(),
-        snow.as_ref(),
-    );
+    let frame = Frame::new(req.scene_ref(), cam, &light)
+        .with_effects(setup.haze.as_ref(), rain.as_ref(), snow.as_ref())
+        .with_windshield(parsed.glass(), setup.defocus());
     // Into numpy's arrays (see `FrameOut`): the caller's (`out`) where given, else new ones,
     // sized once the frame is known to fit.
     check_frame_size(cam).map_err(CoreError)?;
@@ -179,11 +177,9 @@ pub fn render_frame8<'py>(
     let req = parsed.request()?;
     let setup = FrameSetup::new(&req).map_err(CoreError)?;
     let (light, rain, snow) = (setup.light(), setup.rain(), setup.snow());
-    let frame = Frame::new(req.scene_ref(), &req.camera, &light).with_effects(
-        setup.haze.as_ref(),
-        rain.as_ref(),
-        snow.as_ref(),
-    );
+    let frame = Frame::new(req.scene_ref(), &req.camera, &light)
+        .with_effects(setup.haze.as_ref(), rain.as_ref(), snow.as_ref())
+        .with_windshield(parsed.glass(), setup.defocus());
     let out = out_w.as_slice_mut()?;
     let (report, snow_report) = py
         .detach(|| draw_srgb8(&frame, out, slices))
@@ -231,11 +227,9 @@ pub fn render_photo8<'py>(
     // Which stages the fused 8-bit output draws is the stages' own declaration.
     let light = setup.light();
     let (rain, snow) = (setup.rain(), setup.snow());
-    let frame = Frame::new(req.scene_ref(), &req.camera, &light).with_effects(
-        setup.haze.as_ref(),
-        rain.as_ref(),
-        snow.as_ref(),
-    );
+    let frame = Frame::new(req.scene_ref(), &req.camera, &light)
+        .with_effects(setup.haze.as_ref(), rain.as_ref(), snow.as_ref())
+        .with_windshield(parsed.glass(), setup.defocus());
     frame.plan().check(Output::Srgb8).map_err(CoreError)?;
     let depth_m = match req.scene_ref() {
         skyfall_core::frame::SceneRef::Photo { depth_m, .. } => depth_m,

@@ -15,6 +15,7 @@ use skyfall_core::scene::boxes::{BoxScene, SceneBox};
 use skyfall_core::scene::camera::{Camera, ThinLens};
 use skyfall_core::scene::lights::Light;
 use skyfall_core::weather::{SkySpec, SnowOpacity, Weather};
+use skyfall_core::windshield::stage::Glass;
 use std::sync::Arc;
 
 /// `skyfall.Weather`'s fields.
@@ -277,6 +278,19 @@ pub struct RequestArgs<'py> {
     /// The clouds in the sky (`skyfall.clouds`' `_core.CloudField`), when the weather has them.
     #[pyo3(default)]
     clouds: Option<Bound<'py, crate::clouds::CloudField>>,
+    /// The windshield the camera looks through: a `_core.Windshield` drawn as it stands, or a
+    /// `_core.GlassClock` drawn at the frame's time.
+    #[pyo3(default)]
+    windshield: Option<GlassArg<'py>>,
+}
+
+/// A request's windshield.
+#[derive(FromPyObject)]
+pub enum GlassArg<'py> {
+    /// A windshield as it stands.
+    Now(Bound<'py, crate::windshield::Windshield>),
+    /// A warmed-up windshield on the frame's clock.
+    Clock(Bound<'py, crate::windshield::GlassClock>),
 }
 
 /// A request's parts: the Python arrays it borrows, and the rest, owned.
@@ -292,6 +306,7 @@ pub struct ParsedRequest<'py> {
     ambient: Arc<skyfall_core::sky::ambient::AmbientMap>,
     snow_cover: Option<Arc<skyfall_core::snow::cover::SnowCover>>,
     clouds: Option<Arc<skyfall_core::cloud::frame::CloudField>>,
+    glass: Option<Glass>,
 }
 
 impl<'py> RequestArgs<'py> {
@@ -337,11 +352,21 @@ impl<'py> RequestArgs<'py> {
             ambient: Arc::clone(&self.ambient.get().map),
             snow_cover: self.snow_cover.map(|c| Arc::clone(&c.get().cover)),
             clouds: self.clouds.map(|c| Arc::clone(&c.get().field)),
+            glass: match self.windshield {
+                None => None,
+                Some(GlassArg::Now(w)) => Some(w.get().glass()?),
+                Some(GlassArg::Clock(c)) => Some(c.get().glass_at(c.py(), self.time_s)?),
+            },
         })
     }
 }
 
 impl<'py> ParsedRequest<'py> {
+    /// The windshield the camera looks through, at the frame's time.
+    pub fn glass(&self) -> Option<&Glass> {
+        self.glass.as_ref()
+    }
+
     /// The core's request, borrowing the scene's arrays.
     pub fn request(&self) -> PyResult<FrameRequest<'_>> {
         let scene = match &self.arrays {

@@ -11,9 +11,11 @@ use numpy::{
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use skyfall_core::ranges;
+use skyfall_core::windshield::clock;
 use skyfall_core::windshield::furmidge::Wetting;
 use skyfall_core::windshield::render::{self, RefractMode, Refraction};
 use skyfall_core::windshield::sim::{MeshDrop, ParticleDrop};
+use skyfall_core::windshield::stage::Glass;
 use skyfall_core::windshield::{Windshield as Sim, WindshieldConfig, WindshieldState};
 use std::sync::Mutex;
 
@@ -77,12 +79,23 @@ fn state_from_dict(d: &Bound<'_, PyDict>) -> PyResult<WindshieldState> {
 }
 
 /// A simulated windshield (the Python class `skyfall.windshield.Windshield` wraps it).
-#[pyclass(module = "skyfall._core")]
+#[pyclass(module = "skyfall._core", frozen)]
 pub struct Windshield {
     sim: Mutex<Sim>,
 }
 
 impl Windshield {
+    fn wrap(sim: Sim) -> Self {
+        Windshield {
+            sim: Mutex::new(sim),
+        }
+    }
+
+    /// The glass as a frame draws it now.
+    pub fn glass(&self) -> PyResult<Glass> {
+        self.with(|s| Glass::of(s))
+    }
+
     fn with<T>(&self, f: impl FnOnce(&mut Sim) -> T) -> PyResult<T> {
         let mut g = self.sim.lock().map_err(|_| {
             crate::errors::SkyfallError::new_err("the windshield's lock is poisoned")
@@ -439,4 +452,55 @@ pub fn windshield_gpu<'py>(
             from_slice::<f32, Ix2>(py, &[h, w], &out.mask)?,
         ),
     ))
+}
+
+/// A warmed-up windshield on a frame's clock (`skyfall_core::windshield::clock`): the glass at
+/// any frame time, the same bits whatever frames came before.
+#[pyclass(module = "skyfall._core", frozen)]
+pub struct GlassClock {
+    clock: Mutex<clock::GlassClock>,
+}
+
+impl GlassClock {
+    /// The glass at frame time `t_s`, GIL released.
+    pub fn glass_at(&self, py: Python<'_>, t_s: f64) -> PyResult<Glass> {
+        self.sim_at(py, t_s).map(|s| Glass::of(&s))
+    }
+
+    fn sim_at(&self, py: Python<'_>, t_s: f64) -> PyResult<Sim> {
+        let mut g = self.clock.lock().map_err(|_| {
+            crate::errors::SkyfallError::new_err("the windshield clock's lock is poisoned")
+        })?;
+        let c: &mut clock::GlassClock = &mut g;
+        Ok(py.detach(|| c.at(t_s)).map_err(CoreError)?)
+    }
+}
+
+#[pymethods]
+impl GlassClock {
+    /// The clock of `warm` (a copy of its state now, a whole number of `period_s` into the
+    /// rain), whose frames repeat every `epoch_periods` periods.
+    #[new]
+    #[pyo3(signature = (warm, period_s, epoch_periods))]
+    fn new(warm: &Windshield, period_s: f64, epoch_periods: usize) -> PyResult<Self> {
+        let sim = warm.with(|s| s.clone())?;
+        let c = clock::GlassClock::new(sim, period_s, epoch_periods).map_err(CoreError)?;
+        Ok(GlassClock {
+            clock: Mutex::new(c),
+        })
+    }
+
+    /// The windshield at frame time `t_s` (a new one), GIL released.
+    fn at(&self, py: Python<'_>, t_s: f64) -> PyResult<Windshield> {
+        self.sim_at(py, t_s).map(Windshield::wrap)
+    }
+
+    /// The epoch, s: frames this far apart show the same glass.
+    #[getter]
+    fn epoch_s(&self) -> PyResult<f64> {
+        let g = self.clock.lock().map_err(|_| {
+            crate::errors::SkyfallError::new_err("the windshield clock's lock is poisoned")
+        })?;
+        Ok(g.epoch_s())
+    }
 }

@@ -2,7 +2,9 @@
 //! draws them ([`crate::stage::draw_bands_then`]), each band encoded to 8-bit sRGB as soon as
 //! it is finished, with no frame-sized float buffer. The same bytes as the float frame encoded
 //! by [`crate::color::encode_srgb8`]; what the fused path ([`super::srgb8`]) does not draw
-//! (clouds, a snow cover, box scenes and their glows) is drawn here.
+//! (clouds, a snow cover, box scenes and their glows, a windshield) is drawn here. A frame with a
+//! whole-frame stage (the windshield, whose drops refract other rows) is drawn into a float
+//! frame first, then through that stage, then encoded.
 
 use super::stages::Frame;
 use super::{RainReport, SceneRef, check_frame_size, check_photo};
@@ -11,7 +13,8 @@ use crate::error::{Error, Param, Result};
 use crate::particles::composite::BAND_ROWS;
 use crate::snow::streaks::SnowStats;
 use crate::stage::layers::{Layer, Layers};
-use crate::stage::{Output, draw_bands_then};
+use crate::stage::{Output, Whole, any_whole, draw_bands, draw_bands_then, draw_whole};
+use rayon::prelude::*;
 
 /// Draws `frame` as 8-bit sRGB into `out_srgb8` (H·W·3), and into `layers` each layer the
 /// caller keeps (H·W each): the frame's value where a stage draws it, the layer's neutral
@@ -55,8 +58,48 @@ pub fn draw_srgb8(
         }
     }
     let level = crate::simd::Dispatch::detect().encode();
+    let stages = prepared.stages();
+    if any_whole(&stages) {
+        // A whole-frame stage (the windshield) reads other rows: the float frame first, then
+        // the stage, then the encoding.
+        let w = cam.width as usize;
+        let mut rgb = crate::error::try_filled_par("the float frame", 3 * n, 0.0f32)?;
+        let mut depth = crate::error::try_filled_par("the frame's depth", n, 0.0f32)?;
+        let mut scratch: Layers<Vec<f32>> = Layers::default();
+        for l in drawn.iter() {
+            if kept.get(l).is_none() {
+                scratch.set(l, crate::error::try_filled_par(l.name(), n, 0.0f32)?);
+            }
+        }
+        let mut all: Layers<&mut [f32]> = Layers::default();
+        for (l, (k, s)) in Layer::ALL
+            .into_iter()
+            .zip(kept.0.into_iter().zip(scratch.0.iter_mut()))
+        {
+            match (k, s) {
+                (Some(b), _) => all.set(l, b),
+                (None, Some(b)) => all.set(l, &mut b[..]),
+                (None, None) => {}
+            }
+        }
+        draw_bands(&stages, w, BAND_ROWS, &mut rgb, &mut depth, all.reborrow());
+        draw_whole(
+            &stages,
+            &mut Whole {
+                width: w,
+                rgb: &mut rgb,
+                depth_m: &mut depth,
+                layers: all,
+            },
+        )?;
+        out_srgb8
+            .par_chunks_mut(3 * BAND_ROWS * w)
+            .zip(rgb.par_chunks(3 * BAND_ROWS * w))
+            .for_each(|(out, rgb)| encode_srgb8_serial(level, rgb, out));
+        return Ok((prepared.rain_report(), prepared.snow_report()));
+    }
     draw_bands_then(
-        &prepared.stages(),
+        &stages,
         cam.width as usize,
         BAND_ROWS,
         drawn,

@@ -11,7 +11,7 @@ use crate::particles::composite::BAND_ROWS;
 use crate::rain::streaks::RainFrame;
 use crate::scene::camera::Camera;
 use crate::snow::streaks::{SnowFrame, SnowStats};
-use crate::stage::{Output, draw_bands};
+use crate::stage::{Output, Whole, draw_bands, draw_whole};
 
 /// Renders a frame on the CPU: its stages (the scene, the clouds, the haze, the glows, the
 /// particles) into new buffers.
@@ -64,8 +64,8 @@ pub fn render_into_reporting(
 
 /// Draws `frame` into `out` (every value overwritten): its stages made once, then drawn band
 /// by band (16 rows) while the band is in cache, each row through the row stages (the scene,
-/// the clouds, the haze, the glows), then the band through the particles. Returns the rain's
-/// and the snow's reports.
+/// the clouds, the haze, the glows), then the band through the particles; then the whole frame
+/// through the whole-frame stages (the windshield). Returns the rain's and the snow's reports.
 pub fn draw(
     frame: &Frame<'_>,
     out: FrameOut<'_>,
@@ -81,16 +81,27 @@ pub fn draw(
     let FrameOut {
         rgb,
         depth_m,
-        layers,
+        mut layers,
     } = out;
+    let stages = prepared.stages();
+    let width = cam.width as usize;
     draw_bands(
-        &prepared.stages(),
-        cam.width as usize,
+        &stages,
+        width,
         BAND_ROWS,
-        rgb,
-        depth_m,
-        layers,
+        &mut *rgb,
+        &mut *depth_m,
+        layers.reborrow(),
     );
+    draw_whole(
+        &stages,
+        &mut Whole {
+            width,
+            rgb,
+            depth_m,
+            layers,
+        },
+    )?;
     let particles = prepared.particles();
     Ok((
         particles.and_then(Particles::rain_report),

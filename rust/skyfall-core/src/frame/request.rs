@@ -306,6 +306,11 @@ impl FrameSetup {
             .with_sky_light(sun, clouds)
     }
 
+    /// The camera's thin lens at the frame's resolution (None: a pinhole).
+    pub fn defocus(&self) -> Option<Defocus> {
+        self.lens
+    }
+
     /// The rain the frame draws, when it draws streaks.
     pub fn rain(&self) -> Option<RainFrame<'_>> {
         self.rain.as_ref().map(|(region, shading)| RainFrame {

@@ -21,9 +21,11 @@ use crate::haze::stage::HazeStage;
 use crate::rain::streaks::{RainFrame, RainStats};
 use crate::scene::boxes::BoxScene;
 use crate::scene::camera::Camera;
+use crate::scene::camera::Defocus;
 use crate::snow::streaks::{SnowFrame, SnowStats};
 use crate::stage::layers::{Layer, LayerSet};
 use crate::stage::{Declared, Output, Plan, Stage};
+use crate::windshield::stage::{Glass, WindshieldStage};
 
 /// What one frame draws: the scene seen by the camera under its light, and the effects.
 #[derive(Clone, Copy)]
@@ -40,6 +42,8 @@ pub struct Frame<'a> {
     pub rain: Option<&'a RainFrame<'a>>,
     /// The snowfall, when it snows.
     pub snow: Option<&'a SnowFrame<'a>>,
+    /// The windshield in front of the camera, and the camera's thin lens that blurs its drops.
+    pub windshield: Option<(&'a Glass, Option<Defocus>)>,
 }
 
 impl<'a> Frame<'a> {
@@ -52,6 +56,15 @@ impl<'a> Frame<'a> {
             haze: None,
             rain: None,
             snow: None,
+            windshield: None,
+        }
+    }
+
+    /// The same seen through `glass` (its drops blurred by the camera's thin lens `defocus`).
+    pub fn with_windshield(self, glass: Option<&'a Glass>, defocus: Option<Defocus>) -> Self {
+        Frame {
+            windshield: glass.map(|g| (g, defocus)),
+            ..self
         }
     }
 
@@ -138,6 +151,16 @@ impl<'a> Frame<'a> {
                           with it, or backend=\"cpu\" for the far level of detail",
             });
         }
+        if self.windshield.is_some() {
+            plan.push(Declared {
+                name: "windshield",
+                layers: crate::windshield::stage::LAYERS,
+                srgb8: false,
+                gpu: true,
+                param: "windshield",
+                why_not: "the windshield is drawn by the banded 8-bit output (frame::encoded)",
+            });
+        }
         Plan(plan)
     }
 
@@ -179,6 +202,10 @@ impl<'a> Frame<'a> {
             Some(p) => Some(PreparedParticles::Listed(p)),
             None => None,
         };
+        let windshield = self
+            .windshield
+            .map(|(glass, defocus)| WindshieldStage::new(glass, cam, defocus.as_ref()))
+            .transpose()?;
         Ok(Prepared {
             scene: SceneStage {
                 scene: self.scene,
@@ -189,6 +216,7 @@ impl<'a> Frame<'a> {
             haze,
             glow: glow.map(|glow| GlowStage { glow, cam }),
             particles,
+            windshield,
         })
     }
 }
@@ -214,6 +242,8 @@ pub struct Prepared<'a> {
     pub glow: Option<GlowStage<'a>>,
     /// The particles (rain and snow), when any effect makes them.
     pub particles: Option<PreparedParticles>,
+    /// The windshield, when the camera looks through one (a whole-frame stage, last).
+    pub windshield: Option<WindshieldStage>,
 }
 
 impl Prepared<'_> {
@@ -230,6 +260,9 @@ impl Prepared<'_> {
             list.push(s);
         }
         if let Some(PreparedParticles::Binned(s)) = &self.particles {
+            list.push(s);
+        }
+        if let Some(s) = &self.windshield {
             list.push(s);
         }
         list

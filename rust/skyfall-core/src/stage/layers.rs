@@ -189,6 +189,19 @@ impl<T> Layers<T> {
     }
 }
 
+impl Layers<&mut [f32]> {
+    /// The same buffers, borrowed again (handed to one pass and kept for the next).
+    pub fn reborrow(&mut self) -> Layers<&mut [f32]> {
+        let mut out = Layers::default();
+        for (slot, l) in self.0.iter_mut().zip(Layer::ALL) {
+            if let Some(b) = slot {
+                out.set(l, &mut **b);
+            }
+        }
+        out
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

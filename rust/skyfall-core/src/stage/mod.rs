@@ -77,6 +77,49 @@ pub trait Stage: Sync {
 
     /// Draws a band, after every row stage drew its rows.
     fn band(&self, _band: &mut Band<'_>) {}
+
+    /// Whether the stage draws on the whole frame ([`Stage::whole`]) after every band: a stage
+    /// that reads other rows' pixels (the windshield's drops refract what lies around them).
+    fn is_whole(&self) -> bool {
+        false
+    }
+
+    /// Draws on the whole frame, after every band of every stage (see [`draw_whole`]).
+    fn whole(&self, _frame: &mut Whole<'_>) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// The whole frame, as a whole-frame stage ([`Stage::whole`]) draws it.
+pub struct Whole<'f> {
+    /// The frame's width, px.
+    pub width: usize,
+    /// Linear RGB, H·W·3.
+    pub rgb: &'f mut [f32],
+    /// Depth along the optical axis, m, H·W.
+    pub depth_m: &'f mut [f32],
+    /// The frame's layers (those the frame draws), H·W each.
+    pub layers: Layers<&'f mut [f32]>,
+}
+
+impl Whole<'_> {
+    /// The frame's height, px.
+    pub fn height(&self) -> usize {
+        self.depth_m.len() / self.width.max(1)
+    }
+}
+
+/// Whether any of `stages` draws on the whole frame.
+pub fn any_whole(stages: &[&dyn Stage]) -> bool {
+    stages.iter().any(|s| s.is_whole())
+}
+
+/// The whole-frame stages of `stages`, in their order, over a frame drawn by [`draw_bands`].
+pub fn draw_whole(stages: &[&dyn Stage], frame: &mut Whole<'_>) -> Result<()> {
+    for s in stages.iter().filter(|s| s.is_whole()) {
+        s.whole(frame)?;
+    }
+    Ok(())
 }
 
 /// Draws `stages`, in their order, over a frame `width` wide: bands of `band_rows` rows in

@@ -3,9 +3,11 @@
 //! mesh model away from the wipers, the particle model near them, the rain's arrival), when a
 //! drop slides ([`furmidge`]), and their drawing as refracting 2D metaballs ([`render`]).
 
+pub mod clock;
 pub mod furmidge;
 mod merge;
 pub mod render;
 pub mod sim;
+pub mod stage;
 
 pub use sim::{DropKind, Metaball, Windshield, WindshieldConfig, WindshieldState, Wiper};

@@ -703,6 +703,24 @@ impl Windshield {
         Ok(())
     }
 
+    /// Advances by one internal step of `dt_s`, in (0, [`MAX_SUBSTEP_S`]] (a clock that keeps
+    /// its own grid of steps, [`super::clock::GlassClock`]).
+    pub fn step_once(&mut self, dt_s: f64) -> Result<()> {
+        if !(dt_s > 0.0 && dt_s <= MAX_SUBSTEP_S) {
+            return Err(crate::error::Error::OutOfRange {
+                param: crate::error::Param {
+                    name: "dt_s",
+                    index: None,
+                },
+                value: dt_s,
+                range: format!("(0, {MAX_SUBSTEP_S}] s"),
+                integer: false,
+            });
+        }
+        self.substep(dt_s);
+        Ok(())
+    }
+
     fn substep(&mut self, dt: f64) {
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(crate::seed::derive(
             self.config.seed,
