@@ -152,7 +152,6 @@ def test_sampling_depends_on_the_seed_and_index_only():
         ({"focus_distance_m": "2:10"}, ["focus_distance_m needs f_number"]),
         ({"rain_far_m": 6.0}, ["rain_far_m", "rain_near_m"]),
         ({"rain_far_m": 2.0, "f_number": "2:4"}, ["rain_far_m", "f_number"]),
-        ({"rain_far_m": 2.0, "backend": "gpu"}, ["rain_far_m", "cpu"]),
     ],
 )
 def test_bad_options_name_the_parameter_and_its_range(options, words):

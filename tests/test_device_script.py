@@ -26,7 +26,8 @@ def test_the_device_script_runs_every_effect_from_the_wheel(tmp_path):
     assert len(effects) == 7
     for name, r in effects.items():
         if name.startswith("far rain"):
-            assert r["status"] == "refused" and "rain_far_m" in r["reason"]  # no GPU pass yet, refused by name
+            # the GPU's lookups are exact where the CPU interpolates them: a few values 2-3 codes off
+            assert r["status"] == "pass" and r["ssim"] >= 0.99, (name, r)
         else:
             assert r["status"] == "pass" and r["max_code_diff"] <= 1, (name, r)
     assert all(t["cpu_s"] > 0 for t in report["timing"])

@@ -329,8 +329,6 @@ class DatasetConfig:
             Weather(rain_near_m=self.rain_near_m, rain_far_m=self.rain_far_m)  # the core's check: rain_far_m below rain_near_m
             if self.f_number is not None:
                 raise ValueError("rain_far_m draws its layers in focus: it cannot be used with f_number (a thin lens)")
-            if self.backend != "cpu":
-                raise ValueError(f"rain_far_m needs backend='cpu' (the GPU backend draws every drop one by one), got {self.backend!r}")
         set_(self, "snow_hours", _hours(self.snow_hours))
         if self.snow_hours[1] > 0.0 and self.snow_rate_mm_h[1] <= 0.0:
             raise ValueError("snow_hours needs snow_rate_mm_h (a cover is the snow that fell)")

@@ -8,6 +8,7 @@ use crate::pass::{FrameEncoder, FramePass, FrameTargets};
 use crate::pool::BufferPool;
 use crate::pool::Pooled;
 use crate::rain::RainPass;
+use crate::rain_far::FarPass;
 use crate::scene_raycast::SceneRaycastPass;
 use crate::windshield::WindshieldPass;
 use skyfall_core::frame::layers::{Layer, Layers};
@@ -32,6 +33,7 @@ pub struct GpuRenderer {
     haze: HazePass,
     glow: GlowPass,
     rain: RainPass,
+    far: FarPass,
     cloud: CloudPass,
     windshield: WindshieldPass,
     pool: BufferPool,
@@ -41,12 +43,13 @@ impl GpuRenderer {
     /// Creates the device and compiles the passes.
     pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
         let ctx = GpuContext::new(choice)?;
-        let (raycast, haze, glow, rain, cloud) = ctx.scoped(|| {
+        let (raycast, haze, glow, rain, far, cloud) = ctx.scoped(|| {
             Ok((
                 SceneRaycastPass::new(&ctx),
                 HazePass::new(&ctx),
                 GlowPass::new(&ctx),
                 RainPass::new(&ctx),
+                FarPass::new(&ctx),
                 CloudPass::new(&ctx),
             ))
         })?;
@@ -57,6 +60,7 @@ impl GpuRenderer {
             haze,
             glow,
             rain,
+            far,
             cloud,
             windshield,
             pool: BufferPool::default(),
@@ -115,8 +119,7 @@ impl GpuRenderer {
         )
     }
 
-    /// Draws `frame` into `out`: its stages (checked to be the GPU's: the plan refuses the
-    /// rain's far level of detail), each recorded as its pass into one encoder, submitted once
+    /// Draws `frame` into `out`: its stages, each recorded as its pass into one encoder, submitted once
     /// and read back in one mapped copy.
     pub fn draw(
         &self,
@@ -199,7 +202,11 @@ impl GpuRenderer {
                 self.glow.encode(&mut f, &targets, &g.glow)?;
             }
             if let Some(p) = prepared.particles() {
-                self.rain.encode(&mut f, &targets, &p.streaks)?;
+                if let Some(far) = &p.far {
+                    self.far.encode(&mut f, &targets, far)?;
+                }
+                self.rain
+                    .encode(&mut f, &targets, (&p.streaks, p.far.is_some()))?;
             }
             // One submission, one readback of every output.
             let FrameOut {

@@ -23,6 +23,7 @@ pub mod haze;
 pub mod pass;
 pub mod pool;
 pub mod rain;
+pub mod rain_far;
 pub mod readback;
 pub mod scene_raycast;
 pub mod uniforms;

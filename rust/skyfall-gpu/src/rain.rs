@@ -27,8 +27,10 @@ pub const TILE_H: u32 = 4;
 pub struct RainPass(ComputePass);
 
 impl FramePass for RainPass {
-    /// The prepared streaks, far to near (each with its light and r).
-    type Input<'i> = &'i [ScreenStreak];
+    /// The prepared streaks, far to near (each with its light and r), and whether the far
+    /// pass drew the rain's far shells before them (the rain's layers then hold their
+    /// coverage and depth, which the streaks continue).
+    type Input<'i> = (&'i [ScreenStreak], bool);
 
     fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
@@ -51,7 +53,7 @@ impl FramePass for RainPass {
         &self,
         f: &mut FrameEncoder<'_>,
         t: &FrameTargets<'_>,
-        streaks: Self::Input<'_>,
+        (streaks, after_far): Self::Input<'_>,
     ) -> Result<(), GpuError> {
         let cam = f.cam;
         // A layer the frame does not draw is bound to a one-value stand-in, never written
@@ -92,7 +94,9 @@ impl FramePass for RainPass {
             tiles_x: cam.width.div_ceil(TILE_W),
             tile_w: TILE_W,
             tile_h: TILE_H,
-            layers: u32::from(rain_layers.is_some()) | (u32::from(snow_layer.is_some()) << 1),
+            layers: u32::from(rain_layers.is_some())
+                | (u32::from(snow_layer.is_some()) << 1)
+                | (u32::from(after_far && rain_layers.is_some()) << 2),
             pad: [0; 3],
         };
         let cam_buf = f.uniform("camera", &CameraUniform::new(cam));

@@ -64,7 +64,8 @@ pub struct RainUniform {
     /// Tile height, px.
     pub tile_h: u32,
     /// The layers drawn: bit 0 the rain's (rain_alpha, rain_depth_m), bit 1 the snow's
-    /// (snow_alpha).
+    /// (snow_alpha); bit 2: the far pass drew the rain's far shells into the rain's layers,
+    /// which the streaks continue.
     pub layers: u32,
     /// Padding to 16 bytes.
     pub pad: [u32; 3],

@@ -140,15 +140,13 @@ impl<'a> Frame<'a> {
             });
         }
         if self.rain.is_some() || self.snow.is_some() {
-            let far = self.rain.is_some_and(|r| r.region.far_m.is_some());
             plan.push(Declared {
                 name: "particles",
                 layers: passes::layers(self.rain.is_some(), self.snow.is_some()),
                 srgb8: true,
-                gpu: !far,
+                gpu: true,
                 param: "rain_far_m",
-                why_not: "the GPU backend draws every drop one by one: use rain_far_m = None \
-                          with it, or backend=\"cpu\" for the far level of detail",
+                why_not: "",
             });
         }
         if self.windshield.is_some() {

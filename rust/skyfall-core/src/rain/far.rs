@@ -126,6 +126,38 @@ pub struct FarRain {
     lights: Vec<Option<Vec3>>,
 }
 
+/// A frame's far rain as plain arrays (see [`FarRain::arrays`] and [`FarRain::composite`], whose
+/// per-pixel lookup they serve).
+#[derive(Debug, Clone)]
+pub struct FarArrays<'a> {
+    /// The shells' radii R_k, m, far to near.
+    pub radii: &'a [f32],
+    /// Per shell: the texture offsets (a, b), texels.
+    pub offsets: &'a [[f32; 2]],
+    /// The shells' textures, K·[`TEXTURE_SIZE`]² opacities (far shell first).
+    pub textures: &'a [f32],
+    /// The textures' identity while they are cached (equal ids: the same texels).
+    pub texture_id: usize,
+    /// Per [`BLOCK_PX`] block and shell (block-major): the shell's light (r, g, b, 1), or
+    /// zeros where culled or sheltered.
+    pub lights: Vec<[f32; 4]>,
+    /// 1/δ, texels per radian.
+    pub inv_delta: f32,
+    /// Δ, m.
+    pub spacing_m: f32,
+    /// The region's radius, m.
+    pub near_m: f32,
+    /// The drops' share r of their light.
+    pub reflectance: f32,
+    /// The relative horizontal velocity over the fall speed, (x, z).
+    pub shear: [f32; 2],
+    /// Blocks per row.
+    pub blocks_x: usize,
+}
+
+/// tan(elevation) is clamped to ± this in a far lookup.
+pub const FAR_MAX_TAN: f32 = MAX_TAN;
+
 fn invalid(name: &'static str, message: impl Into<String>) -> Error {
     Error::Invalid {
         param: Param { name, index: None },
@@ -423,6 +455,27 @@ impl FarRain {
     /// The shells drawn.
     pub fn layers(&self) -> usize {
         self.radii.len()
+    }
+
+    /// What an output with its own per-pixel lookup needs (the GPU's far pass), as plain arrays.
+    pub fn arrays(&self) -> FarArrays<'_> {
+        FarArrays {
+            radii: &self.radii,
+            offsets: &self.offsets,
+            textures: &self.textures.0,
+            texture_id: Arc::as_ptr(&self.textures.0) as usize,
+            lights: self
+                .lights
+                .iter()
+                .map(|l| l.map_or([0.0; 4], |l| [l.x, l.y, l.z, 1.0]))
+                .collect(),
+            inv_delta: self.inv_delta,
+            spacing_m: self.spacing_m,
+            near_m: self.near_m,
+            reflectance: self.reflectance,
+            shear: [self.shear.x, self.shear.y],
+            blocks_x: self.blocks_x,
+        }
     }
 
     /// Whether every light the shells carry is grey (the 8-bit output then keeps one Q plane).

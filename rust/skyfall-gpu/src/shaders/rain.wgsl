@@ -7,7 +7,7 @@ struct RainParams {
     tiles_x: u32,
     tile_w: u32,
     tile_h: u32,
-    layers: u32,  // bit 0: rain_alpha and rain_depth_m drawn; bit 1: snow_alpha
+    layers: u32,  // bit 0: rain_alpha and rain_depth_m drawn; bit 1: snow_alpha; bit 2: continue the far pass's rain layers
     pad0: u32,
     pad1: u32,
     pad2: u32,
@@ -62,6 +62,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var keep = 1.0;
     var keep_snow = 1.0;
     var z_min = infinity();
+    if (params.layers & 4u) != 0u {
+        keep = 1.0 - alpha[i];
+        z_min = rain_depth[i];
+    }
     let scene_depth = depth[i];
     for (var j = offsets[t]; j < offsets[t + 1u]; j++) {
         let k = indices[j];
