@@ -12,15 +12,11 @@ use crate::rain_far::FarPass;
 use crate::scene_raycast::SceneRaycastPass;
 use crate::windshield::WindshieldPass;
 use skyfall_core::frame::layers::{Layer, Layers};
-use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::frame::stages::Frame;
 use skyfall_core::frame::{
     FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo,
 };
-use skyfall_core::haze::Haze;
-use skyfall_core::rain::streaks::RainFrame;
-use skyfall_core::scene::camera::Camera;
-use skyfall_core::snow::streaks::{SnowFrame, SnowStats};
+use skyfall_core::snow::streaks::SnowStats;
 use skyfall_core::stage::{Output, Stage, Whole};
 use skyfall_core::windshield::stage::WindshieldStage;
 
@@ -67,56 +63,11 @@ impl GpuRenderer {
         })
     }
 
-    /// Renders a frame: the scene (ray cast under `light`, or the photo uploaded), haze, the
-    /// lights' glows (box scenes), rain, then readback.
-    pub fn render(
-        &self,
-        scene: SceneRef<'_>,
-        cam: &Camera,
-        light: &SceneLight<'_>,
-        haze: Option<&Haze>,
-        rain: Option<&RainFrame<'_>>,
-        snow: Option<&SnowFrame<'_>>,
-    ) -> Result<FrameBuffers, GpuError> {
-        let frame = Frame::new(scene, cam, light).with_effects(haze, rain, snow);
-        FrameBuffers::filled(cam, frame.layers(), |out| {
-            self.draw(&frame, out).map(|(rain, _)| rain)
+    /// Renders `frame` into new buffers (see [`Self::draw`]).
+    pub fn render_frame(&self, frame: &Frame<'_>) -> Result<FrameBuffers, GpuError> {
+        FrameBuffers::filled(frame.cam, frame.layers(), |out| {
+            self.draw(frame, out).map(|(rain, _)| rain)
         })
-    }
-
-    /// [`Self::render`] read back into the caller's buffers (see [`FrameOut`]); the rain's
-    /// report when it rains.
-    #[allow(clippy::too_many_arguments)]
-    pub fn render_into(
-        &self,
-        scene: SceneRef<'_>,
-        cam: &Camera,
-        light: &SceneLight<'_>,
-        haze: Option<&Haze>,
-        rain: Option<&RainFrame<'_>>,
-        snow: Option<&SnowFrame<'_>>,
-        out: FrameOut<'_>,
-    ) -> Result<Option<RainReport>, GpuError> {
-        self.render_into_reporting(scene, cam, light, haze, rain, snow, out)
-            .map(|(rain, _)| rain)
-    }
-
-    /// [`Self::render_into`], with the snow's report too.
-    #[allow(clippy::too_many_arguments)]
-    pub fn render_into_reporting(
-        &self,
-        scene: SceneRef<'_>,
-        cam: &Camera,
-        light: &SceneLight<'_>,
-        haze: Option<&Haze>,
-        rain: Option<&RainFrame<'_>>,
-        snow: Option<&SnowFrame<'_>>,
-        out: FrameOut<'_>,
-    ) -> Result<(Option<RainReport>, Option<SnowStats>), GpuError> {
-        self.draw(
-            &Frame::new(scene, cam, light).with_effects(haze, rain, snow),
-            out,
-        )
     }
 
     /// Draws `frame` into `out`: its stages, each recorded as its pass into one encoder, submitted once

@@ -5,7 +5,8 @@
 use glam::{Mat3, Vec3};
 use skyfall_core::frame::layers::Layer;
 use skyfall_core::frame::scene::SceneLight;
-use skyfall_core::frame::{FrameOut, SceneRef, render};
+use skyfall_core::frame::stages::Frame;
+use skyfall_core::frame::{FrameOut, SceneRef, draw, render_frame};
 use skyfall_core::haze::Haze;
 use skyfall_core::rain::drops::RainRegion;
 use skyfall_core::rain::streaks::{RainFrame, RainShading};
@@ -101,23 +102,17 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let c = render(
-        SceneRef::Boxes(&scene),
-        &cam,
-        &light,
-        Some(&haze),
-        None,
-        None,
+    let c = render_frame(
+        &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(Some(&haze), None, None),
     )
     .unwrap();
     let g = gpu
-        .render(
-            SceneRef::Boxes(&scene),
-            &cam,
-            &light,
-            Some(&haze),
-            None,
-            None,
+        .render_frame(
+            &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(
+                Some(&haze),
+                None,
+                None,
+            ),
         )
         .unwrap();
     // Silhouette pixels may pick another surface when f32 rounding differs (FMA): allow 0.5 %.
@@ -133,9 +128,10 @@ fn gpu_matches_cpu_on_the_box_scene_and_on_a_photo() {
         rgb: &c.rgb,
         depth_m: &c.depth_m,
     };
-    let c2 = render(photo, &cam, &light, Some(&haze), None, None).unwrap();
+    let c2 = render_frame(&Frame::new(photo, &cam, &light).with_effects(Some(&haze), None, None))
+        .unwrap();
     let g2 = gpu
-        .render(photo, &cam, &light, Some(&haze), None, None)
+        .render_frame(&Frame::new(photo, &cam, &light).with_effects(Some(&haze), None, None))
         .unwrap();
     let (worst, _) = max_abs(&c2.rgb, &g2.rgb);
     assert!(worst < 1e-5, "haze max abs diff {worst}");
@@ -177,14 +173,18 @@ fn gpu_rain_matches_cpu_rain() {
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
+    let bg = render_frame(
+        &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(None, None, None),
+    )
+    .unwrap();
     let photo = SceneRef::Photo {
         rgb: &bg.rgb,
         depth_m: &bg.depth_m,
     };
-    let c = render(photo, &cam, &light, None, Some(&rf), None).unwrap();
+    let c =
+        render_frame(&Frame::new(photo, &cam, &light).with_effects(None, Some(&rf), None)).unwrap();
     let g = gpu
-        .render(photo, &cam, &light, None, Some(&rf), None)
+        .render_frame(&Frame::new(photo, &cam, &light).with_effects(None, Some(&rf), None))
         .unwrap();
     let ((cs, _), (gs, gd)) = (c.rain.unwrap(), g.rain.unwrap());
     assert_eq!(c.rain, g.rain);
@@ -216,7 +216,11 @@ fn gpu_rain_matches_cpu_rain() {
         ],
     );
     let (stats, drops) = gpu
-        .render_into(photo, &cam, &light, None, Some(&rf), None, out)
+        .draw(
+            &Frame::new(photo, &cam, &light).with_effects(None, Some(&rf), None),
+            out,
+        )
+        .map(|(r, _)| r)
         .unwrap()
         .unwrap();
     assert_eq!((stats, drops), (gs, gd));
@@ -234,18 +238,26 @@ fn gpu_rain_matches_cpu_rain() {
         ],
     );
     assert!(
-        gpu.render_into(photo, &cam, &light, None, Some(&rf), None, short)
-            .is_err()
+        gpu.draw(
+            &Frame::new(photo, &cam, &light).with_effects(None, Some(&rf), None),
+            short
+        )
+        .map(|(r, _)| r)
+        .is_err()
     );
     // Rain that does not fit the device's storage buffers is an error that names the streaks,
     // not a wgpu failure: the frame's buffers fit this limit, the streak list does not.
     let mut small = GpuRenderer::new(AdapterChoice::Any).unwrap();
     let frame_bytes = (3 * n * 4) as u64;
     small.ctx.limits.max_storage_buffer_binding_size = frame_bytes;
-    assert!(small.render(photo, &cam, &light, None, None, None).is_ok());
+    assert!(
+        small
+            .render_frame(&Frame::new(photo, &cam, &light).with_effects(None, None, None))
+            .is_ok()
+    );
     assert!((gs.streaks * 64) as u64 > frame_bytes);
     let err = small
-        .render(photo, &cam, &light, None, Some(&rf), None)
+        .render_frame(&Frame::new(photo, &cam, &light).with_effects(None, Some(&rf), None))
         .unwrap_err();
     assert!(
         matches!(err, GpuError::TooLarge { .. }) && err.to_string().contains("streaks"),
@@ -280,16 +292,21 @@ fn gpu_rain_matches_cpu_rain_through_a_lens() {
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
+    let bg = render_frame(
+        &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(None, None, None),
+    )
+    .unwrap();
     let photo = SceneRef::Photo {
         rgb: &bg.rgb,
         depth_m: &bg.depth_m,
     };
-    let c = render(photo, &cam, &light, None, Some(&rf), None).unwrap();
+    let c =
+        render_frame(&Frame::new(photo, &cam, &light).with_effects(None, Some(&rf), None)).unwrap();
     let g = gpu
-        .render(photo, &cam, &light, None, Some(&rf), None)
+        .render_frame(&Frame::new(photo, &cam, &light).with_effects(None, Some(&rf), None))
         .unwrap();
-    let p = render(photo, &cam, &light, None, Some(&pinhole), None).unwrap();
+    let p = render_frame(&Frame::new(photo, &cam, &light).with_effects(None, Some(&pinhole), None))
+        .unwrap();
     assert_eq!(c.rain, g.rain);
     assert!(c.rain.unwrap().0.streaks > 100);
     let (ca, ga, pa) = (
@@ -325,9 +342,14 @@ fn gpu_matches_cpu_under_a_cie_sky_with_sky_visibility() {
     let sky = Sky::new(kind, 2e-3, 900.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let c = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
+    let c = render_frame(
+        &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(None, None, None),
+    )
+    .unwrap();
     let g = gpu
-        .render(SceneRef::Boxes(&scene), &cam, &light, None, None, None)
+        .render_frame(
+            &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(None, None, None),
+        )
         .unwrap();
     // Relative: the clear sky reaches 12 E/π and the WGSL evaluates it in f32 (the CPU in f64).
     // Away from silhouettes the sky and the map's trilinear sample agree to f32 rounding.
@@ -362,7 +384,7 @@ fn pooled_buffers_give_the_same_frames_and_do_not_grow() {
     let boxes = SceneRef::Boxes(&scene);
     assert_eq!(gpu.pooled_bytes(), 0);
     let first = gpu
-        .render(boxes, &cam, &light, Some(&h), Some(&rf), None)
+        .render_frame(&Frame::new(boxes, &cam, &light).with_effects(Some(&h), Some(&rf), None))
         .unwrap();
     let after_one = gpu.pooled_bytes();
     assert!(after_one >= (cam.pixels() * 4 * 7) as u64, "{after_one}");
@@ -374,17 +396,18 @@ fn pooled_buffers_give_the_same_frames_and_do_not_grow() {
         Mat3::IDENTITY,
     )
     .unwrap();
-    gpu.render(boxes, &small, &light, None, None, None).unwrap();
+    gpu.render_frame(&Frame::new(boxes, &small, &light).with_effects(None, None, None))
+        .unwrap();
     let dry = RainRegion::new(1.0, &[1.0], 2.0, [0.0; 3], 0.0, 9).unwrap();
     let drizzle = RainFrame { region: &dry, ..rf };
-    gpu.render(boxes, &cam, &light, Some(&h), Some(&drizzle), None)
+    gpu.render_frame(&Frame::new(boxes, &cam, &light).with_effects(Some(&h), Some(&drizzle), None))
         .unwrap();
     let again = gpu
-        .render(boxes, &cam, &light, Some(&h), Some(&rf), None)
+        .render_frame(&Frame::new(boxes, &cam, &light).with_effects(Some(&h), Some(&rf), None))
         .unwrap();
     assert_eq!(again, first);
     let settled = gpu.pooled_bytes();
-    gpu.render(boxes, &cam, &light, Some(&h), Some(&rf), None)
+    gpu.render_frame(&Frame::new(boxes, &cam, &light).with_effects(Some(&h), Some(&rf), None))
         .unwrap();
     assert_eq!(gpu.pooled_bytes(), settled);
 }
@@ -420,23 +443,17 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
         spot(-5.0, Vec3::new(0.0, -0.3, -1.0)),
     ];
     let light = SceneLight::new(&sky, &amb).with_lights(&lights, 30.0);
-    let c = render(
-        SceneRef::Boxes(&scene),
-        &cam,
-        &light,
-        Some(&haze),
-        None,
-        None,
+    let c = render_frame(
+        &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(Some(&haze), None, None),
     )
     .unwrap();
     let g = gpu
-        .render(
-            SceneRef::Boxes(&scene),
-            &cam,
-            &light,
-            Some(&haze),
-            None,
-            None,
+        .render_frame(
+            &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(
+                Some(&haze),
+                None,
+                None,
+            ),
         )
         .unwrap();
     // As the box scene without lights: silhouettes (and a light at a skip level's edge) may
@@ -444,13 +461,13 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
     assert_rgb_agrees(&c.rgb, &g.rgb);
     // The lights really show: against the frame without them, the lamps lit much of it, and
     // the hidden lamp has no glow source.
-    let dark = render(
-        SceneRef::Boxes(&scene),
-        &cam,
-        &SceneLight::new(&sky, &amb).with_lights(&[], 30.0),
-        Some(&haze),
-        None,
-        None,
+    let dark = render_frame(
+        &Frame::new(
+            SceneRef::Boxes(&scene),
+            &cam,
+            &SceneLight::new(&sky, &amb).with_lights(&[], 30.0),
+        )
+        .with_effects(Some(&haze), None, None),
     )
     .unwrap();
     let brighter = c
@@ -473,7 +490,6 @@ fn gpu_matches_cpu_with_lamps_shadows_and_glows() {
 fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
     // Flakes (every sprite, near ones several pixels wide) and drops in one far-to-near list
     // over a photo of the CPU's box frame: the same counts, rgb and each effect's layers.
-    use skyfall_core::frame::float::render_into_reporting;
     use skyfall_core::snow::SNOW_ALBEDO;
     use skyfall_core::snow::flakes::SnowRegion;
     use skyfall_core::snow::streaks::{SnowFrame, SnowOpacity};
@@ -482,7 +498,10 @@ fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
     let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
     let amb = lit(&scene, &cam, &sky);
     let light = SceneLight::new(&sky, &amb);
-    let bg = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
+    let bg = render_frame(
+        &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(None, None, None),
+    )
+    .unwrap();
     let photo = SceneRef::Photo {
         rgb: &bg.rgb,
         depth_m: &bg.depth_m,
@@ -517,9 +536,11 @@ fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
             haze: Some(skyfall_core::haze::Haze::new(0.01, [1.0; 3], f32::INFINITY).unwrap()),
         };
         for rain in [None, Some(&rf)] {
-            let c = render(photo, &cam, &light, None, rain, Some(&sf)).unwrap();
+            let c =
+                render_frame(&Frame::new(photo, &cam, &light).with_effects(None, rain, Some(&sf)))
+                    .unwrap();
             let g = gpu
-                .render(photo, &cam, &light, None, rain, Some(&sf))
+                .render_frame(&Frame::new(photo, &cam, &light).with_effects(None, rain, Some(&sf)))
                 .unwrap();
             assert_eq!(c.rain, g.rain);
             assert_eq!(
@@ -537,13 +558,8 @@ fn gpu_snow_and_rain_match_the_cpu_in_one_list() {
                 ],
                 None => vec![(Layer::SnowAlpha, &mut s[..])],
             };
-            let (_, stats) = render_into_reporting(
-                photo,
-                &cam,
-                &light,
-                None,
-                rain,
-                Some(&sf),
+            let (_, stats) = draw(
+                &Frame::new(photo, &cam, &light).with_effects(None, rain, Some(&sf)),
                 FrameOut::from_layers(&mut rgb, &mut d, layers),
             )
             .unwrap();
@@ -610,9 +626,14 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
     let cover = accumulate(field, &weather, &params, None).unwrap();
     let snow = SnowRender::boxes(&cover).unwrap();
     let light = SceneLight::new(&sky, &amb).with_snow(Some(&snow));
-    let c = render(SceneRef::Boxes(&scene), &cam, &light, None, None, None).unwrap();
+    let c = render_frame(
+        &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(None, None, None),
+    )
+    .unwrap();
     let g = gpu
-        .render(SceneRef::Boxes(&scene), &cam, &light, None, None, None)
+        .render_frame(
+            &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(None, None, None),
+        )
         .unwrap();
     assert_rgb_agrees(&c.rgb, &g.rgb);
     let (c_snow, g_snow) = (
@@ -630,7 +651,9 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
     // Without the cover the GPU frame is the one it always was.
     let bare = SceneLight::new(&sky, &amb);
     let g0 = gpu
-        .render(SceneRef::Boxes(&scene), &cam, &bare, None, None, None)
+        .render_frame(
+            &Frame::new(SceneRef::Boxes(&scene), &cam, &bare).with_effects(None, None, None),
+        )
         .unwrap();
     assert!(g0.layer(Layer::SnowDepth).is_none());
     assert!(max_abs(&g0.rgb, &g.rgb).1 > 1000);
@@ -648,8 +671,11 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
     .unwrap();
     let psnow = SnowRender::photo(&pcover, &cam, &g0.depth_m, Vec3::ONE).unwrap();
     let plight = SceneLight::new(&sky, &amb).with_snow(Some(&psnow));
-    let cp = render(photo, &cam, &plight, None, None, None).unwrap();
-    let gp = gpu.render(photo, &cam, &plight, None, None, None).unwrap();
+    let cp =
+        render_frame(&Frame::new(photo, &cam, &plight).with_effects(None, None, None)).unwrap();
+    let gp = gpu
+        .render_frame(&Frame::new(photo, &cam, &plight).with_effects(None, None, None))
+        .unwrap();
     assert_eq!(cp.rgb, gp.rgb);
     assert_eq!(
         cp.layer(Layer::SnowDepth).unwrap(),

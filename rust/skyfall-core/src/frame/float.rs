@@ -2,64 +2,18 @@
 //! band by [`crate::stage::draw_bands`] (see the module docs of [`super`]).
 
 use super::passes::Particles;
-use super::scene::SceneLight;
 use super::stages::Frame;
 use super::{FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo};
 use crate::error::Result;
-use crate::haze::Haze;
 use crate::particles::composite::BAND_ROWS;
-use crate::rain::streaks::RainFrame;
-use crate::scene::camera::Camera;
-use crate::snow::streaks::{SnowFrame, SnowStats};
+use crate::snow::streaks::SnowStats;
 use crate::stage::{Output, Whole, draw_bands, draw_whole};
 
-/// Renders a frame on the CPU: its stages (the scene, the clouds, the haze, the glows, the
-/// particles) into new buffers.
-pub fn render(
-    scene: SceneRef<'_>,
-    cam: &Camera,
-    light: &SceneLight<'_>,
-    haze: Option<&Haze>,
-    rain: Option<&RainFrame<'_>>,
-    snow: Option<&SnowFrame<'_>>,
-) -> Result<FrameBuffers> {
-    render_frame(&Frame::new(scene, cam, light).with_effects(haze, rain, snow))
-}
-
-/// [`render`] of a [`Frame`].
+/// Renders `frame` on the CPU into new buffers (see [`draw`]).
 pub fn render_frame(frame: &Frame<'_>) -> Result<FrameBuffers> {
     FrameBuffers::filled(frame.cam, frame.layers(), |out| {
         draw(frame, out).map(|(rain, _)| rain)
     })
-}
-
-/// [`render`] into the caller's buffers (see [`FrameOut`]); the rain's report when it rains.
-pub fn render_into(
-    scene: SceneRef<'_>,
-    cam: &Camera,
-    light: &SceneLight<'_>,
-    haze: Option<&Haze>,
-    rain: Option<&RainFrame<'_>>,
-    snow: Option<&SnowFrame<'_>>,
-    out: FrameOut<'_>,
-) -> Result<Option<RainReport>> {
-    render_into_reporting(scene, cam, light, haze, rain, snow, out).map(|(rain, _)| rain)
-}
-
-/// [`render_into`], with the snow's report too.
-pub fn render_into_reporting(
-    scene: SceneRef<'_>,
-    cam: &Camera,
-    light: &SceneLight<'_>,
-    haze: Option<&Haze>,
-    rain: Option<&RainFrame<'_>>,
-    snow: Option<&SnowFrame<'_>>,
-    out: FrameOut<'_>,
-) -> Result<(Option<RainReport>, Option<SnowStats>)> {
-    draw(
-        &Frame::new(scene, cam, light).with_effects(haze, rain, snow),
-        out,
-    )
 }
 
 /// Draws `frame` into `out` (every value overwritten): its stages made once, then drawn band
@@ -114,6 +68,10 @@ mod tests {
     use super::*;
     use crate::error::{Error, Param};
     use crate::frame::fixture::one_box;
+    use crate::frame::scene::SceneLight;
+    use crate::haze::Haze;
+    use crate::rain::streaks::RainFrame;
+    use crate::scene::camera::Camera;
     use crate::sky::ambient::AmbientMap;
     use crate::sky::{Sky, cie::SkyKind};
     use crate::stage::layers::Layer;
@@ -123,7 +81,10 @@ mod tests {
     fn fused_frame_is_the_ray_cast_then_eq_2_per_pixel() {
         let (cam, scene, h, sky, amb) = one_box(40, 30);
         let light = SceneLight::new(&sky, &amb);
-        let fused = render(SceneRef::Boxes(&scene), &cam, &light, Some(&h), None, None).unwrap();
+        let fused = render_frame(
+            &Frame::new(SceneRef::Boxes(&scene), &cam, &light).with_effects(Some(&h), None, None),
+        )
+        .unwrap();
         let t_layer = fused.layer(Layer::Transmittance).unwrap().to_vec();
         for y in 0..30u32 {
             for x in 0..40u32 {
@@ -148,16 +109,16 @@ mod tests {
             }
         }
         // A photo of that frame rendered without haze comes back unchanged.
-        let plain = render(
-            SceneRef::Photo {
-                rgb: &fused.rgb,
-                depth_m: &fused.depth_m,
-            },
-            &cam,
-            &light,
-            None,
-            None,
-            None,
+        let plain = render_frame(
+            &Frame::new(
+                SceneRef::Photo {
+                    rgb: &fused.rgb,
+                    depth_m: &fused.depth_m,
+                },
+                &cam,
+                &light,
+            )
+            .with_effects(None, None, None),
         )
         .unwrap();
         assert_eq!(plain.rgb, fused.rgb);
@@ -199,7 +160,9 @@ mod tests {
             shelter: &[],
             shading: &shading,
         };
-        let want = render(scene, &cam, &light, Some(&h), Some(&rf), None).unwrap();
+        let want =
+            render_frame(&Frame::new(scene, &cam, &light).with_effects(Some(&h), Some(&rf), None))
+                .unwrap();
         let (mut rgb, mut d, mut t, mut a, mut rd) = (
             vec![f32::NAN; 3 * n],
             vec![f32::NAN; n],
@@ -216,9 +179,13 @@ mod tests {
                 (Layer::RainDepth, &mut rd[..]),
             ],
         );
-        let (stats, drops) = render_into(scene, &cam, &light, Some(&h), Some(&rf), None, out)
-            .unwrap()
-            .unwrap();
+        let (stats, drops) = draw(
+            &Frame::new(scene, &cam, &light).with_effects(Some(&h), Some(&rf), None),
+            out,
+        )
+        .map(|(r, _)| r)
+        .unwrap()
+        .unwrap();
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert!(stats.streaks > 0 && want.rain == Some((stats, drops)));
         assert_eq!(bits(&rgb), bits(&want.rgb));
@@ -229,7 +196,11 @@ mod tests {
         // Buffers that do not match the request are named.
         let short = FrameOut::from_layers(&mut rgb[1..], &mut d, []);
         assert!(matches!(
-            render_into(scene, &cam, &light, None, None, None, short),
+            draw(
+                &Frame::new(scene, &cam, &light).with_effects(None, None, None),
+                short
+            )
+            .map(|(r, _)| r),
             Err(Error::Length {
                 param: Param { name: "rgb", .. },
                 ..
@@ -237,7 +208,11 @@ mod tests {
         ));
         let missing = FrameOut::from_layers(&mut rgb, &mut d, []);
         assert!(matches!(
-            render_into(scene, &cam, &light, Some(&h), None, None, missing),
+            draw(
+                &Frame::new(scene, &cam, &light).with_effects(Some(&h), None, None),
+                missing
+            )
+            .map(|(r, _)| r),
             Err(Error::Length {
                 param: Param {
                     name: "transmittance",
@@ -255,7 +230,11 @@ mod tests {
             ],
         );
         assert!(matches!(
-            render_into(scene, &cam, &light, None, None, None, extra),
+            draw(
+                &Frame::new(scene, &cam, &light).with_effects(None, None, None),
+                extra
+            )
+            .map(|(r, _)| r),
             Err(Error::Length {
                 param: Param {
                     name: "rain_alpha",
@@ -280,16 +259,16 @@ mod tests {
         let amb = AmbientMap::uniform([1.0; 5]);
         let light = SceneLight::new(&sky, &amb);
         assert!(matches!(
-            render(
-                SceneRef::Photo {
-                    rgb: &[],
-                    depth_m: &[]
-                },
-                &cam,
-                &light,
-                None,
-                None,
-                None
+            render_frame(
+                &Frame::new(
+                    SceneRef::Photo {
+                        rgb: &[],
+                        depth_m: &[]
+                    },
+                    &cam,
+                    &light
+                )
+                .with_effects(None, None, None)
             ),
             // the photo's arrays are checked before any frame-sized allocation
             Err(Error::Length { .. })

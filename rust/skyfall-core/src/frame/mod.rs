@@ -32,7 +32,7 @@ pub mod scene;
 pub mod srgb8;
 pub mod stages;
 
-pub use float::{render, render_into};
+pub use float::{draw, render_frame};
 
 /// Largest frame (rgb + depth + layers, float32) the renderers allocate: 8 GiB, the
 /// documented largest frame (16384 × 16384, [`crate::ranges::SIDE_PX`]) with every value per
@@ -112,7 +112,7 @@ pub fn check_photo(cam: &Camera, rgb: &[f32], depth_m: &[f32]) -> Result<()> {
     check_depth(depth_m)
 }
 
-/// Where [`render_into`] writes a frame: buffers the caller owns, every value overwritten
+/// Where [`draw`] writes a frame: buffers the caller owns, every value overwritten
 /// (the Python binding passes numpy's arrays, so a frame's megabytes come from numpy's
 /// allocator, which asks for huge pages: a fresh frame then costs a few dozen page faults
 /// instead of one per 4 KiB).
@@ -126,7 +126,7 @@ pub struct FrameOut<'a> {
     pub layers: Layers<&'a mut [f32]>,
 }
 
-/// What [`render_into`] reports of the rain: streaks drawn and culled, drops generated.
+/// What [`draw`] reports of the rain: streaks drawn and culled, drops generated.
 pub type RainReport = (RainStats, usize);
 
 impl<'a> FrameOut<'a> {
@@ -176,11 +176,11 @@ impl<'a> FrameOut<'a> {
 
 impl FrameBuffers {
     /// A `cam` frame's buffers (with each layer of `drawn`), sized after the frame
-    /// is checked to fit, filled by a backend's `render_into`.
+    /// is checked to fit, filled by a backend's `draw`.
     pub fn filled<E: From<Error>>(
         cam: &Camera,
         drawn: LayerSet,
-        render_into: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
+        draw: impl FnOnce(FrameOut<'_>) -> std::result::Result<Option<RainReport>, E>,
     ) -> std::result::Result<Self, E> {
         check_frame_size(cam)?;
         let n = cam.pixels();
@@ -201,7 +201,7 @@ impl FrameBuffers {
             .zip(Layer::ALL)
             .filter_map(|(b, l)| b.as_mut().map(|b| (l, b.as_mut_slice())));
         let out = FrameOut::from_layers(&mut rgb, &mut depth, slices);
-        let rain = render_into(out)?;
+        let rain = draw(out)?;
         Ok(FrameBuffers {
             rgb,
             depth_m: depth,

@@ -609,7 +609,8 @@ mod tests {
     use super::*;
     use crate::color::{encode_srgb8, encode_srgb8_formula};
     use crate::frame::scene::SceneLight;
-    use crate::frame::{SceneRef, render};
+    use crate::frame::stages::Frame;
+    use crate::frame::{SceneRef, render_frame};
     use crate::rain::drops::RainRegion;
     use crate::rain::streaks::RainShading;
     use crate::scene::lights::Light;
@@ -692,16 +693,16 @@ mod tests {
         let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
         let amb = AmbientMap::uniform([1.0, 0.4, 0.4, 0.4, 0.4]);
         let light = SceneLight::new(&sky, &amb);
-        let reference = render(
-            SceneRef::Photo {
-                rgb: &linear,
-                depth_m: &depth,
-            },
-            &cam,
-            &light,
-            Some(&haze),
-            Some(&rf),
-            None,
+        let reference = render_frame(
+            &Frame::new(
+                SceneRef::Photo {
+                    rgb: &linear,
+                    depth_m: &depth,
+                },
+                &cam,
+                &light,
+            )
+            .with_effects(Some(&haze), Some(&rf), None),
         )
         .unwrap();
         let mut expected = vec![0u8; srgb.len()];
