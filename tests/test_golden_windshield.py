@@ -5,7 +5,9 @@ mid-sweep), small, against a PNG made from the code on purpose, with the bounds 
 
 It lives in ``tests/data/golden/windshield/`` so that regenerating it rewrites no other golden:
 ``SKYFALL_UPDATE_GOLDEN=1 .venv/bin/python -m pytest tests/test_golden_windshield.py``. The GPU
-backend renders the street; the windshield stage runs on the CPU after it (no GPU pass yet).
+backend renders the street; the demo's f/8 lens defocuses the drops, so the windshield stage
+runs on the CPU after the GPU frame's readback (drops in focus are GPU passes:
+``tests/test_windshield.py``).
 """
 
 from __future__ import annotations

@@ -189,8 +189,8 @@ def test_drops_refract_a_gradient_and_snell_agrees_with_the_offset_on_gentle_dro
 
 
 def test_the_gpu_pass_draws_the_cpus_windshield() -> None:
-    # the renderer's stage on both backends, drops in focus (a pinhole camera): the GPU pass's
-    # height map and refraction against the CPU's, over the same frame
+    # the renderer's stage on both backends, drops in focus (a pinhole camera): the GPU's
+    # field, lookup copy and refraction (in the frame's encoder) against the CPU's
     from skimage.metrics import structural_similarity
 
     from skyfall import Renderer, Weather, scenes
@@ -206,6 +206,12 @@ def test_the_gpu_pass_draws_the_cpus_windshield() -> None:
     assert 0.02 < cpu.layers["drop_mask"].mean() < 0.9
     ssim = structural_similarity(cpu.rgb, gpu.rgb, data_range=float(cpu.rgb.max()), channel_axis=-1)
     assert ssim >= 0.99
+    # drawn in the GPU frame's own encoder (the lookup copy too): the CPU's within f32 rounding
+    from skyfall import io
+
+    for name in ("drop_mask", "drop_height"):
+        np.testing.assert_allclose(gpu.layers[name], cpu.layers[name], atol=1e-5, err_msg=name)
+    assert np.abs(io.to_srgb8(cpu.rgb).astype(int) - io.to_srgb8(gpu.rgb)).max() <= 1
 
 
 # ---- issue 27, item 4: drops merge across cells, slide above Furmidge's size, the glass settles

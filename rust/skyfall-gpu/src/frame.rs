@@ -18,7 +18,6 @@ use skyfall_core::frame::{
 };
 use skyfall_core::snow::streaks::SnowStats;
 use skyfall_core::stage::{Output, Stage, Whole};
-use skyfall_core::windshield::stage::WindshieldStage;
 
 /// A device with every pass compiled, reused across frames.
 #[derive(Debug)]
@@ -118,11 +117,13 @@ impl GpuRenderer {
                     }
                 }
             };
-            // The layers the passes draw, one buffer each (the windshield's are drawn after
-            // the readback).
+            // The layers the passes draw, one buffer each (a defocused windshield's are drawn on
+            // the CPU after the readback).
+            let glass_on_gpu = prepared.windshield.as_ref().is_some_and(|w| w.in_focus());
+            let glass_layers = skyfall_core::windshield::stage::LAYERS;
             let mut layers: Layers<Pooled> = Layers::default();
             for l in Layer::ALL {
-                if drawn.contains(l) && !skyfall_core::windshield::stage::LAYERS.contains(l) {
+                if drawn.contains(l) && (glass_on_gpu || !glass_layers.contains(l)) {
                     match (l, snow_photo.take()) {
                         (Layer::SnowDepth, Some(b)) => layers.set(l, b),
                         (_, taken) => {
@@ -159,16 +160,21 @@ impl GpuRenderer {
                 self.rain
                     .encode(&mut f, &targets, (&p.streaks, p.far.is_some()))?;
             }
+            if let Some(ws) = prepared.windshield.as_ref().filter(|_| glass_on_gpu) {
+                self.windshield.encode(&mut f, &targets, ws)?;
+            }
             // One submission, one readback of every output.
             let FrameOut {
                 rgb: rgb_out,
                 depth_m: depth_out,
                 layers: mut layers_out,
             } = out;
-            let mut glass_layers = Layers::default();
-            for l in skyfall_core::windshield::stage::LAYERS.iter() {
-                if let Some(o) = layers_out.take(l) {
-                    glass_layers.set(l, o);
+            let mut cpu_glass_layers = Layers::default();
+            if !glass_on_gpu {
+                for l in glass_layers.iter() {
+                    if let Some(o) = layers_out.take(l) {
+                        cpu_glass_layers.set(l, o);
+                    }
                 }
             }
             let mut outputs = vec![(rgb, &mut *rgb_out), (depth, &mut *depth_out)];
@@ -178,46 +184,22 @@ impl GpuRenderer {
                 }
             }
             f.read_back(outputs)?;
-            // The windshield, over the frame read back: its in-focus drops by the GPU pass.
+            // The windshield's blades over the frame read back (its drops in focus were drawn
+            // in the frame's passes); a defocused windshield whole on the CPU.
             if let Some(ws) = &prepared.windshield {
-                let mut whole = Whole {
-                    width: cam.width as usize,
-                    rgb: rgb_out,
-                    depth_m: depth_out,
-                    layers: glass_layers,
-                };
-                self.draw_windshield(ws, &mut whole)?;
+                if glass_on_gpu {
+                    ws.draw_blades(rgb_out);
+                } else {
+                    ws.whole(&mut Whole {
+                        width: cam.width as usize,
+                        rgb: rgb_out,
+                        depth_m: depth_out,
+                        layers: cpu_glass_layers,
+                    })?;
+                }
             }
             Ok((prepared.rain_report(), prepared.snow_report()))
         })
-    }
-
-    /// The windshield over the frame read back: in focus, its height map and refraction in the
-    /// GPU pass (`WindshieldPass`, the CPU's within f32 rounding), then the blades on the CPU;
-    /// defocused, the CPU's stage.
-    fn draw_windshield(&self, ws: &WindshieldStage, frame: &mut Whole<'_>) -> Result<(), GpuError> {
-        if !ws.in_focus() {
-            return Ok(ws.whole(frame)?);
-        }
-        let (w, h) = (frame.width, frame.height());
-        let (centres, radii) = ws.metaballs_px();
-        let out = self.windshield.draw(
-            &self.ctx,
-            centres,
-            radii,
-            w,
-            h,
-            true,
-            frame.rgb,
-            ws.refraction(),
-        )?;
-        frame.rgb.copy_from_slice(&out.rgb);
-        if let Some(m) = frame.layers.get_mut(Layer::DropMask) {
-            m.copy_from_slice(&out.mask);
-        }
-        let height = frame.layers.get_mut(Layer::DropHeight).map(|b| &mut **b);
-        ws.finish(frame.rgb, &out.field, height);
-        Ok(())
     }
 
     /// Bytes of device memory the renderer keeps pooled between frames.

@@ -5,14 +5,17 @@
 //! the lookup copy is the CPU's. In focus only: the drops' defocus blur is the CPU's.
 
 use crate::context::{GpuContext, GpuError};
-use crate::pass::{Binding, ComputePass};
+use crate::pass::{Binding, ComputePass, FrameEncoder, FrameTargets};
 use crate::pool::{BufferPool, Pooled};
 use crate::readback::read_f32_into;
 use skyfall_core::error::{Error, Param};
+use skyfall_core::frame::layers::Layer;
 use skyfall_core::windshield::render::{self, CUTOFF, RefractMode, Refraction};
+use skyfall_core::windshield::stage::WindshieldStage;
 
 const FIELD: &str = include_str!("shaders/windshield_field.wgsl");
 const REFRACT: &str = include_str!("shaders/windshield_refract.wgsl");
+const LOOKUP: &str = include_str!("shaders/windshield_lookup.wgsl");
 const TILE: usize = 16;
 
 /// What the pass gives back: the field (H·W), the frame through the drops (H·W·3) and the
@@ -27,11 +30,54 @@ pub struct WindshieldOut {
     pub mask: Vec<f32>,
 }
 
-/// The two compiled pipelines.
+/// The metaballs binned into [`TILE`]² tiles, each in every tile its 4R square reaches, in index
+/// order (the order the CPU sums them in): (tiles across, balls (x, y, R, 0), offsets, items).
+fn tiles(
+    centres_px: &[[f32; 2]],
+    radii_px: &[f32],
+    width: usize,
+    height: usize,
+) -> (usize, Vec<[f32; 4]>, Vec<u32>, Vec<u32>) {
+    let (tx, ty) = (width.div_ceil(TILE), height.div_ceil(TILE));
+    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); tx * ty];
+    let mut balls: Vec<[f32; 4]> = Vec::with_capacity(centres_px.len());
+    for (i, (c, &rad)) in centres_px.iter().zip(radii_px).enumerate() {
+        balls.push([c[0], c[1], rad, 0.0]);
+        let reach = CUTOFF * rad;
+        let (x0, x1) = (c[0] - reach, c[0] + reach);
+        let (y0, y1) = (c[1] - reach, c[1] + reach);
+        if x1 < 0.0 || y1 < 0.0 || x0 > width as f32 || y0 > height as f32 {
+            continue;
+        }
+        let t = |v: f32, n: usize| ((v.max(0.0) as usize) / TILE).min(n - 1);
+        for tj in t(y0, ty)..=t(y1, ty) {
+            for ti in t(x0, tx)..=t(x1, tx) {
+                lists[tj * tx + ti].push(i as u32);
+            }
+        }
+    }
+    let mut offsets = Vec::with_capacity(tx * ty + 1);
+    let mut items = Vec::new();
+    offsets.push(0u32);
+    for l in &lists {
+        items.extend_from_slice(l);
+        offsets.push(items.len() as u32);
+    }
+    if balls.is_empty() {
+        balls.push([0.0; 4]);
+    }
+    if items.is_empty() {
+        items.push(0);
+    }
+    (tx, balls, offsets, items)
+}
+
+/// The compiled pipelines.
 #[derive(Debug)]
 pub struct WindshieldPass {
     field: ComputePass,
     refract: ComputePass,
+    lookup: ComputePass,
     pool: BufferPool,
 }
 
@@ -70,11 +116,92 @@ impl WindshieldPass {
                     ctx,
                     "windshield_refract",
                     REFRACT,
-                    &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite],
+                    &[Uniform, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite],
+                ),
+                lookup: ComputePass::new(
+                    ctx,
+                    "windshield_lookup",
+                    LOOKUP,
+                    &[Uniform, ReadOnly, ReadWrite],
                 ),
                 pool: BufferPool::default(),
             })
         })
+    }
+
+    /// Records the windshield stage's drops in focus into the frame's encoder, over its `rgb`
+    /// target in place: the field, the box-averaged lookup copy (`windshield_lookup.wgsl`, the
+    /// CPU's `render::lookup_copy` in the same order of sums), the refraction, `drop_mask` and
+    /// `drop_height`. The blades are the caller's (over the frame read back).
+    pub fn encode(
+        &self,
+        f: &mut FrameEncoder<'_>,
+        t: &FrameTargets<'_>,
+        ws: &WindshieldStage,
+    ) -> Result<(), GpuError> {
+        let r = ws.refraction();
+        if r.blur_px != 0.0 {
+            return Err(GpuError::Core(Error::Unusable {
+                param: Param {
+                    name: "blur_px",
+                    index: None,
+                },
+                value: r.blur_px,
+                message: "is not drawn by the GPU pass: blur on the CPU (blur_px = 0 here)".into(),
+            }));
+        }
+        let (width, height) = (f.cam.width as usize, f.cam.height as usize);
+        let n = width * height;
+        let (centres, radii) = ws.metaballs_px();
+        let (tx, balls, offsets, items) = tiles(centres, radii, width, height);
+        let s = width
+            .min(height)
+            .checked_div(r.lookup_px)
+            .map_or(1, |s| s.max(1));
+        let (lw, lh) = (width.div_ceil(s), height.div_ceil(s));
+        let fp = FieldParams {
+            dims: [width as u32, height as u32, tx as u32, 1],
+        };
+        let rp = RefractParams {
+            dims: [width as u32, height as u32, lw as u32, lh as u32],
+            opts: [
+                s as u32,
+                match r.mode {
+                    RefractMode::Offset => 0,
+                    RefractMode::Snell => 1,
+                },
+                0,
+                0,
+            ],
+            lens: [
+                r.focal_px as f32,
+                r.principal_px[0] as f32,
+                r.principal_px[1] as f32,
+                r.index as f32,
+            ],
+            more: [r.slope_px as f32, 0.0, 0.0, 0.0],
+        };
+        let lp = FieldParams {
+            dims: [width as u32, height as u32, lw as u32, s as u32],
+        };
+        let mask = t.layer(Layer::DropMask)?;
+        let height_layer = t.layer(Layer::DropHeight)?;
+        let fpu = f.uniform("windshield field params", &fp);
+        let rpu = f.uniform("windshield refract params", &rp);
+        let lpu = f.uniform("windshield lookup params", &lp);
+        let bb = f.upload("metaballs", &balls);
+        let ob = f.upload("tile offsets", &offsets);
+        let ib = f.upload("tile items", &items);
+        let field = f.target("field", n);
+        let look = f.target("lookup", lw * lh * 3);
+        f.dispatch(&self.field, &[&fpu, &bb, &ob, &ib, &field]);
+        f.dispatch(&self.lookup, &[&lpu, t.rgb, &look]);
+        f.dispatch(
+            &self.refract,
+            &[&rpu, &field, &look, t.rgb, mask, height_layer],
+        );
+        f.hold([fpu, rpu, lpu, bb, ob, ib, field, look]);
+        Ok(())
     }
 
     fn upload<T: bytemuck::Pod>(
@@ -139,32 +266,7 @@ impl WindshieldPass {
             }));
         }
         ctx.check_buffer("the windshield's frame", (n * 12) as u64)?;
-        // tiles: each metaball in every tile its 4R square reaches, in index order
-        let (tx, ty) = (width.div_ceil(TILE), height.div_ceil(TILE));
-        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); tx * ty];
-        let mut balls: Vec<[f32; 4]> = Vec::with_capacity(centres_px.len());
-        for (i, (c, &rad)) in centres_px.iter().zip(radii_px).enumerate() {
-            balls.push([c[0], c[1], rad, 0.0]);
-            let reach = CUTOFF * rad;
-            let (x0, x1) = (c[0] - reach, c[0] + reach);
-            let (y0, y1) = (c[1] - reach, c[1] + reach);
-            if x1 < 0.0 || y1 < 0.0 || x0 > width as f32 || y0 > height as f32 {
-                continue;
-            }
-            let t = |v: f32, n: usize| ((v.max(0.0) as usize) / TILE).min(n - 1);
-            for tj in t(y0, ty)..=t(y1, ty) {
-                for ti in t(x0, tx)..=t(x1, tx) {
-                    lists[tj * tx + ti].push(i as u32);
-                }
-            }
-        }
-        let mut offsets = Vec::with_capacity(tx * ty + 1);
-        let mut items = Vec::new();
-        offsets.push(0u32);
-        for l in &lists {
-            items.extend_from_slice(l);
-            offsets.push(items.len() as u32);
-        }
+        let (tx, balls, offsets, items) = tiles(centres_px, radii_px, width, height);
         let (look, lw, lh, scale) = render::lookup_copy(frame, width, height, r.lookup_px)?;
         let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST;
         let fp = FieldParams {
@@ -196,9 +298,10 @@ impl WindshieldPass {
             let ob = self.upload(ctx, "tile offsets", &offsets, STORAGE);
             let ib = self.upload(ctx, "tile items", &items, STORAGE);
             let lb = self.upload(ctx, "lookup", &look, STORAGE);
-            let frb = self.upload(ctx, "frame behind the glass", frame, STORAGE);
+            // the frame behind the glass, refracted in place
+            let rgb = self.upload(ctx, "rgb", frame, STORAGE);
             let field = self.pool.take(ctx, "field", (n * 4) as u64, STORAGE);
-            let rgb = self.pool.take(ctx, "rgb", (n * 12) as u64, STORAGE);
+            let height_layer = self.pool.take(ctx, "drop height", (n * 4) as u64, STORAGE);
             let mask = self.pool.take(ctx, "mask", (n * 4) as u64, STORAGE);
             let total = (n * 20) as u64;
             let staging = self.pool.take(
@@ -215,8 +318,13 @@ impl WindshieldPass {
             let (w, h) = (width as u32, height as u32);
             self.field
                 .dispatch(ctx, &mut enc, &[&fpu, &bb, &ob, &ib, &field], w, h);
-            self.refract
-                .dispatch(ctx, &mut enc, &[&rpu, &field, &lb, &frb, &rgb, &mask], w, h);
+            self.refract.dispatch(
+                ctx,
+                &mut enc,
+                &[&rpu, &field, &lb, &rgb, &mask, &height_layer],
+                w,
+                h,
+            );
             let mut at = 0;
             for (b, bytes) in [(&field, n * 4), (&rgb, n * 12), (&mask, n * 4)] {
                 enc.copy_buffer_to_buffer(&b.buffer, 0, &staging.buffer, at, bytes as u64);
@@ -224,7 +332,7 @@ impl WindshieldPass {
             }
             ctx.queue.submit([enc.finish()]);
             Ok((
-                [fpu, rpu, bb, ob, ib, lb, frb, field, rgb, mask],
+                [fpu, rpu, bb, ob, ib, lb, height_layer, field, rgb, mask],
                 staging,
                 total,
             ))

@@ -1,7 +1,8 @@
 // The frame seen through the windshield's drops (skyfall-core windshield::render::refract_frame,
 // in focus): coverage from the field's crossing of 0.5 over one pixel, the normal from central
 // differences, the lookup by the paper's offset (mode 0) or Snell's law (mode 1), bilinear and
-// mirrored in the box-averaged lookup copy, laid over the frame.
+// mirrored in the box-averaged lookup copy, laid over the frame (in place: a pixel reads only
+// its own value of the frame, the rest from the lookup copy).
 
 struct WsRefractParams {
     // width, height, lookup width, lookup height
@@ -17,9 +18,9 @@ struct WsRefractParams {
 @group(0) @binding(0) var<uniform> ws_r: WsRefractParams;
 @group(0) @binding(1) var<storage, read> ws_field: array<f32>;
 @group(0) @binding(2) var<storage, read> ws_look: array<f32>;
-@group(0) @binding(3) var<storage, read> ws_frame: array<f32>;
-@group(0) @binding(4) var<storage, read_write> ws_rgb: array<f32>;
-@group(0) @binding(5) var<storage, read_write> ws_mask: array<f32>;
+@group(0) @binding(3) var<storage, read_write> ws_rgb: array<f32>;  // the frame behind the glass, refracted in place
+@group(0) @binding(4) var<storage, read_write> ws_mask: array<f32>;
+@group(0) @binding(5) var<storage, read_write> ws_height: array<f32>;  // the field above its 0.5 threshold
 
 fn ws_at(x: u32, y: u32) -> f32 {
     return ws_field[y * ws_r.dims.x + x];
@@ -99,6 +100,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let glen = max(length(g), 1e-6);
     let m = clamp((v - 0.5) / glen + 0.5, 0.0, 1.0);
     ws_mask[p] = m;
+    ws_height[p] = max(v - 0.5, 0.0);
     var c = vec3<f32>(0.0, 0.0, 0.0);
     if (m > 0.0) {
         let s = ws_r.more.x;
@@ -122,6 +124,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         c = ws_sample(q.x / sc, q.y / sc);
     }
     for (var k = 0u; k < 3u; k = k + 1u) {
-        ws_rgb[p * 3u + k] = ws_frame[p * 3u + k] * (1.0 - m) + m * c[k];
+        ws_rgb[p * 3u + k] = ws_rgb[p * 3u + k] * (1.0 - m) + m * c[k];
     }
 }
