@@ -16,6 +16,7 @@ use skyfall_core::frame::stages::Frame;
 use skyfall_core::frame::{
     FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo,
 };
+use skyfall_core::particles::streak::PARTICLE_LAYERS;
 use skyfall_core::snow::streaks::SnowStats;
 use skyfall_core::stage::{Output, Stage, Whole};
 
@@ -154,11 +155,27 @@ impl GpuRenderer {
                 self.glow.encode(&mut f, &targets, &g.glow)?;
             }
             if let Some(p) = prepared.particles() {
+                // The particle layers' coverages as one array of planes, copied to the
+                // frame's layers after the passes.
+                let coverage = f.target("particle coverage", PARTICLE_LAYERS.len() * n);
                 if let Some(far) = &p.far {
-                    self.far.encode(&mut f, &targets, far)?;
+                    self.far.encode(&mut f, &targets, (far, &coverage))?;
                 }
                 self.rain
-                    .encode(&mut f, &targets, (&p.streaks, p.far.is_some()))?;
+                    .encode(&mut f, &targets, (&p.streaks, p.far.is_some(), &coverage))?;
+                let bytes = (n * 4) as u64;
+                for (k, l) in PARTICLE_LAYERS.iter().enumerate() {
+                    if let Some(target) = layers.get(l.coverage) {
+                        f.enc.copy_buffer_to_buffer(
+                            &coverage.buffer,
+                            k as u64 * bytes,
+                            &target.buffer,
+                            0,
+                            bytes,
+                        );
+                    }
+                }
+                f.hold([coverage]);
             }
             if let Some(ws) = prepared.windshield.as_ref().filter(|_| glass_on_gpu) {
                 self.windshield.encode(&mut f, &targets, ws)?;

@@ -34,6 +34,14 @@ pub fn shared_constants() -> String {
         u("SKIP_LEVELS", SKIP_LEVELS),
         f("SHADOW_OFFSET_M", SHADOW_OFFSET_M),
         f("SUN_RAY_M", SUN_RAY_M),
+        u(
+            "PARTICLE_LAYERS",
+            skyfall_core::particles::streak::PARTICLE_LAYERS.len(),
+        ),
+        u(
+            "LAYER_RAIN",
+            usize::from(skyfall_core::particles::streak::LAYER_RAIN),
+        ),
     ]
     .concat()
 }

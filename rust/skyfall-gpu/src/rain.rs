@@ -11,10 +11,10 @@
 
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
+use crate::pool::Pooled;
 use crate::uniforms::{CameraUniform, RainUniform};
-use skyfall_core::frame::layers::Layer;
 use skyfall_core::particles::binning::bin_by_tiles;
-use skyfall_core::particles::streak::ScreenStreak;
+use skyfall_core::particles::streak::{PARTICLE_LAYERS, ScreenStreak};
 
 const SOURCE: &str = include_str!("shaders/rain.wgsl");
 /// Tile width, px (see the module's note on tile size).
@@ -27,10 +27,11 @@ pub const TILE_H: u32 = 4;
 pub struct RainPass(ComputePass);
 
 impl FramePass for RainPass {
-    /// The prepared streaks, far to near (each with its light and r), and whether the far
-    /// pass drew the rain's far shells before them (the rain's layers then hold their
-    /// coverage and depth, which the streaks continue).
-    type Input<'i> = (&'i [ScreenStreak], bool);
+    /// The prepared streaks, far to near (each with its light and r); whether the far pass
+    /// drew the rain's far shells before them (the rain's coverage plane and the depth then
+    /// hold theirs, which the streaks continue); and the particle layers' coverage planes
+    /// ([`PARTICLE_LAYERS`] in order, W·H each), which the caller copies to the frame's layers.
+    type Input<'i> = (&'i [ScreenStreak], bool, &'i Pooled);
 
     fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
@@ -40,32 +41,32 @@ impl FramePass for RainPass {
             SOURCE,
             &[
                 Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadOnly, ReadWrite,
-                ReadWrite, ReadWrite,
+                ReadWrite,
             ],
         ))
     }
 
-    /// rgb composited in place, the rain's coverage and nearest depth and the snow's coverage
-    /// written (those the frame draws: each particle carries its layer);
+    /// rgb composited in place, every particle layer's coverage plane written, and the nearest
+    /// depth of the layers that have one (when the frame draws it);
     /// [`GpuError::TooLarge`] when the streaks or the tiles' lists of them do not fit one of
     /// the device's storage buffers.
     fn encode(
         &self,
         f: &mut FrameEncoder<'_>,
         t: &FrameTargets<'_>,
-        (streaks, after_far): Self::Input<'_>,
+        (streaks, after_far, coverage): Self::Input<'_>,
     ) -> Result<(), GpuError> {
         let cam = f.cam;
-        // A layer the frame does not draw is bound to a one-value stand-in, never written
+        // A frame without the depth layer binds a one-value stand-in, never written
         // (`params.layers`).
         let unused = f.target("unused layer", 1);
-        let rain_layers = t
-            .layers
-            .get(Layer::RainAlpha)
-            .zip(t.layers.get(Layer::RainDepth));
-        let snow_layer = t.layers.get(Layer::SnowAlpha);
-        let (alpha, rain_depth) = rain_layers.unwrap_or((&unused, &unused));
-        let snow_alpha = snow_layer.unwrap_or(&unused);
+        let depth_layer = PARTICLE_LAYERS.iter().find_map(|l| l.depth);
+        let rain_depth = depth_layer.and_then(|l| t.layers.get(l));
+        let depth_layers = PARTICLE_LAYERS
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.depth.is_some())
+            .fold(0u32, |m, (k, _)| m | 1 << k);
         let (offsets, mut indices) = bin_by_tiles(streaks, cam.width, cam.height, TILE_W, TILE_H)?;
         // rain_near_m, snow_near_m and the rates set how many streaks there are (a region's
         // volume goes as its radius cubed).
@@ -94,10 +95,9 @@ impl FramePass for RainPass {
             tiles_x: cam.width.div_ceil(TILE_W),
             tile_w: TILE_W,
             tile_h: TILE_H,
-            layers: u32::from(rain_layers.is_some())
-                | (u32::from(snow_layer.is_some()) << 1)
-                | (u32::from(after_far && rain_layers.is_some()) << 2),
-            pad: [0; 3],
+            layers: u32::from(rain_depth.is_some()) | (u32::from(after_far) << 2),
+            depth_layers,
+            pad: [0; 2],
         };
         let cam_buf = f.uniform("camera", &CameraUniform::new(cam));
         let params_buf = f.uniform("rain", &params);
@@ -114,9 +114,8 @@ impl FramePass for RainPass {
                 &indices_buf,
                 t.rgb,
                 t.depth,
-                alpha,
-                rain_depth,
-                snow_alpha,
+                coverage,
+                rain_depth.unwrap_or(&unused),
             ],
         );
         f.hold([

@@ -4,6 +4,7 @@
 
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
+use crate::pool::Pooled;
 use crate::uniforms::CameraUniform;
 use skyfall_core::frame::layers::Layer;
 use skyfall_core::rain::far::{BLOCK_PX, FAR_MAX_TAN, FarRain, TEXTURE_SIZE};
@@ -23,8 +24,8 @@ struct FarUniform {
 }
 
 impl FramePass for FarPass {
-    /// The frame's far rain.
-    type Input<'i> = &'i FarRain;
+    /// The frame's far rain, and the particle layers' coverage planes (the rain's is written).
+    type Input<'i> = (&'i FarRain, &'i Pooled);
 
     fn new(ctx: &GpuContext) -> Self {
         use Binding::*;
@@ -39,19 +40,16 @@ impl FramePass for FarPass {
         ))
     }
 
-    /// rgb composited in place, `rain_alpha` and `rain_depth_m` written (the rain's, which the
+    /// rgb composited in place, the rain's coverage plane and `rain_depth_m` written (which the
     /// rain pass continues); [`GpuError::TooLarge`] when the textures do not fit one of the
     /// device's storage buffers.
     fn encode(
         &self,
         f: &mut FrameEncoder<'_>,
         t: &FrameTargets<'_>,
-        far: Self::Input<'_>,
+        (far, coverage): Self::Input<'_>,
     ) -> Result<(), GpuError> {
-        let (Some(alpha), Some(rain_depth)) = (
-            t.layers.get(Layer::RainAlpha),
-            t.layers.get(Layer::RainDepth),
-        ) else {
+        let Some(rain_depth) = t.layers.get(Layer::RainDepth) else {
             // a frame with far rain draws the rain's layers (its plan declares them)
             return Ok(());
         };
@@ -91,7 +89,7 @@ impl FramePass for FarPass {
                 &lights,
                 t.rgb,
                 t.depth,
-                alpha,
+                coverage,
                 rain_depth,
             ],
         );

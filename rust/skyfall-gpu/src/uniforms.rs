@@ -63,12 +63,13 @@ pub struct RainUniform {
     pub tile_w: u32,
     /// Tile height, px.
     pub tile_h: u32,
-    /// The layers drawn: bit 0 the rain's (rain_alpha, rain_depth_m), bit 1 the snow's
-    /// (snow_alpha); bit 2: the far pass drew the rain's far shells into the rain's layers,
-    /// which the streaks continue.
+    /// Bit 0: the depth layer (`rain_depth_m`) is drawn; bit 2: the far pass drew the rain's
+    /// far shells into the rain's coverage plane and the depth, which the streaks continue.
     pub layers: u32,
+    /// Bit k: particle layer k's nearest visible particle is the depth layer's.
+    pub depth_layers: u32,
     /// Padding to 16 bytes.
-    pub pad: [u32; 3],
+    pub pad: [u32; 2],
 }
 
 /// `SceneInfo` in `shaders/scene_raycast.wgsl`.

@@ -83,6 +83,14 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
         ("SKIP_LEVELS", SKIP_LEVELS as f64),
         ("SHADOW_OFFSET_M", bits(SHADOW_OFFSET_M)),
         ("SUN_RAY_M", bits(SUN_RAY_M)),
+        (
+            "PARTICLE_LAYERS",
+            skyfall_core::particles::streak::PARTICLE_LAYERS.len() as f64,
+        ),
+        (
+            "LAYER_RAIN",
+            f64::from(skyfall_core::particles::streak::LAYER_RAIN),
+        ),
     ];
     assert_eq!(seen.len(), want.len(), "{seen:?}");
     for (name, v) in want {

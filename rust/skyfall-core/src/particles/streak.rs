@@ -26,6 +26,7 @@
 use super::Particle;
 use super::num::{ceil_nonneg, clamp01, floor_nonneg, idx_f32, least, pos};
 use crate::scene::camera::{Camera, Defocus};
+use crate::stage::layers::Layer;
 use glam::{Vec2, Vec3, Vec4};
 
 /// The share of a particle's band a sphere's silhouette covers, averaged along its path: a
@@ -69,6 +70,29 @@ pub struct ScreenStreak {
 pub const LAYER_RAIN: u8 = 0;
 /// Layer index of the snow's particles: `snow_alpha`.
 pub const LAYER_SNOW: u8 = 1;
+
+/// A particle effect's layers: its coverage, and the depth of its nearest visible particle
+/// when it has one (the rain's).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ParticleLayer {
+    /// The coverage 1 − ∏(1 − aᵢ) of the effect's particles.
+    pub coverage: Layer,
+    /// The depth of its nearest visible particle, m (inf: none).
+    pub depth: Option<Layer>,
+}
+
+/// Every particle effect's layers, indexed by a particle's layer index ([`LAYER_RAIN`],
+/// [`LAYER_SNOW`]): the GPU binds the coverages as one array of planes in this order.
+pub const PARTICLE_LAYERS: [ParticleLayer; 2] = [
+    ParticleLayer {
+        coverage: Layer::RainAlpha,
+        depth: Some(Layer::RainDepth),
+    },
+    ParticleLayer {
+        coverage: Layer::SnowAlpha,
+        depth: None,
+    },
+];
 
 /// The kinds of sprite a particle's path can carry across it.
 pub const SPRITE_FLAT: u8 = 0;

@@ -7,8 +7,8 @@ struct RainParams {
     tiles_x: u32,
     tile_w: u32,
     tile_h: u32,
-    layers: u32,  // bit 0: rain_alpha and rain_depth_m drawn; bit 1: snow_alpha; bit 2: continue the far pass's rain layers
-    pad0: u32,
+    layers: u32,  // bit 0: the depth layer (rain_depth_m) drawn; bit 2: continue the far pass's rain plane and depth
+    depth_layers: u32,  // bit k: particle layer k's nearest particle is the depth layer's
     pad1: u32,
     pad2: u32,
 }
@@ -45,9 +45,9 @@ fn sprite_profile(kind: u32, turn: f32, x: f32) -> f32 {
 @group(0) @binding(4) var<storage, read> indices: array<u32>;
 @group(0) @binding(5) var<storage, read_write> rgb: array<f32>;
 @group(0) @binding(6) var<storage, read> depth: array<f32>;
-@group(0) @binding(7) var<storage, read_write> alpha: array<f32>;
+// One coverage plane per particle layer (skyfall_core::particles::streak::PARTICLE_LAYERS), W·H each.
+@group(0) @binding(7) var<storage, read_write> coverage: array<f32>;
 @group(0) @binding(8) var<storage, read_write> rain_depth: array<f32>;
-@group(0) @binding(9) var<storage, read_write> snow_alpha: array<f32>;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -59,11 +59,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = vec2<f32>(f32(gid.x) + 0.5, f32(gid.y) + 0.5);
     let t = (gid.y / params.tile_h) * params.tiles_x + gid.x / params.tile_w;
     var c = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);
-    var keep = 1.0;
-    var keep_snow = 1.0;
+    let n = w * cam.size.y;
+    var keep: array<f32, PARTICLE_LAYERS>;
+    for (var k = 0u; k < PARTICLE_LAYERS; k++) {
+        keep[k] = 1.0;
+    }
     var z_min = infinity();
     if (params.layers & 4u) != 0u {
-        keep = 1.0 - alpha[i];
+        keep[LAYER_RAIN] = 1.0 - coverage[LAYER_RAIN * n + i];
         z_min = rain_depth[i];
     }
     let scene_depth = depth[i];
@@ -124,21 +127,19 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let fa = min(s2.z * cov, 1.0);
         let ar = fa * s2.w;  // r, per streak
         c += ar * (light - c);
-        if layer == 1u {
-            keep_snow *= 1.0 - fa;
-        } else {
-            keep *= 1.0 - fa;
+        let l = min(layer, PARTICLE_LAYERS - 1u);
+        keep[l] *= 1.0 - fa;
+        if ((params.depth_layers >> l) & 1u) != 0u {
             z_min = min(z_min, z);
         }
     }
     rgb[3u * i] = c.x;
     rgb[3u * i + 1u] = c.y;
     rgb[3u * i + 2u] = c.z;
-    if (params.layers & 1u) != 0u {
-        alpha[i] = 1.0 - keep;
-        rain_depth[i] = z_min;
+    for (var k = 0u; k < PARTICLE_LAYERS; k++) {
+        coverage[k * n + i] = 1.0 - keep[k];
     }
-    if (params.layers & 2u) != 0u {
-        snow_alpha[i] = 1.0 - keep_snow;
+    if (params.layers & 1u) != 0u {
+        rain_depth[i] = z_min;
     }
 }

@@ -1,6 +1,6 @@
 // The rain's far level of detail over the frame, per pixel: each shell's texture looked up
 // where the pixel's ray meets the shell, composited far to near before the near streaks
-// (rain.wgsl continues from the coverage and depth written here). CPU reference:
+// (rain.wgsl continues from the rain's coverage plane and the depth written here). CPU reference:
 // skyfall_core::rain::far (FarRain::composite), whose lookups are exact at each 16-pixel
 // segment's ends and linear between, and whose atan2 is a polynomial within 2e-5 rad.
 // Prepended with common.wgsl.
@@ -19,7 +19,7 @@ struct FarParams {
 @group(0) @binding(5) var<storage, read> lights: array<vec4<f32>>;  // per block and shell; w = 0: none
 @group(0) @binding(6) var<storage, read_write> rgb: array<f32>;
 @group(0) @binding(7) var<storage, read> depth: array<f32>;
-@group(0) @binding(8) var<storage, read_write> alpha: array<f32>;
+@group(0) @binding(8) var<storage, read_write> coverage: array<f32>;  // the particle layers' planes (rain_alpha's: LAYER_RAIN)
 @group(0) @binding(9) var<storage, read_write> rain_depth: array<f32>;
 
 @compute @workgroup_size(8, 8)
@@ -73,6 +73,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     rgb[3u * i] = c.x;
     rgb[3u * i + 1u] = c.y;
     rgb[3u * i + 2u] = c.z;
-    alpha[i] = 1.0 - keep;
+    coverage[LAYER_RAIN * w * cam.size.y + i] = 1.0 - keep;
     rain_depth[i] = z_min;
 }
