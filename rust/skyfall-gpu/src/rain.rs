@@ -97,7 +97,12 @@ impl FramePass for RainPass {
             tile_h: TILE_H,
             layers: u32::from(rain_depth.is_some()) | (u32::from(after_far) << 2),
             depth_layers,
-            pad: [0; 2],
+            planes: PARTICLE_LAYERS
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| t.layers.get(l.coverage).is_some())
+                .fold(0u32, |m, (k, _)| m | 1 << k),
+            pad: 0,
         };
         let cam_buf = f.uniform("camera", &CameraUniform::new(cam));
         let params_buf = f.uniform("rain", &params);

@@ -68,8 +68,10 @@ pub struct RainUniform {
     pub layers: u32,
     /// Bit k: particle layer k's nearest visible particle is the depth layer's.
     pub depth_layers: u32,
+    /// Bit k: particle layer k's coverage plane is drawn (the frame keeps its layer).
+    pub planes: u32,
     /// Padding to 16 bytes.
-    pub pad: [u32; 2],
+    pub pad: u32,
 }
 
 /// `SceneInfo` in `shaders/scene_raycast.wgsl`.

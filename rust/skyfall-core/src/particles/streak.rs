@@ -82,7 +82,8 @@ pub struct ParticleLayer {
 }
 
 /// Every particle effect's layers, indexed by a particle's layer index ([`LAYER_RAIN`],
-/// [`LAYER_SNOW`]): the GPU binds the coverages as one array of planes in this order.
+/// [`LAYER_SNOW`]): the GPU binds the coverages as one array of planes in this order (and keeps
+/// a pixel's coverage products in the lanes of one vector: at most four layers, asserted).
 pub const PARTICLE_LAYERS: [ParticleLayer; 2] = [
     ParticleLayer {
         coverage: Layer::RainAlpha,
@@ -93,6 +94,8 @@ pub const PARTICLE_LAYERS: [ParticleLayer; 2] = [
         depth: None,
     },
 ];
+
+const _: () = assert!(PARTICLE_LAYERS.len() <= 4);
 
 /// The kinds of sprite a particle's path can carry across it.
 pub const SPRITE_FLAT: u8 = 0;

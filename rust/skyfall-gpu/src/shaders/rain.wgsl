@@ -9,7 +9,7 @@ struct RainParams {
     tile_h: u32,
     layers: u32,  // bit 0: the depth layer (rain_depth_m) drawn; bit 2: continue the far pass's rain plane and depth
     depth_layers: u32,  // bit k: particle layer k's nearest particle is the depth layer's
-    pad1: u32,
+    planes: u32,  // bit k: particle layer k's coverage plane is drawn (the frame keeps it)
     pad2: u32,
 }
 
@@ -60,13 +60,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = (gid.y / params.tile_h) * params.tiles_x + gid.x / params.tile_w;
     var c = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);
     let n = w * cam.size.y;
-    var keep: array<f32, PARTICLE_LAYERS>;
-    for (var k = 0u; k < PARTICLE_LAYERS; k++) {
-        keep[k] = 1.0;
-    }
+    // ∏(1 − a) per particle layer, lane k for layer k (in registers: at most four layers)
+    let lanes = vec4<u32>(0u, 1u, 2u, 3u);
+    var keep = vec4<f32>(1.0);
     var z_min = infinity();
     if (params.layers & 4u) != 0u {
-        keep[LAYER_RAIN] = 1.0 - coverage[LAYER_RAIN * n + i];
+        keep = select(keep, vec4<f32>(1.0 - coverage[LAYER_RAIN * n + i]), lanes == vec4<u32>(LAYER_RAIN));
         z_min = rain_depth[i];
     }
     let scene_depth = depth[i];
@@ -128,7 +127,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let ar = fa * s2.w;  // r, per streak
         c += ar * (light - c);
         let l = min(layer, PARTICLE_LAYERS - 1u);
-        keep[l] *= 1.0 - fa;
+        keep *= select(vec4<f32>(1.0), vec4<f32>(1.0 - fa), lanes == vec4<u32>(l));
         if ((params.depth_layers >> l) & 1u) != 0u {
             z_min = min(z_min, z);
         }
@@ -137,7 +136,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     rgb[3u * i + 1u] = c.y;
     rgb[3u * i + 2u] = c.z;
     for (var k = 0u; k < PARTICLE_LAYERS; k++) {
-        coverage[k * n + i] = 1.0 - keep[k];
+        if ((params.planes >> k) & 1u) != 0u {
+            coverage[k * n + i] = 1.0 - keep[k];
+        }
     }
     if (params.layers & 1u) != 0u {
         rain_depth[i] = z_min;
