@@ -98,7 +98,7 @@ def test_layers_are_the_cores() -> None:
     glass = windshield.Windshield(5.0, glass_width_mm=100.0, glass_height_mm=100.0, wipers=0)
     snowy = Weather(rain_rate_mm_h=5.0, snow_rate_mm_h=0.5, visibility_m=500.0, windshield=glass)
     cover = snow.accumulate(scenes.street(), snowy, duration_s=600.0, dt_s=600.0, resolution_m=4.0)
-    sunny = dataclasses.replace(snowy, sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=200.0, clouds="cumulus")
+    sunny = dataclasses.replace(snowy, sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=200.0, clouds="cumulus", rain_duration_s=None)
     f = r.render(scenes.street(), dataclasses.replace(sunny, snow_cover=cover))
     assert list(f.layers) == list(_core.LAYERS)
     assert "cloud_alpha" not in r.render(scenes.street(), dataclasses.replace(snowy, snow_cover=cover)).layers

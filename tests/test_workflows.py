@@ -54,6 +54,7 @@ def test_drawn_layers_are_the_frames_own_arrays(renderer):
         sun_elevation_deg=30.0,
         sun_azimuth_deg=200.0,
         clouds="cumulus",
+        rain_duration_s=None,
     )
     frame = renderer.render(scenes.street(), dataclasses.replace(weather, snow_cover=cover))
     assert set(frame.layers) == set(_core.LAYERS)
@@ -86,6 +87,10 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
     cloudless = sunny.layers["cloud_alpha"] == 0.0
     sky_px = np.isinf(sunny.depth_m)
     assert cloudless.any() and (~cloudless).any() and sky_px.any()
+    # A street wet after the rain: its sky is the wet stage's untouched value.
+    wet = renderer.render(scenes.street(), Weather(rain_rate_mm_h=1.0, rain_duration_s=None, dry_s=1.0))
+    wet_sky = np.isinf(wet.depth_m)
+    assert wet_sky.any() and (wet.layers["wetness"] > 0).any()
     for name in _core.LAYERS:
         layer = clear.layer(name)
         assert layer.shape == (H, W) and layer.dtype == np.float32 and not layer.flags.writeable
@@ -99,6 +104,8 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
             untouched = sunny.layers[name][cloudless]
         elif name == "sun_transmittance":
             untouched = sunny.layers[name][sky_px]
+        elif name == "wetness":
+            untouched = wet.layers[name][wet_sky]
         else:
             untouched = rain.layers[name][empty]
         assert len(np.unique(layer)) == 1

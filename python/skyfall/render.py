@@ -517,7 +517,7 @@ class Renderer:
         bytes within 1 code (``"banded"`` and ``"float"``: exactly).
 
         - ``"fused"``: an 8-bit photo on the CPU backend, no windshield, no clouds, no snow
-          cover in the weather, and no layer asked for but ``rain_alpha`` and ``snow_alpha``:
+          cover and no wet surfaces in the weather, and no layer asked for but ``rain_alpha`` and ``snow_alpha``:
           each pixel decoded, hazed, composited and encoded once (the fastest);
         - ``"banded"``: on the CPU backend, anything else (box scenes and their glows, clouds,
           a snow cover, a windshield, any layer), in one core call: the frame's stages band by
@@ -559,6 +559,7 @@ class Renderer:
             and weather.windshield is None
             and weather.clouds is None
             and weather.snow_cover is None
+            and not weather._may_wet
             and set(names) <= set(FUSED_LAYERS)
         )
         return "fused" if fused else "banded"
@@ -1016,7 +1017,7 @@ def _particle_reach_m(weather: Weather) -> float:
     farthest drawn particle (the rain's ``rain_near_m`` when its streaks are drawn, the
     snow's ``snow_near_m`` when it snows), and a metre around the camera without any."""
     reach = 1.0
-    if weather.rain_rate_mm_h > 0 and weather.rain_streaks:
+    if weather.rain_rate_mm_h > 0 and weather.rain_streaks and weather.dry_s == 0:
         reach = max(reach, weather.rain_near_m + 1.0)
     if weather.snow_rate_mm_h > 0:
         reach = max(reach, weather.snow_near_m + 1.0)

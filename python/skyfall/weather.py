@@ -46,7 +46,21 @@ class Weather:
     rain_sheltered : bool
         Boxes (a box scene's, a photo's ``occluders``) keep the rain off what they cover: a
         drop whose path back up along its velocity meets a box is not drawn (default True).
-        Under an awning only what the wind blows in remains.
+        Under an awning only what the wind blows in remains. The same test keeps the water
+        film off sheltered surfaces (``rain_duration_s``).
+    rain_duration_s : float or None
+        How long the rain has fallen at ``rain_rate_mm_h`` on the surfaces, s, in [0, 1e7]:
+        it leaves a water film (README, "Wet surfaces") that darkens rough surfaces (Lekner &
+        Dorf) and mirrors the sky, the buildings, the lamps and the sun (Fresnel's
+        reflectance, 0.02 looking straight down, 1 at grazing), and the frame carries
+        ``layers["wetness"]`` (0-1). ``None``: long enough to fill every exposed surface
+        (1 mm). ``0`` (default): dry surfaces, the frame's bits unchanged. Drawn by the CPU
+        backend (float and 8-bit outputs); the GPU backend refuses a wet frame, naming this
+        parameter.
+    dry_s : float
+        How long ago that rain stopped, s, in [0, 1e7] (default 0: it is raining). The film
+        dries at 0.25 mm/h, and the frame draws no falling rain (no streaks, no rain in the
+        haze): the street after the rain.
     sky : "overcast" or int
         The sky's luminance distribution: ``"overcast"`` (default) is Yamamoto & Tadamura's CIE standard
         overcast sky, (1 + 2 sin(elevation)) / 3 of the zenith; 1-15 the CIE S 011 general
@@ -150,6 +164,8 @@ class Weather:
     rain_streaks: bool = True
     rain_method: str = "billboards"
     rain_sheltered: bool = True
+    rain_duration_s: float | None = 0.0
+    dry_s: float = 0.0
     sky: str | int = "overcast"
     sun_elevation_deg: float | None = None
     sun_azimuth_deg: float | None = None
@@ -182,6 +198,9 @@ class Weather:
         object.__setattr__(self, "rain_diameters_mm", diams)
         choice("rain_method", self.rain_method, ("drops", "billboards"))
         object.__setattr__(self, "snow_near_m", in_range("snow_near_m", self.snow_near_m))
+        if self.rain_duration_s is not None:
+            object.__setattr__(self, "rain_duration_s", in_range("rain_duration_s", self.rain_duration_s))
+        object.__setattr__(self, "dry_s", in_range("dry_s", self.dry_s))
         choice("snow_opacity", self.snow_opacity, ("extinction", "levels"))
         for name in ("rain_streaks", "rain_sheltered"):
             object.__setattr__(self, name, flag(name, getattr(self, name)))
@@ -253,6 +272,12 @@ class Weather:
     def extinction_per_m(self) -> float:
         """Total extinction sigma = sigma_air + sigma_rain + sigma_snow, 1/m."""
         return self._optics[2]
+
+    @property
+    def _may_wet(self) -> bool:
+        """Whether the rain may leave a film on the surfaces (the core decides whether it does,
+        after drying): the fused 8-bit path is then not taken."""
+        return self.rain_rate_mm_h > 0 and self.rain_duration_s != 0
 
     @property
     def cloud_base_height_m(self) -> float:

@@ -9,6 +9,11 @@ horizon sky), so the dusk stays dusk: before, any rain at all made that sky flat
 (175, 175, 175). At dusk the drops themselves are dim (they are lit by that sky): the rain
 shows as mist. The astronaut is a bright portrait 4 m away (a constant depth map), where the
 streaks show. Both need scikit-image and scipy (``make demo`` installs them).
+
+The wet photo is the bundled street, rendered dry and saved as an 8-bit photo with its depth
+map (what a user brings from a dashcam and a depth estimator), then wetted through the photo
+path: the road darkens and mirrors the photo's own buildings and sky by a march through its
+depth map, the pavement under the awning stays dry (the awning is among its ``occluders``).
 """
 
 from __future__ import annotations
@@ -20,9 +25,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from skyfall import Camera, PhotoScene, Renderer, Weather, io
+from skyfall import Camera, PhotoScene, Renderer, Weather, io, scenes
 
-__all__ = ["PHOTO_FRAMES", "PhotoFrame", "astronaut", "rocket"]
+__all__ = ["PHOTO_FRAMES", "PhotoFrame", "astronaut", "rocket", "street_photo"]
 
 
 def _resized(image: NDArray[np.uint8], width: int | None) -> NDArray[np.uint8]:
@@ -63,6 +68,17 @@ def astronaut(width: int | None = None) -> PhotoScene:
     return PhotoScene(img, np.full(img.shape[:2], 4.0, np.float32), camera=cam)
 
 
+def street_photo(width: int | None = None) -> PhotoScene:
+    """The bundled street rendered dry (16:9, ``width`` px wide, 640 by default) as an 8-bit
+    photo with its depth map, its camera, and its boxes as the photo's ``occluders``."""
+    w = 640 if width is None else width
+    h = w * 9 // 16
+    street = scenes.street()
+    clear = Renderer(w, h, backend="cpu").render(street)
+    occluders = [{"min": tuple(b[:3]), "max": tuple(b[3:6])} for b in np.asarray(street.boxes, dtype=float)]
+    return PhotoScene(io.to_srgb8(clear.rgb), clear.depth_m, camera=street.camera, occluders=occluders)
+
+
 @dataclass(frozen=True)
 class PhotoFrame:
     """A photo of the demo in the rain: ``{name}.png`` shows it before and after, side by side."""
@@ -87,8 +103,10 @@ class PhotoFrame:
 PHOTO_FRAMES = (
     PhotoFrame("photo_rain", rocket, Weather(rain_rate_mm_h=15.0)),
     PhotoFrame("photo_rain_portrait", astronaut, Weather(rain_rate_mm_h=25.0)),
+    PhotoFrame("photo_wet", street_photo, Weather(rain_rate_mm_h=5.0, rain_duration_s=None)),
 )
-"""The rocket at dusk in 15 mm/h rain, the astronaut in 25 mm/h."""
+"""The rocket at dusk in 15 mm/h rain, the astronaut in 25 mm/h, the street photo wet in
+5 mm/h."""
 
 
 def write(out: Path) -> list[Path]:

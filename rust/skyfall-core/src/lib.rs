@@ -37,6 +37,7 @@ pub mod sky;
 pub mod snow;
 pub mod stage;
 pub mod weather;
+pub mod wet;
 pub mod windshield;
 
 pub use error::{Error, Result};

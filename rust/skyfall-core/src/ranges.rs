@@ -109,6 +109,18 @@ pub const ROUGHNESS: Limit = Limit::new(
     Range::closed(0.0, 1.0, ""),
     "amplitude of the snow cover's random factor r = 1 + roughness u, u in [-1, 1]",
 );
+/// How long the rain has fallen on the surfaces (`Weather.rain_duration_s`).
+pub const RAIN_DURATION_S: Limit = Limit::new(
+    "rain_duration_s",
+    Range::closed(0.0, 1e7, "s"),
+    "how long the rain has fallen on the surfaces (0: dry surfaces; None: long enough to fill them)",
+);
+/// How long ago the rain stopped (`Weather.dry_s`).
+pub const DRY_S: Limit = Limit::new(
+    "dry_s",
+    Range::closed(0.0, 1e7, "s"),
+    "how long ago the rain stopped: the surfaces dry and no rain falls (0: it is raining)",
+);
 /// Meteorological visibility of the air without rain.
 pub const VISIBILITY_M: Limit = Limit::new(
     "visibility_m",
@@ -546,6 +558,8 @@ pub const ALL: &[Limit] = &[
     DT_S,
     RESOLUTION_M,
     ROUGHNESS,
+    RAIN_DURATION_S,
+    DRY_S,
     VISIBILITY_M,
     SKY_ILLUMINANCE_LUX,
     WIND_M_S,

@@ -57,6 +57,12 @@ pub struct Weather {
     pub rain_method: RainMethod,
     /// Whether boxes keep the rain off what they cover.
     pub rain_sheltered: bool,
+    /// How long the rain has fallen at `rain_rate_mm_h` on the surfaces, s: their water film
+    /// ([`crate::wet`]); None: long enough to fill them; 0: dry surfaces (no wet stage).
+    pub rain_duration_s: Option<f64>,
+    /// How long ago that rain stopped, s: the surfaces dry ([`crate::wet::film`]), and no rain
+    /// falls in the frame (no streaks, no rain in the haze); 0: it is raining.
+    pub dry_s: f64,
     /// The sky.
     pub sky: SkySpec,
     /// The sun's (elevation, azimuth), deg, for the skies that need one.
@@ -98,6 +104,10 @@ impl Weather {
             }
         }
         ranges::SNOW_NEAR_M.check(self.snow_near_m)?;
+        if let Some(t) = self.rain_duration_s {
+            ranges::RAIN_DURATION_S.check(t)?;
+        }
+        ranges::DRY_S.check(self.dry_s)?;
         ranges::RAIN_DIAMETERS_MM.check_all(&self.rain_diameters_mm)?;
         if let Some((el, az)) = self.sun_deg {
             ranges::SUN_ELEVATION_DEG.check(el)?;
@@ -134,9 +144,28 @@ impl Weather {
         }
     }
 
-    /// Extinction by rain, 1/m ([`rain_extinction_per_m`] of the rate).
+    /// Extinction by rain, 1/m ([`rain_extinction_per_m`] of the rate falling).
     pub fn rain_extinction_per_m(&self) -> f64 {
-        rain_extinction_per_m(self.rain_rate_mm_h)
+        rain_extinction_per_m(self.falling_rain_mm_h())
+    }
+
+    /// The rain rate falling in the frame, mm/h: `rain_rate_mm_h`, or 0 once the rain stopped
+    /// (`dry_s` > 0).
+    pub fn falling_rain_mm_h(&self) -> f64 {
+        if self.dry_s > 0.0 {
+            0.0
+        } else {
+            self.rain_rate_mm_h
+        }
+    }
+
+    /// The water the rain left on the surfaces ([`crate::wet::film`]).
+    pub fn film(&self) -> crate::wet::film::Film {
+        crate::wet::film::Film {
+            rate_mm_h: self.rain_rate_mm_h,
+            duration_s: self.rain_duration_s,
+            dry_s: self.dry_s,
+        }
     }
 
     /// Extinction by falling snow, 1/m ([`Snowfall::extinction_per_m`] of the rate; 0 without
@@ -177,7 +206,7 @@ impl Weather {
     /// The cloud base H in use, m: the given one, or [`cloud_base_m`] of the rain rate.
     pub fn cloud_base_height_m(&self) -> f64 {
         self.cloud_base_m
-            .unwrap_or_else(|| cloud_base_m(self.rain_rate_mm_h))
+            .unwrap_or_else(|| cloud_base_m(self.falling_rain_mm_h()))
     }
 
     /// The sun's direct light: its direction (unit, towards it) and its normal illuminance at
@@ -239,7 +268,7 @@ impl Weather {
             Drawn {
                 radius_m: self.rain_near_m as f32,
                 extinction_per_m: (self.rain_extinction_per_m()
-                    * drawn_share(self.rain_rate_mm_h, &self.rain_diameters_mm))
+                    * drawn_share(self.falling_rain_mm_h(), &self.rain_diameters_mm))
                     as f32,
             }
         } else {
@@ -261,7 +290,7 @@ impl Weather {
 
     /// Whether the frame draws the rain near the camera as streaks.
     pub fn draws_streaks(&self) -> bool {
-        self.rain_rate_mm_h > 0.0 && self.rain_streaks
+        self.falling_rain_mm_h() > 0.0 && self.rain_streaks
     }
 
     /// The rain region of a frame at `time_s` with `seed`, when it draws streaks.
@@ -276,7 +305,7 @@ impl Weather {
     /// draw them).
     pub fn region(&self, time_s: f64, seed: u64) -> Result<RainRegion> {
         let mut region = RainRegion::new(
-            self.rain_rate_mm_h,
+            self.falling_rain_mm_h(),
             &self.rain_diameters_mm,
             self.rain_near_m,
             self.wind_m_s,
@@ -367,6 +396,8 @@ mod tests {
             rain_streaks: true,
             rain_method: RainMethod::Billboards,
             rain_sheltered: true,
+            rain_duration_s: Some(0.0),
+            dry_s: 0.0,
             sky: SkySpec::Overcast,
             sun_deg: None,
             cloud_base_m: None,

@@ -612,6 +612,8 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
         rain_streaks: true,
         rain_method: skyfall_core::rain::drops::RainMethod::Billboards,
         rain_sheltered: true,
+        rain_duration_s: Some(0.0),
+        dry_s: 0.0,
         sky: skyfall_core::weather::SkySpec::Overcast,
         sun_deg: None,
         cloud_base_m: None,

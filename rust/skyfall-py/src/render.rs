@@ -13,7 +13,6 @@ use skyfall_core::frame::float::draw;
 use skyfall_core::frame::layers::{Layer, Layers};
 use skyfall_core::frame::request::FrameSetup;
 use skyfall_core::frame::srgb8::{Photo8, Photo8Out, render_photo8 as render_photo8_core};
-use skyfall_core::frame::stages::Frame;
 use skyfall_core::frame::{FrameOut, RainReport, check_frame_size};
 use skyfall_core::rain::streaks::RainStats;
 use skyfall_core::snow::streaks::SnowStats;
@@ -80,10 +79,8 @@ pub fn render_frame<'py>(
     let parsed: ParsedRequest<'py> = request.parse(true)?;
     let req = parsed.request()?;
     let setup = FrameSetup::new(&req).map_err(CoreError)?;
-    let (cam, light, rain, snow) = (&req.camera, setup.light(), setup.rain(), setup.snow());
-    let frame = Frame::new(req.scene_ref(), cam, &light)
-        .with_effects(setup.haze.as_ref(), rain.as_ref(), snow.as_ref())
-        .with_windshield(parsed.glass(), setup.defocus());
+    let (cam, effects) = (&req.camera, setup.effects());
+    let frame = effects.frame(req.scene_ref(), cam, parsed.glass());
     // Into numpy's arrays (see `FrameOut`): the caller's (`out`) where given, else new ones,
     // sized once the frame is known to fit.
     check_frame_size(cam).map_err(CoreError)?;
@@ -176,10 +173,8 @@ pub fn render_frame8<'py>(
     let parsed: ParsedRequest<'py> = request.parse(true)?;
     let req = parsed.request()?;
     let setup = FrameSetup::new(&req).map_err(CoreError)?;
-    let (light, rain, snow) = (setup.light(), setup.rain(), setup.snow());
-    let frame = Frame::new(req.scene_ref(), &req.camera, &light)
-        .with_effects(setup.haze.as_ref(), rain.as_ref(), snow.as_ref())
-        .with_windshield(parsed.glass(), setup.defocus());
+    let effects = setup.effects();
+    let frame = effects.frame(req.scene_ref(), &req.camera, parsed.glass());
     let out = out_w.as_slice_mut()?;
     let (report, snow_report) = py
         .detach(|| draw_srgb8(&frame, out, slices))
@@ -225,11 +220,9 @@ pub fn render_photo8<'py>(
         )
     })?;
     // Which stages the fused 8-bit output draws is the stages' own declaration.
-    let light = setup.light();
-    let (rain, snow) = (setup.rain(), setup.snow());
-    let frame = Frame::new(req.scene_ref(), &req.camera, &light)
-        .with_effects(setup.haze.as_ref(), rain.as_ref(), snow.as_ref())
-        .with_windshield(parsed.glass(), setup.defocus());
+    let effects = setup.effects();
+    let (rain, snow) = (&effects.rain, &effects.snow);
+    let frame = effects.frame(req.scene_ref(), &req.camera, parsed.glass());
     frame.plan().check(Output::Srgb8).map_err(CoreError)?;
     let depth_m = match req.scene_ref() {
         skyfall_core::frame::SceneRef::Photo { depth_m, .. } => depth_m,

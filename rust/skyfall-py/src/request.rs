@@ -36,6 +36,10 @@ pub struct WeatherSpec {
     rain_streaks: bool,
     rain_method: String,
     rain_sheltered: bool,
+    #[pyo3(default)]
+    rain_duration_s: Option<f64>,
+    #[pyo3(default)]
+    dry_s: f64,
     sky: SkyArg,
     sun_elevation_deg: Option<f64>,
     sun_azimuth_deg: Option<f64>,
@@ -84,6 +88,8 @@ impl WeatherSpec {
             rain_streaks: self.rain_streaks,
             rain_method: RainMethod::parse(&self.rain_method).map_err(CoreError)?,
             rain_sheltered: self.rain_sheltered,
+            rain_duration_s: self.rain_duration_s,
+            dry_s: self.dry_s,
             sky,
             sun_deg,
             cloud_base_m: self.cloud_base_m,

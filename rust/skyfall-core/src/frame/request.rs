@@ -4,6 +4,7 @@
 
 use super::SceneRef;
 use super::scene::{SceneLight, SunLight};
+use super::stages::Frame;
 use crate::cloud::frame::{CloudField, CloudLight, CloudPass, VolumeView};
 use crate::error::Result;
 use crate::error::{Error, Param};
@@ -21,6 +22,7 @@ use crate::snow::cover::{SnowCover, SnowRender};
 use crate::snow::flakes::SnowRegion;
 use crate::snow::streaks::{SnowFrame, SnowOpacity};
 use crate::weather::Weather;
+use crate::windshield::stage::Glass;
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -91,6 +93,18 @@ pub struct FrameRequest<'a> {
     pub clouds: Option<&'a Arc<CloudField>>,
 }
 
+/// The rain on a frame's surfaces: what it left (the film), the wind that slanted it, and the
+/// boxes that kept it off what they cover.
+#[derive(Debug, Clone)]
+pub struct WetWeather {
+    /// The water the rain left.
+    pub film: crate::wet::film::Film,
+    /// The wind, m/s.
+    pub wind_m_s: [f64; 3],
+    /// The boxes that keep the rain off (empty without `rain_sheltered`).
+    pub shelter: Vec<SceneBox>,
+}
+
 /// What a frame's passes need, derived from its request.
 #[derive(Debug, Clone)]
 pub struct FrameSetup {
@@ -113,6 +127,7 @@ pub struct FrameSetup {
     /// The sun on a box scene's surfaces: its direction and normal illuminance over E.
     sun: Option<(Vec3, f32)>,
     eye_m: glam::DVec3,
+    wet: Option<WetWeather>,
 }
 
 impl FrameRequest<'_> {
@@ -212,6 +227,16 @@ impl FrameSetup {
         } else {
             Vec::new()
         };
+        let film = w.film();
+        let wet = film.any().then(|| WetWeather {
+            film,
+            wind_m_s: w.wind_m_s,
+            shelter: if w.rain_sheltered {
+                boxes.to_vec()
+            } else {
+                Vec::new()
+            },
+        });
         let v = req.camera_velocity_m_s;
         let lens = req
             .lens
@@ -264,6 +289,7 @@ impl FrameSetup {
             _ => None,
         };
         Ok(FrameSetup {
+            wet,
             clouds,
             sun,
             eye_m: req.camera.position_m,
@@ -306,6 +332,11 @@ impl FrameSetup {
             .with_sky_light(sun, clouds)
     }
 
+    /// The rain on the surfaces, when it wets them.
+    pub fn wet(&self) -> Option<&WetWeather> {
+        self.wet.as_ref()
+    }
+
     /// The camera's thin lens at the frame's resolution (None: a pinhole).
     pub fn defocus(&self) -> Option<Defocus> {
         self.lens
@@ -324,6 +355,17 @@ impl FrameSetup {
         })
     }
 
+    /// The frame's light and effects, made once ([`Effects::frame`] builds the [`Frame`]
+    /// that borrows them).
+    pub fn effects(&self) -> Effects<'_> {
+        Effects {
+            light: self.light(),
+            rain: self.rain(),
+            snow: self.snow(),
+            setup: self,
+        }
+    }
+
     /// The snow the frame draws, when it snows.
     pub fn snow(&self) -> Option<SnowFrame<'_>> {
         self.snow
@@ -339,6 +381,39 @@ impl FrameSetup {
                 opacity: *opacity,
                 haze: self.haze,
             })
+    }
+}
+
+/// What a [`Frame`] borrows from its [`FrameSetup`]: the light, the rain and the snow (made
+/// from it once), with the setup itself for the rest (the haze, the lens, the wet surfaces).
+pub struct Effects<'s> {
+    /// How the scene is lit.
+    pub light: SceneLight<'s>,
+    /// The rain, when it rains streaks.
+    pub rain: Option<RainFrame<'s>>,
+    /// The snowfall, when it snows.
+    pub snow: Option<SnowFrame<'s>>,
+    setup: &'s FrameSetup,
+}
+
+impl Effects<'_> {
+    /// The frame of `scene` seen by `cam` (through `glass` when given) with every effect of the
+    /// setup: the one place a request's frame is put together, so a new effect's field reaches
+    /// every output from here.
+    pub fn frame<'a>(
+        &'a self,
+        scene: SceneRef<'a>,
+        cam: &'a Camera,
+        glass: Option<&'a Glass>,
+    ) -> Frame<'a> {
+        Frame::new(scene, cam, &self.light)
+            .with_effects(
+                self.setup.haze.as_ref(),
+                self.rain.as_ref(),
+                self.snow.as_ref(),
+            )
+            .with_windshield(glass, self.setup.defocus())
+            .with_wet(self.setup.wet())
     }
 }
 

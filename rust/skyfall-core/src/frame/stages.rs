@@ -25,6 +25,7 @@ use crate::scene::camera::Defocus;
 use crate::snow::streaks::{SnowFrame, SnowStats};
 use crate::stage::layers::{Layer, LayerSet};
 use crate::stage::{Declared, Output, Plan, Stage};
+use crate::wet::stage::{Surfaces, WetFrame, WetStage};
 use crate::windshield::stage::{Glass, WindshieldStage};
 
 /// What one frame draws: the scene seen by the camera under its light, and the effects.
@@ -44,6 +45,8 @@ pub struct Frame<'a> {
     pub snow: Option<&'a SnowFrame<'a>>,
     /// The windshield in front of the camera, and the camera's thin lens that blurs its drops.
     pub windshield: Option<(&'a Glass, Option<Defocus>)>,
+    /// The rain the surfaces received, when it wets them.
+    pub wet: Option<&'a super::request::WetWeather>,
 }
 
 impl<'a> Frame<'a> {
@@ -57,6 +60,15 @@ impl<'a> Frame<'a> {
             rain: None,
             snow: None,
             windshield: None,
+            wet: None,
+        }
+    }
+
+    /// The same with the rain `wet` on its surfaces (None, or a film that wets nothing: dry).
+    pub fn with_wet(self, wet: Option<&'a super::request::WetWeather>) -> Self {
+        Frame {
+            wet: wet.filter(|w| w.film.any()),
+            ..self
         }
     }
 
@@ -109,6 +121,17 @@ impl<'a> Frame<'a> {
                 "it draws 8-bit photos; a box scene is drawn by the banded 8-bit output (frame::encoded)"
             },
         }];
+        if self.wet.is_some() {
+            plan.push(Declared {
+                name: "wet",
+                layers: crate::wet::stage::LAYERS,
+                srgb8: false,
+                gpu: false,
+                param: "rain_duration_s",
+                why_not: "wet surfaces are drawn by the CPU backend's float and banded 8-bit \
+                          outputs only (set rain_duration_s=0 for dry surfaces)",
+            });
+        }
         if light.clouds.is_some() {
             plan.push(Declared {
                 name: "clouds",
@@ -200,6 +223,22 @@ impl<'a> Frame<'a> {
             Some(p) => Some(PreparedParticles::Listed(p)),
             None => None,
         };
+        let wet = self.wet.and_then(|w| {
+            WetStage::new(WetFrame {
+                surfaces: match self.scene {
+                    SceneRef::Boxes(b) => Surfaces::Boxes(b),
+                    SceneRef::Photo { rgb, depth_m } => Surfaces::Photo { rgb, depth_m },
+                },
+                cam,
+                film: w.film,
+                wind_m_s: w.wind_m_s,
+                shelter: &w.shelter,
+                light,
+                lamps: light.lights,
+                sky_illuminance_lux: light.sky_illuminance_lux,
+                sun: light.sun.map(|s| (s.direction, s.relative)),
+            })
+        });
         let windshield = self
             .windshield
             .map(|(glass, defocus)| WindshieldStage::new(glass, cam, defocus.as_ref()))
@@ -210,6 +249,7 @@ impl<'a> Frame<'a> {
                 cam,
                 light,
             },
+            wet,
             clouds,
             haze,
             glow: glow.map(|glow| GlowStage { glow, cam }),
@@ -232,6 +272,8 @@ pub enum PreparedParticles {
 pub struct Prepared<'a> {
     /// The scene: the box scene ray cast (with its snow cover and the sun), or the photo.
     pub scene: SceneStage<'a>,
+    /// The wet surfaces, when the rain wets them.
+    pub wet: Option<WetStage<'a>>,
     /// The clouds, when the sky has them.
     pub clouds: Option<CloudStage<'a>>,
     /// The haze, when the weather has any.
@@ -248,6 +290,9 @@ impl Prepared<'_> {
     /// The stages, in drawing order.
     pub fn stages(&self) -> Vec<&dyn Stage> {
         let mut list: Vec<&dyn Stage> = vec![&self.scene];
+        if let Some(s) = &self.wet {
+            list.push(s);
+        }
         if let Some(s) = &self.clouds {
             list.push(s);
         }

@@ -27,6 +27,9 @@ pub enum Layer {
     /// The windshield's metaball field above its 0.5 threshold, 0 off the drops (the
     /// windshield stage).
     DropHeight,
+    /// The share of the visible surface under the rain's water film, 0–1; 0 on the sky, dry
+    /// and snow-covered surfaces (the wet stage).
+    Wetness,
 }
 
 /// A set of layers: what a stage draws ([`super::Stage::layers`]), and what a frame's stages
@@ -86,7 +89,7 @@ impl LayerSet {
 }
 
 /// How many layers there are.
-pub const LAYER_COUNT: usize = 9;
+pub const LAYER_COUNT: usize = 10;
 
 impl Layer {
     /// Every layer, in the order frames list them.
@@ -100,6 +103,7 @@ impl Layer {
         Layer::SunTransmittance,
         Layer::DropMask,
         Layer::DropHeight,
+        Layer::Wetness,
     ];
 
     /// The layer's name, as users see it (`frame.layers[name]`, EXR channel names).
@@ -114,6 +118,7 @@ impl Layer {
             Layer::DropHeight => "drop_height",
             Layer::CloudAlpha => "cloud_alpha",
             Layer::SunTransmittance => "sun_transmittance",
+            Layer::Wetness => "wetness",
         }
     }
 
@@ -133,6 +138,7 @@ impl Layer {
             Layer::SunTransmittance => {
                 "share of direct sunlight reaching the visible surface (boxes' and clouds' shadows)"
             }
+            Layer::Wetness => "share of the visible surface under the rain's water film, 0-1",
         }
     }
 
@@ -148,6 +154,7 @@ impl Layer {
             Layer::DropMask | Layer::DropHeight => 0.0,
             Layer::CloudAlpha => 0.0,
             Layer::SunTransmittance => 1.0,
+            Layer::Wetness => 0.0,
         }
     }
 

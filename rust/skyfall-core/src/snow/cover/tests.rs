@@ -22,6 +22,8 @@ fn weather(rate: f64, wind: [f64; 3]) -> Weather {
         rain_streaks: true,
         rain_method: crate::rain::drops::RainMethod::Billboards,
         rain_sheltered: true,
+        rain_duration_s: Some(0.0),
+        dry_s: 0.0,
         sky: crate::weather::SkySpec::Overcast,
         sun_deg: None,
         cloud_base_m: None,

@@ -1,0 +1,430 @@
+//! The wet stage: after the scene stage, each visible surface's film ([`super::film`]) darkens
+//! it (Lekner & Dorf, [`super::optics::Wetting`]) and adds the film's reflection: Fresnel's
+//! share of what the mirrored ray sees (on a box scene the ray cast through the boxes, lit as
+//! the scene stage lights surfaces, or the sky; on a photo a screen-space march through its
+//! depth map, the photo's own sky where the ray leaves the frame) and the highlights of the
+//! lamps and the sun on the rippled film (a GGX lobe, [`super::optics::brdf`]). It draws
+//! the `wetness` layer (0 on the sky, dry and snow-covered surfaces).
+//!
+//! A wet surface's light is its dry light times (1 − w) + w·darkening(a) per channel, plus
+//! w·(reflection): w the wetness as the share of the surface under the film. The dry light
+//! of a Lambertian face is its albedo a times the light it receives, so the factor applies to
+//! all of it; a photo's albedo is read from its pixel (linear, at most 1).
+
+use super::film::{Film, RainDirections};
+use super::optics::{FILM_ROUGHNESS, WATER_INDEX, Wetting, brdf, fresnel};
+use crate::scene::SurfaceLight;
+use crate::scene::boxes::{BoxScene, SceneBox, surface_albedo, trace};
+use crate::scene::camera::Camera;
+use crate::scene::lights::Light;
+use crate::scene::raycast::occluded_within;
+use crate::stage::layers::{Layer, LayerSet};
+use crate::stage::{Row, Stage};
+use glam::Vec3;
+
+/// The layers the wet stage draws.
+pub const LAYERS: LayerSet = LayerSet::of(&[Layer::Wetness]);
+
+/// Surfaces are lifted off their face by this before a reflected or shelter ray, m.
+const OFFSET_M: f32 = 1e-3;
+
+/// How far up its path a box keeps the rain off a surface, m (any box above it).
+const SHELTER_RAY_M: f32 = 1e5;
+
+/// Steps of a photo's screen-space march.
+const MARCH_STEPS: usize = 64;
+
+/// What the wet stage's surfaces are.
+#[derive(Clone, Copy)]
+pub enum Surfaces<'a> {
+    /// A box scene, ray cast again per pixel.
+    Boxes(&'a BoxScene),
+    /// A photo: linear RGB H·W·3 and depth along the optical axis H·W (inf: sky).
+    Photo {
+        /// Linear RGB, H·W·3.
+        rgb: &'a [f32],
+        /// Depth along the optical axis, m (inf: sky), H·W.
+        depth_m: &'a [f32],
+    },
+}
+
+/// The wet stage of a frame.
+pub struct WetStage<'a> {
+    surfaces: Surfaces<'a>,
+    cam: &'a Camera,
+    film: Film,
+    rain: RainDirections,
+    shelter: &'a [SceneBox],
+    light: &'a (dyn SurfaceLight + Sync),
+    lamps: &'a [Light],
+    inv_sky_lux: f32,
+    sun: Option<(Vec3, f32)>,
+    wetting: Wetting,
+    /// A photo's sky colour for reflected rays that leave the frame (its sky pixels' mean).
+    photo_sky: Vec3,
+}
+
+/// What the wet stage reads from its frame.
+pub struct WetFrame<'a> {
+    /// The surfaces.
+    pub surfaces: Surfaces<'a>,
+    /// The camera.
+    pub cam: &'a Camera,
+    /// The rain the surfaces received.
+    pub film: Film,
+    /// The wind, m/s (it slants the rain).
+    pub wind_m_s: [f64; 3],
+    /// Boxes that keep the rain off what they cover (empty: none).
+    pub shelter: &'a [SceneBox],
+    /// How the frame lights a surface (for what a reflected ray hits).
+    pub light: &'a (dyn SurfaceLight + Sync),
+    /// The point and spot lights, whose highlights the film shows.
+    pub lamps: &'a [Light],
+    /// The sky's horizontal illuminance E, lux (the lamps' unit).
+    pub sky_illuminance_lux: f32,
+    /// Towards the sun, and its normal illuminance over E, when the sky has a sun.
+    pub sun: Option<(Vec3, f32)>,
+}
+
+impl<'a> WetStage<'a> {
+    /// The stage for `frame`, or None when no surface is wet.
+    pub fn new(frame: WetFrame<'a>) -> Option<Self> {
+        if !frame.film.any() {
+            return None;
+        }
+        let photo_sky = match frame.surfaces {
+            Surfaces::Photo { rgb, depth_m } => photo_sky(rgb, depth_m, frame.cam.width as usize),
+            Surfaces::Boxes(_) => Vec3::ZERO,
+        };
+        Some(WetStage {
+            surfaces: frame.surfaces,
+            cam: frame.cam,
+            film: frame.film,
+            rain: RainDirections::new(frame.film.rate_mm_h, frame.wind_m_s),
+            shelter: frame.shelter,
+            light: frame.light,
+            lamps: frame.lamps,
+            inv_sky_lux: 1.0 / frame.sky_illuminance_lux.max(1e-12),
+            sun: frame.sun,
+            wetting: Wetting::new(WATER_INDEX),
+            photo_sky,
+        })
+    }
+
+    /// The wetness of a face of normal `n` at `p`.
+    pub fn wetness(&self, p: Vec3, n: Vec3) -> f32 {
+        let lifted = p + n * OFFSET_M;
+        let exposure = self.rain.exposure(n, |up| {
+            occluded_within(self.shelter, lifted, up, SHELTER_RAY_M)
+        });
+        self.film.wetness(exposure)
+    }
+
+    /// The wet light of a surface: `dry` (its dry radiance, albedo `a`) darkened by the film
+    /// of wetness `w`, plus w times the film's `reflection`.
+    fn wet(&self, dry: Vec3, a: Vec3, w: f32, reflection: Vec3) -> Vec3 {
+        let k = a.to_array().map(|c| {
+            let d = self.wetting.darkening(f64::from(c)) as f32;
+            1.0 - w + w * d
+        });
+        dry * Vec3::from(k) + w * reflection
+    }
+
+    /// The highlights of the lamps (shadowed by `boxes`) and the sun (`sun_share` of it
+    /// reaching the face) on a film of normal `n` at `p` seen along unit `v` (towards the
+    /// camera), relative to E.
+    fn highlights(&self, boxes: &[SceneBox], p: Vec3, n: Vec3, v: Vec3, sun_share: f32) -> Vec3 {
+        let index = WATER_INDEX as f32;
+        let lifted = p + n * OFFSET_M;
+        let mut sum = Vec3::ZERO;
+        for l in self.lamps {
+            let (e, dir, r) = l.surface_illuminance_lux(p, n);
+            if e.max_element() <= 0.0 {
+                continue;
+            }
+            let f = brdf(n, v, dir, FILM_ROUGHNESS, index);
+            if f > 0.0 && !occluded_within(boxes, lifted, dir, r - OFFSET_M) {
+                sum += e * (f * self.inv_sky_lux);
+            }
+        }
+        if let Some((s, rel)) = self.sun
+            && sun_share > 0.0
+        {
+            let cos = n.dot(s).max(0.0);
+            sum += Vec3::splat(brdf(n, v, s, FILM_ROUGHNESS, index) * rel * cos * sun_share);
+        }
+        sum
+    }
+
+    /// One pixel of a box scene: its new light and wetness (None: not a wet surface).
+    fn box_pixel(
+        &self,
+        scene: &BoxScene,
+        x: u32,
+        y: u32,
+        dry: Vec3,
+        sun: f32,
+    ) -> Option<(Vec3, f32)> {
+        let eye = self.cam.eye();
+        let dir = self.cam.ray_direction(x, y);
+        let (t, n, albedo) = trace(scene, eye, dir)?;
+        let p = eye + dir * t;
+        let w = self.wetness(p, n);
+        if w <= 0.0 {
+            return Some((dry, 0.0));
+        }
+        let a = surface_albedo(albedo, n, p);
+        let d = dir.normalize();
+        let v = -d;
+        let r = d - 2.0 * d.dot(n) * n;
+        let lifted = p + n * OFFSET_M;
+        let seen = match trace(scene, lifted, r) {
+            Some((t2, n2, a2)) => {
+                let q = lifted + r * t2;
+                let a2 = surface_albedo(a2, n2, q);
+                self.light.surface_radiance_sun(&scene.boxes, q, n2, a2).0
+            }
+            None => Vec3::splat(self.light.sky_pixel(r)),
+        };
+        let f = fresnel(f64::from(n.dot(v)), WATER_INDEX) as f32;
+        let reflection = seen * f + self.highlights(&scene.boxes, p, n, v, sun);
+        Some((self.wet(dry, a, w, reflection), w))
+    }
+
+    /// One pixel of a photo: its new light and wetness.
+    fn photo_pixel(
+        &self,
+        rgb: &[f32],
+        depth_m: &[f32],
+        x: usize,
+        y: usize,
+        dry: Vec3,
+    ) -> (Vec3, f32) {
+        let w_px = self.cam.width as usize;
+        let Some((p, n)) = photo_surface(self.cam, depth_m, x, y) else {
+            return (dry, 0.0);
+        };
+        let w = self.wetness(p, n);
+        if w <= 0.0 {
+            return (dry, 0.0);
+        }
+        let a = dry.min(Vec3::ONE);
+        let d = (p - self.cam.eye()).normalize();
+        let v = -d;
+        let r = d - 2.0 * d.dot(n) * n;
+        let seen = self.march(rgb, depth_m, w_px, p, n, r);
+        let f = fresnel(f64::from(n.dot(v)), WATER_INDEX) as f32;
+        let reflection = seen * f + self.highlights(&[], p, n, v, 1.0);
+        (self.wet(dry, a, w, reflection), w)
+    }
+
+    /// What a photo's surface at `p` (normal `n`) mirrors along unit `r`: the photo's pixel
+    /// where the march meets its depth (a surface above the plane of `p`: at grazing angles
+    /// the march runs just above its own plane, which a pixel's single depth would otherwise
+    /// take for a hit), else the sky the direction shows (a sky pixel in view, or the photo's
+    /// mean sky).
+    fn march(&self, rgb: &[f32], depth_m: &[f32], w: usize, p: Vec3, n: Vec3, r: Vec3) -> Vec3 {
+        let cam = self.cam;
+        let dist = (p - cam.eye()).length();
+        let mut s = 0.01 * dist.max(0.1);
+        let mut travelled = 0.0;
+        for _ in 0..MARCH_STEPS {
+            travelled += s;
+            s *= 1.12;
+            let Some((px, py, z)) = project(cam, p + r * travelled) else {
+                break;
+            };
+            let d = depth_m[py * w + px];
+            if d.is_finite() && z > d && z - d < (0.1 * d).max(0.3) {
+                let hit = cam.eye() + cam.ray_direction(px as u32, py as u32) * d;
+                let off = hit - p;
+                if off.dot(n) > 0.02 * off.length() + 0.01 {
+                    return Vec3::from_slice(&rgb[3 * (py * w + px)..]);
+                }
+            }
+        }
+        // The sky along r: where its direction falls in the frame on the sky, that pixel.
+        if let Some((px, py, _)) = project(cam, cam.eye() + r * 1e4)
+            && depth_m[py * w + px].is_infinite()
+        {
+            return Vec3::from_slice(&rgb[3 * (py * w + px)..]);
+        }
+        self.photo_sky
+    }
+}
+
+/// The pixel (x, y) a world point projects to and its depth along the optical axis, or None
+/// behind the camera or outside the frame.
+fn project(cam: &Camera, q: Vec3) -> Option<(usize, usize, f32)> {
+    let c = cam.rotation.transpose() * (q - cam.eye());
+    let z = -c.z;
+    if z <= 1e-6 {
+        return None;
+    }
+    let x = cam.cx + cam.fx * c.x / z;
+    let y = cam.cy - cam.fy * c.y / z;
+    if x < 0.0 || y < 0.0 || x >= cam.width as f32 || y >= cam.height as f32 {
+        return None;
+    }
+    Some((x as usize, y as usize, z))
+}
+
+/// A photo's point at pixel (x, y) and its normal (towards the camera) from the depth map, or
+/// None on the sky or without a neighbour along an axis.
+///
+/// Along each axis the tangent is a difference to a neighbour: the central one where both
+/// neighbours lie on one plane with the pixel (1/depth is linear across a plane in a
+/// perspective image: its two one-sided differences agree within 10 %), else the one-sided
+/// difference to the neighbour nearer in 1/depth (at a depth edge, the pixel's own surface).
+pub fn photo_surface(cam: &Camera, depth_m: &[f32], x: usize, y: usize) -> Option<(Vec3, Vec3)> {
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let d = depth_m[y * w + x];
+    if !d.is_finite() {
+        return None;
+    }
+    let point = |x: usize, y: usize| {
+        let d = depth_m[y * w + x];
+        d.is_finite().then(|| {
+            (
+                cam.eye() + cam.ray_direction(x as u32, y as u32) * d,
+                1.0 / d,
+            )
+        })
+    };
+    let p = cam.eye() + cam.ray_direction(x as u32, y as u32) * d;
+    let inv = 1.0 / d;
+    // One axis: its neighbours before and after (None off the frame or on the sky).
+    let tangent = |before: Option<(Vec3, f32)>, after: Option<(Vec3, f32)>| match (before, after) {
+        (Some((pb, ib)), Some((pa, ia))) => {
+            let (fb, fa) = (inv - ib, ia - inv);
+            if (fa - fb).abs() <= 0.1 * fa.abs().max(fb.abs()) + 1e-9 {
+                Some(pa - pb)
+            } else if fa.abs() < fb.abs() {
+                Some(pa - p)
+            } else {
+                Some(p - pb)
+            }
+        }
+        (Some((pb, _)), None) => Some(p - pb),
+        (None, Some((pa, _))) => Some(pa - p),
+        (None, None) => None,
+    };
+    let tx = tangent(
+        (x > 0).then(|| point(x - 1, y)).flatten(),
+        (x + 1 < w).then(|| point(x + 1, y)).flatten(),
+    )?;
+    // Rows run down the image: "before" is the row above.
+    let ty = tangent(
+        (y > 0).then(|| point(x, y - 1)).flatten(),
+        (y + 1 < h).then(|| point(x, y + 1)).flatten(),
+    )?;
+    let n = tx.cross(ty).normalize_or_zero();
+    if n == Vec3::ZERO {
+        return None;
+    }
+    let towards = cam.eye() - p;
+    Some((p, if n.dot(towards) < 0.0 { -n } else { n }))
+}
+
+/// The mean of a photo's sky pixels (its top row's mean when it has none).
+fn photo_sky(rgb: &[f32], depth_m: &[f32], w: usize) -> Vec3 {
+    let (mut sum, mut n) = (Vec3::ZERO, 0u32);
+    for (i, d) in depth_m.iter().enumerate() {
+        if d.is_infinite() {
+            sum += Vec3::from_slice(&rgb[3 * i..]);
+            n += 1;
+        }
+    }
+    if n == 0 {
+        for i in 0..w.min(depth_m.len()) {
+            sum += Vec3::from_slice(&rgb[3 * i..]);
+            n += 1;
+        }
+    }
+    sum / n.max(1) as f32
+}
+
+impl Stage for WetStage<'_> {
+    fn layers(&self) -> LayerSet {
+        LAYERS
+    }
+
+    fn row(&self, row: &mut Row<'_>) {
+        let y = row.y;
+        let [wet, snow, sun] = row
+            .layers
+            .0
+            .get_disjoint_mut([
+                Layer::Wetness.index(),
+                Layer::SnowDepth.index(),
+                Layer::SunTransmittance.index(),
+            ])
+            .unwrap_or_else(|_| unreachable!("three distinct layers"));
+        let width = row.depth_m.len();
+        for x in 0..width {
+            let mut w = 0.0;
+            let snowed = snow.as_deref().is_some_and(|s| s[x] > 0.0);
+            if row.depth_m[x].is_finite() && !snowed {
+                let dry = Vec3::from_slice(&row.rgb[3 * x..]);
+                let lit = match self.surfaces {
+                    Surfaces::Boxes(scene) => {
+                        let share = sun.as_deref().map_or(1.0, |s| s[x]);
+                        self.box_pixel(scene, x as u32, y, dry, share)
+                    }
+                    Surfaces::Photo { rgb, depth_m } => {
+                        Some(self.photo_pixel(rgb, depth_m, x, y as usize, dry))
+                    }
+                };
+                if let Some((c, wx)) = lit {
+                    row.rgb[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
+                    w = wx;
+                }
+            }
+            if let Some(l) = wet.as_deref_mut() {
+                l[x] = w;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Mat3;
+
+    #[test]
+    fn a_depth_maps_ground_has_an_upward_normal_up_to_a_depth_edge() {
+        // A level camera 1.5 m up over a ground plane, with a wall 4 m away in the middle
+        // columns: ground pixels beside the wall (a depth edge on one side) still get +Y from
+        // their one-sided difference, the wall's pixels +Z, the sky none.
+        let (w, h) = (40u32, 30u32);
+        let cam = Camera::new(
+            w,
+            h,
+            [30.0, 30.0, 20.0, 15.0],
+            Vec3::new(0.0, 1.5, 0.0),
+            Mat3::IDENTITY,
+        )
+        .unwrap();
+        let mut depth = vec![f32::INFINITY; (w * h) as usize];
+        for y in 0..h {
+            for x in 0..w {
+                let d = cam.ray_direction(x, y);
+                let ground = if d.y < 0.0 { -1.5 / d.y } else { f32::INFINITY };
+                let wall = (14..26).contains(&x) && y >= 10;
+                depth[(y * w + x) as usize] = if wall { ground.min(4.0) } else { ground };
+            }
+        }
+        for (x, y, want) in [
+            (5, 29, Vec3::Y),
+            (13, 27, Vec3::Y),
+            (26, 25, Vec3::Y),
+            (20, 12, Vec3::Z),
+            (14, 11, Vec3::Z),
+        ] {
+            let (_, n) = photo_surface(&cam, &depth, x, y).unwrap();
+            assert!((n - want).length() < 1e-3, "({x}, {y}): {n}");
+        }
+        assert!(photo_surface(&cam, &depth, 5, 3).is_none());
+    }
+}

@@ -1,0 +1,242 @@
+"""Wet surfaces (``Weather.rain_duration_s``, ``dry_s``), against references computed here:
+Lekner & Dorf's wet albedo and Fresnel's equations in numpy, the mirror image of the sky in
+the frame's own sky pixels, a lamp's mirrored position, the shelter of a slab, drying in
+time, and dry weather that leaves the frame's bits alone."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from skyfall import Camera, PhotoScene, PointLight, Renderer, Weather, scenes
+
+W, H = 96, 72
+N_WATER = 1.33
+AFTER_RAIN = Weather(rain_rate_mm_h=5.0, rain_duration_s=None, dry_s=1.0)
+"""Surfaces as wet as they get, a second after the rain stopped: no rain in the air."""
+
+
+def fresnel(cos_i: np.ndarray, n: float = N_WATER) -> np.ndarray:
+    """Unpolarised reflectance from air into index n (Fresnel's equations)."""
+    c = np.clip(cos_i, 0.0, 1.0)
+    ct = np.sqrt(1.0 - (1.0 - c**2) / n**2)
+    rs = ((c - n * ct) / (c + n * ct)) ** 2
+    rp = ((ct - n * c) / (ct + n * c)) ** 2
+    return 0.5 * (rs + rp)
+
+
+def wet_albedo(a: np.ndarray, n: float = N_WATER) -> np.ndarray:
+    """Lekner & Dorf (1988): (1 - R)(1 - p) a / (1 - p a), R the film's reflectance for diffuse
+    light (integrated here), p = 1 - (1 - R)/n^2 its internal reflection of diffuse light."""
+    th = (np.arange(100_000) + 0.5) / 100_000 * np.pi / 2
+    r_diffuse = np.sum(fresnel(np.cos(th), n) * np.sin(2 * th)) * (np.pi / 2 / 100_000)
+    p = 1.0 - (1.0 - r_diffuse) / n**2
+    return (1.0 - r_diffuse) * a * (1.0 - p) / (1.0 - p * a)
+
+
+def level_camera() -> Camera:
+    return Camera((0.0, 1.5, 0.0), vertical_fov_deg=60.0)
+
+
+def view_cosines(cam: Camera) -> np.ndarray:
+    """cos of the angle between each pixel's view ray and the vertical (H, W), level camera."""
+    fx, fy, cx, cy = cam.with_resolution(W, H).intrinsics()
+    ys, xs = np.mgrid[0:H, 0:W]
+    d = np.stack([(xs + 0.5 - cx) / fx, -(ys + 0.5 - cy) / fy, -np.ones((H, W))], axis=-1)
+    d = d @ cam.rotation.T
+    return np.abs(d[..., 1]) / np.linalg.norm(d, axis=-1)
+
+
+@pytest.fixture(scope="module")
+def cpu() -> Renderer:
+    return Renderer(W, H, backend="cpu")
+
+
+@pytest.mark.parametrize("albedo", [0.05, 0.2, 0.5, 0.8])
+def test_open_ground_darkens_as_lekner_and_dorf_and_mirrors_the_sky(cpu, albedo):
+    # A level camera over open ground under the overcast sky: the view ray of ground row y is the
+    # sky row H-1-y mirrored, so wet = dry * A_wet(a)/a + F(cos) * sky[H-1-y], on every ground
+    # pixel (edges, top and bottom rows of the ground included).
+    cam = level_camera()
+    scene = scenes.boxes([], ground=True, ground_albedo=albedo, camera=cam)
+    dry = cpu.render(scene, Weather())
+    wet = cpu.render(scene, AFTER_RAIN)
+    ground = np.isfinite(dry.depth_m)
+    assert ground[H // 2 :].all() and not ground[: H // 2].any()
+    mirrored_sky = dry.rgb[::-1]
+    cos = view_cosines(cam)[..., None]
+    want = dry.rgb * (wet_albedo(albedo) / albedo) + fresnel(cos) * mirrored_sky
+    np.testing.assert_allclose(wet.rgb[ground], want[ground], rtol=2e-4, atol=1e-6)
+    np.testing.assert_array_equal(wet.rgb[~ground], dry.rgb[~ground])
+    np.testing.assert_array_equal(wet.layers["wetness"], ground.astype(np.float32))
+    assert "wetness" not in dry.layers
+
+
+def ggx_highlight(n, v, l, alpha: float = 0.12) -> np.ndarray:
+    """The film's GGX BRDF (Trowbridge-Reitz D, Smith's G, Fresnel at v.h), sr^-1, per row of
+    unit vectors: Walter et al. 2007's microfacet model."""
+    h = v + l
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    nv, nl, nh = (np.sum(n * a, axis=-1) for a in (v, l, h))
+    a2 = alpha**2
+    d = a2 / (np.pi * (nh**2 * (a2 - 1.0) + 1.0) ** 2)
+
+    def g1(c):
+        return 2 * c / (c + np.sqrt(a2 + (1 - a2) * c**2))
+
+    return fresnel(np.sum(v * h, axis=-1)) * d * g1(nv) * g1(nl) / (4 * nv * nl)
+
+
+def test_a_lamp_is_mirrored_where_geometry_puts_it(cpu):
+    # A lamp 4 m up, 20 m ahead, over dark open ground at dusk. Its highlight on the film is the
+    # GGX lobe computed here on every ground pixel; the streak runs through the pixel where the
+    # line from the eye to the lamp's mirror image (y -> -y) meets the ground, in its column,
+    # its peak pulled a few pixels towards the horizon (grazing light: Fresnel and 1/cos).
+    cam = level_camera()
+    lamp = PointLight((1.0, 4.0, -20.0), 8000.0)
+    e_sky = 1.0
+    scene = scenes.boxes([], ground=True, ground_albedo=0.05, camera=cam, lights=(lamp,))
+    weather = replace(AFTER_RAIN, sky_illuminance_lux=e_sky)
+    frame = cpu.render(scene, weather)
+    dry = cpu.render(scene, Weather(sky_illuminance_lux=e_sky))
+    ground = np.isfinite(dry.depth_m)
+    # the sky's own mirror image, as in the open-ground test (the lamp's emitter disc, drawn
+    # after the wet stage, is not in the film's mirror: its highlight stands for it)
+    unlit = cpu.render(replace(scene, lights=()), Weather(sky_illuminance_lux=e_sky))
+    sky_part = fresnel(view_cosines(cam))[..., None] * unlit.rgb[::-1]
+    highlight = (frame.rgb - dry.rgb * (wet_albedo(0.05) / 0.05) - sky_part)[..., 1]
+    # the reference: lamp illuminance on the ground I cos / r^2 over E, times the BRDF
+    fx, fy, cx, cy = cam.with_resolution(W, H).intrinsics()
+    ys, xs = np.mgrid[0:H, 0:W]
+    d = np.stack([(xs + 0.5 - cx) / fx, -(ys + 0.5 - cy) / fy, -np.ones((H, W))], axis=-1) @ cam.rotation.T
+    eye = np.asarray(cam.position_m)
+    p = eye + d * np.where(ground, dry.depth_m, 0.0)[..., None]
+    ground &= np.abs(p[..., 1]) < 1e-3  # not the lamp's emitter disc
+    assert ground.sum() > 0.45 * W * H
+    to_lamp = np.asarray(lamp.position_m) - p
+    r = np.linalg.norm(to_lamp, axis=-1, keepdims=True)
+    l = to_lamp / r
+    v = -d / np.linalg.norm(d, axis=-1, keepdims=True)
+    n = np.broadcast_to([0.0, 1.0, 0.0], p.shape)
+    e = lamp.intensity_cd * l[..., 1] / r[..., 0] ** 2 / e_sky
+    want = ggx_highlight(n[ground], v[ground], l[ground]) * e[ground]
+    np.testing.assert_allclose(highlight[ground], want, rtol=2e-3, atol=2e-5 * want.max())
+    # where it lies: through the mirror point, in its column
+    mirror = np.array(lamp.position_m) * np.array([1.0, -1.0, 1.0])
+    hit = eye + eye[1] / (eye[1] - mirror[1]) * (mirror - eye)
+    pc = cam.rotation.T @ (hit - eye)
+    px, py = cx + fx * pc[0] / -pc[2], cy - fy * pc[1] / -pc[2]
+    y, x = np.unravel_index(np.argmax(np.where(ground, highlight, 0.0)), highlight.shape)
+    assert abs(x + 0.5 - px) <= 1.0, (x, px)
+    assert highlight[int(py), int(px)] > 0.3 * highlight[y, x]
+    assert highlight[y, x] > 100 * np.median(highlight[ground])
+
+
+@pytest.mark.parametrize("wind", [(0.0, 0.0, 0.0), (3.0, 0.0, 0.0)])
+def test_ground_under_a_slab_stays_dry_as_the_rain_slants(cpu, wind):
+    # A slab 3 m up: a ground point is dry when every quartile drop's path up from it meets the
+    # slab; in a calm that is the slab's footprint exactly. Checked on every ground pixel away
+    # from the footprint's edge. The volume quartile drops of 5 mm/h (0.9-1.8 mm) fall at
+    # 3.3-6.1 m/s (Gunn & Kinzer), bracketed here by 3 and 7 m/s: in 3 m/s of wind the dry
+    # patch moves 1.3-3 m downwind.
+    cam = Camera((0.0, 1.5, 6.0), pitch_deg=-30.0, vertical_fov_deg=70.0)
+    slab = {"min": (-2.0, 3.0, -3.0), "max": (2.0, 3.2, 1.0), "albedo": 0.5}
+    scene = scenes.boxes([slab], ground=True, ground_albedo=0.2, camera=cam)
+    frame = cpu.render(scene, Weather(rain_rate_mm_h=5.0, rain_duration_s=None, wind_m_s=wind, rain_streaks=False))
+    wet = frame.layers["wetness"]
+    depth = frame.depth_m
+    fx, fy, cx, cy = cam.with_resolution(W, H).intrinsics()
+    ys, xs = np.mgrid[0:H, 0:W]
+    d = np.stack([(xs + 0.5 - cx) / fx, -(ys + 0.5 - cy) / fy, -np.ones((H, W))], axis=-1) @ cam.rotation.T
+    p = np.asarray(cam.position_m) + d * np.where(np.isfinite(depth), depth, 0.0)[..., None]
+    ground = np.isfinite(depth) & (np.abs(p[..., 1]) < 1e-3)
+    shift = 3.0 * wind[0] / np.array([7.0, 3.0])  # least and most slanted quartile drop
+    under = ground & (p[..., 0] > -2.0 + shift[1] + 0.1) & (p[..., 0] < 2.0 + shift[0] - 0.1) & (p[..., 2] > -2.9) & (p[..., 2] < 0.9)
+    clear = ground & ((p[..., 0] < -2.1 + shift[0]) | (p[..., 0] > 2.1 + shift[1]) | (p[..., 2] < -3.1) | (p[..., 2] > 1.1))
+    assert under.sum() > 50 and clear.sum() > 50
+    assert (wet[under] == 0.0).all()
+    assert (wet[clear] == 1.0).all()
+
+
+def test_surfaces_dry_after_the_rain_and_no_rain_falls(cpu):
+    # 10 mm/h for 60 s leaves 1/6 mm on open ground (wetness 1/6 / 0.2); it evaporates at
+    # 0.25 mm/h once the rain stops: the open ground's wetness (the layer's maximum) is that
+    # water balance, falling monotonically to 0.
+    scene = scenes.street()
+    rain = dict(rain_rate_mm_h=10.0, rain_duration_s=60.0)
+    times = (0.0, 600.0, 1200.0, 1800.0, 2400.0)
+    wet = [cpu.render(scene, Weather(**rain, dry_s=t)).layers.get("wetness", np.zeros(1)).max() for t in times]
+    want = [max(0.0, (10.0 * 60.0 - 0.25 * t) / 3600.0) / 0.2 for t in times]
+    np.testing.assert_allclose(wet, want, rtol=1e-5, atol=1e-7)
+    assert all(b < a for a, b in zip(wet[:-1], wet[1:-1]))
+    after = cpu.render(scene, Weather(**rain, dry_s=600.0))
+    assert "rain_alpha" not in after.layers and not after.stats.get("streaks_drawn")
+    dried = cpu.render(scene, Weather(**rain, dry_s=4 * 3600.0))
+    nothing = cpu.render(scene, Weather())
+    np.testing.assert_array_equal(dried.rgb, nothing.rgb)
+    assert set(dried.layers) == set(nothing.layers)
+
+
+def test_dry_weather_leaves_the_frame_unchanged(cpu):
+    scene = scenes.street(lamps=True)
+    for w in (Weather(rain_rate_mm_h=10.0), Weather(rain_rate_mm_h=0.0, rain_duration_s=None)):
+        assert "wetness" not in cpu.render(scene, w, seed=3).layers
+    a = cpu.render(scene, Weather(rain_rate_mm_h=10.0, rain_duration_s=0.0), seed=3)
+    b = cpu.render(scene, Weather(rain_rate_mm_h=10.0), seed=3)
+    np.testing.assert_array_equal(a.rgb, b.rgb)
+
+
+def test_a_photo_of_open_ground_darkens_and_mirrors_its_own_sky():
+    # The same analytic frame as a photo: its depth map the ground plane, its sky rows a
+    # gradient; the screen-space march finds no surface above the ground, so each ground pixel
+    # mirrors the photo's sky pixel at the mirrored row.
+    cam = level_camera().with_resolution(W, H)
+    fx, fy, cx, cy = cam.intrinsics()
+    ys = np.arange(H)[:, None] + 0.5
+    down = (ys - cy) / fy
+    depth = np.where(down > 0, 1.5 / np.maximum(down, 1e-9), np.inf) * np.ones((1, W))
+    sky_rows = np.linspace(0.9, 0.6, H // 2)[:, None, None] * np.array([0.8, 0.9, 1.0])
+    rgb = np.empty((H, W, 3))
+    rgb[: H // 2] = sky_rows
+    rgb[H // 2 :] = np.array([0.2, 0.15, 0.1])
+    photo = PhotoScene(rgb.astype(np.float32), depth_m=depth.astype(np.float32), camera=cam, encoding="linear")
+    r = Renderer(W, H, backend="cpu")
+    dry = r.render(photo, Weather())
+    wet = r.render(photo, AFTER_RAIN)
+    ground = np.isfinite(depth)
+    inner = ground.copy()
+    inner[:, [0, -1]] = False
+    inner[[H // 2, -1]] = False  # the depth map's neighbours define the normal
+    cos = view_cosines(cam)[..., None]
+    a = np.array([0.2, 0.15, 0.1])
+    want = dry.rgb * (wet_albedo(a) / a) + fresnel(cos) * dry.rgb[::-1]
+    np.testing.assert_allclose(wet.rgb[inner], want[inner], rtol=1e-3, atol=1e-5)
+    assert (wet.layers["wetness"][inner] == 1.0).all() and (wet.layers["wetness"][~ground] == 0.0).all()
+
+
+def test_the_8bit_output_draws_the_wet_stage_and_the_gpu_refuses_it_by_name(cpu):
+    from skyfall import io
+
+    scene = scenes.street(lamps=True)
+    weather = Weather(rain_rate_mm_h=10.0, rain_duration_s=None, sky_illuminance_lux=300.0)
+    frame = cpu.render(scene, weather, seed=1)
+    image, layers = cpu.render_srgb8(scene, weather, seed=1, layers=("wetness",))
+    assert cpu.srgb8_path(scene, weather) == "banded"
+    assert np.abs(image.astype(int) - io.to_srgb8(frame.rgb).astype(int)).max() <= 1
+    np.testing.assert_array_equal(layers["wetness"], frame.layers["wetness"])
+    try:
+        gpu = Renderer(W, H, backend="gpu")
+    except RuntimeError:
+        return
+    with pytest.raises(ValueError, match="rain_duration_s"):
+        gpu.render(scene, weather)
+
+
+@pytest.mark.parametrize("value", [-1.0, 2e7, float("nan")])
+def test_bad_durations_are_refused_by_name(value):
+    with pytest.raises(ValueError, match="rain_duration_s"):
+        Weather(rain_rate_mm_h=1.0, rain_duration_s=value)
+    with pytest.raises(ValueError, match="dry_s"):
+        Weather(rain_rate_mm_h=1.0, dry_s=value)
