@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from skimage.metrics import structural_similarity
 
 from skyfall import PhotoScene, Renderer, Weather, io, scenes
-from skyfall._demo import DEMO_FRAMES, STREET_RAIN_DAY, STREET_WET, rain_alpha_png
+from skyfall._demo import DEMO_FRAMES, STREET_RAIN_DAY, rain_alpha_png
 from skyfall._demo.photo import PHOTO_FRAMES
 from skyfall._demo.snow import SNOW_DEMOS, png8
 
@@ -64,13 +64,10 @@ def street_photo() -> PhotoScene:
 
 
 def render_all(backend: str) -> dict[str, NDArray[np.uint8]]:
-    """Every golden's picture, 8-bit sRGB, from ``backend`` (the GPU backend: all but the wet
-    street, which it refuses by name: tests/test_wet.py)."""
+    """Every golden's picture, 8-bit sRGB, from ``backend``."""
     renderer = Renderer(W, H, backend=backend)
     images: dict[str, NDArray[np.uint8]] = {}
     for demo in DEMO_FRAMES:
-        if backend == "gpu" and demo.weather._may_wet:
-            continue
         frame = demo.render(renderer)
         images[demo.name] = demo.png8(frame)
         if demo is STREET_RAIN_DAY:
@@ -116,9 +113,6 @@ def rendered(request: pytest.FixtureRequest) -> tuple[str, dict[str, NDArray[np.
 @pytest.mark.parametrize("name", NAMES)
 def test_frames_match_their_goldens(rendered, goldens, name):
     backend, images = rendered
-    if backend == "gpu" and name == STREET_WET.name:
-        assert name not in images  # the GPU does not draw wet surfaces yet
-        return
     stats = compare(images[name], goldens[name])
     assert within(stats, backend), f"{name} on {backend}: SSIM {stats[0]:.5f}, mean {stats[1]:.4f} codes, {stats[2]:.3%} > 1 code (bounds {BOUNDS[backend]})"
 

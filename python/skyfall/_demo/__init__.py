@@ -118,10 +118,9 @@ STREET_WET = DemoFrame(
 )
 """The street at dusk after enough 5 mm/h rain to wet it (:mod:`skyfall.wet`): the road darker,
 mirroring the buildings and the sky, the lamps' and the headlights' highlights streaked along
-it, and the pavement under the awning dry (CPU backend only)."""
+it, and the pavement under the awning dry."""
 DEMO_FRAMES = (STREET, STREET_RAIN_DAY, STREET_RAIN_DUSK, STREET_CLOUDS, STREET_WET)
-"""The demo's street frames (rendered at 1280 x 720; tests/test_golden.py at 320 x 180; the GPU
-backend draws all but the wet one)."""
+"""The demo's street frames (rendered at 1280 x 720; tests/test_golden.py at 320 x 180)."""
 
 
 WINDSHIELD_PRESET = "rain"
@@ -259,11 +258,9 @@ def main(argv: list[str] | None = None) -> int:
     frames: dict[str, Frame] = {}
     for demo in DEMO_FRAMES:
         t0 = time.perf_counter()
-        # The GPU backend does not draw wet surfaces yet: those frames take the CPU's.
-        r = Renderer(1280, 720, backend="cpu") if demo.weather._may_wet and renderer.backend == "gpu" else renderer
-        frames[demo.name] = frame = demo.render(r)
+        frames[demo.name] = frame = demo.render(renderer)
         dt = time.perf_counter() - t0
-        print(f"{demo.name}, {demo.weather.rain_rate_mm_h:g} mm/h: 1280x720 on the {r.backend} backend in {dt * 1e3:.1f} ms, {frame.stats.get('rain_streaks', 0)} streaks")
+        print(f"{demo.name}, {demo.weather.rain_rate_mm_h:g} mm/h: 1280x720 on the {renderer.backend} backend in {dt * 1e3:.1f} ms, {frame.stats.get('rain_streaks', 0)} streaks")
         frame.save(out / f"{demo.name}.exr")
         frame.save(out / f"{demo.name}.png", exposure=demo.exposure)
     wet_weather = STREET_RAIN_DAY.weather

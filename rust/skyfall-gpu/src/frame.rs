@@ -143,7 +143,8 @@ impl GpuRenderer {
             // cast; a photo is its upload), the clouds, the haze, the lights' glows, the
             // particles.
             if let SceneRef::Boxes(b) = scene {
-                self.raycast.encode(&mut f, &targets, (b, light))?;
+                let wet = prepared.wet.as_ref().and_then(|w| w.gpu());
+                self.raycast.encode(&mut f, &targets, (b, light, wet))?;
             }
             if let Some(c) = &prepared.clouds {
                 self.cloud.encode(&mut f, &targets, &c.splats)?;

@@ -42,6 +42,13 @@ pub fn shared_constants() -> String {
             "LAYER_RAIN",
             usize::from(skyfall_core::particles::streak::LAYER_RAIN),
         ),
+        f("WET_OFFSET_M", skyfall_core::wet::stage::OFFSET_M),
+        f("SHELTER_RAY_M", skyfall_core::wet::stage::SHELTER_RAY_M),
+        f("MIN_EXPOSURE", skyfall_core::wet::film::MIN_EXPOSURE as f32),
+        f("STORAGE_MM", skyfall_core::wet::film::STORAGE_MM as f32),
+        f("WET_FILM_MM", skyfall_core::wet::film::WET_FILM_MM as f32),
+        f("WATER_INDEX", skyfall_core::wet::optics::WATER_INDEX as f32),
+        f("FILM_ROUGHNESS", skyfall_core::wet::optics::FILM_ROUGHNESS),
     ]
     .concat()
 }

@@ -4,51 +4,65 @@ use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
 use crate::uniforms::{
     AmbientUniform, BoxElement, CameraUniform, LampUniform, LightElement, SceneUniform, SkyUniform,
-    SnowUniform, SunUniform, VolumeUniform,
+    SnowUniform, SunUniform, VolumeUniform, WetUniform,
 };
 use skyfall_core::frame::layers::Layer;
 use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::cie::SkyKind;
+use skyfall_core::wet::stage::WetGpu;
+use std::sync::OnceLock;
 
 const SOURCE: &str = include_str!("shaders/scene_raycast.wgsl");
 
 /// The compiled pass, twice: with the lights' code, and without it (`LIT = false`) for scenes
 /// without lights, so that an effect switched off costs nothing (on lavapipe the lit pipeline
 /// made the unlit street 1.18x slower even though its light loop never ran); and both again
-/// with the snow cover's code (`SNOW = true`), for frames with a cover.
+/// with the snow cover's code (`SNOW = true`), for frames with a cover; the four again with
+/// the wet stage's code (`WET = true`), compiled at the first wet frame.
 #[derive(Debug)]
 pub struct SceneRaycastPass {
     lit: ComputePass,
     unlit: ComputePass,
     lit_snow: ComputePass,
     unlit_snow: ComputePass,
+    /// lit, unlit, lit_snow, unlit_snow with `WET = true`.
+    wet: OnceLock<[ComputePass; 4]>,
+}
+
+/// The pass's bindings, in the order of `shaders/scene_raycast.wgsl`.
+const BINDINGS: [Binding; 19] = {
+    use Binding::*;
+    [
+        Uniform, Uniform, ReadOnly, ReadWrite, ReadWrite, Uniform, Uniform, ReadOnly, ReadOnly,
+        Uniform, ReadOnly, Uniform, ReadOnly, ReadWrite, Uniform, ReadOnly, ReadWrite, Uniform,
+        ReadWrite,
+    ]
+};
+
+/// The pass compiled with its constants.
+fn compile(ctx: &GpuContext, lit: bool, snow: bool, wet: bool) -> ComputePass {
+    let b = |v: bool| if v { 1.0 } else { 0.0 };
+    ComputePass::with_constants(
+        ctx,
+        "scene_raycast",
+        SOURCE,
+        &BINDINGS,
+        &[("LIT", b(lit)), ("SNOW", b(snow)), ("WET", b(wet))],
+    )
 }
 
 impl FramePass for SceneRaycastPass {
-    /// The box scene and its light (sky, ambient-light map, lights).
-    type Input<'i> = (&'i BoxScene, &'i SceneLight<'i>);
+    /// The box scene, its light (sky, ambient-light map, lights) and its wet surfaces.
+    type Input<'i> = (&'i BoxScene, &'i SceneLight<'i>, Option<WetGpu>);
 
     fn new(ctx: &GpuContext) -> Self {
-        use Binding::*;
-        let bindings = [
-            Uniform, Uniform, ReadOnly, ReadWrite, ReadWrite, Uniform, Uniform, ReadOnly, ReadOnly,
-            Uniform, ReadOnly, Uniform, ReadOnly, ReadWrite, Uniform, ReadOnly, ReadWrite,
-        ];
-        let pass = |lit: f64, snow: f64| {
-            ComputePass::with_constants(
-                ctx,
-                "scene_raycast",
-                SOURCE,
-                &bindings,
-                &[("LIT", lit), ("SNOW", snow)],
-            )
-        };
         SceneRaycastPass {
-            lit: pass(1.0, 0.0),
-            unlit: pass(0.0, 0.0),
-            lit_snow: pass(1.0, 1.0),
-            unlit_snow: pass(0.0, 1.0),
+            lit: compile(ctx, true, false, false),
+            unlit: compile(ctx, false, false, false),
+            lit_snow: compile(ctx, true, true, false),
+            unlit_snow: compile(ctx, false, true, false),
+            wet: OnceLock::new(),
         }
     }
 
@@ -57,7 +71,7 @@ impl FramePass for SceneRaycastPass {
         &self,
         f: &mut FrameEncoder<'_>,
         t: &FrameTargets<'_>,
-        (scene, light): Self::Input<'_>,
+        (scene, light, wet): Self::Input<'_>,
     ) -> Result<(), GpuError> {
         f.ctx.check_buffer(
             "the ambient-light map",
@@ -198,22 +212,48 @@ impl FramePass for SceneRaycastPass {
             snow,
             cells,
         ] = &buffers;
+        // The wet stage (its code in the WET pipelines, which a wet frame takes).
+        let wet_layer = t.layers.get(Layer::Wetness);
+        let wet_info = f.uniform(
+            "wet",
+            &wet.map_or(WetUniform::default(), |w| {
+                WetUniform::new(&w, wet_layer.is_some())
+            }),
+        );
+        let wet_dummy = f.target("wet_dummy", 1);
+        let wet_out = wet_layer.unwrap_or(&wet_dummy);
         let unlit = light.lights.is_empty() && light.sun.is_none();
-        let pass = match (unlit, light.snow.is_some()) {
-            (true, false) => &self.unlit,
-            (false, false) => &self.lit,
-            (true, true) => &self.unlit_snow,
-            (false, true) => &self.lit_snow,
+        let variant = match (unlit, light.snow.is_some()) {
+            (false, false) => 0,
+            (true, false) => 1,
+            (false, true) => 2,
+            (true, true) => 3,
+        };
+        let pass = match wet {
+            Some(_) => {
+                let passes = self.wet.get_or_init(|| {
+                    [
+                        compile(f.ctx, true, false, true),
+                        compile(f.ctx, false, false, true),
+                        compile(f.ctx, true, true, true),
+                        compile(f.ctx, false, true, true),
+                    ]
+                });
+                &passes[variant]
+            }
+            None => [&self.lit, &self.unlit, &self.lit_snow, &self.unlit_snow][variant],
         };
         f.dispatch(
             pass,
             &[
                 cam, info, boxes, t.rgb, t.depth, sky, amb, values, solid, lamps, lights, snow,
-                cells, snow_out, &sun_info, &sun_gamma, sun_out,
+                cells, snow_out, &sun_info, &sun_gamma, sun_out, &wet_info, wet_out,
             ],
         );
         f.hold(buffers);
-        f.hold([snow_dummy, sun_info, sun_gamma, sun_dummy]);
+        f.hold([
+            snow_dummy, sun_info, sun_gamma, sun_dummy, wet_info, wet_dummy,
+        ]);
         Ok(())
     }
 }

@@ -274,6 +274,34 @@ pub struct SunUniform {
     pub volume: VolumeUniform,
 }
 
+/// `WetInfo` in `shaders/scene_raycast.wgsl`: the wet stage of a box scene
+/// (`skyfall_core::wet::stage::WetGpu`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct WetUniform {
+    /// The quartile drops' directions of fall (xyz).
+    pub dirs: [[f32; 4]; 3],
+    /// Water per unit exposure, mm (x; < 0: the storage, filled), dried, mm (y).
+    pub film: [f32; 4],
+    /// Lekner & Dorf's (1 − R̄)(1 − p) (x) and p (y).
+    pub optics: [f32; 4],
+    /// Sheltered by the boxes (x), the wetness layer written (y).
+    pub flags: [u32; 4],
+}
+
+impl WetUniform {
+    /// The uniform of `wet` (the wetness layer written when `layer`).
+    pub fn new(wet: &skyfall_core::wet::stage::WetGpu, layer: bool) -> Self {
+        let d = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
+        WetUniform {
+            dirs: wet.directions.map(d),
+            film: [wet.mm_per_exposure.unwrap_or(-1.0), wet.dried_mm, 0.0, 0.0],
+            optics: [wet.darkening_numerator, wet.internal_reflectance, 0.0, 0.0],
+            flags: [u32::from(wet.sheltered), u32::from(layer), 0, 0],
+        }
+    }
+}
+
 /// `CloudInfo` in `shaders/cloud.wgsl`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]

@@ -91,6 +91,31 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
             "LAYER_RAIN",
             f64::from(skyfall_core::particles::streak::LAYER_RAIN),
         ),
+        ("WET_OFFSET_M", bits(skyfall_core::wet::stage::OFFSET_M)),
+        (
+            "SHELTER_RAY_M",
+            bits(skyfall_core::wet::stage::SHELTER_RAY_M),
+        ),
+        (
+            "MIN_EXPOSURE",
+            bits(skyfall_core::wet::film::MIN_EXPOSURE as f32),
+        ),
+        (
+            "STORAGE_MM",
+            bits(skyfall_core::wet::film::STORAGE_MM as f32),
+        ),
+        (
+            "WET_FILM_MM",
+            bits(skyfall_core::wet::film::WET_FILM_MM as f32),
+        ),
+        (
+            "WATER_INDEX",
+            bits(skyfall_core::wet::optics::WATER_INDEX as f32),
+        ),
+        (
+            "FILM_ROUGHNESS",
+            bits(skyfall_core::wet::optics::FILM_ROUGHNESS),
+        ),
     ];
     assert_eq!(seen.len(), want.len(), "{seen:?}");
     for (name, v) in want {

@@ -126,10 +126,14 @@ impl<'a> Frame<'a> {
                 name: "wet",
                 layers: crate::wet::stage::LAYERS,
                 srgb8: false,
-                gpu: false,
+                gpu: !photo,
                 param: "rain_duration_s",
-                why_not: "wet surfaces are drawn by the CPU backend's float and banded 8-bit \
-                          outputs only (set rain_duration_s=0 for dry surfaces)",
+                why_not: if photo {
+                    "a wet photo is drawn by the CPU backend's float and banded 8-bit outputs \
+                     (set rain_duration_s=0 for dry surfaces)"
+                } else {
+                    "wet surfaces are drawn by the banded 8-bit output (frame::encoded)"
+                },
             });
         }
         if light.clouds.is_some() {

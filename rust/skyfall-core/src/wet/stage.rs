@@ -26,10 +26,28 @@ use glam::Vec3;
 pub const LAYERS: LayerSet = LayerSet::of(&[Layer::Wetness]);
 
 /// Surfaces are lifted off their face by this before a reflected or shelter ray, m.
-const OFFSET_M: f32 = 1e-3;
+pub const OFFSET_M: f32 = 1e-3;
 
 /// How far up its path a box keeps the rain off a surface, m (any box above it).
-const SHELTER_RAY_M: f32 = 1e5;
+pub const SHELTER_RAY_M: f32 = 1e5;
+
+/// What the GPU's scene pass needs to draw a box scene's wet stage (`scene_raycast.wgsl`,
+/// `WET`): the film as numbers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WetGpu {
+    /// The quartile drops' directions of fall (unit, downwards).
+    pub directions: [Vec3; 3],
+    /// Water per unit exposure while it rained, mm (R·t/3600); None: the storage, filled.
+    pub mm_per_exposure: Option<f32>,
+    /// Water evaporated since the rain stopped, mm.
+    pub dried_mm: f32,
+    /// Lekner & Dorf's (1 − R̄)(1 − p): the darkening is this over (1 − p·a).
+    pub darkening_numerator: f32,
+    /// p, the film's internal reflection of diffuse light.
+    pub internal_reflectance: f32,
+    /// Whether the boxes keep the rain off what they cover.
+    pub sheltered: bool,
+}
 
 /// Steps of a photo's screen-space march.
 const MARCH_STEPS: usize = 64;
@@ -108,6 +126,25 @@ impl<'a> WetStage<'a> {
             sun: frame.sun,
             wetting: Wetting::new(WATER_INDEX),
             photo_sky,
+        })
+    }
+
+    /// The stage as the GPU's scene pass draws it, for a box scene (None for a photo: the
+    /// GPU backend draws no wet photo).
+    pub fn gpu(&self) -> Option<WetGpu> {
+        if !matches!(self.surfaces, Surfaces::Boxes(_)) {
+            return None;
+        }
+        let f = self.film;
+        let w = self.wetting;
+        Some(WetGpu {
+            directions: self.rain.0,
+            mm_per_exposure: f.duration_s.map(|t| (f.rate_mm_h * t / 3600.0) as f32),
+            dried_mm: (super::film::DRYING_MM_H * f.dry_s / 3600.0) as f32,
+            darkening_numerator: ((1.0 - w.diffuse_reflectance) * (1.0 - w.internal_reflectance))
+                as f32,
+            internal_reflectance: w.internal_reflectance as f32,
+            sheltered: !self.shelter.is_empty(),
         })
     }
 

@@ -36,6 +36,18 @@ override LIT: bool = true;
 @group(0) @binding(14) var<uniform> sun: SunInfo;
 @group(0) @binding(15) var<storage, read> sun_gamma: array<f32>;
 @group(0) @binding(16) var<storage, read_write> sun_out: array<f32>;
+@group(0) @binding(17) var<uniform> wet: WetInfo;
+@group(0) @binding(18) var<storage, read_write> wet_out: array<f32>;
+
+// True in the pipelines for frames with wet surfaces (skyfall_core::wet::stage, WetStage).
+override WET: bool = false;
+
+struct WetInfo {
+    dirs: array<vec4<f32>, 3>,   // the quartile drops' directions of fall
+    film: vec4<f32>,             // water per unit exposure, mm (< 0: the storage, filled), dried, mm
+    optics: vec4<f32>,           // Lekner & Dorf's (1 - R)(1 - p), p
+    flags: vec4<u32>,            // sheltered by the boxes, wetness layer written
+}
 
 // The sun on the surfaces (skyfall_core::frame::scene::SunLight); its code runs in the LIT
 // pipelines only (a frame with a sun takes them).
@@ -511,15 +523,15 @@ fn surface_radiance(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> Shaded {
     return Shaded(c, share);
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let w = cam.size.x;
-    let h = cam.size.y;
-    if gid.x >= w || gid.y >= h {
-        return;
-    }
-    let origin = cam.pos.xyz;
-    let dir = ray_direction(cam, gid.x, gid.y);
+// skyfall_core::scene::boxes::trace: the nearest hit along origin + t dir, t > T_MIN.
+struct Hit {
+    hit: bool,
+    t: f32,
+    n: vec3<f32>,
+    a: vec3<f32>,
+}
+
+fn trace(origin: vec3<f32>, dir: vec3<f32>) -> Hit {
     var hit = false;
     var best_t = 3.4e38;
     var best_n = vec3<f32>(0.0);
@@ -552,6 +564,118 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             best_a = b.albedo.xyz;
         }
     }
+    return Hit(hit, best_t, best_n, best_a);
+}
+
+// --- wet surfaces (skyfall_core::wet) ---------------------------------------------------
+
+// wet::optics::fresnel: unpolarised, from the air into index n.
+fn fresnel(cos_i: f32, n: f32) -> f32 {
+    let c = clamp(cos_i, 0.0, 1.0);
+    if c == 0.0 {
+        return 1.0;
+    }
+    let sin_t = sqrt(max(1.0 - c * c, 0.0)) / n;
+    let cos_t = sqrt(max(1.0 - sin_t * sin_t, 0.0));
+    let rs = (c - n * cos_t) / (c + n * cos_t);
+    let rp = (cos_t - n * c) / (cos_t + n * c);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// wet::optics::brdf: the film's GGX lobe (Smith's masking, Fresnel at v.h), 1/sr.
+fn wet_brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
+    let nv = dot(n, v);
+    let nl = dot(n, l);
+    if nv <= 0.0 || nl <= 0.0 {
+        return 0.0;
+    }
+    let hv = v + l;
+    let hl = length(hv);
+    var h = vec3<f32>(0.0);
+    if hl > 0.0 {
+        h = hv / hl;
+    }
+    let nh = max(dot(n, h), 0.0);
+    let a2 = FILM_ROUGHNESS * FILM_ROUGHNESS;
+    let q = nh * nh * (a2 - 1.0) + 1.0;
+    let d = a2 / (PI * q * q);
+    let g_v = 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
+    let g_l = 2.0 * nl / (nl + sqrt(a2 + (1.0 - a2) * nl * nl));
+    return fresnel(dot(v, h), WATER_INDEX) * d * g_v * g_l / (4.0 * nv * nl);
+}
+
+// wet::film: the wetness of a face of normal n at p (RainDirections::exposure, Film::wetness).
+fn wet_wetness(p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let lifted = p + n * WET_OFFSET_M;
+    var sum = 0.0;
+    for (var k = 0u; k < 3u; k++) {
+        let v = wet.dirs[k].xyz;
+        let h = -dot(n, v);
+        if h > 0.0 && !(wet.flags.x != 0u && occluded_within(lifted, -v, SHELTER_RAY_M)) {
+            sum += h / -v.y;
+        }
+    }
+    let exposure = sum / 3.0;
+    if exposure < MIN_EXPOSURE {
+        return 0.0;
+    }
+    var filled = STORAGE_MM;
+    if wet.film.x >= 0.0 {
+        filled = min(wet.film.x * exposure, STORAGE_MM);
+    }
+    return min(max(filled - wet.film.y, 0.0) / WET_FILM_MM, 1.0);
+}
+
+// WetStage::box_pixel: the dry light c of a face (albedo a, normal n, at p, seen along dir,
+// receiving `share` of the sun) under a film of wetness w.
+fn wet_light(c: vec3<f32>, a: vec3<f32>, w: f32, p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, share: f32) -> vec3<f32> {
+    let d = normalize(dir);
+    let v = -d;
+    let r = d - 2.0 * dot(d, n) * n;
+    let lifted = p + n * WET_OFFSET_M;
+    let mirror = trace(lifted, r);
+    var seen: vec3<f32>;
+    if mirror.hit {
+        let q = lifted + r * mirror.t;
+        seen = surface_radiance(q, mirror.n, surface_albedo(mirror.a, mirror.n, q)).c;
+    } else {
+        seen = vec3<f32>(sky.e_scale.y * relative_to_zenith(r));
+    }
+    var reflection = seen * fresnel(dot(n, v), WATER_INDEX);
+    if LIT {
+        for (var i = 0u; i < lamps.counts.x; i++) {
+            let s = surface_lit(lights[i], p, n, a);
+            if max(max(s.e.x, s.e.y), s.e.z) <= 0.0 {
+                continue;
+            }
+            let f = wet_brdf(n, v, s.dir);
+            if f > 0.0 && !occluded_within(lifted, s.dir, s.r - WET_OFFSET_M) {
+                reflection += s.e * (f * lamps.params.x);
+            }
+        }
+        if sun.flags.x != 0u && share > 0.0 {
+            let cs = max(dot(n, sun.dir.xyz), 0.0);
+            reflection += vec3<f32>(wet_brdf(n, v, sun.dir.xyz) * sun.dir.w * cs * share);
+        }
+    }
+    let k = vec3<f32>(1.0 - w) + w * wet.optics.x / (vec3<f32>(1.0) - wet.optics.y * a);
+    return c * k + w * reflection;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = cam.size.x;
+    let h = cam.size.y;
+    if gid.x >= w || gid.y >= h {
+        return;
+    }
+    let origin = cam.pos.xyz;
+    let dir = ray_direction(cam, gid.x, gid.y);
+    let first = trace(origin, dir);
+    let hit = first.hit;
+    let best_t = first.t;
+    let best_n = first.n;
+    let best_a = first.a;
     let i = gid.y * w + gid.x;
     if SNOW {
         // SnowRender::shade_pixel.
@@ -582,6 +706,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         snow_out[i] = sd;
         if found {
+            if WET && wet.flags.y != 0u {
+                wet_out[i] = 0.0;
+            }
             rgb[3u * i] = sc.c.x;
             rgb[3u * i + 1u] = sc.c.y;
             rgb[3u * i + 2u] = sc.c.z;
@@ -595,18 +722,29 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var c: vec3<f32>;
     var d: f32;
     var share = 1.0;
+    var wetness = 0.0;
     if hit {
         let p = origin + dir * best_t;
-        let s = surface_radiance(p, best_n, surface_albedo(best_a, best_n, p));
+        let a = surface_albedo(best_a, best_n, p);
+        let s = surface_radiance(p, best_n, a);
         c = s.c;
         share = s.share;
         d = best_t;
+        if WET {
+            wetness = wet_wetness(p, best_n);
+            if wetness > 0.0 {
+                c = wet_light(c, a, wetness, p, best_n, dir, share);
+            }
+        }
     } else {
         c = vec3<f32>(sky.e_scale.y * relative_to_zenith(normalize(dir)));
         d = infinity();
     }
     if LIT && sun.flags.z != 0u {
         sun_out[i] = share;
+    }
+    if WET && wet.flags.y != 0u {
+        wet_out[i] = wetness;
     }
     rgb[3u * i] = c.x;
     rgb[3u * i + 1u] = c.y;
