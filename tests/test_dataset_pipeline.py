@@ -209,3 +209,21 @@ def test_clouds_in_every_items_sky(tmp_path):
     assert "clouds" not in json.dumps(plain.to_json()) or plain.to_json()["clouds"] is None
     with pytest.raises(ValueError, match="clouds = 'nimbus' must be one of"):
         config(tmp_path, clouds="nimbus")
+
+
+def test_wet_street_items_carry_their_wetness(tmp_path):
+    # 2-10 mm/h for 30-60 s: the open ground's film is R t / 3600 mm, its wetness that over
+    # 0.2 mm (the layer's maximum, on the open road); walls stay dry in a calm.
+    cfg = config(tmp_path / "wet", variants=3, rain_rate_mm_h="2:10", rain_duration_s="30:60", layers=("wetness",))
+    s = generate(cfg, progress=False)
+    assert (s.generated, s.errors) == (3, 0), s.error_messages
+    for i in range(3):
+        row = json.loads((cfg.out / "items" / f"{i:06d}.json").read_text())
+        p = row["params"]
+        wet = np.load(cfg.out / "items" / f"{i:06d}.wetness.npy")
+        want = min(1.0, p["rain_rate_mm_h"] * p["rain_duration_s"] / 3600.0 / 0.2)
+        assert 30.0 <= p["rain_duration_s"] <= 60.0
+        np.testing.assert_allclose(wet.max(), want, rtol=1e-5)
+        assert (wet == 0.0).any()
+    with pytest.raises(ValueError, match="rain_duration_s"):
+        config(tmp_path, rain_duration_s="-1:5")

@@ -43,6 +43,7 @@ _DATASET_OPTIONS: list[tuple[str, tuple[str, ...], dict[str, Any]]] = [
     ("wind_m_s", ("--wind-m-s",), {"metavar": "LO:HI", "help": "cross wind (x), m/s, in [-60, 60], uniform; default 0"}),
     ("snow_rate_mm_h", ("--snow-rate", "--snow-rate-mm-h"), {"metavar": "LO:HI", "help": "snowfall rate as liquid-water equivalent, mm/h, in [0, 100], uniform; default 0 (no snow)"}),
     ("snow_hours", ("--snow-hours",), {"metavar": "LO:HI", "help": "hours the snow has lain, in [0, 2777], uniform: each item's snow cover (needs --snow-rate); default 0 (no cover)"}),
+    ("rain_duration_s", ("--rain-duration-s",), {"metavar": "LO:HI", "help": "how long the rain has fallen on the surfaces, s, in [0, 1e7], uniform: wet, darker, mirroring roads (writes wetness when asked); default 0 (dry)"}),
     ("snow_resolution_m", ("--snow-resolution-m",), {"type": float, "metavar": "M", "help": "cell side of the snow cover, m, in [0.01, 100]; default 0.25"}),
     ("clouds", ("--clouds",), {"metavar": "PRESET", "help": "clouds in every item's sky: broken, cumulus or stratocumulus (skyfall.clouds.PRESETS); writes cloud_alpha when asked"}),
     ("windshield", ("--windshield",), {"nargs": "?", "const": "rain", "metavar": "PRESET", "help": "see each item through a windshield with wipers: drizzle, rain (the default with no PRESET), downpour or parked; writes drop_mask and drop_height when asked"}),

@@ -149,6 +149,7 @@ def _weather(config: DatasetConfig, p: ItemParams) -> Weather:
         rain_far_m=config.rain_far_m,
         windshield=glass,
         clouds=config.clouds,
+        rain_duration_s=p.rain_duration_s,
     )
 
 

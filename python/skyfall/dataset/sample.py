@@ -17,12 +17,16 @@ from typing import Any
 
 import numpy as np
 
+from skyfall import _core
 from skyfall._validate import in_range, integer, real
 from skyfall.weather import Weather
 
 __all__ = ["DatasetConfig", "EXR_COMPRESSIONS", "PNG_STRATEGIES", "ItemParams", "parse_range", "sample_item", "LAYER_NAMES", "RANGE_OPTIONS"]
 
-LAYER_NAMES = ("rain_alpha", "rain_depth_m", "transmittance", "snow_alpha", "snow_depth_m", "drop_mask", "drop_height", "cloud_alpha")
+_FIRST_LAYERS = ("rain_alpha", "rain_depth_m", "transmittance", "snow_alpha", "snow_depth_m", "drop_mask", "drop_height", "cloud_alpha")
+LAYER_NAMES = (*_FIRST_LAYERS, *(n for n in _core.LAYERS if n not in _FIRST_LAYERS))
+"""Every layer an item can write (the core's ``_core.LAYERS``), the first eight in the order
+items have listed their files in since before the list was the core's."""
 """The ground-truth layers an item can write (``layers=``)."""
 
 # option -> (the parameter whose valid range its ends must lie in, how it is sampled)
@@ -158,6 +162,12 @@ class DatasetConfig:
         item's cover is :func:`skyfall.snow.accumulate` of its own snow rate and wind over
         that time (``snow_resolution_m`` cells, 300 s steps, the item's seed), drawn with the
         frame (``snow_depth_m``). Needs ``snow_rate_mm_h``.
+    rain_duration_s : (lo, hi)
+        How long the rain has fallen on the surfaces, s, in [0, 1e7], uniform (default 0: dry
+        surfaces): each item's ``Weather.rain_duration_s``, so its surfaces darken and mirror
+        (the README's "Wet surfaces"), with the ``wetness`` layer when asked. 10 mm/h for
+        72 s fill the 0.2 mm film that reads fully wet. The GPU backend draws wet box scenes
+        only (``backend="cpu"`` for wet photos).
     snow_resolution_m : float
         The cover's cell side, m, in [0.01, 100] (default 0.25: about a second per item for
         an hour of snow on the street).
@@ -254,6 +264,7 @@ class DatasetConfig:
     wind_m_s: Range = (0.0, 0.0)
     snow_rate_mm_h: Range = (0.0, 0.0)
     snow_hours: Range = (0.0, 0.0)
+    rain_duration_s: Range = (0.0, 0.0)
     snow_resolution_m: float = 0.25
     windshield: str | None = None
     clouds: str | None = None
@@ -317,7 +328,7 @@ class DatasetConfig:
         set_(self, "seed", integer("seed", self.seed, 0, 2**63 - 1))
         set_(self, "width", integer("width", self.width, 1, 16384))
         set_(self, "height", integer("height", self.height, 1, 16384))
-        for name in ("rain_rate_mm_h", "visibility_m", "exposure_s", "wind_m_s", "snow_rate_mm_h"):
+        for name in ("rain_rate_mm_h", "visibility_m", "exposure_s", "wind_m_s", "snow_rate_mm_h", "rain_duration_s"):
             set_(self, name, parse_range(name, getattr(self, name)))
         set_(self, "f_number", _optional_range("f_number", self.f_number))
         set_(self, "focus_distance_m", _optional_range("focus_distance_m", self.focus_distance_m))
@@ -408,7 +419,7 @@ class DatasetConfig:
                 d.pop(name)
         if d["exr_compression"] == "zip":  # the checksum of the options before it was one
             d.pop("exr_compression")
-        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None), ("clouds", None), ("rain_far_m", None),
+        for name, plain in (("snow_rate_mm_h", [0.0, 0.0]), ("snow_hours", [0.0, 0.0]), ("rain_duration_s", [0.0, 0.0]), ("snow_resolution_m", 0.25), ("windshield", None), ("clouds", None), ("rain_far_m", None),
                             ("depth_format", None), ("depth_model", None), ("distance_m", None)):
             if d[name] == plain:  # not used: the checksum of before it was an option
                 d.pop(name)
@@ -449,6 +460,7 @@ class ItemParams:
     snow_rate_mm_h: float = 0.0
     snow_hours: float = 0.0
     windshield_time_s: float = 0.0
+    rain_duration_s: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
         """The parameters as JSON values (inf as the string "inf")."""
@@ -493,6 +505,7 @@ def sample_item(config: DatasetConfig, index: int) -> ItemParams:
     snow = _draw(rng, config.snow_rate_mm_h, "uniform")  # drawn last: the draws before keep their values
     hours = _draw(rng, config.snow_hours, "uniform")
     glass_t = 60.0 * float(rng.random())
+    wet_s = _draw(rng, config.rain_duration_s, "uniform")  # drawn last: the draws before keep their values
     assert rate is not None and vis is not None and exposure is not None and wind is not None and snow is not None
     if f_number is not None and focus is None:
         focus = math.inf
@@ -512,4 +525,5 @@ def sample_item(config: DatasetConfig, index: int) -> ItemParams:
         snow_rate_mm_h=snow,
         snow_hours=hours if hours is not None else 0.0,
         windshield_time_s=glass_t if config.windshield is not None else 0.0,
+        rain_duration_s=wet_s if wet_s is not None else 0.0,
     )
