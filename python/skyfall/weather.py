@@ -54,9 +54,8 @@ class Weather:
         Dorf) and mirrors the sky, the buildings, the lamps and the sun (Fresnel's
         reflectance, 0.02 looking straight down, 1 at grazing), and the frame carries
         ``layers["wetness"]`` (0-1). ``None``: long enough to fill every exposed surface
-        (1 mm). ``0`` (default): dry surfaces, the frame's bits unchanged. The GPU backend
-        draws wet box scenes and refuses a wet photo, naming this parameter (the CPU backend
-        draws both).
+        (1 mm). ``0`` (default): dry surfaces, the frame's bits unchanged. Both backends draw
+        it (box scenes and photos); ``render_srgb8`` then takes its banded path.
     dry_s : float
         How long ago that rain stopped, s, in [0, 1e7] (default 0: it is raining). The film
         dries at 0.25 mm/h, and the frame draws no falling rain (no streaks, no rain in the

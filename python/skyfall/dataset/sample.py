@@ -166,8 +166,7 @@ class DatasetConfig:
         How long the rain has fallen on the surfaces, s, in [0, 1e7], uniform (default 0: dry
         surfaces): each item's ``Weather.rain_duration_s``, so its surfaces darken and mirror
         (the README's "Wet surfaces"), with the ``wetness`` layer when asked. 10 mm/h for
-        72 s fill the 0.2 mm film that reads fully wet. The GPU backend draws wet box scenes
-        only (``backend="cpu"`` for wet photos).
+        72 s fill the 0.2 mm film that reads fully wet.
     snow_resolution_m : float
         The cover's cell side, m, in [0.01, 100] (default 0.25: about a second per item for
         an hour of snow on the street).

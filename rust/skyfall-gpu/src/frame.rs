@@ -10,6 +10,7 @@ use crate::pool::Pooled;
 use crate::rain::RainPass;
 use crate::rain_far::FarPass;
 use crate::scene_raycast::SceneRaycastPass;
+use crate::wet::WetPhotoPass;
 use crate::windshield::WindshieldPass;
 use skyfall_core::frame::layers::{Layer, Layers};
 use skyfall_core::frame::stages::Frame;
@@ -32,6 +33,7 @@ pub struct GpuRenderer {
     far: FarPass,
     cloud: CloudPass,
     windshield: WindshieldPass,
+    wet_photo: WetPhotoPass,
     pool: BufferPool,
 }
 
@@ -50,6 +52,7 @@ impl GpuRenderer {
             ))
         })?;
         let windshield = WindshieldPass::new(&ctx)?;
+        let wet_photo = WetPhotoPass::new(&ctx);
         Ok(GpuRenderer {
             ctx,
             raycast,
@@ -59,6 +62,7 @@ impl GpuRenderer {
             far,
             cloud,
             windshield,
+            wet_photo,
             pool: BufferPool::default(),
         })
     }
@@ -143,8 +147,13 @@ impl GpuRenderer {
             // cast; a photo is its upload), the clouds, the haze, the lights' glows, the
             // particles.
             if let SceneRef::Boxes(b) = scene {
-                let wet = prepared.wet.as_ref().and_then(|w| w.gpu());
+                let wet = prepared.wet.as_ref().map(|w| w.gpu());
                 self.raycast.encode(&mut f, &targets, (b, light, wet))?;
+            }
+            if let Some(w) = &prepared.wet
+                && let Some(photo) = w.photo_gpu()
+            {
+                self.wet_photo.encode(&mut f, &targets, (w.gpu(), photo))?;
             }
             if let Some(c) = &prepared.clouds {
                 self.cloud.encode(&mut f, &targets, &c.splats)?;

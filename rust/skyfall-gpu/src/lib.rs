@@ -6,9 +6,9 @@
 //!   [`pass::FrameEncoder`] a frame records into; [`uniforms`]: the passes' uniform blocks as
 //!   Pod structs; [`pool`]: buffers pooled across frames; [`readback`]: one mapped copy back.
 //! - One pass per file, its WGSL in `shaders/`: [`scene_raycast`] (with the sun's direct
-//!   light through the clouds), [`cloud`] (the clouds' splats), [`haze`], [`glow`],
-//!   [`rain`]; [`windshield`] (the drops on the glass: drawn on request, not yet a stage of
-//!   [`frame`]).
+//!   light through the clouds, and a box scene's wet surfaces), [`wet`] (a photo's wet
+//!   surfaces), [`cloud`] (the clouds' splats), [`haze`], [`glow`], [`rain`], [`rain_far`];
+//!   [`windshield`] (the drops on the glass).
 //! - [`frame`]: the passes in physical order on one encoder, one submission, one readback.
 //!
 //! Passes read and write storage buffers (one f32 per channel), so readback is a plain
@@ -27,6 +27,7 @@ pub mod rain_far;
 pub mod readback;
 pub mod scene_raycast;
 pub mod uniforms;
+pub mod wet;
 pub mod windshield;
 
 pub use context::{AdapterChoice, GpuContext, GpuError};

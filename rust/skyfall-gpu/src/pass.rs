@@ -49,6 +49,7 @@ pub fn shared_constants() -> String {
         f("WET_FILM_MM", skyfall_core::wet::film::WET_FILM_MM as f32),
         f("WATER_INDEX", skyfall_core::wet::optics::WATER_INDEX as f32),
         f("FILM_ROUGHNESS", skyfall_core::wet::optics::FILM_ROUGHNESS),
+        u("MARCH_STEPS", skyfall_core::wet::stage::MARCH_STEPS),
     ]
     .concat()
 }

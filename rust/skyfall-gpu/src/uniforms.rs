@@ -302,6 +302,22 @@ impl WetUniform {
     }
 }
 
+/// `WetPhotoInfo` in `shaders/wet_photo.wgsl`: a photo's wet stage.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
+pub struct WetPhotoUniform {
+    /// The quartile drops' directions of fall (xyz).
+    pub dirs: [[f32; 4]; 3],
+    /// Water per unit exposure, mm (x; < 0: the storage, filled), dried, mm (y).
+    pub film: [f32; 4],
+    /// Lekner & Dorf's (1 − R̄)(1 − p) (x), p (y), 1/E (z).
+    pub optics: [f32; 4],
+    /// The photo's mean sky (xyz).
+    pub sky: [f32; 4],
+    /// Sheltering occluders (x), lights (y), snow depth bound (z), wetness written (w).
+    pub counts: [u32; 4],
+}
+
 /// `CloudInfo` in `shaders/cloud.wgsl`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]

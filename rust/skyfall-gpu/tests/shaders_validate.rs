@@ -116,6 +116,7 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
             "FILM_ROUGHNESS",
             bits(skyfall_core::wet::optics::FILM_ROUGHNESS),
         ),
+        ("MARCH_STEPS", skyfall_core::wet::stage::MARCH_STEPS as f64),
     ];
     assert_eq!(seen.len(), want.len(), "{seen:?}");
     for (name, v) in want {

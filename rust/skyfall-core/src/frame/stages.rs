@@ -126,14 +126,9 @@ impl<'a> Frame<'a> {
                 name: "wet",
                 layers: crate::wet::stage::LAYERS,
                 srgb8: false,
-                gpu: !photo,
+                gpu: true,
                 param: "rain_duration_s",
-                why_not: if photo {
-                    "a wet photo is drawn by the CPU backend's float and banded 8-bit outputs \
-                     (set rain_duration_s=0 for dry surfaces)"
-                } else {
-                    "wet surfaces are drawn by the banded 8-bit output (frame::encoded)"
-                },
+                why_not: "wet surfaces are drawn by the banded 8-bit output (frame::encoded)",
             });
         }
         if light.clouds.is_some() {

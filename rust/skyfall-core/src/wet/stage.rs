@@ -31,6 +31,22 @@ pub const OFFSET_M: f32 = 1e-3;
 /// How far up its path a box keeps the rain off a surface, m (any box above it).
 pub const SHELTER_RAY_M: f32 = 1e5;
 
+/// A photo's wet stage on the GPU (`shaders/wet_photo.wgsl`): the photo the march reads, its
+/// mean sky, the boxes that shelter it and the lights whose highlights it shows.
+#[derive(Debug, Clone, Copy)]
+pub struct WetPhotoGpu<'a> {
+    /// The photo, linear RGB H·W·3 (what the march mirrors).
+    pub rgb: &'a [f32],
+    /// Its sky pixels' mean (for rays that leave the frame elsewhere).
+    pub sky: Vec3,
+    /// The boxes that keep the rain off (empty: none).
+    pub shelter: &'a [SceneBox],
+    /// The lights.
+    pub lamps: &'a [Light],
+    /// 1/E, 1/lux.
+    pub inv_sky_lux: f32,
+}
+
 /// What the GPU's scene pass needs to draw a box scene's wet stage (`scene_raycast.wgsl`,
 /// `WET`): the film as numbers.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,7 +66,7 @@ pub struct WetGpu {
 }
 
 /// Steps of a photo's screen-space march.
-const MARCH_STEPS: usize = 64;
+pub const MARCH_STEPS: usize = 64;
 
 /// What the wet stage's surfaces are.
 #[derive(Clone, Copy)]
@@ -129,15 +145,12 @@ impl<'a> WetStage<'a> {
         })
     }
 
-    /// The stage as the GPU's scene pass draws it, for a box scene (None for a photo: the
-    /// GPU backend draws no wet photo).
-    pub fn gpu(&self) -> Option<WetGpu> {
-        if !matches!(self.surfaces, Surfaces::Boxes(_)) {
-            return None;
-        }
+    /// The stage's film as the GPU draws it (a box scene's in its scene pass, a photo's in
+    /// its wet pass, with [`Self::photo_gpu`]).
+    pub fn gpu(&self) -> WetGpu {
         let f = self.film;
         let w = self.wetting;
-        Some(WetGpu {
+        WetGpu {
             directions: self.rain.0,
             mm_per_exposure: f.duration_s.map(|t| (f.rate_mm_h * t / 3600.0) as f32),
             dried_mm: (super::film::DRYING_MM_H * f.dry_s / 3600.0) as f32,
@@ -145,7 +158,21 @@ impl<'a> WetStage<'a> {
                 as f32,
             internal_reflectance: w.internal_reflectance as f32,
             sheltered: !self.shelter.is_empty(),
-        })
+        }
+    }
+
+    /// What the GPU's wet pass of a photo needs besides [`Self::gpu`] (None for a box scene).
+    pub fn photo_gpu(&self) -> Option<WetPhotoGpu<'_>> {
+        match self.surfaces {
+            Surfaces::Photo { rgb, .. } => Some(WetPhotoGpu {
+                rgb,
+                sky: self.photo_sky,
+                shelter: self.shelter,
+                lamps: self.lamps,
+                inv_sky_lux: self.inv_sky_lux,
+            }),
+            Surfaces::Boxes(_) => None,
+        }
     }
 
     /// The wetness of a face of normal `n` at `p`.

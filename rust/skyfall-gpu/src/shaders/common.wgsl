@@ -44,3 +44,111 @@ fn volume_cell(t: f32, n: u32) -> VolumeCell {
     let i = min(u32(x), n - 2u);
     return VolumeCell(i, x - f32(i));
 }
+
+// An axis-aligned box of a scene (or a photo's occluder), m.
+struct SceneBox {
+    min_m: vec4<f32>,
+    max_m: vec4<f32>,
+    albedo: vec4<f32>,
+}
+
+// Whether box b meets the segment p + t dir, T_MIN <= t <= t_max (inv = 1/dir, safely; the
+// segment's bounds lo_seg, hi_seg): one box of skyfall_core::scene::raycast::occluded_within.
+fn box_blocks(b: SceneBox, p: vec3<f32>, inv: vec3<f32>, t_max: f32, lo_seg: vec3<f32>, hi_seg: vec3<f32>) -> bool {
+    if any(b.min_m.xyz > hi_seg) || any(b.max_m.xyz < lo_seg) {
+        return false;
+    }
+    let t1 = (b.min_m.xyz - p) * inv;
+    let t2 = (b.max_m.xyz - p) * inv;
+    let lo = min(t1, t2);
+    let hi = max(t1, t2);
+    let t_near = max(max(max(lo.x, lo.y), lo.z), T_MIN);
+    let t_far = min(min(min(hi.x, hi.y), hi.z), t_max);
+    return t_near <= t_far;
+}
+
+fn safe(d: f32) -> f32 {
+    if abs(d) < 1e-20 {
+        return select(1e-20, -1e-20, d < 0.0);
+    }
+    return d;
+}
+
+// A point or spot light (skyfall_core::scene::lights::Light).
+struct LightElement {
+    pos_cd: vec4<f32>,      // position (m), intensity (cd)
+    color_spot: vec4<f32>,  // linear RGB, 1 for a spot
+    axis_outer: vec4<f32>,  // the spot's unit axis, cos of its outer half-angle
+    inner: vec4<f32>,       // cos of its inner half-angle
+}
+
+// skyfall_core::scene::lights::Light::illuminance_lux.
+fn light_illuminance(l: LightElement, p: vec3<f32>) -> vec3<f32> {
+    let d = p - l.pos_cd.xyz;
+    let r2 = max(dot(d, d), 1e-4);
+    var cone = 1.0;
+    if l.color_spot.w != 0.0 {
+        let c = dot(l.axis_outer.xyz, d) / sqrt(r2);
+        let co = l.axis_outer.w;
+        let ci = l.inner.x;
+        if c <= co {
+            cone = 0.0;
+        } else if c >= ci {
+            cone = 1.0;
+        } else {
+            let t = (c - co) / max(ci - co, 1e-6);
+            cone = t * t * (3.0 - 2.0 * t);
+        }
+    }
+    return l.color_spot.xyz * (l.pos_cd.w * cone / r2);
+}
+
+// --- wet surfaces (skyfall_core::wet), shared by the box scene's pass and the photos' -----
+
+// wet::optics::fresnel: unpolarised, from the air into index n.
+fn fresnel(cos_i: f32, n: f32) -> f32 {
+    let c = clamp(cos_i, 0.0, 1.0);
+    if c == 0.0 {
+        return 1.0;
+    }
+    let sin_t = sqrt(max(1.0 - c * c, 0.0)) / n;
+    let cos_t = sqrt(max(1.0 - sin_t * sin_t, 0.0));
+    let rs = (c - n * cos_t) / (c + n * cos_t);
+    let rp = (cos_t - n * c) / (cos_t + n * c);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// wet::optics::brdf: the film's GGX lobe (Smith's masking, Fresnel at v.h), 1/sr.
+fn wet_brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
+    let nv = dot(n, v);
+    let nl = dot(n, l);
+    if nv <= 0.0 || nl <= 0.0 {
+        return 0.0;
+    }
+    let hv = v + l;
+    let hl = length(hv);
+    var h = vec3<f32>(0.0);
+    if hl > 0.0 {
+        h = hv / hl;
+    }
+    let nh = max(dot(n, h), 0.0);
+    let a2 = FILM_ROUGHNESS * FILM_ROUGHNESS;
+    let q = nh * nh * (a2 - 1.0) + 1.0;
+    let d = a2 / (PI * q * q);
+    let g_v = 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
+    let g_l = 2.0 * nl / (nl + sqrt(a2 + (1.0 - a2) * nl * nl));
+    return fresnel(dot(v, h), WATER_INDEX) * d * g_v * g_l / (4.0 * nv * nl);
+}
+
+// wet::film::Film::wetness of a face of `exposure`: `film` holds the water per unit exposure, mm
+// (x; < 0: the storage, filled) and the water dried since the rain stopped, mm (y).
+fn wet_film(exposure: f32, film: vec4<f32>) -> f32 {
+    if exposure < MIN_EXPOSURE {
+        return 0.0;
+    }
+    var filled = STORAGE_MM;
+    if film.x >= 0.0 {
+        filled = min(film.x * exposure, STORAGE_MM);
+    }
+    return min(max(filled - film.y, 0.0) / WET_FILM_MM, 1.0);
+}

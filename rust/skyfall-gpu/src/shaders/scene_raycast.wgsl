@@ -10,11 +10,6 @@ struct SceneInfo {
     counts: vec4<u32>,   // number of boxes, ground (0/1)
 }
 
-struct SceneBox {
-    min_m: vec4<f32>,
-    max_m: vec4<f32>,
-    albedo: vec4<f32>,
-}
 
 // False in the pipeline for scenes without lights: the lights' code is compiled out.
 override LIT: bool = true;
@@ -69,13 +64,6 @@ struct SnowInfo {
 struct LampInfo {
     params: vec4<f32>,   // 1/E (1/lux), SHADOW_SKIP_RELATIVE, unused x2
     counts: vec4<u32>,   // number of lights
-}
-
-struct LightElement {
-    pos_cd: vec4<f32>,      // position (m), intensity (cd)
-    color_spot: vec4<f32>,  // linear RGB, 1 for a spot
-    axis_outer: vec4<f32>,  // the spot's unit axis, cos of its outer half-angle
-    inner: vec4<f32>,       // cos of its inner half-angle
 }
 
 struct SkyInfo {
@@ -186,34 +174,6 @@ fn surface_albedo(albedo: vec3<f32>, n: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
     return albedo;
 }
 
-fn safe(d: f32) -> f32 {
-    if abs(d) < 1e-20 {
-        return select(1e-20, -1e-20, d < 0.0);
-    }
-    return d;
-}
-
-// skyfall_core::scene::lights::Light::illuminance_lux.
-fn light_illuminance(l: LightElement, p: vec3<f32>) -> vec3<f32> {
-    let d = p - l.pos_cd.xyz;
-    let r2 = max(dot(d, d), 1e-4);
-    var cone = 1.0;
-    if l.color_spot.w != 0.0 {
-        let c = dot(l.axis_outer.xyz, d) / sqrt(r2);
-        let co = l.axis_outer.w;
-        let ci = l.inner.x;
-        if c <= co {
-            cone = 0.0;
-        } else if c >= ci {
-            cone = 1.0;
-        } else {
-            let t = (c - co) / max(ci - co, 1e-6);
-            cone = t * t * (3.0 - 2.0 * t);
-        }
-    }
-    return l.color_spot.xyz * (l.pos_cd.w * cone / r2);
-}
-
 // Light::surface_illuminance_lux: (E·cos θ, its channel max share with albedo a) and the unit
 // vector to the light with its distance.
 struct Lit {
@@ -243,17 +203,7 @@ fn occluded_within(p: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
     let lo_seg = min(p, q);
     let hi_seg = max(p, q);
     for (var i = 0u; i < scene.counts.x; i++) {
-        let b = boxes[i];
-        if any(b.min_m.xyz > hi_seg) || any(b.max_m.xyz < lo_seg) {
-            continue;
-        }
-        let t1 = (b.min_m.xyz - p) * inv;
-        let t2 = (b.max_m.xyz - p) * inv;
-        let lo = min(t1, t2);
-        let hi = max(t1, t2);
-        let t_near = max(max(max(lo.x, lo.y), lo.z), T_MIN);
-        let t_far = min(min(min(hi.x, hi.y), hi.z), t_max);
-        if t_near <= t_far {
+        if box_blocks(boxes[i], p, inv, t_max, lo_seg, hi_seg) {
             return true;
         }
     }
@@ -569,41 +519,6 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>) -> Hit {
 
 // --- wet surfaces (skyfall_core::wet) ---------------------------------------------------
 
-// wet::optics::fresnel: unpolarised, from the air into index n.
-fn fresnel(cos_i: f32, n: f32) -> f32 {
-    let c = clamp(cos_i, 0.0, 1.0);
-    if c == 0.0 {
-        return 1.0;
-    }
-    let sin_t = sqrt(max(1.0 - c * c, 0.0)) / n;
-    let cos_t = sqrt(max(1.0 - sin_t * sin_t, 0.0));
-    let rs = (c - n * cos_t) / (c + n * cos_t);
-    let rp = (cos_t - n * c) / (cos_t + n * c);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
-// wet::optics::brdf: the film's GGX lobe (Smith's masking, Fresnel at v.h), 1/sr.
-fn wet_brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
-    let nv = dot(n, v);
-    let nl = dot(n, l);
-    if nv <= 0.0 || nl <= 0.0 {
-        return 0.0;
-    }
-    let hv = v + l;
-    let hl = length(hv);
-    var h = vec3<f32>(0.0);
-    if hl > 0.0 {
-        h = hv / hl;
-    }
-    let nh = max(dot(n, h), 0.0);
-    let a2 = FILM_ROUGHNESS * FILM_ROUGHNESS;
-    let q = nh * nh * (a2 - 1.0) + 1.0;
-    let d = a2 / (PI * q * q);
-    let g_v = 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
-    let g_l = 2.0 * nl / (nl + sqrt(a2 + (1.0 - a2) * nl * nl));
-    return fresnel(dot(v, h), WATER_INDEX) * d * g_v * g_l / (4.0 * nv * nl);
-}
-
 // wet::film: the wetness of a face of normal n at p (RainDirections::exposure, Film::wetness).
 fn wet_wetness(p: vec3<f32>, n: vec3<f32>) -> f32 {
     let lifted = p + n * WET_OFFSET_M;
@@ -615,15 +530,7 @@ fn wet_wetness(p: vec3<f32>, n: vec3<f32>) -> f32 {
             sum += h / -v.y;
         }
     }
-    let exposure = sum / 3.0;
-    if exposure < MIN_EXPOSURE {
-        return 0.0;
-    }
-    var filled = STORAGE_MM;
-    if wet.film.x >= 0.0 {
-        filled = min(wet.film.x * exposure, STORAGE_MM);
-    }
-    return min(max(filled - wet.film.y, 0.0) / WET_FILM_MM, 1.0);
+    return wet_film(sum / 3.0, wet.film);
 }
 
 // WetStage::box_pixel: the dry light c of a face (albedo a, normal n, at p, seen along dir,

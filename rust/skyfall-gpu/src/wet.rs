@@ -1,0 +1,114 @@
+//! A photo's wet stage (`shaders/wet_photo.wgsl`): after the photo is uploaded, each surface's
+//! film darkens it and mirrors what a march through the depth map meets. A box scene's wet
+//! stage is drawn in its scene pass ([`crate::scene_raycast`]), where its mirror rays are cast.
+
+use crate::context::{GpuContext, GpuError};
+use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
+use crate::uniforms::{BoxElement, CameraUniform, LightElement, WetPhotoUniform};
+use skyfall_core::frame::layers::Layer;
+use skyfall_core::wet::stage::{WetGpu, WetPhotoGpu};
+use std::sync::OnceLock;
+
+const SOURCE: &str = include_str!("shaders/wet_photo.wgsl");
+
+/// The pass, compiled at the first wet photo (a renderer that draws none pays nothing).
+#[derive(Debug, Default)]
+pub struct WetPhotoPass(OnceLock<ComputePass>);
+
+impl FramePass for WetPhotoPass {
+    /// The film, and the photo's own inputs.
+    type Input<'i> = (WetGpu, WetPhotoGpu<'i>);
+
+    fn new(_ctx: &GpuContext) -> Self {
+        WetPhotoPass(OnceLock::new())
+    }
+
+    /// rgb in place and the wetness written, from depth (and the snow cover's depth).
+    fn encode(
+        &self,
+        f: &mut FrameEncoder<'_>,
+        t: &FrameTargets<'_>,
+        (wet, photo): Self::Input<'_>,
+    ) -> Result<(), GpuError> {
+        use Binding::*;
+        let pass = self.0.get_or_init(|| {
+            ComputePass::new(
+                f.ctx,
+                "wet_photo",
+                SOURCE,
+                &[
+                    Uniform, Uniform, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly, ReadOnly,
+                    ReadOnly,
+                ],
+            )
+        });
+        f.ctx
+            .check_buffer("the photo", (photo.rgb.len() * 4) as u64)?;
+        let v = |a: glam::Vec3| [a.x, a.y, a.z, 0.0];
+        let mut boxes: Vec<BoxElement> = photo
+            .shelter
+            .iter()
+            .map(|b| BoxElement {
+                min_m: v(b.min_m),
+                max_m: v(b.max_m),
+                albedo: v(b.albedo),
+            })
+            .collect();
+        if boxes.is_empty() {
+            boxes.push(BoxElement::default()); // counts.x = 0 keeps it unread
+        }
+        let mut lights: Vec<LightElement> = photo.lamps.iter().map(LightElement::new).collect();
+        if lights.is_empty() {
+            lights.push(LightElement::default()); // counts.y = 0 keeps it unread
+        }
+        let wet_layer = t.layers.get(Layer::Wetness);
+        let snow = t.layers.get(Layer::SnowDepth);
+        let block = WetPhotoUniform {
+            dirs: wet.directions.map(v),
+            film: [wet.mm_per_exposure.unwrap_or(-1.0), wet.dried_mm, 0.0, 0.0],
+            optics: [
+                wet.darkening_numerator,
+                wet.internal_reflectance,
+                photo.inv_sky_lux,
+                0.0,
+            ],
+            sky: v(photo.sky),
+            counts: [
+                if wet.sheltered {
+                    photo.shelter.len() as u32
+                } else {
+                    0
+                },
+                photo.lamps.len() as u32,
+                u32::from(snow.is_some()),
+                u32::from(wet_layer.is_some()),
+            ],
+        };
+        let dummy = f.target("wet_dummy", 1);
+        let buffers = [
+            f.uniform("camera", &CameraUniform::new(f.cam)),
+            f.uniform("wet_photo", &block),
+            f.upload("photo", photo.rgb),
+            f.upload("occluders", &boxes),
+            f.upload("lights", &lights),
+        ];
+        let [cam, info, rgb, occluders, lights] = &buffers;
+        f.dispatch(
+            pass,
+            &[
+                cam,
+                info,
+                rgb,
+                t.depth,
+                t.rgb,
+                wet_layer.unwrap_or(&dummy),
+                occluders,
+                lights,
+                snow.unwrap_or(&dummy),
+            ],
+        );
+        f.hold(buffers);
+        f.hold([dummy]);
+        Ok(())
+    }
+}
