@@ -82,19 +82,7 @@ impl FramePass for SceneRaycastPass {
             ground_albedo: [g.x, g.y, g.z, 0.0],
             counts: [scene.boxes.len() as u32, u32::from(scene.ground), 0, 0],
         };
-        let v = |a: glam::Vec3| [a.x, a.y, a.z, 0.0];
-        let mut boxes: Vec<BoxElement> = scene
-            .boxes
-            .iter()
-            .map(|b| BoxElement {
-                min_m: v(b.min_m),
-                max_m: v(b.max_m),
-                albedo: v(b.albedo),
-            })
-            .collect();
-        if boxes.is_empty() {
-            boxes.push(BoxElement::default()); // a binding may not be empty; counts.x = 0 keeps it unread
-        }
+        let boxes = BoxElement::list(&scene.boxes);
         let (p, sun) = light.sky.kind.params();
         let kind = if matches!(light.sky.kind, SkyKind::Overcast) {
             0.0
@@ -127,10 +115,7 @@ impl FramePass for SceneRaycastPass {
             "the lights",
             (light.lights.len() * size_of::<LightElement>()) as u64,
         )?;
-        let mut lights: Vec<LightElement> = light.lights.iter().map(LightElement::new).collect();
-        if lights.is_empty() {
-            lights.push(LightElement::default()); // counts.x = 0 keeps it unread
-        }
+        let lights = LightElement::list(light.lights);
         // The snow cover's grid (a cell of none where the frame has no cover: its pipeline
         // does not read them).
         let (snow_info, cells) = match light.snow {

@@ -96,7 +96,7 @@ pub struct SnowUniform {
     pub dims: [u32; 4],
 }
 
-/// `SceneBox` in `shaders/scene_raycast.wgsl` (a storage array's element).
+/// `SceneBox` in `shaders/common.wgsl` (a storage array's element).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
 pub struct BoxElement {
@@ -106,6 +106,26 @@ pub struct BoxElement {
     pub max_m: [f32; 4],
     /// Albedo.
     pub albedo: [f32; 4],
+}
+
+impl BoxElement {
+    /// The elements of `boxes`, or one zeroed element when there are none (a binding may not
+    /// be empty; the shader's count of 0 keeps it unread).
+    pub fn list(boxes: &[skyfall_core::scene::boxes::SceneBox]) -> Vec<Self> {
+        let v = |a: glam::Vec3| [a.x, a.y, a.z, 0.0];
+        let mut out: Vec<Self> = boxes
+            .iter()
+            .map(|b| BoxElement {
+                min_m: v(b.min_m),
+                max_m: v(b.max_m),
+                albedo: v(b.albedo),
+            })
+            .collect();
+        if out.is_empty() {
+            out.push(BoxElement::default());
+        }
+        out
+    }
 }
 
 /// `SkyInfo` in `shaders/scene_raycast.wgsl`.
@@ -155,6 +175,16 @@ pub struct LightElement {
 }
 
 impl LightElement {
+    /// The elements of `lights`, or one zeroed element when there are none (see
+    /// [`BoxElement::list`]).
+    pub fn list(lights: &[skyfall_core::scene::lights::Light]) -> Vec<Self> {
+        let mut out: Vec<Self> = lights.iter().map(LightElement::new).collect();
+        if out.is_empty() {
+            out.push(LightElement::default());
+        }
+        out
+    }
+
     /// The element of `l`.
     pub fn new(l: &skyfall_core::scene::lights::Light) -> Self {
         let p = l.position_m;

@@ -45,22 +45,8 @@ impl FramePass for WetPhotoPass {
         f.ctx
             .check_buffer("the photo", (photo.rgb.len() * 4) as u64)?;
         let v = |a: glam::Vec3| [a.x, a.y, a.z, 0.0];
-        let mut boxes: Vec<BoxElement> = photo
-            .shelter
-            .iter()
-            .map(|b| BoxElement {
-                min_m: v(b.min_m),
-                max_m: v(b.max_m),
-                albedo: v(b.albedo),
-            })
-            .collect();
-        if boxes.is_empty() {
-            boxes.push(BoxElement::default()); // counts.x = 0 keeps it unread
-        }
-        let mut lights: Vec<LightElement> = photo.lamps.iter().map(LightElement::new).collect();
-        if lights.is_empty() {
-            lights.push(LightElement::default()); // counts.y = 0 keeps it unread
-        }
+        let boxes = BoxElement::list(photo.shelter);
+        let lights = LightElement::list(photo.lamps);
         let wet_layer = t.layers.get(Layer::Wetness);
         let snow = t.layers.get(Layer::SnowDepth);
         let block = WetPhotoUniform {
