@@ -96,6 +96,32 @@ struct RefractParams {
     more: [f32; 4],
 }
 
+impl RefractParams {
+    /// The refraction `r` over a `dims` = (width, height, lookup width, lookup height) frame
+    /// whose lookup copy is `scale` times smaller.
+    fn new(r: &Refraction, dims: [usize; 4], scale: usize) -> Self {
+        RefractParams {
+            dims: dims.map(|d| d as u32),
+            opts: [
+                scale as u32,
+                match r.mode {
+                    RefractMode::Offset => 0,
+                    RefractMode::Snell => 1,
+                },
+                0,
+                0,
+            ],
+            lens: [
+                r.focal_px as f32,
+                r.principal_px[0] as f32,
+                r.principal_px[1] as f32,
+                r.index as f32,
+            ],
+            more: [r.slope_px as f32, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
 const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
@@ -162,25 +188,7 @@ impl WindshieldPass {
         let fp = FieldParams {
             dims: [width as u32, height as u32, tx as u32, 1],
         };
-        let rp = RefractParams {
-            dims: [width as u32, height as u32, lw as u32, lh as u32],
-            opts: [
-                s as u32,
-                match r.mode {
-                    RefractMode::Offset => 0,
-                    RefractMode::Snell => 1,
-                },
-                0,
-                0,
-            ],
-            lens: [
-                r.focal_px as f32,
-                r.principal_px[0] as f32,
-                r.principal_px[1] as f32,
-                r.index as f32,
-            ],
-            more: [r.slope_px as f32, 0.0, 0.0, 0.0],
-        };
+        let rp = RefractParams::new(r, [width, height, lw, lh], s);
         let lp = FieldParams {
             dims: [width as u32, height as u32, lw as u32, s as u32],
         };
@@ -272,25 +280,7 @@ impl WindshieldPass {
         let fp = FieldParams {
             dims: [width as u32, height as u32, tx as u32, u32::from(compress)],
         };
-        let rp = RefractParams {
-            dims: [width as u32, height as u32, lw as u32, lh as u32],
-            opts: [
-                scale as u32,
-                match r.mode {
-                    RefractMode::Offset => 0,
-                    RefractMode::Snell => 1,
-                },
-                0,
-                0,
-            ],
-            lens: [
-                r.focal_px as f32,
-                r.principal_px[0] as f32,
-                r.principal_px[1] as f32,
-                r.index as f32,
-            ],
-            more: [r.slope_px as f32, 0.0, 0.0, 0.0],
-        };
+        let rp = RefractParams::new(r, [width, height, lw, lh], scale);
         let bufs = ctx.scoped(|| {
             let fpu = self.upload(ctx, "windshield field params", &[fp], uniform);
             let rpu = self.upload(ctx, "windshield refract params", &[rp], uniform);
