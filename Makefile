@@ -72,10 +72,16 @@ test-rust: setup vulkan
 	cargo test --workspace --locked
 	cargo clippy --workspace --all-targets --locked -- -D warnings
 
+# Python's fault dump on a crash (tests/conftest.py); printed when pytest dies of a signal.
+CRASH_LOG := $(abspath .pytest-crash.txt)
+
 test-python: build wheel vulkan
 	$(PY) -m mypy.stubtest skyfall._core
 	$(PY) -m mypy
-	$(PY) -m pytest --nbmake tests notebooks
+	@rm -f $(CRASH_LOG) $(CRASH_LOG).test
+	SKYFALL_CRASH_LOG=$(CRASH_LOG) $(PY) -m pytest -p no:faulthandler --nbmake tests notebooks || { \
+	  s=$$?; if [ -s $(CRASH_LOG) ]; then echo "== pytest crashed in: $$(cat $(CRASH_LOG).test 2>/dev/null)"; \
+	  head -n 2 $(CRASH_LOG); grep -A25 -m1 "^Current thread" $(CRASH_LOG) || head -c 2500 $(CRASH_LOG); fi; exit $$s; }
 
 test: test-rust test-python
 

@@ -2,12 +2,40 @@
 
 from __future__ import annotations
 
+import faulthandler
+import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 DATA = Path(__file__).parent / "data"
+
+# A crash (a signal such as SIGABRT, not a failed test) leaves only the end of Python's fault
+# dump in a log that keeps its last lines: where SKYFALL_CRASH_LOG names a file (``make test``
+# sets it), the dump goes there and the running test's id to its ``.test`` twin, and the
+# Makefile prints both, the crashing thread's frames first, after pytest dies.
+_CRASH: dict[str, Any] = {}
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    path = os.environ.get("SKYFALL_CRASH_LOG")
+    if path and "dump" not in _CRASH:
+        _CRASH["dump"] = open(path, "w")  # noqa: SIM115 (open for the whole session)
+        _CRASH["test"] = Path(path + ".test")
+        faulthandler.enable(file=_CRASH["dump"], all_threads=True)
+
+
+def pytest_runtest_logstart(nodeid: str, location: tuple[str, int | None, str]) -> None:
+    if "test" in _CRASH:
+        _CRASH["test"].write_text(nodeid + "\n")
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if "dump" in _CRASH:
+        faulthandler.disable()
+        _CRASH.pop("dump").close()
 
 
 def load_csv(name: str) -> dict[str, np.ndarray]:
