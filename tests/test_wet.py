@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from skyfall import Camera, PhotoScene, PointLight, Renderer, Weather, scenes
+from skyfall import Camera, PhotoScene, PointLight, Renderer, Weather, io, scenes
 
 W, H = 96, 72
 N_WATER = 1.33
@@ -217,8 +217,6 @@ def test_a_photo_of_open_ground_darkens_and_mirrors_its_own_sky():
 
 
 def test_the_8bit_output_draws_the_wet_stage(cpu):
-    from skyfall import io
-
     scene = scenes.street(lamps=True)
     weather = Weather(rain_rate_mm_h=10.0, rain_duration_s=None, sky_illuminance_lux=300.0)
     frame = cpu.render(scene, weather, seed=1)
@@ -226,6 +224,33 @@ def test_the_8bit_output_draws_the_wet_stage(cpu):
     assert cpu.srgb8_path(scene, weather) == "banded"
     assert np.abs(image.astype(int) - io.to_srgb8(frame.rgb).astype(int)).max() <= 1
     np.testing.assert_array_equal(layers["wetness"], frame.layers["wetness"])
+
+
+def test_the_8bit_path_follows_the_cores_plan_of_the_film():
+    # render_srgb8's path is read from the core's plan (_core.frame_plan), not from the
+    # weather's fields: a film the drying has emptied (1 mm of storage at 0.25 mm/h: gone after
+    # 4 h) declares no wet stage, and the 8-bit photo takes the fused path again.
+    from skyfall import _core
+
+    r = Renderer(32, 24, backend="cpu")
+    photo8 = PhotoScene(np.full((24, 32, 3), 120, np.uint8), depth_m=np.full((24, 32), 30.0, np.float32))
+    cases = {
+        "rain, dry surfaces": (Weather(rain_rate_mm_h=5.0), False),
+        "rain, wet surfaces": (Weather(rain_rate_mm_h=5.0, rain_duration_s=None), True),
+        "1 h after the rain": (Weather(rain_rate_mm_h=5.0, rain_duration_s=None, dry_s=3600.0), True),
+        "4 h 10 min after the rain": (Weather(rain_rate_mm_h=5.0, rain_duration_s=None, dry_s=4 * 3600.0 + 600.0), False),
+    }
+    for name, (weather, wet) in cases.items():
+        plan = {stage: (srgb8, gpu, layers) for stage, srgb8, gpu, layers in _core.frame_plan(r._request(photo8, weather))}
+        assert ("wet" in plan) == wet, (name, plan)
+        if wet:
+            assert plan["wet"] == (False, True, ["wetness"]), name
+        assert all(srgb8 for srgb8, _, _ in plan.values()) == (not wet), (name, plan)
+        assert r.srgb8_path(photo8, weather) == ("banded" if wet else "fused"), name
+        # and the bytes are the float frame's either way
+        image = r.render_srgb8(photo8, weather, seed=2)
+        want = io.to_srgb8(r.render(photo8, weather, seed=2).rgb)
+        assert np.abs(image.astype(int) - want.astype(int)).max() <= 1, name
 
 
 GPU_CASES = {
@@ -240,8 +265,6 @@ def test_the_gpu_draws_wet_box_scenes_as_the_cpu_does(cpu, case):
     # The GPU's scene pass draws the wet stage of box scenes (scene_raycast.wgsl, WET): within
     # one code of the CPU's frame (lavapipe: 0 values more than one code off) and the same
     # wetness to f32 rounding.
-    from skyfall import io
-
     make, weather, exposure = GPU_CASES[case]
     a = cpu.render(make(), weather, seed=1)
     b = Renderer(W, H, backend="gpu").render(make(), weather, seed=1)
@@ -256,7 +279,6 @@ def test_the_gpu_draws_wet_photos_as_the_cpu_does(weather):
     # The street kept as a photo with its depth and its boxes as occluders: the GPU's wet pass
     # (wet_photo.wgsl: normals from the depth map, the march, the occluders' shelter) against
     # the CPU's stage, within one code and the same wetness to f32 rounding.
-    from skyfall import io
     from skyfall._demo.photo import street_photo
 
     photo = street_photo(W)

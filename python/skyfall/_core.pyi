@@ -34,6 +34,7 @@ __all__ = [
     "snow_cover_boxes",
     "snow_cover_photo",
     "GpuUnavailableError",
+    "frame_plan",
     "render_frame",
     "render_frame8",
     "render_photo8",
@@ -118,6 +119,7 @@ SNOW_ALBEDO: float
 def render_frame(
     request: _Request, *, device: GpuDevice | None = None, out: dict[str, NDArray[np.float32] | None] | None = None
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], dict[str, NDArray[np.float32]], dict[str, int]]: ...
+def frame_plan(request: _Request) -> list[tuple[str, bool, bool, list[str]]]: ...
 def render_frame8(
     request: _Request, out_srgb8: NDArray[np.uint8], *, layers: dict[str, NDArray[np.float32]] | None = None
 ) -> dict[str, int]: ...

@@ -516,9 +516,11 @@ class Renderer:
         """Which path :meth:`render_srgb8` of these takes; every path gives the float frame's
         bytes within 1 code (``"banded"`` and ``"float"``: exactly).
 
-        - ``"fused"``: an 8-bit photo on the CPU backend, no windshield, no clouds, no snow
-          cover and no wet surfaces in the weather, and no layer asked for but ``rain_alpha`` and ``snow_alpha``:
-          each pixel decoded, hazed, composited and encoded once (the fastest);
+        - ``"fused"``: an 8-bit photo on the CPU backend whose every stage the core declares
+          the fused output draws (not a windshield, clouds, a snow cover or wet surfaces:
+          ``_core.frame_plan`` lists a frame's stages), and no layer asked for but
+          ``rain_alpha`` and ``snow_alpha``: each pixel decoded, hazed, composited and encoded
+          once (the fastest);
         - ``"banded"``: on the CPU backend, anything else (box scenes and their glows, clouds,
           a snow cover, a windshield, any layer), in one core call: the frame's stages band by
           band, each band encoded as it is finished, with no frame-sized float buffer (with a
@@ -552,15 +554,21 @@ class Renderer:
         weather = weather if weather is not None else Weather()
         if self._device is not None:
             return "float"
-        names = _layer_names(layers) or ()
+        if not isinstance(scene, PhotoScene) or scene.srgb8 is None:
+            return "banded"  # (without the request: a box scene's would build its ambient map)
+        return self._path8(scene, self._request(scene, weather), _layer_names(layers) or ())
+
+    def _path8(self, scene: BoxScene | PhotoScene, request: _Request, names: Sequence[str]) -> str:
+        """:meth:`srgb8_path` of ``request``: fused for an 8-bit photo on the CPU backend whose
+        every stage the core declares the fused output draws (``_core.frame_plan``, the one
+        place that decides it) and no layer asked for but :data:`FUSED_LAYERS`."""
+        if self._device is not None:
+            return "float"
         fused = (
             isinstance(scene, PhotoScene)
             and scene.srgb8 is not None
-            and weather.windshield is None
-            and weather.clouds is None
-            and weather.snow_cover is None
-            and not weather._may_wet
             and set(names) <= set(FUSED_LAYERS)
+            and all(srgb8 for _, srgb8, _, _ in _core.frame_plan(request))
         )
         return "fused" if fused else "banded"
 
@@ -693,11 +701,11 @@ class Renderer:
         """:meth:`render_srgb8` with its options and outputs checked: the image and each
         target layer (its given array filled, or a new one)."""
         image = out if out is not None else np.empty((self.height, self.width, 3), np.uint8)
-        path = self.srgb8_path(scene, weather, layers=targets)
+        request = self._request(scene, weather, options, time_s) if self._device is None else None
+        path = self._path8(scene, request, tuple(targets)) if request is not None else "float"
         if path == "fused":
-            assert isinstance(scene, PhotoScene) and scene.srgb8 is not None
+            assert isinstance(scene, PhotoScene) and scene.srgb8 is not None and request is not None
             filled = {name: a if a is not None else np.empty((self.height, self.width), np.float32) for name, a in targets.items()}
-            request = self._request(scene, weather, options, time_s)
             _core.render_photo8(
                 request, scene.srgb8, io.srgb8_table(), image, rain_alpha_out=filled.get("rain_alpha"), snow_alpha_out=filled.get("snow_alpha")
             )
@@ -707,7 +715,8 @@ class Renderer:
             # A stage the fused path does not draw (clouds, a snow cover, a box scene and its
             # glows, a windshield) or a layer it does not fill: the stages band by band, each band encoded as
             # it is finished (the float frame's bytes, no frame-sized float buffer).
-            _core.render_frame8(self._request(scene, weather, options, time_s), image, layers=filled)
+            assert request is not None
+            _core.render_frame8(request, image, layers=filled)
             return image, filled
         # The GPU backend: float, then encode.
         frame = self._render(scene, weather, dataclasses.replace(options, layers=tuple(targets)), time_s, None)

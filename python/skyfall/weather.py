@@ -273,12 +273,6 @@ class Weather:
         return self._optics[2]
 
     @property
-    def _may_wet(self) -> bool:
-        """Whether the rain may leave a film on the surfaces (the core decides whether it does,
-        after drying): the fused 8-bit path is then not taken."""
-        return self.rain_rate_mm_h > 0 and self.rain_duration_s != 0
-
-    @property
     def cloud_base_height_m(self) -> float:
         """The cloud base H in use, m: ``cloud_base_m`` or :func:`skyfall.sky.cloud_base_m` of the rain rate."""
         return self._optics[3]

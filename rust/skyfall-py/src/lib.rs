@@ -47,7 +47,7 @@ mod _core {
     #[pymodule_export]
     use super::ranges::check_range;
     #[pymodule_export]
-    use super::render::{GpuDevice, render_frame, render_frame8, render_photo8};
+    use super::render::{GpuDevice, frame_plan, render_frame, render_frame8, render_photo8};
     #[pymodule_export]
     use super::sky::{AmbientLightMap, SkyModel, cloud_base_m};
     #[pymodule_export]

@@ -127,6 +127,37 @@ pub fn render_frame<'py>(
     Ok((rgb, depth, named, stats(py, report, snow_report)?))
 }
 
+/// A stage as `frame_plan` returns it: its name, whether the fused 8-bit output draws it,
+/// whether the GPU does, and its layers' names.
+type DeclaredStage = (&'static str, bool, bool, Vec<&'static str>);
+
+/// The stages the frame of `request` draws, as the core declares them
+/// (`skyfall_core::frame::stages::Frame::plan`), in drawing order: each stage's name, whether
+/// the fused 8-bit output draws it, whether the GPU backend does, and the names of its layers.
+/// Outputs decide what they can draw from this list alone (`Renderer.srgb8_path`).
+#[pyfunction]
+#[pyo3(signature = (request))]
+pub fn frame_plan<'py>(request: RequestArgs<'py>) -> PyResult<Vec<DeclaredStage>> {
+    let parsed: ParsedRequest<'py> = request.parse(true)?;
+    let req = parsed.request()?;
+    let setup = FrameSetup::new(&req).map_err(CoreError)?;
+    let effects = setup.effects();
+    let frame = effects.frame(req.scene_ref(), &req.camera, parsed.glass());
+    Ok(frame
+        .plan()
+        .0
+        .iter()
+        .map(|d| {
+            (
+                d.name,
+                d.srgb8,
+                d.gpu,
+                d.layers.iter().map(Layer::name).collect(),
+            )
+        })
+        .collect())
+}
+
 /// Renders the frame of `request` as 8-bit sRGB into `out_srgb8` on the CPU, any frame (the
 /// stages band by band, each band encoded as it is finished: the float frame's bytes, see
 /// `skyfall_core::frame::encoded`), filling the arrays of `layers` (name to (H, W) float32)
