@@ -108,6 +108,7 @@ bench: build vulkan
 	$(PY) benches/snow_cover.py
 	$(PY) benches/srgb8_banded.py
 	$(PY) benches/wet.py
+	$(PY) benches/sweeps.py
 
 # A/B of the bench rows against BASE, timed alternately in one run: benches/results/ab.md.
 # BASE's wheel and venv are cached under .ab-cache/ by commit; BASE_WHEEL=<wheel of BASE> skips its build.

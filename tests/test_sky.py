@@ -257,6 +257,35 @@ def test_map_is_cached_and_open_scenes_are_uniform():
     assert open_map.grid[0, 0, 0, 0] == pytest.approx(E, rel=1e-4)
 
 
+def test_a_map_under_a_new_sky_is_lit_from_the_scenes_horizon():
+    # What the boxes hide is found once per geometry (_core.AmbientHorizon); a map under another
+    # rain rate, visibility or sky is lit from it: the directly built map bit for bit, and on a
+    # canyon's floor the independent scipy integral (canyon_illuminance) under each weather.
+    from skyfall import _core
+
+    boxes = sky._occluders(canyon(12.0, 10.0))
+    lo, hi = np.array([-4.0, 0.0, -4.0]), np.array([4.0, 2.0, 4.0])
+    weathers = [Weather(), Weather(rain_rate_mm_h=30.0), Weather(rain_rate_mm_h=5.0, visibility_m=300.0)]
+    for i, w in enumerate(weathers):
+        m = sky.cached_core_map(boxes, w, lo, hi, 1.0, 256)
+        if i == 0:
+            horizon = sky._horizon(boxes, lo, hi, 1.0, 256, "spacing_m")
+            assert horizon is not None and horizon.samples == 256 and horizon.nbytes > 0
+        direct = w.sky_model().ambient_map(boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=1.0, samples=256)
+        assert np.array_equal(m.values, direct.values) and np.array_equal(m.solid, direct.solid)
+        ref = canyon_illuminance(0.0, 12.0, 10.0, extinction_per_m=w.extinction_per_m, cloud_base_m=w.cloud_base_height_m)
+        assert m.values[4, 0, 4, 0] == pytest.approx(ref, rel=1e-3)
+    # a grid past HORIZON_MAX_PAIRS keeps no horizon (MemoryError, at once) and its maps are
+    # built directly
+    big_lo, big_hi = np.array([0.0, 0.0, 0.0]), np.array([140.0, 14.0, 140.0])
+    assert 141 * 15 * 141 * 64 > _core.HORIZON_MAX_PAIRS
+    with pytest.raises(MemoryError, match="horizon"):
+        _core.ambient_horizon(boxes, bounds_min_m=list(big_lo), bounds_max_m=list(big_hi), spacing_m=1.0, samples=64)
+    m = sky.cached_core_map(boxes, weathers[1], big_lo, big_hi, 1.0, 64)
+    assert sky._horizon(boxes, big_lo, big_hi, 1.0, 64, "spacing_m") is None
+    assert m.dims == [141, 15, 141]
+
+
 # ---- frames ---------------------------------------------------------------------------
 
 

@@ -28,7 +28,10 @@ __all__ = [
     "dark_channel",
     "AMBIENT_EXTENT_M",
     "FRAME_BUDGET_BYTES",
+    "AmbientHorizon",
     "AmbientLightMap",
+    "ambient_horizon",
+    "HORIZON_MAX_PAIRS",
     "GpuDevice",
     "SnowCoverGrid",
     "snow_cover_boxes",
@@ -90,6 +93,7 @@ AIRLIGHT_TOP_FRACTION: float
 def dark_channel(image: NDArray[np.uint8] | NDArray[np.float32], patch_px: int) -> NDArray[np.float32]: ...
 def atmospheric_light_pixel(image: NDArray[np.uint8] | NDArray[np.float32], patch_px: int, top_fraction: float) -> tuple[int, int]: ...
 AMBIENT_EXTENT_M: float
+HORIZON_MAX_PAIRS: int
 FRAME_BUDGET_BYTES: int
 
 class SkyfallError(Exception): ...
@@ -160,6 +164,28 @@ class SkyModel:
         samples: int,
         spacing_name: str | None = None,
     ) -> AmbientLightMap: ...
+    def light_map(self, horizon: AmbientHorizon) -> AmbientLightMap: ...
+
+@final
+class AmbientHorizon:
+    """What a scene fixes of its ambient-light map: each open node's visible sky per azimuth."""
+
+    @property
+    def dims(self) -> list[int]: ...
+    @property
+    def samples(self) -> int: ...
+    @property
+    def nbytes(self) -> int: ...
+
+def ambient_horizon(
+    boxes: NDArray[np.float32],
+    *,
+    bounds_min_m: list[float],
+    bounds_max_m: list[float],
+    spacing_m: float,
+    samples: int,
+    spacing_name: str | None = None,
+) -> AmbientHorizon: ...
 
 @final
 class AmbientLightMap:

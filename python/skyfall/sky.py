@@ -285,6 +285,35 @@ class AmbientLightMap:
 _cache: OrderedDict[tuple[Any, ...], _core.AmbientLightMap] = OrderedDict()
 _cache_lock = threading.Lock()
 _CACHE_SIZE = 8
+# What the boxes fix of a map (_core.AmbientHorizon: each node's visible sky per azimuth), per
+# (geometry, bounds, spacing, samples): a map under a new sky (another rain rate, visibility,
+# sky type or sun) is then lit from it, bit for bit the map built from scratch, at a fraction
+# of the cost. Two kept (the bundled street's is about 90 MB).
+_horizons: OrderedDict[tuple[Any, ...], _core.AmbientHorizon | None] = OrderedDict()
+_HORIZONS = 2
+
+
+def _horizon(
+    boxes: NDArray[np.float32], lo: NDArray[np.float64], hi: NDArray[np.float64], spacing: float, samples: int, spacing_name: str
+) -> _core.AmbientHorizon | None:
+    """The geometry's horizon, found once per (geometry, bounds, spacing, samples); None for a
+    grid too large to keep one (its maps are built directly)."""
+    key = (boxes.tobytes(), boxes.shape, tuple(lo), tuple(hi), spacing, samples)
+    with _cache_lock:
+        if key in _horizons:
+            _horizons.move_to_end(key)
+            return _horizons[key]
+    try:
+        found: _core.AmbientHorizon | None = _core.ambient_horizon(
+            boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=spacing, samples=samples, spacing_name=spacing_name
+        )
+    except MemoryError:
+        found = None  # past HORIZON_MAX_PAIRS, or no memory for it: the map is built directly
+    with _cache_lock:
+        _horizons[key] = found
+        while len(_horizons) > _HORIZONS:
+            _horizons.popitem(last=False)
+    return found
 
 
 def cached_core_map(
@@ -297,7 +326,8 @@ def cached_core_map(
     spacing_name: str = "spacing_m",
 ) -> _core.AmbientLightMap:
     """The core map, built once per (geometry, sky, bounds, spacing, samples) in a process;
-    errors name the spacing ``spacing_name`` (the caller's own parameter)."""
+    errors name the spacing ``spacing_name`` (the caller's own parameter). A map under a new
+    sky over a geometry seen before is lit from the geometry's horizon (the same bits)."""
     model = w.sky_model()
     sky_key = (w.sky, w.sun_elevation_deg, w.sun_azimuth_deg, w.extinction_per_m, w.cloud_base_height_m)
     key = (boxes.tobytes(), boxes.shape, sky_key, tuple(lo), tuple(hi), spacing, samples)
@@ -305,9 +335,13 @@ def cached_core_map(
         if key in _cache:
             _cache.move_to_end(key)
             return _cache[key]
-    built = model.ambient_map(
-        boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=spacing, samples=samples, spacing_name=spacing_name
-    )
+    horizon = _horizon(boxes, lo, hi, spacing, samples, spacing_name) if len(boxes) else None
+    if horizon is not None:
+        built = model.light_map(horizon)
+    else:
+        built = model.ambient_map(
+            boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=spacing, samples=samples, spacing_name=spacing_name
+        )
     with _cache_lock:
         _cache[key] = built
         while len(_cache) > _CACHE_SIZE:

@@ -49,7 +49,7 @@ mod _core {
     #[pymodule_export]
     use super::render::{GpuDevice, frame_plan, render_frame, render_frame8, render_photo8};
     #[pymodule_export]
-    use super::sky::{AmbientLightMap, SkyModel, cloud_base_m};
+    use super::sky::{AmbientHorizon, AmbientLightMap, SkyModel, ambient_horizon, cloud_base_m};
     #[pymodule_export]
     use super::snow::{SnowCoverGrid, snow_cover_boxes, snow_cover_photo};
     #[pymodule_export]
@@ -101,6 +101,7 @@ mod _core {
             skyfall_core::haze::airlight::TOP_FRACTION,
         )?;
         m.add("AMBIENT_EXTENT_M", skyfall_core::sky::ambient::MAP_EXTENT_M)?;
+        m.add("HORIZON_MAX_PAIRS", skyfall_core::sky::horizon::MAX_PAIRS)?;
         m.add(
             "FRAME_BUDGET_BYTES",
             skyfall_core::frame::FRAME_BUDGET_BYTES,

@@ -14,6 +14,7 @@ use skyfall_core::ranges;
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::ambient::AmbientMap;
 use skyfall_core::sky::cie::SkyKind;
+use skyfall_core::sky::horizon::Horizon;
 use skyfall_core::sky::illuminance::{CHANNELS, SkyTable, boxes_above, irradiance};
 use skyfall_core::sky::{Sky, cloud_base_m as base_for_rate, sun_direction};
 use std::sync::Arc;
@@ -158,17 +159,9 @@ impl SkyModel {
         samples: usize,
         spacing_name: Option<String>,
     ) -> PyResult<AmbientLightMap> {
-        let scene: BoxScene = box_scene(&boxes, true, [0.0; 3])?;
-        let (lo, hi) = (Vec3::from(bounds_min_m), Vec3::from(bounds_max_m));
+        let (scene, lo, hi, nodes) =
+            map_grid(&boxes, bounds_min_m, bounds_max_m, spacing_m, spacing_name)?;
         let sky = &self.sky;
-        let name = spacing_name
-            .and_then(|n| skyfall_core::ranges::find(&n))
-            .map_or("spacing_m", |l| l.name);
-        let nodes = AmbientMap::grid_dims_for(lo, hi, spacing_m, name)
-            .map_err(CoreError)?
-            .iter()
-            .map(|&d| d as u128)
-            .product::<u128>();
         let steps = (if scene.boxes.is_empty() { 0 } else { nodes } + 512) * samples as u128;
         let map = interruptible_core(py, steps, |cancel| {
             let s = SkyTable::new_cancellable(sky, samples, cancel)?;
@@ -181,6 +174,94 @@ impl SkyModel {
         })?;
         Ok(AmbientLightMap { map: Arc::new(map) })
     }
+
+    /// The ambient-light map under this sky from `horizon` (`ambient_horizon`): the map
+    /// `ambient_map` builds over the same boxes, bounds, spacing and samples, bit for bit,
+    /// from the sky's tables alone (what the boxes hide was found once, in the horizon).
+    fn light_map(&self, py: Python<'_>, horizon: &AmbientHorizon) -> PyResult<AmbientLightMap> {
+        let h = Arc::clone(&horizon.inner);
+        let sky = &self.sky;
+        let [nx, ny, nz] = h.dims();
+        let steps = (nx * ny * nz + 512) as u128 * h.azimuths() as u128 / 8;
+        let map = interruptible_core(py, steps, |cancel| {
+            let t = SkyTable::new_cancellable(sky, h.azimuths(), cancel)?;
+            h.light(&t, cancel)
+        })?;
+        Ok(AmbientLightMap { map: Arc::new(map) })
+    }
+}
+
+/// What a scene fixes of its ambient-light map (see skyfall_core::sky::horizon): each open
+/// node's visible sky per azimuth, found once and lit under any sky by `SkyModel.light_map`.
+#[pyclass(frozen, module = "skyfall._core")]
+pub struct AmbientHorizon {
+    pub(crate) inner: Arc<Horizon>,
+}
+
+#[pymethods]
+impl AmbientHorizon {
+    /// Nodes along X, Y, Z.
+    #[getter]
+    fn dims(&self) -> [usize; 3] {
+        self.inner.dims()
+    }
+
+    /// Azimuths per node.
+    #[getter]
+    fn samples(&self) -> usize {
+        self.inner.azimuths()
+    }
+
+    /// Bytes it holds.
+    #[getter]
+    fn nbytes(&self) -> usize {
+        self.inner.bytes()
+    }
+}
+
+/// A map's boxes (N, 6) as a scene, its bounds, and its node count, the bounds and the
+/// spacing checked (errors name the spacing `spacing_name`, the caller's own parameter).
+fn map_grid(
+    boxes: &PyReadonlyArray2<'_, f32>,
+    bounds_min_m: [f32; 3],
+    bounds_max_m: [f32; 3],
+    spacing_m: f64,
+    spacing_name: Option<String>,
+) -> PyResult<(BoxScene, Vec3, Vec3, u128)> {
+    let scene: BoxScene = box_scene(boxes, true, [0.0; 3])?;
+    let (lo, hi) = (Vec3::from(bounds_min_m), Vec3::from(bounds_max_m));
+    let name = spacing_name
+        .and_then(|n| skyfall_core::ranges::find(&n))
+        .map_or("spacing_m", |l| l.name);
+    let nodes = AmbientMap::grid_dims_for(lo, hi, spacing_m, name)
+        .map_err(CoreError)?
+        .iter()
+        .map(|&d| d as u128)
+        .product::<u128>();
+    Ok((scene, lo, hi, nodes))
+}
+
+/// The horizon of the boxes (N, 6) over the grid `ambient_map` builds for these bounds,
+/// spacing and samples (azimuths); MemoryError past `HORIZON_MAX_PAIRS` node-azimuth pairs.
+#[pyfunction]
+#[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples, spacing_name=None))]
+pub fn ambient_horizon(
+    py: Python<'_>,
+    boxes: PyReadonlyArray2<'_, f32>,
+    bounds_min_m: [f32; 3],
+    bounds_max_m: [f32; 3],
+    spacing_m: f64,
+    samples: usize,
+    spacing_name: Option<String>,
+) -> PyResult<AmbientHorizon> {
+    let (scene, lo, hi, nodes) =
+        map_grid(&boxes, bounds_min_m, bounds_max_m, spacing_m, spacing_name)?;
+    let horizon = interruptible_core(py, (nodes + 512) * samples as u128, |cancel| {
+        Horizon::build_cancellable(&scene, samples, lo, hi, spacing_m, cancel)
+    })?;
+    Ok(AmbientHorizon {
+        inner: Arc::new(horizon),
+    })
 }
 
 /// Sky illuminance relative to E on five normals over a grid (see skyfall_core::sky::ambient).

@@ -12,7 +12,7 @@
 //! [`AmbientMap::sample`] is the CPU reference of the WGSL `ambient_sample` in
 //! `skyfall-gpu`'s `common.wgsl`.
 
-use super::illuminance::{CHANNELS, SkyTable, boxes_above, irradiance};
+use super::illuminance::{CHANNELS, SkyTable, VisibleSky, boxes_above};
 use crate::error::{Error, Param, Range, Result, check_cancel, try_filled};
 use crate::scene::boxes::BoxScene;
 use glam::Vec3;
@@ -42,7 +42,7 @@ pub struct AmbientMap {
 }
 
 /// Whether a node is inside a box (and so filled from outside).
-fn solid(scene: &BoxScene, p: Vec3) -> bool {
+pub(crate) fn solid(scene: &BoxScene, p: Vec3) -> bool {
     scene.boxes.iter().any(|b| {
         p.x > b.min_m.x
             && p.x < b.max_m.x
@@ -156,11 +156,12 @@ impl AmbientMap {
         let nodes = nx * ny * nz;
         let mut values = try_filled("the ambient map's values", nodes * CHANNELS, 0.0f32)?;
         let mut is_solid = try_filled("the ambient map's solid nodes", nodes, false)?;
+        let dirs = samples.dirs();
         values
             .par_chunks_mut(nz * CHANNELS)
             .zip(is_solid.par_chunks_mut(nz))
             .enumerate()
-            .for_each(|(ij, (column, solid_col))| {
+            .for_each_init(VisibleSky::default, |sky, (ij, (column, solid_col))| {
                 let (i, j) = (ij / ny, ij % ny);
                 let y = min_m.y + j as f32 * s;
                 let above = boxes_above(scene, y);
@@ -172,13 +173,28 @@ impl AmbientMap {
                     if solid(scene, p) {
                         solid_col[k] = true;
                     } else {
+                        sky.clear();
+                        sky.find(&above, dirs, p);
                         column[k * CHANNELS..(k + 1) * CHANNELS]
-                            .copy_from_slice(&irradiance(&above, samples, p));
+                            .copy_from_slice(&sky.light(samples));
                     }
                 }
             });
         check_cancel(cancel, "the ambient-light map")?;
-        let mut solid = try_filled("the ambient map's solid nodes", nodes, 0u32)?;
+        Self::finish(min_m, s, dims, values, is_solid, cancel)
+    }
+
+    /// The map of `values` over the grid (`min_m`, spacing `s`, `dims`), its solid nodes
+    /// `is_solid` filled from their open neighbours.
+    pub(crate) fn finish(
+        min_m: Vec3,
+        s: f32,
+        dims: [usize; 3],
+        values: Vec<f32>,
+        is_solid: Vec<bool>,
+        cancel: &AtomicBool,
+    ) -> Result<Self> {
+        let mut solid = try_filled("the ambient map's solid nodes", is_solid.len(), 0u32)?;
         for (o, &b) in solid.iter_mut().zip(&is_solid) {
             *o = u32::from(b);
         }
@@ -349,6 +365,7 @@ pub fn scene_bounds(scene: &BoxScene, extra: &[Vec3], spacing_m: f32) -> (Vec3, 
 mod tests {
     use super::*;
     use crate::scene::boxes::SceneBox;
+    use crate::sky::illuminance::irradiance;
     use crate::sky::{Sky, cie::SkyKind};
 
     #[test]

@@ -40,15 +40,30 @@ const GL4: [(f64, f64); 4] = [
     (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
 ];
 
+/// The midpoints of `azimuths` equal sectors, as unit horizontal directions (sin φ, −cos φ):
+/// the azimuths of [`SkyTable`] and [`super::horizon::Horizon`].
+pub fn azimuth_dirs(azimuths: usize) -> Vec<(f64, f64)> {
+    let dphi = TAU / azimuths as f64;
+    (0..azimuths)
+        .map(|k| {
+            let phi = (k as f64 + 0.5) * dphi;
+            (phi.sin(), -phi.cos())
+        })
+        .collect()
+}
+
 /// A sky tabulated for illuminance: per azimuth, cumulative integrals over elevation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkyTable {
     /// Azimuths (midpoints of equal sectors), as unit horizontal directions (sin φ, −cos φ).
     dirs: Vec<(f64, f64)>,
-    /// ∫₀^γ L τ sin γ cos γ dγ / π · Δφ per azimuth, STEPS + 1 values each.
-    up: Vec<f64>,
-    /// ∫₀^γ L τ cos² γ dγ / π · Δφ per azimuth, STEPS + 1 values each.
-    side: Vec<f64>,
+    /// Per azimuth, STEPS + 1 pairs (∫₀^γ L τ sin γ cos γ dγ, ∫₀^γ L τ cos² γ dγ) / π · Δφ:
+    /// the horizontal and the vertical surfaces' cumulative integrals, side by side (a node's
+    /// edge reads both).
+    cum: Vec<[f64; 2]>,
+    /// Each azimuth's `up` and `side` read at the zenith (as [`SkyTable::at`] reads them), the
+    /// end of every node's highest visible interval.
+    top: Vec<(f64, f64)>,
 }
 
 impl SkyTable {
@@ -63,22 +78,16 @@ impl SkyTable {
         AZIMUTHS.check("samples", None, azimuths as f64)?;
         let dphi = TAU / azimuths as f64;
         let h = FRAC_PI_2 / STEPS as f64;
-        let mut dirs = Vec::with_capacity(azimuths);
+        let dirs = azimuth_dirs(azimuths);
         // 2 x 269 MB at 65536 azimuths: refused as OutOfMemory, not an abort.
         let n = azimuths * (STEPS + 1);
-        let (mut up, mut side) = (Vec::new(), Vec::new());
-        for v in [&mut up, &mut side] {
-            v.try_reserve_exact(n)
-                .map_err(|_| crate::Error::out_of_memory::<f64>("the sky table", n))?;
-        }
-        for k in 0..azimuths {
+        let mut cum = Vec::new();
+        cum.try_reserve_exact(n)
+            .map_err(|_| crate::Error::out_of_memory::<[f64; 2]>("the sky table", n))?;
+        for &(sx, sz) in &dirs {
             check_cancel(cancel, "the sky table")?;
-            let phi = (k as f64 + 0.5) * dphi;
-            let (sx, sz) = (phi.sin(), -phi.cos());
-            dirs.push((sx, sz));
             let (mut a, mut b) = (0.0, 0.0);
-            up.push(0.0);
-            side.push(0.0);
+            cum.push([0.0, 0.0]);
             for j in 0..STEPS {
                 for (x, w) in GL4 {
                     let g = (j as f64 + x) * h;
@@ -88,11 +97,13 @@ impl SkyTable {
                     a += l * sg * cg;
                     b += l * cg * cg;
                 }
-                up.push(a);
-                side.push(b);
+                cum.push([a, b]);
             }
         }
-        Ok(SkyTable { dirs, up, side })
+        let top = (0..azimuths)
+            .map(|k| SkyTable::at(&cum, k, FRAC_PI_2))
+            .collect();
+        Ok(SkyTable { dirs, cum, top })
     }
 
     /// Number of azimuths.
@@ -100,14 +111,20 @@ impl SkyTable {
         self.dirs.len()
     }
 
-    /// Cumulative value of azimuth `k`'s table at elevation `g` (linear between steps).
+    /// The azimuths, as unit horizontal directions (sin φ, −cos φ).
+    pub fn dirs(&self) -> &[(f64, f64)] {
+        &self.dirs
+    }
+
+    /// Azimuth `k`'s cumulative values (up, side) at elevation `g` (linear between steps).
     #[inline]
-    fn at(table: &[f64], k: usize, g: f64) -> f64 {
+    fn at(cum: &[[f64; 2]], k: usize, g: f64) -> (f64, f64) {
         let x = (g / FRAC_PI_2 * STEPS as f64).clamp(0.0, STEPS as f64);
         let j = (x as usize).min(STEPS - 1);
         let f = x - j as f64;
-        let row = &table[k * (STEPS + 1)..(k + 1) * (STEPS + 1)];
-        row[j] + f * (row[j + 1] - row[j])
+        let row = &cum[k * (STEPS + 1)..(k + 1) * (STEPS + 1)];
+        let ([u0, s0], [u1, s1]) = (row[j], row[j + 1]);
+        (u0 + f * (u1 - u0), s0 + f * (s1 - s0))
     }
 }
 
@@ -158,33 +175,95 @@ pub fn boxes_above(scene: &BoxScene, y_m: f32) -> Vec<SceneBox> {
 
 /// Illuminance on the five normals at `p`, relative to E (1 on the open ground).
 pub fn irradiance(boxes_above_p: &[SceneBox], table: &SkyTable, p: Vec3) -> [f32; CHANNELS] {
-    let mut acc = [0.0f64; CHANNELS];
-    let mut spans: Vec<(f64, f64)> = Vec::with_capacity(boxes_above_p.len());
-    for (k, &(dx, dz)) in table.dirs.iter().enumerate() {
-        spans.clear();
-        spans.extend(boxes_above_p.iter().filter_map(|b| hidden(b, p, dx, dz)));
-        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
-        // Visible elevations: [0, π/2] less the union of the hidden spans.
-        let (mut up, mut side) = (0.0, 0.0);
-        let mut from = 0.0;
-        for &(lo, hi) in &spans {
-            if lo > from {
-                up += SkyTable::at(&table.up, k, lo) - SkyTable::at(&table.up, k, from);
-                side += SkyTable::at(&table.side, k, lo) - SkyTable::at(&table.side, k, from);
+    let mut sky = VisibleSky::default();
+    sky.find(boxes_above_p, &table.dirs, p);
+    sky.light(table)
+}
+
+/// The sky a point sees, per azimuth: what the boxes fix, whatever the sky. Azimuth k's visible
+/// elevations are `edges[..]` read as a₀ b₀ a₁ b₁ … (radians, the intervals [a, b] in
+/// increasing order) and, when their count (`counts[k]`) is odd, a last a whose interval
+/// ends at π/2. [`VisibleSky::light`] turns it into illuminance under a sky.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct VisibleSky {
+    /// Edges per azimuth.
+    pub counts: Vec<u16>,
+    /// The edges, azimuth after azimuth.
+    pub edges: Vec<f64>,
+    /// Scratch: one azimuth's hidden spans.
+    spans: Vec<(f64, f64)>,
+}
+
+impl VisibleSky {
+    /// Appends the visible elevations of `p` along each of `dirs` (unit horizontal
+    /// directions), hidden by `boxes_above_p`.
+    pub fn find(&mut self, boxes_above_p: &[SceneBox], dirs: &[(f64, f64)], p: Vec3) {
+        for &(dx, dz) in dirs {
+            self.spans.clear();
+            self.spans
+                .extend(boxes_above_p.iter().filter_map(|b| hidden(b, p, dx, dz)));
+            self.spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+            // Visible elevations: [0, π/2] less the union of the hidden spans.
+            let start = self.edges.len();
+            let mut from = 0.0;
+            for &(lo, hi) in &self.spans {
+                if lo > from {
+                    self.edges.extend([from, lo]);
+                }
+                from = f64::max(from, hi);
             }
-            from = f64::max(from, hi);
-        }
-        if from < FRAC_PI_2 {
-            up += SkyTable::at(&table.up, k, FRAC_PI_2) - SkyTable::at(&table.up, k, from);
-            side += SkyTable::at(&table.side, k, FRAC_PI_2) - SkyTable::at(&table.side, k, from);
-        }
-        acc[0] += up;
-        // n·ω / cos γ for the vertical normals +X, −X, +Z, −Z.
-        for (c, w) in [dx, -dx, dz, -dz].into_iter().enumerate() {
-            acc[c + 1] += side * w.max(0.0);
+            if from < FRAC_PI_2 {
+                self.edges.push(from);
+            }
+            // At most two edges per box and one more: 8193 for a scene's most boxes
+            // (`scene::boxes::MAX_BOXES`, 4096, which every scene is checked against).
+            self.counts
+                .push(u16::try_from(self.edges.len() - start).unwrap_or(u16::MAX));
         }
     }
-    acc.map(|v| v as f32)
+
+    /// Forgets the point (keeps the buffers).
+    pub fn clear(&mut self) {
+        self.counts.clear();
+        self.edges.clear();
+    }
+
+    /// The illuminance on the five normals relative to E under `table`'s sky, of the point
+    /// whose visible elevations are `counts` and `edges` (one count per azimuth of `table`).
+    pub fn light_parts(table: &SkyTable, counts: &[u16], edges: &[f64]) -> [f32; CHANNELS] {
+        let mut acc = [0.0f64; CHANNELS];
+        let mut at_edge = 0;
+        for (k, (&(dx, dz), &n)) in table.dirs.iter().zip(counts).enumerate() {
+            let e = &edges[at_edge..at_edge + usize::from(n)];
+            at_edge += usize::from(n);
+            let (mut up, mut side) = (0.0, 0.0);
+            let (pairs, last) = e.as_chunks::<2>();
+            for &[a, b] in pairs {
+                let ((ua, sa), (ub, sb)) = (
+                    SkyTable::at(&table.cum, k, a),
+                    SkyTable::at(&table.cum, k, b),
+                );
+                up += ub - ua;
+                side += sb - sa;
+            }
+            if let &[a] = last {
+                let ((ua, sa), (ut, st)) = (SkyTable::at(&table.cum, k, a), table.top[k]);
+                up += ut - ua;
+                side += st - sa;
+            }
+            acc[0] += up;
+            // n·ω / cos γ for the vertical normals +X, −X, +Z, −Z.
+            for (c, w) in [dx, -dx, dz, -dz].into_iter().enumerate() {
+                acc[c + 1] += side * w.max(0.0);
+            }
+        }
+        acc.map(|v| v as f32)
+    }
+
+    /// [`Self::light_parts`] of this point.
+    pub fn light(&self, table: &SkyTable) -> [f32; CHANNELS] {
+        Self::light_parts(table, &self.counts, &self.edges)
+    }
 }
 
 #[cfg(test)]

@@ -13,10 +13,13 @@
 //!   sky's angular distribution (the low sky dims most), it does not change E.
 //! - [`illuminance`]: E on five axis-aligned normals (up, ±X, ±Z) at points among boxes.
 //! - [`ambient`]: those five values on a uniform 3D grid, interpolated trilinearly.
+//! - [`horizon`]: what the boxes fix of such a grid (each node's visible sky per azimuth), kept
+//!   to light the map again under another sky without the boxes (a sweep over the weather).
 //! - [`sun`]: the sun's direct normal illuminance under a clear sky.
 
 pub mod ambient;
 pub mod cie;
+pub mod horizon;
 pub mod illuminance;
 mod model;
 pub mod sun;

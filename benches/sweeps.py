@@ -1,0 +1,112 @@
+"""Sweeps at the speed of a frame (issue 31, item 1): a frame whose weather changes the sky
+(a new rain rate, visibility or sky type) against a frame of a weather seen before, on the
+bundled street at 640x360 on the CPU, in one run. Every "new" call draws a value never drawn
+before, so its ambient-light map is always made again: from the scene's horizon
+(``_core.AmbientHorizon``, found at the first frame) as skyfall does now, and, for the
+comparison, from scratch as it did before (the horizon switched off for that row). A new sky
+brightness E needs no new map (the map is relative to E). Also: the first map of a scene with
+and without its horizon, the horizon's size, and the relit map against the direct one.
+
+Writes benches/results/sweeps.md and .json. Run with ``make bench``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from timing import block_times_s
+
+from skyfall import Renderer, Weather, _core, scenes, sky
+
+RESULTS = Path(__file__).parent / "results"
+W, H = 640, 360
+
+
+def main() -> None:
+    r = Renderer(W, H, backend="cpu")
+    street = scenes.street()
+    seen = Weather(rain_rate_mm_h=5.0)
+    r.render(street, seen)  # the scene's horizon and the seen weather's map
+    n = itertools.count(1)
+    sweeps = {
+        "rain rate": lambda: Weather(rain_rate_mm_h=5.0 + 1e-3 * next(n)),
+        "visibility": lambda: Weather(rain_rate_mm_h=5.0, visibility_m=2000.0 - 0.5 * next(n)),
+        "sky type and sun": lambda: Weather(sky=12, sun_elevation_deg=20.0 + 1e-3 * next(n), sun_azimuth_deg=185.0, rain_rate_mm_h=5.0),
+        "sky brightness E": lambda: Weather(rain_rate_mm_h=5.0, sky_illuminance_lux=10000.0 + next(n)),
+    }
+    original = sky._horizon
+
+    def without_horizon(*args: object, **kwargs: object) -> None:
+        return None
+
+    rows = []
+    for name, make in sweeps.items():
+        fns = {
+            "seen": lambda: r.render(street, seen),
+            "new": lambda m=make: r.render(street, m()),  # type: ignore[misc]
+        }
+        times = block_times_s(fns, blocks=5, per_block=3)
+        sky._horizon = without_horizon  # type: ignore[assignment]
+        try:
+            before = block_times_s({"new_direct": lambda m=make: r.render(street, m())}, blocks=5, per_block=3)  # type: ignore[misc]
+        finally:
+            sky._horizon = original  # type: ignore[assignment]
+        med = {k: float(np.median(v)) for k, v in {**times, **before}.items()}
+        rows.append({
+            "sweep": name, "seen_ms": 1e3 * med["seen"], "new_ms": 1e3 * med["new"], "new_direct_ms": 1e3 * med["new_direct"],
+            "new_over_seen": float(np.median([a / b for a, b in zip(times["new"], times["seen"])])),
+            "direct_over_seen": med["new_direct"] / med["seen"],
+        })
+        print(rows[-1])
+    # The first map of a scene: its horizon found and lit, against the direct build.
+    lo, hi = sky.default_bounds(street, 1.0)
+    boxes = sky._occluders(street)
+    model = Weather(rain_rate_mm_h=5.0).sky_model()
+    kw = dict(bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=1.0, samples=sky.MAP_SAMPLES)
+    first: dict[str, list[float]] = {"direct": [], "horizon": [], "light": []}
+    for _ in range(3):
+        t = time.perf_counter()
+        direct = model.ambient_map(boxes, **kw)
+        first["direct"].append(time.perf_counter() - t)
+        t = time.perf_counter()
+        horizon = _core.ambient_horizon(boxes, **kw)
+        first["horizon"].append(time.perf_counter() - t)
+        t = time.perf_counter()
+        relit = model.light_map(horizon)
+        first["light"].append(time.perf_counter() - t)
+    same = bool(np.array_equal(direct.values, relit.values) and np.array_equal(direct.solid, relit.solid))
+    fm = {k: 1e3 * float(np.median(v)) for k, v in first.items()}
+    summary = {"rows": rows, "first_map_ms": fm, "horizon_mb": horizon.nbytes / 1e6, "map_nodes": int(np.prod(direct.dims)),
+               "relit_equals_direct": same}
+    lines = [
+        "# Sweeps at the speed of a frame: the ambient map lit from the scene's horizon",
+        "",
+        f"{W}x{H}, CPU backend, the bundled street, {platform.processor() or platform.machine()}, {len(os.sched_getaffinity(0))} cores; "
+        "medians of 5 alternating blocks of 3 frames (benches/sweeps.py). Each 'new' frame's weather was never drawn before, "
+        "so its map is made again; 'from scratch' is the same sweep with the horizon switched off (skyfall before this change).",
+        "",
+        "| sweep | seen weather, ms | new weather, ms | new / seen | from scratch, ms | from scratch / seen |",
+        "|---|---|---|---|---|---|",
+        *(f"| {x['sweep']} | {x['seen_ms']:.0f} | {x['new_ms']:.0f} | {x['new_over_seen']:.2f} | {x['new_direct_ms']:.0f} | "
+          f"{x['direct_over_seen']:.2f} |" for x in rows),
+        "",
+        f"The scene's first map ({summary['map_nodes']} nodes, {sky.MAP_SAMPLES} azimuths): built directly {fm['direct']:.0f} ms; "
+        f"its horizon found {fm['horizon']:.0f} ms, then lit {fm['light']:.0f} ms. The horizon holds {summary['horizon_mb']:.0f} MB. "
+        f"The relit map equals the directly built one bit for bit: {same}.",
+        "",
+    ]
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "sweeps.md").write_text("\n".join(lines))
+    (RESULTS / "sweeps.json").write_text(json.dumps(summary, indent=1))
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

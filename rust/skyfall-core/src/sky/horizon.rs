@@ -1,0 +1,239 @@
+//! The ambient-light map in two parts: what the scene fixes and what the weather changes.
+//!
+//! A node's five illuminances are, per azimuth, the sky's cumulative integrals read at the
+//! edges of the elevations the boxes leave visible ([`super::illuminance`]). The edges depend
+//! only on the boxes, the grid and the azimuths, and finding them (every box above a node, on
+//! every azimuth) is nearly all of a map's cost; reading the sky's tables at them is a small
+//! part. [`Horizon`] keeps the edges of every open node, so [`Horizon::light`] makes the map
+//! under any sky (another rain rate, visibility, sky type or sun) by the table reads alone.
+//! The map it makes is [`AmbientMap::build`]'s bit for bit: the same edges, read in the same
+//! order with the same arithmetic.
+
+use super::ambient::{AmbientMap, solid};
+use super::illuminance::{AZIMUTHS, CHANNELS, SkyTable, VisibleSky, azimuth_dirs, boxes_above};
+use crate::error::{Error, Param, Result, check_cancel, try_filled};
+use crate::scene::boxes::BoxScene;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// The most (open node, azimuth) pairs a horizon keeps: about 2 bytes of count and 9 of
+/// edges each (the bundled street at 1 m and 64 azimuths: 8.3 M pairs, about 90 MB). A larger
+/// grid's map is built directly ([`AmbientMap::build`]), at its full cost for every sky.
+pub const MAX_PAIRS: usize = 1 << 24;
+
+/// One column of nodes (fixed x and height, every z): its open nodes' visible skies.
+#[derive(Debug, Clone, Default, PartialEq)]
+struct Column {
+    /// Whether each node of the column is inside a box.
+    solid: Vec<bool>,
+    /// The open nodes' edges per azimuth, node after node ([`VisibleSky`]).
+    sky: VisibleSky,
+}
+
+/// What a scene fixes of its ambient-light map: the grid, the solid nodes and each open
+/// node's visible elevations per azimuth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Horizon {
+    origin_m: Vec3,
+    spacing_m: f32,
+    dims: [usize; 3],
+    azimuths: usize,
+    /// Columns (x, height) in the map's order, each its z nodes.
+    columns: Vec<Column>,
+}
+
+impl Horizon {
+    /// The horizon of `scene` over the grid [`AmbientMap::build`] would make for `min_m`,
+    /// `max_m` and `spacing_m`, at `azimuths` (the sky tables' count: [`SkyTable::new`]'s,
+    /// checked as its),
+    /// stopping with [`Error::Cancelled`] soon after `cancel` is set (checked before every
+    /// node). A grid of more than [`MAX_PAIRS`] (open node, azimuth) pairs is refused as
+    /// [`Error::OutOfMemory`]: build its maps directly.
+    pub fn build_cancellable(
+        scene: &BoxScene,
+        azimuths: usize,
+        min_m: Vec3,
+        max_m: Vec3,
+        spacing_m: f64,
+        cancel: &AtomicBool,
+    ) -> Result<Self> {
+        let dims = AmbientMap::grid_dims(min_m, max_m, spacing_m)?;
+        let [nx, ny, nz] = dims;
+        AZIMUTHS.check("samples", None, azimuths as f64)?;
+        let n_az = azimuths;
+        let pairs = (nx * ny * nz) as u128 * n_az as u128;
+        if pairs > MAX_PAIRS as u128 {
+            return Err(Error::out_of_memory::<[u8; 11]>(
+                format!(
+                    "a horizon of {nx}x{ny}x{nz} nodes at {n_az} azimuths (more than the \
+                     {MAX_PAIRS} node-azimuth pairs a horizon keeps)"
+                ),
+                usize::try_from(pairs).unwrap_or(usize::MAX),
+            ));
+        }
+        let s = spacing_m as f32;
+        let dirs = &azimuth_dirs(n_az);
+        let mut columns = Vec::new();
+        columns
+            .try_reserve_exact(nx * ny)
+            .map_err(|_| Error::out_of_memory::<Column>("the horizon's columns", nx * ny))?;
+        (0..nx * ny)
+            .into_par_iter()
+            .map(|ij| {
+                let (i, j) = (ij / ny, ij % ny);
+                let y = min_m.y + j as f32 * s;
+                let above = boxes_above(scene, y);
+                let mut col = Column {
+                    solid: vec![false; nz],
+                    sky: VisibleSky::default(),
+                };
+                for k in 0..nz {
+                    if cancel.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let p = min_m + Vec3::new(i as f32 * s, j as f32 * s, k as f32 * s);
+                    if solid(scene, p) {
+                        col.solid[k] = true;
+                    } else {
+                        col.sky.find(&above, dirs, p);
+                    }
+                }
+                col
+            })
+            .collect_into_vec(&mut columns);
+        check_cancel(cancel, "the ambient map's horizon")?;
+        Ok(Horizon {
+            origin_m: min_m,
+            spacing_m: s,
+            dims,
+            azimuths: n_az,
+            columns,
+        })
+    }
+
+    /// Its grid's nodes along X, Y and Z.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// The azimuths it was found at.
+    pub fn azimuths(&self) -> usize {
+        self.azimuths
+    }
+
+    /// The bytes it holds (its edges and counts).
+    pub fn bytes(&self) -> usize {
+        self.columns
+            .iter()
+            .map(|c| c.solid.len() + 2 * c.sky.counts.len() + 8 * c.sky.edges.len())
+            .sum()
+    }
+
+    /// The map under the sky of `table` (which must have [`Self::azimuths`] azimuths):
+    /// [`AmbientMap::build`]'s values for that sky, bit for bit.
+    pub fn light(&self, table: &SkyTable, cancel: &AtomicBool) -> Result<AmbientMap> {
+        if table.azimuths() != self.azimuths {
+            return Err(Error::Invalid {
+                param: Param {
+                    name: "samples",
+                    index: None,
+                },
+                message: format!(
+                    "the sky is tabulated at {} azimuths, the horizon was found at {}: use the same samples",
+                    table.azimuths(),
+                    self.azimuths
+                ),
+            });
+        }
+        let [nx, ny, nz] = self.dims;
+        let nodes = nx * ny * nz;
+        let mut values = try_filled("the ambient map's values", nodes * CHANNELS, 0.0f32)?;
+        let mut is_solid = try_filled("the ambient map's solid nodes", nodes, false)?;
+        let n_az = self.azimuths;
+        values
+            .par_chunks_mut(nz * CHANNELS)
+            .zip(is_solid.par_chunks_mut(nz))
+            .zip(self.columns.par_iter())
+            .for_each(|((column, solid_col), col)| {
+                solid_col.copy_from_slice(&col.solid);
+                let (mut node, mut edge) = (0, 0);
+                for k in 0..nz {
+                    if col.solid[k] {
+                        continue;
+                    }
+                    let counts = &col.sky.counts[node * n_az..(node + 1) * n_az];
+                    let n_edges: usize = counts.iter().map(|&c| usize::from(c)).sum();
+                    let edges = &col.sky.edges[edge..edge + n_edges];
+                    column[k * CHANNELS..(k + 1) * CHANNELS]
+                        .copy_from_slice(&VisibleSky::light_parts(table, counts, edges));
+                    node += 1;
+                    edge += n_edges;
+                }
+            });
+        AmbientMap::finish(
+            self.origin_m,
+            self.spacing_m,
+            self.dims,
+            values,
+            is_solid,
+            cancel,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::boxes::SceneBox;
+    use crate::sky::Sky;
+    use crate::sky::cie::SkyKind;
+
+    fn canyon() -> BoxScene {
+        let wall = |x0: f32, x1: f32, h: f32| SceneBox {
+            min_m: Vec3::new(x0, 0.0, -30.0),
+            max_m: Vec3::new(x1, h, 30.0),
+            albedo: Vec3::splat(0.4),
+        };
+        let awning = SceneBox {
+            min_m: Vec3::new(4.0, 3.0, -5.0),
+            max_m: Vec3::new(6.0, 3.2, 5.0),
+            albedo: Vec3::splat(0.3),
+        };
+        BoxScene::new(
+            vec![wall(-8.0, -6.0, 20.0), wall(6.0, 8.0, 12.0), awning],
+            true,
+            Vec3::splat(0.2),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_horizon_lights_the_map_of_every_sky_bit_for_bit() {
+        let scene = canyon();
+        let (lo, hi) = (Vec3::new(-10.0, 0.0, -12.0), Vec3::new(10.0, 14.0, 12.0));
+        let cancel = AtomicBool::new(false);
+        let table = |sky: &Sky| SkyTable::new(sky, 48).unwrap();
+        let horizon = Horizon::build_cancellable(&scene, 48, lo, hi, 1.0, &cancel).unwrap();
+        for sky in [
+            Sky::new(SkyKind::Overcast, 1e-3, 900.0).unwrap(),
+            Sky::new(SkyKind::Overcast, 0.04, 400.0).unwrap(),
+            Sky::new(
+                SkyKind::general(12, Some(Vec3::new(0.3, 0.64, -0.7).normalize())).unwrap(),
+                3e-4,
+                1200.0,
+            )
+            .unwrap(),
+        ] {
+            let t = table(&sky);
+            let direct = AmbientMap::build(&scene, &t, lo, hi, 1.0).unwrap();
+            let relit = horizon.light(&t, &cancel).unwrap();
+            assert_eq!(direct, relit);
+        }
+        assert!(horizon.bytes() > 0);
+        // another number of azimuths is refused by name
+        let other = SkyTable::new(&Sky::new(SkyKind::Overcast, 1e-3, 900.0).unwrap(), 32).unwrap();
+        let e = horizon.light(&other, &cancel).unwrap_err().to_string();
+        assert!(e.contains("samples"), "{e}");
+    }
+}
