@@ -253,25 +253,24 @@ def test_the_8bit_path_follows_the_cores_plan_of_the_film():
         assert np.abs(image.astype(int) - want.astype(int)).max() <= 1, name
 
 
-GPU_CASES = {
-    "dusk, lamps and headlights": (lambda: scenes.street(lamps=True, headlights=True), Weather(rain_rate_mm_h=5.0, sky_illuminance_lux=30.0, rain_duration_s=None), 0.1),
-    "day, 10 min of rain in a cross wind": (scenes.street, Weather(rain_rate_mm_h=5.0, rain_duration_s=600.0, wind_m_s=(3.0, 0.0, 0.0)), 1.0),
-    "sun, after the rain": (scenes.street, Weather(sky=12, sun_elevation_deg=40.0, sun_azimuth_deg=185.0, rain_rate_mm_h=2.0, rain_duration_s=None, dry_s=600.0), 1.0),
-}
-
-
-@pytest.mark.parametrize("case", list(GPU_CASES))
-def test_the_gpu_draws_wet_box_scenes_as_the_cpu_does(cpu, case):
-    # The GPU's scene pass draws the wet stage of box scenes (scene_raycast.wgsl, WET): within
-    # one code of the CPU's frame (lavapipe: 0 values more than one code off) and the same
-    # wetness to f32 rounding.
-    make, weather, exposure = GPU_CASES[case]
-    a = cpu.render(make(), weather, seed=1)
-    b = Renderer(W, H, backend="gpu").render(make(), weather, seed=1)
-    diff = np.abs(io.to_srgb8(a.rgb * exposure).astype(int) - io.to_srgb8(b.rgb * exposure).astype(int))
-    assert diff.max() <= 1 and np.mean(diff > 0) < 0.01, (diff.max(), np.mean(diff > 0))
-    np.testing.assert_allclose(b.layers["wetness"], a.layers["wetness"], atol=1e-6)
-    assert a.layers["wetness"].max() > 0.0
+def test_the_gpu_refuses_wet_box_scenes_by_name():
+    # A box scene's wet stage would run in the GPU's scene pass, whose wet pipelines lavapipe's
+    # compiler (Mesa 22.3) corrupted its own heap making (valgrind's memcheck); until a form it
+    # compiles safely is found, the GPU refuses the stage by its parameter and names the backend
+    # that draws it, before any work. Dry frames and wet photos are drawn.
+    gpu = Renderer(W, H, backend="gpu")
+    wet = Weather(rain_rate_mm_h=5.0, rain_duration_s=None)
+    with pytest.raises(ValueError, match=r"rain_duration_s.*backend=\"cpu\""):
+        gpu.render(scenes.street(), wet)
+    dried = Weather(rain_rate_mm_h=5.0, rain_duration_s=None, dry_s=5 * 3600.0)  # 1 mm at 0.25 mm/h: gone after 4 h
+    frame = gpu.render(scenes.street(), dried, layers=("wetness",))
+    assert np.isfinite(frame.rgb).all() and (frame.layers["wetness"] == 0.0).all()
+    # backend="auto" on a GPU draws such a frame on the CPU: the CPU's bits (lavapipe stands in
+    # for the hardware GPU "auto" would take)
+    auto = Renderer(W, H, backend="auto")
+    auto._device, auto.backend = gpu._device, "gpu"
+    np.testing.assert_array_equal(auto.render(scenes.street(), wet, seed=1).rgb, Renderer(W, H, backend="cpu").render(scenes.street(), wet, seed=1).rgb)
+    assert auto._device_for(auto._request(scenes.street(), dried)) is gpu._device
 
 
 @pytest.mark.parametrize("weather", [AFTER_RAIN, Weather(rain_rate_mm_h=5.0, rain_duration_s=60.0, wind_m_s=(3.0, 0.0, 0.0))], ids=["after the rain", "a minute in a cross wind"])

@@ -342,7 +342,9 @@ class Renderer:
         Frame size, px, in [1, 16384].
     backend : {"auto", "cpu", "gpu"}
         See the module docstring. ``"gpu"`` raises :class:`skyfall.GpuUnavailableError` when
-        no Vulkan adapter exists, with what to install.
+        no Vulkan adapter exists, with what to install, and refuses by name a frame with a
+        stage the GPU does not draw (today a wet box scene: ``rain_duration_s``); ``"auto"``
+        draws such a frame on the CPU.
 
     Attributes
     ----------
@@ -375,6 +377,15 @@ class Renderer:
             except _core.GpuUnavailableError:
                 self._device = None
         self.backend = "gpu" if self._device is not None else "cpu"
+        self._auto = backend == "auto"
+
+    def _device_for(self, request: _Request) -> _core.GpuDevice | None:
+        """The device that draws ``request``: the renderer's, except that ``backend="auto"``
+        draws on the CPU a frame with a stage the core declares the GPU does not draw (today a
+        wet box scene), where ``backend="gpu"`` refuses it by name."""
+        if self._device is not None and self._auto and not all(gpu for _, _, gpu, _ in _core.frame_plan(request)):
+            return None
+        return self._device
 
     @property
     def adapter_info(self) -> dict[str, str] | None:
@@ -464,7 +475,7 @@ class Renderer:
         # One core call: the core derives the sky, the haze and its airlight, the rain and its
         # light from the request, draws every stage (the windshield last), and names the layers
         # it drew (skyfall._core.LAYERS).
-        rgb, depth, drawn, stats = _core.render_frame(request, device=self._device, out=arrays)
+        rgb, depth, drawn, stats = _core.render_frame(request, device=self._device_for(request), out=arrays)
         if options.layers is not None:
             reuse = out.layers if out is not None else {}
             drawn = {name: drawn[name] if name in drawn else _neutral(name, depth.shape, reuse.get(name)) for name in options.layers}
@@ -702,7 +713,11 @@ class Renderer:
         target layer (its given array filled, or a new one)."""
         image = out if out is not None else np.empty((self.height, self.width, 3), np.uint8)
         request = self._request(scene, weather, options, time_s) if self._device is None else None
-        path = self._path8(scene, request, tuple(targets)) if request is not None else "float"
+        # An 8-bit photo asking only for the fused path's layers goes to _core.render_photo8,
+        # which reads the frame's plan itself and draws it fused, or banded when a stage needs
+        # it (one core call either way; srgb8_path asks the same plan).
+        fusable = isinstance(scene, PhotoScene) and scene.srgb8 is not None and set(targets) <= set(FUSED_LAYERS)
+        path = "float" if request is None else "fused" if fusable else "banded"
         if path == "fused":
             assert isinstance(scene, PhotoScene) and scene.srgb8 is not None and request is not None
             filled = {name: a if a is not None else np.empty((self.height, self.width), np.float32) for name, a in targets.items()}

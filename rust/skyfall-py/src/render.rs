@@ -215,13 +215,15 @@ pub fn render_frame8<'py>(
 
 /// Renders the frame of `request` over its 8-bit sRGB photo `photo_srgb8` into `out_srgb8` on
 /// the CPU, fused (see `skyfall_core::frame::srgb8`); fills `rain_alpha_out` and
-/// `snow_alpha_out` when given. Returns the passes' counters.
+/// `snow_alpha_out` when given. A frame with a stage the fused output does not draw (the
+/// core's plan decides) is drawn by the banded 8-bit output instead, in the same call.
+/// Returns the passes' counters.
 #[pyfunction]
 #[pyo3(signature = (request, photo_srgb8, decode_table, out_srgb8, *, rain_alpha_out=None, snow_alpha_out=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render_photo8<'py>(
     py: Python<'py>,
-    request: RequestArgs<'py>,
+    request: Bound<'py, PyAny>,
     photo_srgb8: Bound<'py, PyArray3<u8>>,
     decode_table: PyReadonlyArray1<'py, f32>,
     out_srgb8: Bound<'py, PyArray3<u8>>,
@@ -233,6 +235,24 @@ pub fn render_photo8<'py>(
     let photo_srgb8 = photo_srgb8
         .try_readonly()
         .map_err(|_| in_use("the photo (scene.srgb8)"))?;
+    // A stage the fused output does not draw (wet surfaces, clouds, a snow cover, a
+    // windshield; the core's plan decides): the banded 8-bit output draws the frame, in this
+    // one call, the same bytes as `render_frame8`.
+    let fused = {
+        let args: RequestArgs<'py> = request.extract()?;
+        let parsed: ParsedRequest<'py> = args.parse(false)?;
+        let req = parsed.request()?;
+        let setup = FrameSetup::new(&req).map_err(CoreError)?;
+        let effects = setup.effects();
+        let frame = effects.frame(req.scene_ref(), &req.camera, parsed.glass());
+        frame.plan().check(Output::Srgb8).is_ok()
+    };
+    if !fused {
+        let layers = PyDict::new(py);
+        layers.set_item("rain_alpha", rain_alpha_out)?;
+        layers.set_item("snow_alpha", snow_alpha_out)?;
+        return render_frame8(py, request.extract()?, out_srgb8, Some(layers.extract()?));
+    }
     let mut out_srgb8 = out_srgb8.try_readwrite().map_err(|_| in_use("out"))?;
     let rain_alpha_out = rain_alpha_out
         .map(|a| a.try_readwrite().map_err(|_| in_use("rain_alpha_out")))
@@ -240,7 +260,8 @@ pub fn render_photo8<'py>(
     let snow_alpha_out = snow_alpha_out
         .map(|a| a.try_readwrite().map_err(|_| in_use("snow_alpha_out")))
         .transpose()?;
-    let parsed: ParsedRequest<'py> = request.parse(false)?;
+    let args: RequestArgs<'py> = request.extract()?;
+    let parsed: ParsedRequest<'py> = args.parse(false)?;
     let req = parsed.request()?;
     let setup = FrameSetup::new(&req).map_err(CoreError)?;
     let decode: &[f32; 256] = decode_table.as_slice()?.try_into().map_err(|_| {
