@@ -290,6 +290,7 @@ _CACHE_SIZE = 8
 # sky type or sun) is then lit from it, bit for bit the map built from scratch, at a fraction
 # of the cost. Two kept (the bundled street's is about 90 MB).
 _horizons: OrderedDict[tuple[Any, ...], _core.AmbientHorizon | None] = OrderedDict()
+_geometries: OrderedDict[tuple[Any, ...], None] = OrderedDict()  # geometries with a map built
 _HORIZONS = 2
 
 
@@ -327,7 +328,8 @@ def cached_core_map(
 ) -> _core.AmbientLightMap:
     """The core map, built once per (geometry, sky, bounds, spacing, samples) in a process;
     errors name the spacing ``spacing_name`` (the caller's own parameter). A map under a new
-    sky over a geometry seen before is lit from the geometry's horizon (the same bits)."""
+    sky over a geometry seen before is lit from the geometry's horizon, found at the second
+    sky (the same bits as a direct build)."""
     model = w.sky_model()
     sky_key = (w.sky, w.sun_elevation_deg, w.sun_azimuth_deg, w.extinction_per_m, w.cloud_base_height_m)
     key = (boxes.tobytes(), boxes.shape, sky_key, tuple(lo), tuple(hi), spacing, samples)
@@ -335,7 +337,15 @@ def cached_core_map(
         if key in _cache:
             _cache.move_to_end(key)
             return _cache[key]
-    horizon = _horizon(boxes, lo, hi, spacing, samples, spacing_name) if len(boxes) else None
+    # The first sky over a geometry builds its map directly; a second one (a sweep) finds the
+    # geometry's horizon and lights every later sky from it.
+    geometry = (boxes.tobytes(), boxes.shape, tuple(lo), tuple(hi), spacing, samples)
+    with _cache_lock:
+        swept = geometry in _geometries
+        _geometries[geometry] = None
+        while len(_geometries) > _CACHE_SIZE:
+            _geometries.popitem(last=False)
+    horizon = _horizon(boxes, lo, hi, spacing, samples, spacing_name) if swept and len(boxes) else None
     if horizon is not None:
         built = model.light_map(horizon)
     else:

@@ -74,20 +74,27 @@ impl Horizon {
         }
         let s = spacing_m as f32;
         let dirs = &azimuth_dirs(n_az);
-        let mut columns = Vec::new();
-        columns
+        // Every allocation that grows with the grid is fallible (out of memory is an error,
+        // which Python answers by building the map directly; a `Vec` that cannot grow would
+        // abort the process).
+        let mut built = Vec::new();
+        built
             .try_reserve_exact(nx * ny)
             .map_err(|_| Error::out_of_memory::<Column>("the horizon's columns", nx * ny))?;
         (0..nx * ny)
             .into_par_iter()
-            .map(|ij| {
+            .map(|ij| -> Result<Column> {
                 let (i, j) = (ij / ny, ij % ny);
                 let y = min_m.y + j as f32 * s;
                 let above = boxes_above(scene, y);
                 let mut col = Column {
-                    solid: vec![false; nz],
+                    solid: try_filled("the horizon's solid nodes", nz, false)?,
                     sky: VisibleSky::default(),
                 };
+                col.sky.counts.try_reserve_exact(nz * n_az).map_err(|_| {
+                    Error::out_of_memory::<u16>("the horizon's edge counts", nz * n_az)
+                })?;
+                let mut node = VisibleSky::default();
                 for k in 0..nz {
                     if cancel.load(Ordering::Relaxed) {
                         break;
@@ -96,13 +103,20 @@ impl Horizon {
                     if solid(scene, p) {
                         col.solid[k] = true;
                     } else {
-                        col.sky.find(&above, dirs, p);
+                        node.clear();
+                        node.find(&above, dirs, p);
+                        col.sky.edges.try_reserve(node.edges.len()).map_err(|_| {
+                            Error::out_of_memory::<f64>("the horizon's edges", node.edges.len())
+                        })?;
+                        col.sky.edges.extend_from_slice(&node.edges);
+                        col.sky.counts.extend_from_slice(&node.counts);
                     }
                 }
-                col
+                Ok(col)
             })
-            .collect_into_vec(&mut columns);
+            .collect_into_vec(&mut built);
         check_cancel(cancel, "the ambient map's horizon")?;
+        let columns = built.into_iter().collect::<Result<Vec<Column>>>()?;
         Ok(Horizon {
             origin_m: min_m,
             spacing_m: s,
