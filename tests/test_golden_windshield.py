@@ -5,9 +5,8 @@ mid-sweep), small, against a PNG made from the code on purpose, with the bounds 
 
 It lives in ``tests/data/golden/windshield/`` so that regenerating it rewrites no other golden:
 ``SKYFALL_UPDATE_GOLDEN=1 .venv/bin/python -m pytest tests/test_golden_windshield.py``. The GPU
-backend renders the street; the demo's f/8 lens defocuses the drops, so the windshield stage
-runs on the CPU after the GPU frame's readback (drops in focus are GPU passes:
-``tests/test_windshield.py``).
+backend renders the street and the whole windshield stage (the demo's f/8 lens defocuses the
+drops: the GPU blurs them and draws the blades in the frame's own passes).
 """
 
 from __future__ import annotations

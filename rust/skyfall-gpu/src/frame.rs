@@ -19,7 +19,7 @@ use skyfall_core::frame::{
 };
 use skyfall_core::particles::streak::PARTICLE_LAYERS;
 use skyfall_core::snow::streaks::SnowStats;
-use skyfall_core::stage::{Output, Stage, Whole};
+use skyfall_core::stage::Output;
 
 /// A device with every pass compiled, reused across frames.
 #[derive(Debug)]
@@ -122,13 +122,10 @@ impl GpuRenderer {
                     }
                 }
             };
-            // The layers the passes draw, one buffer each (a defocused windshield's are drawn on
-            // the CPU after the readback).
-            let glass_on_gpu = prepared.windshield.as_ref().is_some_and(|w| w.in_focus());
-            let glass_layers = skyfall_core::windshield::stage::LAYERS;
+            // The layers the passes draw, one buffer each.
             let mut layers: Layers<Pooled> = Layers::default();
             for l in Layer::ALL {
-                if drawn.contains(l) && (glass_on_gpu || !glass_layers.contains(l)) {
+                if drawn.contains(l) {
                     match (l, snow_photo.take()) {
                         (Layer::SnowDepth, Some(b)) => layers.set(l, b),
                         (_, taken) => {
@@ -187,7 +184,7 @@ impl GpuRenderer {
                 }
                 f.hold([coverage]);
             }
-            if let Some(ws) = prepared.windshield.as_ref().filter(|_| glass_on_gpu) {
+            if let Some(ws) = &prepared.windshield {
                 self.windshield.encode(&mut f, &targets, ws)?;
             }
             // One submission, one readback of every output.
@@ -196,35 +193,13 @@ impl GpuRenderer {
                 depth_m: depth_out,
                 layers: mut layers_out,
             } = out;
-            let mut cpu_glass_layers = Layers::default();
-            if !glass_on_gpu {
-                for l in glass_layers.iter() {
-                    if let Some(o) = layers_out.take(l) {
-                        cpu_glass_layers.set(l, o);
-                    }
-                }
-            }
-            let mut outputs = vec![(rgb, &mut *rgb_out), (depth, &mut *depth_out)];
+            let mut outputs = vec![(rgb, rgb_out), (depth, depth_out)];
             for l in Layer::ALL {
                 if let (Some(b), Some(o)) = (layers.take(l), layers_out.take(l)) {
                     outputs.push((b, o));
                 }
             }
             f.read_back(outputs)?;
-            // The windshield's blades over the frame read back (its drops in focus were drawn
-            // in the frame's passes); a defocused windshield whole on the CPU.
-            if let Some(ws) = &prepared.windshield {
-                if glass_on_gpu {
-                    ws.draw_blades(rgb_out);
-                } else {
-                    ws.whole(&mut Whole {
-                        width: cam.width as usize,
-                        rgb: rgb_out,
-                        depth_m: depth_out,
-                        layers: cpu_glass_layers,
-                    })?;
-                }
-            }
             Ok((prepared.rain_report(), prepared.snow_report()))
         })
     }

@@ -1,21 +1,26 @@
 //! The windshield pass: the metaball field, then the frame refracted through the drops
 //! (`shaders/windshield_field.wgsl`, `shaders/windshield_refract.wgsl`), against the CPU's
 //! `skyfall_core::windshield::render` (tested in `tests/windshield_gpu.rs`). The metaballs are
-//! binned into 16 × 16 tiles on the CPU, in their index order (the order the CPU sums them in);
-//! the lookup copy is the CPU's. In focus only: the drops' defocus blur is the CPU's.
+//! binned into 16 × 16 tiles on the CPU, in their index order (the order the CPU sums them in).
+//! In a frame ([`WindshieldPass::encode`]) the drop layer is box blurred when the camera's lens
+//! defocuses the drops (`shaders/windshield_blur.wgsl`) and laid over the frame with the wipers'
+//! blades (`shaders/windshield_over.wgsl`): the whole stage on the device.
 
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FrameTargets};
 use crate::pool::{BufferPool, Pooled};
 use crate::readback::read_f32_into;
+use bytemuck::Zeroable;
 use skyfall_core::error::{Error, Param};
 use skyfall_core::frame::layers::Layer;
 use skyfall_core::windshield::render::{self, CUTOFF, RefractMode, Refraction};
-use skyfall_core::windshield::stage::WindshieldStage;
+use skyfall_core::windshield::stage::{BLADE_ALBEDO, BladePx, WindshieldStage};
 
 const FIELD: &str = include_str!("shaders/windshield_field.wgsl");
 const REFRACT: &str = include_str!("shaders/windshield_refract.wgsl");
 const LOOKUP: &str = include_str!("shaders/windshield_lookup.wgsl");
+const BLUR: &str = include_str!("shaders/windshield_blur.wgsl");
+const OVER: &str = include_str!("shaders/windshield_over.wgsl");
 const TILE: usize = 16;
 
 /// What the pass gives back: the field (H·W), the frame through the drops (H·W·3) and the
@@ -78,7 +83,65 @@ pub struct WindshieldPass {
     field: ComputePass,
     refract: ComputePass,
     lookup: ComputePass,
+    blur: ComputePass,
+    over: ComputePass,
     pool: BufferPool,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct OverParams {
+    dims: [u32; 4],
+    albedo: [f32; 4],
+}
+
+/// A blade as `windshield_over.wgsl` reads it (see its `WsBlade`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BladeGpu {
+    pivot: [f32; 4],
+    axis: [f32; 4],
+    edge: [f32; 4],
+    bounds: [i32; 4],
+}
+
+impl BladeGpu {
+    fn of(b: &BladePx) -> Self {
+        let f = |v: f64| v as f32;
+        BladeGpu {
+            pivot: [
+                f(b.pivot_px[0]),
+                f(b.pivot_px[1]),
+                f(b.mm_per_px[0]),
+                f(b.mm_per_px[1]),
+            ],
+            axis: [
+                f(b.cos_sin[0]),
+                f(b.cos_sin[1]),
+                f(b.half_width_mm),
+                f(b.length_mm),
+            ],
+            edge: [f(b.px_across), f(b.px_per_mm), 0.0, 0.0],
+            bounds: b.bounds.map(|v| v.clamp(0, i64::from(i32::MAX)) as i32),
+        }
+    }
+}
+
+/// The blades' buffer and the over pass's parameters for a `width` × `height` frame (at least one
+/// blade in the buffer: a binding may not be empty; the count says how many are read).
+fn over_input(blades: &[BladePx], width: usize, height: usize) -> (OverParams, Vec<BladeGpu>) {
+    let mut list: Vec<BladeGpu> = blades.iter().map(BladeGpu::of).collect();
+    let count = list.len() as u32;
+    if list.is_empty() {
+        list.push(BladeGpu::zeroed());
+    }
+    (
+        OverParams {
+            dims: [width as u32, height as u32, count, 0],
+            albedo: [BLADE_ALBEDO, 0.0, 0.0, 0.0],
+        },
+        list,
+    )
 }
 
 #[repr(C)]
@@ -150,15 +213,28 @@ impl WindshieldPass {
                     LOOKUP,
                     &[Uniform, ReadOnly, ReadWrite],
                 ),
+                blur: ComputePass::new(
+                    ctx,
+                    "windshield_blur",
+                    BLUR,
+                    &[Uniform, ReadOnly, ReadWrite],
+                ),
+                over: ComputePass::new(
+                    ctx,
+                    "windshield_over",
+                    OVER,
+                    &[Uniform, ReadOnly, ReadOnly, ReadWrite],
+                ),
                 pool: BufferPool::default(),
             })
         })
     }
 
-    /// Records the windshield stage's drops in focus into the frame's encoder, over its `rgb`
-    /// target in place: the field, the box-averaged lookup copy (`windshield_lookup.wgsl`, the
-    /// CPU's `render::lookup_copy` in the same order of sums), the refraction, `drop_mask` and
-    /// `drop_height`. The blades are the caller's (over the frame read back).
+    /// Records the windshield stage into the frame's encoder, over its `rgb` target in place:
+    /// the field, the box-averaged lookup copy (`windshield_lookup.wgsl`, the CPU's
+    /// `render::lookup_copy` in the same order of sums), the refraction into the drop layer,
+    /// `drop_mask` and `drop_height`; the drop layer box blurred along rows then columns when
+    /// the lens defocuses the drops; then laid over the frame, and the blades over it.
     pub fn encode(
         &self,
         f: &mut FrameEncoder<'_>,
@@ -166,16 +242,6 @@ impl WindshieldPass {
         ws: &WindshieldStage,
     ) -> Result<(), GpuError> {
         let r = ws.refraction();
-        if r.blur_px != 0.0 {
-            return Err(GpuError::Core(Error::Unusable {
-                param: Param {
-                    name: "blur_px",
-                    index: None,
-                },
-                value: r.blur_px,
-                message: "is not drawn by the GPU pass: blur on the CPU (blur_px = 0 here)".into(),
-            }));
-        }
         let (width, height) = (f.cam.width as usize, f.cam.height as usize);
         let n = width * height;
         let (centres, radii) = ws.metaballs_px();
@@ -202,13 +268,38 @@ impl WindshieldPass {
         let ib = f.upload("tile items", &items);
         let field = f.target("field", n);
         let look = f.target("lookup", lw * lh * 3);
+        let layer = f.target("drop layer", 4 * n);
         f.dispatch(&self.field, &[&fpu, &bb, &ob, &ib, &field]);
         f.dispatch(&self.lookup, &[&lpu, t.rgb, &look]);
         f.dispatch(
             &self.refract,
-            &[&rpu, &field, &look, t.rgb, mask, height_layer],
+            &[&rpu, &field, &look, &layer, mask, height_layer],
         );
-        f.hold([fpu, rpu, lpu, bb, ob, ib, field, look]);
+        let radius = r.blur_radius_px();
+        if radius > 0 {
+            let [w, h, rad] = [width, height, radius].map(|v| v as u32);
+            let rows = f.uniform(
+                "windshield blur rows",
+                &FieldParams {
+                    dims: [w, h, rad, 0],
+                },
+            );
+            let cols = f.uniform(
+                "windshield blur columns",
+                &FieldParams {
+                    dims: [w, h, rad, 1],
+                },
+            );
+            let along_rows = f.target("drop layer blurred along rows", 4 * n);
+            f.dispatch(&self.blur, &[&rows, &layer, &along_rows]);
+            f.dispatch(&self.blur, &[&cols, &along_rows, &layer]);
+            f.hold([rows, cols, along_rows]);
+        }
+        let (op, blades) = over_input(&ws.blades_px(), width, height);
+        let opu = f.uniform("windshield over params", &op);
+        let blb = f.upload("blades", &blades);
+        f.dispatch(&self.over, &[&opu, &layer, &blb, t.rgb]);
+        f.hold([fpu, rpu, lpu, bb, ob, ib, field, look, layer, opu, blb]);
         Ok(())
     }
 
@@ -230,7 +321,8 @@ impl WindshieldPass {
     }
 
     /// The field of the metaballs (`centres_px`, `radii_px`) over a `width` × `height` frame,
-    /// and `frame` (H·W·3) refracted through it by `r` (its `blur_px` must be 0).
+    /// and `frame` (H·W·3) refracted through it by `r` (its `blur_px` must be 0; no blades): the
+    /// pass alone, for comparisons with `render::refract_frame`.
     #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &self,
@@ -270,7 +362,7 @@ impl WindshieldPass {
                     index: None,
                 },
                 value: r.blur_px,
-                message: "is not drawn by the GPU pass: blur on the CPU (blur_px = 0 here)".into(),
+                message: "is not drawn by this pass alone (in focus: 0); a frame's windshield stage blurs on the device".into(),
             }));
         }
         ctx.check_buffer("the windshield's frame", (n * 12) as u64)?;
@@ -288,8 +380,12 @@ impl WindshieldPass {
             let ob = self.upload(ctx, "tile offsets", &offsets, STORAGE);
             let ib = self.upload(ctx, "tile items", &items, STORAGE);
             let lb = self.upload(ctx, "lookup", &look, STORAGE);
-            // the frame behind the glass, refracted in place
+            // the frame behind the glass, the drops laid over it in place
             let rgb = self.upload(ctx, "rgb", frame, STORAGE);
+            let (op, blades) = over_input(&[], width, height);
+            let opu = self.upload(ctx, "windshield over params", &[op], uniform);
+            let blb = self.upload(ctx, "blades", &blades, STORAGE);
+            let layer = self.pool.take(ctx, "drop layer", (n * 16) as u64, STORAGE);
             let field = self.pool.take(ctx, "field", (n * 4) as u64, STORAGE);
             let height_layer = self.pool.take(ctx, "drop height", (n * 4) as u64, STORAGE);
             let mask = self.pool.take(ctx, "mask", (n * 4) as u64, STORAGE);
@@ -311,10 +407,12 @@ impl WindshieldPass {
             self.refract.dispatch(
                 ctx,
                 &mut enc,
-                &[&rpu, &field, &lb, &rgb, &mask, &height_layer],
+                &[&rpu, &field, &lb, &layer, &mask, &height_layer],
                 w,
                 h,
             );
+            self.over
+                .dispatch(ctx, &mut enc, &[&opu, &layer, &blb, &rgb], w, h);
             let mut at = 0;
             for (b, bytes) in [(&field, n * 4), (&rgb, n * 12), (&mask, n * 4)] {
                 enc.copy_buffer_to_buffer(&b.buffer, 0, &staging.buffer, at, bytes as u64);
@@ -322,7 +420,21 @@ impl WindshieldPass {
             }
             ctx.queue.submit([enc.finish()]);
             Ok((
-                [fpu, rpu, bb, ob, ib, lb, height_layer, field, rgb, mask],
+                [
+                    fpu,
+                    rpu,
+                    bb,
+                    ob,
+                    ib,
+                    lb,
+                    height_layer,
+                    field,
+                    rgb,
+                    mask,
+                    opu,
+                    blb,
+                    layer,
+                ],
                 staging,
                 total,
             ))

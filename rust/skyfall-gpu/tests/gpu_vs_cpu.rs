@@ -685,3 +685,76 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
     );
     assert!(cp.layer(Layer::SnowDepth).unwrap().iter().any(|&d| d > 0.0));
 }
+
+#[test]
+fn gpu_draws_the_whole_windshield_in_focus_and_defocused() {
+    // The windshield stage wholly on the device: drops, their defocus blur (the CPU's running
+    // f64 box sums against the GPU's f32 window sums) and the blades, against the CPU's stage.
+    use skyfall_core::windshield::sim::Metaball;
+    use skyfall_core::windshield::stage::{Blade, Glass};
+    let gpu = GpuRenderer::new(AdapterChoice::Any).unwrap();
+    let (scene, cam) = street();
+    let sky = Sky::new(SkyKind::Overcast, 0.0, 1000.0).unwrap();
+    let amb = lit(&scene, &cam, &sky);
+    let light = SceneLight::new(&sky, &amb);
+    let mut metaballs = Vec::new();
+    for k in 0..60 {
+        let f = f64::from(k);
+        metaballs.push(Metaball {
+            x_mm: (f * 97.3) % 600.0,
+            y_mm: (f * 53.9) % 400.0,
+            radius_mm: 2.0 + (f * 1.7) % 9.0,
+        });
+    }
+    let glass = Glass {
+        width_mm: 600.0,
+        height_mm: 400.0,
+        tilt_deg: 60.0,
+        contact_deg: 30.0,
+        metaballs,
+        blades: vec![
+            Blade {
+                pivot_mm: [150.0, 390.0],
+                angle_rad: 0.9,
+                length_mm: 300.0,
+                width_mm: 30.0,
+            },
+            Blade {
+                pivot_mm: [420.0, 390.0],
+                angle_rad: 1.7,
+                length_mm: 280.0,
+                width_mm: 3.0,
+            },
+        ],
+    };
+    // f/0.7 on a 200 mm sensor focused at 10 m: the glass (0.2 m or more away) blurs by the cap.
+    let lens = ThinLens::new(0.7, 10.0, 200.0).unwrap();
+    let plain = render_frame(&Frame::new(SceneRef::Boxes(&scene), &cam, &light)).unwrap();
+    let mut seen = Vec::new();
+    for defocus in [None, Some(lens.defocus(&cam).unwrap())] {
+        let frame = Frame::new(SceneRef::Boxes(&scene), &cam, &light)
+            .with_windshield(Some(&glass), defocus);
+        let c = render_frame(&frame).unwrap();
+        let g = gpu.render_frame(&frame).unwrap();
+        for l in [Layer::DropMask, Layer::DropHeight] {
+            let (worst, _) = max_abs(c.layer(l).unwrap(), g.layer(l).unwrap());
+            assert!(worst < 1e-4, "{l:?} max abs diff {worst}");
+        }
+        let (worst, big) = max_abs(&c.rgb, &g.rgb);
+        eprintln!("windshield defocus {defocus:?}: rgb max diff {worst:.2e}, {big} > 1e-3");
+        assert_rgb_agrees(&c.rgb, &g.rgb);
+        // the blades show (dark) on both, the drops change the frame
+        let dark = |rgb: &[f32]| {
+            rgb.chunks(3)
+                .zip(plain.rgb.chunks(3))
+                .filter(|(a, p)| a[1] < 0.5 * p[1] && p[1] > 0.1)
+                .count()
+        };
+        assert!(dark(&g.rgb) > 40, "{} blade pixels", dark(&g.rgb));
+        assert!(dark(&g.rgb).abs_diff(dark(&c.rgb)) <= dark(&c.rgb) / 50);
+        seen.push(g.rgb);
+    }
+    // the blur changed the frame (not the in-focus drops again)
+    let (_, changed) = max_abs(&seen[0], &seen[1]);
+    assert!(changed * 20 > seen[0].len(), "{changed} values blurred");
+}

@@ -275,6 +275,11 @@ pub struct Refraction {
 }
 
 impl Refraction {
+    /// The half-width of the box blur that stands for the blur circle, px (0: sharp).
+    pub fn blur_radius_px(&self) -> usize {
+        (0.5 * self.blur_px).round() as usize
+    }
+
     /// Checks the values.
     pub fn validate(&self) -> Result<()> {
         crate::ranges::FX.check(self.focal_px)?;
@@ -488,7 +493,7 @@ pub fn refract_frame(
                 row[i * 4 + 3] = m;
             }
         });
-    let radius = (0.5 * r.blur_px).round() as usize;
+    let radius = r.blur_radius_px();
     if radius > 0 {
         box_blur(&mut layer, width, height, 4, radius);
     }

@@ -222,53 +222,62 @@ impl WindshieldStage {
         self.draw_blades(rgb);
     }
 
-    /// Draws the wipers' blades into `rgb` (H·W·3): dark ([`BLADE_ALBEDO`], in the frame's
-    /// units: 1 is a white surface under the open sky), anti-aliased over one pixel across
-    /// their edges, sharp (not defocused).
-    pub fn draw_blades(&self, rgb: &mut [f32]) {
+    /// The wipers' blades on screen, as [`Self::draw_blades`] draws them (and the GPU's pass).
+    pub fn blades_px(&self) -> Vec<BladePx> {
         let (v, g) = (&self.view, &self.glass);
         let s = v.px_per_mm();
         let fore = g.fore();
         let (w, h) = (v.width as i64, v.height as i64);
-        for b in &g.blades {
-            let (c, sn) = (b.angle_rad.cos(), b.angle_rad.sin());
-            let [p0, p1] = [
-                v.to_px(g, b.pivot_mm[0], b.pivot_mm[1]),
-                v.to_px(
-                    g,
-                    b.pivot_mm[0] + b.length_mm * c,
-                    b.pivot_mm[1] - b.length_mm * sn,
-                ),
-            ]
-            .map(|p| p.map(|x| f64::from(x as f32)));
-            let pad = b.width_mm * s;
-            let lo = [
-                (p0[0].min(p1[0]) - pad).floor() as i64,
-                (p0[1].min(p1[1]) - pad).floor() as i64,
-            ];
-            let hi = [
-                (p0[0].max(p1[0]) + pad).ceil() as i64,
-                (p0[1].max(p1[1]) + pad).ceil() as i64,
-            ];
-            let (x0, y0, x1, y1) = (lo[0].max(0), lo[1].max(0), hi[0].min(w), hi[1].min(h));
-            // one pixel of edge, measured in the blade's across direction on screen
-            let px_across = s * sn.hypot(c * fore);
+        g.blades
+            .iter()
+            .map(|b| {
+                let (c, sn) = (b.angle_rad.cos(), b.angle_rad.sin());
+                let [p0, p1] = [
+                    v.to_px(g, b.pivot_mm[0], b.pivot_mm[1]),
+                    v.to_px(
+                        g,
+                        b.pivot_mm[0] + b.length_mm * c,
+                        b.pivot_mm[1] - b.length_mm * sn,
+                    ),
+                ]
+                .map(|p| p.map(|x| f64::from(x as f32)));
+                let pad = b.width_mm * s;
+                let lo = [
+                    (p0[0].min(p1[0]) - pad).floor() as i64,
+                    (p0[1].min(p1[1]) - pad).floor() as i64,
+                ];
+                let hi = [
+                    (p0[0].max(p1[0]) + pad).ceil() as i64,
+                    (p0[1].max(p1[1]) + pad).ceil() as i64,
+                ];
+                BladePx {
+                    pivot_px: v.to_px(g, b.pivot_mm[0], b.pivot_mm[1]),
+                    mm_per_px: [1.0 / s, 1.0 / (s * fore)],
+                    cos_sin: [c, sn],
+                    half_width_mm: 0.5 * b.width_mm,
+                    length_mm: b.length_mm,
+                    // one pixel of edge, measured in the blade's across direction on screen
+                    px_across: s * sn.hypot(c * fore),
+                    px_per_mm: s,
+                    bounds: [lo[0].max(0), lo[1].max(0), hi[0].min(w), hi[1].min(h)],
+                }
+            })
+            .collect()
+    }
+
+    /// Draws the wipers' blades into `rgb` (H·W·3): dark ([`BLADE_ALBEDO`], in the frame's
+    /// units: 1 is a white surface under the open sky), anti-aliased over one pixel across
+    /// their edges, sharp (not defocused).
+    pub fn draw_blades(&self, rgb: &mut [f32]) {
+        let w = self.view.width;
+        for b in self.blades_px() {
+            let [x0, y0, x1, y1] = b.bounds;
             for y in y0..y1 {
-                let gy = (y as f64 + 0.5 - v.height as f64 / 2.0) / (s * fore) + g.height_mm / 2.0;
-                let dy = b.pivot_mm[1] - gy;
                 for x in x0..x1 {
-                    let gx = (x as f64 + 0.5 - v.width as f64 / 2.0) / s + g.width_mm / 2.0;
-                    let dx = gx - b.pivot_mm[0];
-                    let along = dx * c + dy * sn;
-                    let across = -dx * sn + dy * c;
-                    if along < 0.0 {
+                    let Some(cover) = b.cover(x as f64 + 0.5, y as f64 + 0.5) else {
                         continue;
-                    }
-                    let cover = ((0.5 * b.width_mm - across.abs()) * px_across + 0.5)
-                        .clamp(0.0, 1.0)
-                        * ((b.length_mm - along) * s + 0.5).clamp(0.0, 1.0);
-                    let cover = cover as f32;
-                    let i = 3 * (y as usize * v.width + x as usize);
+                    };
+                    let i = 3 * (y as usize * w + x as usize);
                     for px in &mut rgb[i..i + 3] {
                         *px *= 1.0 - cover;
                         *px += cover * BLADE_ALBEDO;
@@ -276,6 +285,45 @@ impl WindshieldStage {
                 }
             }
         }
+    }
+}
+
+/// A wiper's blade on screen: a bar from its pivot, anti-aliased over one pixel across its
+/// edges and at its tip, drawn in its bounding box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BladePx {
+    /// The pivot, px (x, y).
+    pub pivot_px: [f64; 2],
+    /// Glass mm per px across the glass and down its slope (foreshortened).
+    pub mm_per_px: [f64; 2],
+    /// The blade's angle's cosine and sine.
+    pub cos_sin: [f64; 2],
+    /// Half its width, mm.
+    pub half_width_mm: f64,
+    /// Its length from the pivot, mm.
+    pub length_mm: f64,
+    /// Screen px per glass mm across its edges.
+    pub px_across: f64,
+    /// Screen px per glass mm along it.
+    pub px_per_mm: f64,
+    /// Its bounding box, px: x0, y0, x1, y1 (ends excluded), inside the frame.
+    pub bounds: [i64; 4],
+}
+
+impl BladePx {
+    /// The blade's coverage of the pixel whose centre is (`x`, `y`) px, None behind the pivot.
+    pub fn cover(&self, x: f64, y: f64) -> Option<f32> {
+        let dx = (x - self.pivot_px[0]) * self.mm_per_px[0];
+        let dy = (self.pivot_px[1] - y) * self.mm_per_px[1];
+        let [c, sn] = self.cos_sin;
+        let along = dx * c + dy * sn;
+        let across = -dx * sn + dy * c;
+        if along < 0.0 {
+            return None;
+        }
+        let cover = ((self.half_width_mm - across.abs()) * self.px_across + 0.5).clamp(0.0, 1.0)
+            * ((self.length_mm - along) * self.px_per_mm + 0.5).clamp(0.0, 1.0);
+        Some(cover as f32)
     }
 }
 

@@ -1,8 +1,9 @@
 // The frame seen through the windshield's drops (skyfall-core windshield::render::refract_frame,
 // in focus): coverage from the field's crossing of 0.5 over one pixel, the normal from central
 // differences, the lookup by the paper's offset (mode 0) or Snell's law (mode 1), bilinear and
-// mirrored in the box-averaged lookup copy, laid over the frame (in place: a pixel reads only
-// its own value of the frame, the rest from the lookup copy).
+// mirrored in the box-averaged lookup copy, into the drop layer (premultiplied: M x the refracted
+// light, and M), which windshield_blur.wgsl blurs when the drops are defocused and
+// windshield_over.wgsl lays over the frame.
 
 struct WsRefractParams {
     // width, height, lookup width, lookup height
@@ -18,7 +19,7 @@ struct WsRefractParams {
 @group(0) @binding(0) var<uniform> ws_r: WsRefractParams;
 @group(0) @binding(1) var<storage, read> ws_field: array<f32>;
 @group(0) @binding(2) var<storage, read> ws_look: array<f32>;
-@group(0) @binding(3) var<storage, read_write> ws_rgb: array<f32>;  // the frame behind the glass, refracted in place
+@group(0) @binding(3) var<storage, read_write> ws_layer: array<vec4<f32>>;  // M x light, M
 @group(0) @binding(4) var<storage, read_write> ws_mask: array<f32>;
 @group(0) @binding(5) var<storage, read_write> ws_height: array<f32>;  // the field above its 0.5 threshold
 
@@ -123,7 +124,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let sc = f32(ws_r.opts.x);
         c = ws_sample(q.x / sc, q.y / sc);
     }
-    for (var k = 0u; k < 3u; k = k + 1u) {
-        ws_rgb[p * 3u + k] = ws_rgb[p * 3u + k] * (1.0 - m) + m * c[k];
-    }
+    ws_layer[p] = vec4<f32>(m * c.x, m * c.y, m * c.z, m);
 }
