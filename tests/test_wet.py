@@ -270,7 +270,10 @@ def test_the_gpu_refuses_wet_box_scenes_by_name():
     auto = Renderer(W, H, backend="auto")
     auto._device, auto.backend = gpu._device, "gpu"
     np.testing.assert_array_equal(auto.render(scenes.street(), wet, seed=1).rgb, Renderer(W, H, backend="cpu").render(scenes.street(), wet, seed=1).rgb)
-    assert auto._device_for(auto._request(scenes.street(), dried)) is gpu._device
+    # and a frame the GPU draws is drawn there (the GPU's bits, which are not the CPU's)
+    on_auto = auto.render(scenes.street(), dried, seed=1).rgb
+    np.testing.assert_array_equal(on_auto, gpu.render(scenes.street(), dried, seed=1).rgb)
+    assert not np.array_equal(on_auto, Renderer(W, H, backend="cpu").render(scenes.street(), dried, seed=1).rgb)
 
 
 @pytest.mark.parametrize("weather", [AFTER_RAIN, Weather(rain_rate_mm_h=5.0, rain_duration_s=60.0, wind_m_s=(3.0, 0.0, 0.0))], ids=["after the rain", "a minute in a cross wind"])

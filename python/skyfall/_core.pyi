@@ -121,7 +121,11 @@ SNOW_ALBEDO: float
 """Albedo of fresh snow (flakes and cover), 0.85 as float32."""
 
 def render_frame(
-    request: _Request, *, device: GpuDevice | None = None, out: dict[str, NDArray[np.float32] | None] | None = None
+    request: _Request,
+    *,
+    device: GpuDevice | None = None,
+    cpu_fallback: bool = False,
+    out: dict[str, NDArray[np.float32] | None] | None = None,
 ) -> tuple[NDArray[np.float32], NDArray[np.float32], dict[str, NDArray[np.float32]], dict[str, int]]: ...
 def frame_plan(request: _Request) -> list[tuple[str, bool, bool, list[str]]]: ...
 def render_frame8(

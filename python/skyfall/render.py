@@ -379,14 +379,6 @@ class Renderer:
         self.backend = "gpu" if self._device is not None else "cpu"
         self._auto = backend == "auto"
 
-    def _device_for(self, request: _Request) -> _core.GpuDevice | None:
-        """The device that draws ``request``: the renderer's, except that ``backend="auto"``
-        draws on the CPU a frame with a stage the core declares the GPU does not draw (today a
-        wet box scene), where ``backend="gpu"`` refuses it by name."""
-        if self._device is not None and self._auto and not all(gpu for _, _, gpu, _ in _core.frame_plan(request)):
-            return None
-        return self._device
-
     @property
     def adapter_info(self) -> dict[str, str] | None:
         """Name, backend, device type and driver of the GPU adapter, or None on the CPU."""
@@ -475,7 +467,7 @@ class Renderer:
         # One core call: the core derives the sky, the haze and its airlight, the rain and its
         # light from the request, draws every stage (the windshield last), and names the layers
         # it drew (skyfall._core.LAYERS).
-        rgb, depth, drawn, stats = _core.render_frame(request, device=self._device_for(request), out=arrays)
+        rgb, depth, drawn, stats = _core.render_frame(request, device=self._device, cpu_fallback=self._auto, out=arrays)
         if options.layers is not None:
             reuse = out.layers if out is not None else {}
             drawn = {name: drawn[name] if name in drawn else _neutral(name, depth.shape, reuse.get(name)) for name in options.layers}
@@ -567,20 +559,11 @@ class Renderer:
             return "float"
         if not isinstance(scene, PhotoScene) or scene.srgb8 is None:
             return "banded"  # (without the request: a box scene's would build its ambient map)
-        return self._path8(scene, self._request(scene, weather), _layer_names(layers) or ())
-
-    def _path8(self, scene: BoxScene | PhotoScene, request: _Request, names: Sequence[str]) -> str:
-        """:meth:`srgb8_path` of ``request``: fused for an 8-bit photo on the CPU backend whose
-        every stage the core declares the fused output draws (``_core.frame_plan``, the one
-        place that decides it) and no layer asked for but :data:`FUSED_LAYERS`."""
-        if self._device is not None:
-            return "float"
-        fused = (
-            isinstance(scene, PhotoScene)
-            and scene.srgb8 is not None
-            and set(names) <= set(FUSED_LAYERS)
-            and all(srgb8 for _, srgb8, _, _ in _core.frame_plan(request))
-        )
+        # Fused when every stage is one the core declares the fused output draws
+        # (``_core.frame_plan``, the one place that decides it) and no layer is asked for but
+        # FUSED_LAYERS.
+        request = self._request(scene, weather)
+        fused = set(_layer_names(layers) or ()) <= set(FUSED_LAYERS) and all(srgb8 for _, srgb8, _, _ in _core.frame_plan(request))
         return "fused" if fused else "banded"
 
     @overload

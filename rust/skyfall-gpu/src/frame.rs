@@ -13,13 +13,14 @@ use crate::scene_raycast::SceneRaycastPass;
 use crate::wet::WetPhotoPass;
 use crate::windshield::WindshieldPass;
 use skyfall_core::frame::layers::{Layer, Layers};
+use skyfall_core::frame::passes::Particles;
 use skyfall_core::frame::stages::Frame;
 use skyfall_core::frame::{
     FrameBuffers, FrameOut, RainReport, SceneRef, check_frame_size, check_photo,
 };
 use skyfall_core::particles::streak::PARTICLE_LAYERS;
 use skyfall_core::snow::streaks::SnowStats;
-use skyfall_core::stage::Output;
+use skyfall_core::stage::{Kind, Output};
 
 /// A device with every pass compiled, reused across frames.
 #[derive(Debug)]
@@ -140,52 +141,51 @@ impl GpuRenderer {
                 depth: &depth,
                 layers: &layers,
             };
-            // The stages in the plan's order, each its pass: the scene (a box scene's ray
-            // cast; a photo is its upload), the clouds, the haze, the lights' glows, the
-            // particles.
-            if let SceneRef::Boxes(b) = scene {
-                let wet = prepared.wet.as_ref().map(|w| w.gpu());
-                self.raycast.encode(&mut f, &targets, (b, light, wet))?;
-            }
-            if let Some(w) = &prepared.wet
-                && let Some(photo) = w.photo_gpu()
-            {
-                self.wet_photo.encode(&mut f, &targets, (w.gpu(), photo))?;
-            }
-            if let Some(c) = &prepared.clouds {
-                self.cloud.encode(&mut f, &targets, &c.splats)?;
-            }
-            if let Some(h) = &prepared.haze {
-                self.haze.encode(&mut f, &targets, h.haze())?;
-            }
-            if let Some(g) = &prepared.glow {
-                self.glow.encode(&mut f, &targets, &g.glow)?;
-            }
-            if let Some(p) = prepared.particles() {
-                // The particle layers' coverages as one array of planes, copied to the
-                // frame's layers after the passes.
-                let coverage = f.target("particle coverage", PARTICLE_LAYERS.len() * n);
-                if let Some(far) = &p.far {
-                    self.far.encode(&mut f, &targets, (far, &coverage))?;
-                }
-                self.rain
-                    .encode(&mut f, &targets, (&p.streaks, p.far.is_some(), &coverage))?;
-                let bytes = (n * 4) as u64;
-                for (k, l) in PARTICLE_LAYERS.iter().enumerate() {
-                    if let Some(target) = layers.get(l.coverage) {
-                        f.enc.copy_buffer_to_buffer(
-                            &coverage.buffer,
-                            k as u64 * bytes,
-                            &target.buffer,
-                            0,
-                            bytes,
-                        );
+            // The stages in the plan's order, each its pass (a stage the frame prepared
+            // nothing for, such as glows with no light in view, records nothing).
+            for d in &prepared.plan.0 {
+                match d.kind {
+                    // A box scene's ray cast (its wet surfaces are declared not drawn here);
+                    // a photo is its upload.
+                    Kind::Scene => {
+                        if let SceneRef::Boxes(b) = scene {
+                            let wet = prepared.wet.as_ref().map(|w| w.gpu());
+                            self.raycast.encode(&mut f, &targets, (b, light, wet))?;
+                        }
+                    }
+                    Kind::Wet => {
+                        if let Some(w) = &prepared.wet
+                            && let Some(photo) = w.photo_gpu()
+                        {
+                            self.wet_photo.encode(&mut f, &targets, (w.gpu(), photo))?;
+                        }
+                    }
+                    Kind::Clouds => {
+                        if let Some(c) = &prepared.clouds {
+                            self.cloud.encode(&mut f, &targets, &c.splats)?;
+                        }
+                    }
+                    Kind::Haze => {
+                        if let Some(h) = &prepared.haze {
+                            self.haze.encode(&mut f, &targets, h.haze())?;
+                        }
+                    }
+                    Kind::Glow => {
+                        if let Some(g) = &prepared.glow {
+                            self.glow.encode(&mut f, &targets, &g.glow)?;
+                        }
+                    }
+                    Kind::Particles => {
+                        if let Some(p) = prepared.particles() {
+                            self.particles(&mut f, &targets, p)?;
+                        }
+                    }
+                    Kind::Windshield => {
+                        if let Some(ws) = &prepared.windshield {
+                            self.windshield.encode(&mut f, &targets, ws)?;
+                        }
                     }
                 }
-                f.hold([coverage]);
-            }
-            if let Some(ws) = &prepared.windshield {
-                self.windshield.encode(&mut f, &targets, ws)?;
             }
             // One submission, one readback of every output.
             let FrameOut {
@@ -202,6 +202,37 @@ impl GpuRenderer {
             f.read_back(outputs)?;
             Ok((prepared.rain_report(), prepared.snow_report()))
         })
+    }
+
+    /// Records the particles: the rain's far layers, then the streaks far to near, their
+    /// layers' coverages into one array of planes, copied to the frame's layers after.
+    fn particles(
+        &self,
+        f: &mut FrameEncoder<'_>,
+        targets: &FrameTargets<'_>,
+        p: &Particles,
+    ) -> Result<(), GpuError> {
+        let n = f.cam.pixels();
+        let coverage = f.target("particle coverage", PARTICLE_LAYERS.len() * n);
+        if let Some(far) = &p.far {
+            self.far.encode(f, targets, (far, &coverage))?;
+        }
+        self.rain
+            .encode(f, targets, (&p.streaks, p.far.is_some(), &coverage))?;
+        let bytes = (n * 4) as u64;
+        for (k, l) in PARTICLE_LAYERS.iter().enumerate() {
+            if let Some(target) = targets.layers.get(l.coverage) {
+                f.enc.copy_buffer_to_buffer(
+                    &coverage.buffer,
+                    k as u64 * bytes,
+                    &target.buffer,
+                    0,
+                    bytes,
+                );
+            }
+        }
+        f.hold([coverage]);
+        Ok(())
     }
 
     /// Bytes of device memory the renderer keeps pooled between frames.

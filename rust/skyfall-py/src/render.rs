@@ -67,13 +67,16 @@ impl<'py> OutArrays<'py> {
 }
 
 /// Renders the frame of `request` on `device` (the GPU backend), or on the CPU backend when
-/// it is None, into `out`'s arrays where given.
+/// it is None, into `out`'s arrays where given. With `cpu_fallback` (`backend="auto"`), a frame
+/// with a stage the core's plan declares the GPU does not draw is drawn on the CPU instead
+/// (without it, the GPU refuses it by name).
 #[pyfunction]
-#[pyo3(signature = (request, *, device=None, out=None))]
+#[pyo3(signature = (request, *, device=None, cpu_fallback=false, out=None))]
 pub fn render_frame<'py>(
     py: Python<'py>,
     request: RequestArgs<'py>,
     device: Option<Bound<'py, GpuDevice>>,
+    cpu_fallback: bool,
     out: Option<OutArrays<'py>>,
 ) -> PyResult<FrameTuple<'py>> {
     let parsed: ParsedRequest<'py> = request.parse(true)?;
@@ -81,6 +84,7 @@ pub fn render_frame<'py>(
     let setup = FrameSetup::new(&req).map_err(CoreError)?;
     let (cam, effects) = (&req.camera, setup.effects());
     let frame = effects.frame(req.scene_ref(), cam, parsed.glass());
+    let device = device.filter(|_| !(cpu_fallback && frame.plan().check(Output::Gpu).is_err()));
     // Into numpy's arrays (see `FrameOut`): the caller's (`out`) where given, else new ones,
     // sized once the frame is known to fit.
     check_frame_size(cam).map_err(CoreError)?;
@@ -149,7 +153,7 @@ pub fn frame_plan<'py>(request: RequestArgs<'py>) -> PyResult<Vec<DeclaredStage>
         .iter()
         .map(|d| {
             (
-                d.name,
+                d.name(),
                 d.srgb8,
                 d.gpu,
                 d.layers.iter().map(Layer::name).collect(),
@@ -235,19 +239,17 @@ pub fn render_photo8<'py>(
     let photo_srgb8 = photo_srgb8
         .try_readonly()
         .map_err(|_| in_use("the photo (scene.srgb8)"))?;
-    // A stage the fused output does not draw (wet surfaces, clouds, a snow cover, a
-    // windshield; the core's plan decides): the banded 8-bit output draws the frame, in this
-    // one call, the same bytes as `render_frame8`.
-    let fused = {
-        let args: RequestArgs<'py> = request.extract()?;
-        let parsed: ParsedRequest<'py> = args.parse(false)?;
-        let req = parsed.request()?;
-        let setup = FrameSetup::new(&req).map_err(CoreError)?;
-        let effects = setup.effects();
-        let frame = effects.frame(req.scene_ref(), &req.camera, parsed.glass());
-        frame.plan().check(Output::Srgb8).is_ok()
-    };
-    if !fused {
+    let args: RequestArgs<'py> = request.extract()?;
+    let parsed: ParsedRequest<'py> = args.parse(false)?;
+    let req = parsed.request()?;
+    let setup = FrameSetup::new(&req).map_err(CoreError)?;
+    // Which stages the fused 8-bit output draws is the stages' own declaration. A stage it does
+    // not draw (wet surfaces, clouds, a snow cover, a windshield): the banded 8-bit output
+    // draws the frame, in this one call, the same bytes as `render_frame8`.
+    let effects = setup.effects();
+    let (rain, snow) = (&effects.rain, &effects.snow);
+    let frame = effects.frame(req.scene_ref(), &req.camera, parsed.glass());
+    if frame.plan().check(Output::Srgb8).is_err() {
         let layers = PyDict::new(py);
         layers.set_item("rain_alpha", rain_alpha_out)?;
         layers.set_item("snow_alpha", snow_alpha_out)?;
@@ -260,10 +262,6 @@ pub fn render_photo8<'py>(
     let snow_alpha_out = snow_alpha_out
         .map(|a| a.try_readwrite().map_err(|_| in_use("snow_alpha_out")))
         .transpose()?;
-    let args: RequestArgs<'py> = request.extract()?;
-    let parsed: ParsedRequest<'py> = args.parse(false)?;
-    let req = parsed.request()?;
-    let setup = FrameSetup::new(&req).map_err(CoreError)?;
     let decode: &[f32; 256] = decode_table.as_slice()?.try_into().map_err(|_| {
         invalid(
             "decode_table",
@@ -271,11 +269,6 @@ pub fn render_photo8<'py>(
             format!("must have 256 entries, got {}", decode_table.len()),
         )
     })?;
-    // Which stages the fused 8-bit output draws is the stages' own declaration.
-    let effects = setup.effects();
-    let (rain, snow) = (&effects.rain, &effects.snow);
-    let frame = effects.frame(req.scene_ref(), &req.camera, parsed.glass());
-    frame.plan().check(Output::Srgb8).map_err(CoreError)?;
     let depth_m = match req.scene_ref() {
         skyfall_core::frame::SceneRef::Photo { depth_m, .. } => depth_m,
         skyfall_core::frame::SceneRef::Boxes(_) => {

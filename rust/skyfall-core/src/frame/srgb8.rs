@@ -19,12 +19,13 @@ use crate::color::Srgb8Encoder;
 use crate::error::{Error, Param, Result};
 use crate::haze::{Haze, ViewRays, blend};
 use crate::particles::binning::bin_by_tiles;
-use crate::particles::composite::{Accumulator, composite_band};
-use crate::particles::streak::{LAYER_SNOW, ScreenStreak};
+use crate::particles::composite::{Accumulator, Blend, Cover, composite_band};
+use crate::particles::streak::{PARTICLE_LAYERS, ScreenStreak};
 use crate::rain::streaks::{RainFrame, RainStats};
 use crate::scene::camera::Camera;
 use crate::simd::{self, Dispatch, Level};
 use crate::snow::streaks::{SnowFrame, SnowStats};
+use crate::stage::layers::Layer;
 use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use std::cell::RefCell;
@@ -82,10 +83,9 @@ struct Scratch {
     /// The rain's Q: one plane when every streak's light is grey, three (one per channel)
     /// with coloured lights.
     q: Vec<f32>,
-    /// The coverage product ∏(1 − a), when the alpha layer is wanted.
-    cover: Vec<f32>,
-    /// The snow's, when its layer is wanted.
-    snow_cover: Vec<f32>,
+    /// The particle layers' coverage products ∏(1 − a) ([`PARTICLE_LAYERS`]' order), each
+    /// when its layer is wanted.
+    covers: [Vec<f32>; PARTICLE_LAYERS.len()],
     /// A row's transmittance.
     t_row: Vec<f32>,
 }
@@ -132,15 +132,24 @@ pub fn render_photo8_with(
     if out.srgb.len() != 3 * n {
         return Err(length_error("out", out.srgb.len(), 3 * n));
     }
-    if let Some(a) = &out.rain_alpha
-        && a.len() != n
-    {
-        return Err(length_error("rain_alpha", a.len(), n));
-    }
-    if let Some(a) = &out.snow_alpha
-        && a.len() != n
-    {
-        return Err(length_error("snow_alpha", a.len(), n));
+    let Photo8Out {
+        srgb: out_srgb,
+        rain_alpha,
+        snow_alpha,
+    } = out;
+    // The coverages in PARTICLE_LAYERS' order.
+    let (mut rain_alpha, mut snow_alpha) = (rain_alpha, snow_alpha);
+    let coverages = PARTICLE_LAYERS.map(|l| match l.coverage {
+        Layer::RainAlpha => rain_alpha.take(),
+        Layer::SnowAlpha => snow_alpha.take(),
+        _ => None,
+    });
+    for (c, l) in coverages.iter().zip(&PARTICLE_LAYERS) {
+        if let Some(a) = c
+            && a.len() != n
+        {
+            return Err(length_error(l.coverage.name(), a.len(), n));
+        }
     }
     crate::haze::check_depth(photo.depth_m)?;
 
@@ -157,12 +166,11 @@ pub fn render_photo8_with(
     let far = particles.as_ref().and_then(|p| p.far.as_ref());
     if haze.is_none() && streaks.is_empty() && far.is_none() {
         // Nothing to draw: encode(decode(b)) = b for every byte (tested), so the bytes as they are.
-        out.srgb.copy_from_slice(photo.srgb);
-        if let Some(a) = out.rain_alpha {
-            a.fill(crate::frame::layers::Layer::RainAlpha.neutral());
-        }
-        if let Some(a) = out.snow_alpha {
-            a.fill(crate::frame::layers::Layer::SnowAlpha.neutral());
+        out_srgb.copy_from_slice(photo.srgb);
+        for (c, l) in coverages.into_iter().zip(&PARTICLE_LAYERS) {
+            if let Some(a) = c {
+                a.fill(l.coverage.neutral());
+            }
         }
         return Ok(stats);
     }
@@ -179,14 +187,11 @@ pub fn render_photo8_with(
     let rays = ViewRays::new(cam);
     let enc = Srgb8Encoder::new();
     let band = BAND_ROWS * w;
-    let mut alpha_bands: Vec<Option<&mut [f32]>> = match out.rain_alpha {
-        Some(a) => a.chunks_mut(band).map(Some).collect(),
-        None => (0..n.div_ceil(band)).map(|_| None).collect(),
-    };
-    let mut snow_bands: Vec<Option<&mut [f32]>> = match out.snow_alpha {
-        Some(a) => a.chunks_mut(band).map(Some).collect(),
-        None => (0..n.div_ceil(band)).map(|_| None).collect(),
-    };
+    // Each band's coverage layers, in PARTICLE_LAYERS' order.
+    let mut chunks = coverages.map(|c| c.map(|a| a.chunks_mut(band)));
+    let mut layer_bands: Vec<[Option<&mut [f32]>; PARTICLE_LAYERS.len()]> = (0..n.div_ceil(band))
+        .map(|_| std::array::from_fn(|k| chunks[k].as_mut().and_then(Iterator::next)))
+        .collect();
     let air = haze.map_or([0.0; 3], |h| h.airlight);
     // Grey light everywhere (the sky's; coloured lamps aside): Q's three channels are equal.
     let grey = streaks.iter().all(|s| {
@@ -194,12 +199,11 @@ pub fn render_photo8_with(
         l.x == l.y && l.y == l.z
     }) && far.is_none_or(|f| f.grey());
     let k = if grey { 1 } else { 3 };
-    out.srgb
+    out_srgb
         .par_chunks_mut(3 * band)
-        .zip(alpha_bands.par_iter_mut())
-        .zip(snow_bands.par_iter_mut())
+        .zip(layer_bands.par_iter_mut())
         .enumerate()
-        .for_each(|(bi, ((out_band, alpha), snow_alpha))| {
+        .for_each(|(bi, (out_band, layers))| {
             let y0 = bi * BAND_ROWS;
             let rows = out_band.len() / (3 * w);
             let px = rows * w;
@@ -210,8 +214,7 @@ pub fn render_photo8_with(
                 let Scratch {
                     p,
                     q,
-                    cover,
-                    snow_cover,
+                    covers,
                     t_row,
                 } = &mut *guard;
                 // Sized for the band; a tile initialises its own columns before drawing (a tile's
@@ -219,8 +222,9 @@ pub fn render_photo8_with(
                 // unchanged, a = 0).
                 p.resize(px, 1.0);
                 q.resize(k * px, 0.0);
-                cover.resize(if alpha.is_some() { px } else { 0 }, 1.0);
-                snow_cover.resize(if snow_alpha.is_some() { px } else { 0 }, 1.0);
+                for (c, l) in covers.iter_mut().zip(layers.iter()) {
+                    c.resize(if l.is_some() { px } else { 0 }, 1.0);
+                }
                 t_row.clear();
                 t_row.resize(w, 1.0);
                 for tx in 0..tiles_x {
@@ -235,11 +239,10 @@ pub fn render_photo8_with(
                             for c in 0..k {
                                 q[c * px + seg.start..c * px + seg.end].fill(0.0);
                             }
-                            if let Some(c) = cover.get_mut(seg.clone()) {
-                                c.fill(1.0);
-                            }
-                            if let Some(c) = snow_cover.get_mut(seg) {
-                                c.fill(1.0);
+                            for c in covers.iter_mut() {
+                                if let Some(c) = c.get_mut(seg.clone()) {
+                                    c.fill(1.0);
+                                }
                             }
                         }
                         // One Q plane when every light is grey, three otherwise.
@@ -257,7 +260,7 @@ pub fn render_photo8_with(
                             depth,
                             p,
                             q,
-                            [cover, snow_cover],
+                            covers.each_mut().map(Vec::as_mut_slice),
                         );
                     }
                     let t_seg = &mut t_row[..cols.len()];
@@ -309,10 +312,7 @@ pub fn render_photo8_with(
                                 out_row,
                             ),
                         }
-                        for (layer, cov) in [
-                            (alpha.as_deref_mut(), &*cover),
-                            (snow_alpha.as_deref_mut(), &*snow_cover),
-                        ] {
+                        for (layer, cov) in layers.iter_mut().zip(covers.iter()) {
                             if let Some(a) = layer {
                                 let a = &mut a[seg.clone()];
                                 if rained {
@@ -331,30 +331,26 @@ pub fn render_photo8_with(
     Ok(stats)
 }
 
-/// The 8-bit output's accumulator over a band: each pixel's affine map C ↦ P·C + Q of the
-/// streaks composited over it (C ← (1 − a r) C + a r L gives P ← (1 − a r) P and
-/// Q ← (1 − a r) Q + a r L), P in `p`, Q in `K` planes of `q` (one when every light is grey),
-/// and the coverage product ∏(1 − a) in `cover` when it is not empty. Band-sized buffers,
-/// indexed as the band.
-struct AffineAccumulator<'a, const K: usize> {
+/// The 8-bit output's colour over a band: each pixel's affine map C ↦ P·C + Q of the streaks
+/// composited over it (C ← (1 − a r) C + a r L gives P ← (1 − a r) P and
+/// Q ← (1 − a r) Q + a r L), P in `p`, Q in `K` planes of `q` (one when every light is grey).
+/// Band-sized buffers, indexed as the band; the layers are the accumulator's [`Cover`].
+struct AffineBlend<'a, const K: usize> {
     p: &'a mut [f32],
     q: [&'a mut [f32]; K],
-    cover: &'a mut [f32],
-    /// The snow's coverage product, when its layer is wanted (else empty).
-    snow_cover: &'a mut [f32],
 }
 
-impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
-    /// The light per channel, r, and whether it is the snow's.
-    type Streak = ([f32; 3], f32, bool);
+impl<const K: usize> Blend for AffineBlend<'_, K> {
+    /// The light per channel, and r.
+    type Light = ([f32; 3], f32);
 
     #[inline(always)]
-    fn streak(&self, light: Vec3, r: f32, layer: u8) -> Self::Streak {
-        (light.to_array(), r, layer == LAYER_SNOW)
+    fn light(&self, light: Vec3, r: f32) -> Self::Light {
+        (light.to_array(), r)
     }
 
     #[inline(always)]
-    fn add_x4(&mut self, (l, r, snow): &Self::Streak, i: usize, a: Vec4, _inv_z: Vec4) {
+    fn blend_x4(&mut self, (l, r): &Self::Light, i: usize, a: Vec4) {
         let end = i + 4;
         let ar = a * *r;
         let keep = Vec4::ONE - ar;
@@ -362,40 +358,23 @@ impl<const K: usize> Accumulator for AffineAccumulator<'_, K> {
         for (q, &lc) in self.q.iter_mut().zip(l) {
             (Vec4::from_slice(&q[i..end]) * keep + ar * lc).write_to_slice(&mut q[i..end]);
         }
-        let cover = if *snow {
-            &mut *self.snow_cover
-        } else {
-            &mut *self.cover
-        };
-        if end <= cover.len() {
-            (Vec4::from_slice(&cover[i..end]) * (Vec4::ONE - a)).write_to_slice(&mut cover[i..end]);
-        }
     }
 
     #[inline(always)]
-    fn add(&mut self, (l, r, snow): &Self::Streak, i: usize, a: f32, _inv_z: f32) {
+    fn blend(&mut self, (l, r): &Self::Light, i: usize, a: f32) {
         let ar = a * r;
         let keep = 1.0 - ar;
         self.p[i] *= keep;
         for (q, &lc) in self.q.iter_mut().zip(l) {
             q[i] = q[i] * keep + ar * lc;
         }
-        let cover = if *snow {
-            &mut *self.snow_cover
-        } else {
-            &mut *self.cover
-        };
-        if let Some(c) = cover.get_mut(i) {
-            *c *= 1.0 - a;
-        }
     }
 }
 
 /// Composites a tile's streaks (`mine`, indices into `streaks`, far to near, after the rain's
 /// far layers `far` when given; the tile: the band's rows, columns `cols`) into the band's
-/// affine maps (see [`AffineAccumulator`]: P in
-/// `p`, Q in `q`'s `K` planes, the rain's and the snow's coverage products in `cover` and
-/// `snow_cover` when they are not empty).
+/// affine maps (see [`AffineBlend`]: P in `p`, Q in `q`'s `K` planes) and the particle layers'
+/// coverage products `covers` ([`PARTICLE_LAYERS`]' order, each empty when not kept).
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn raster_tile<const K: usize>(
@@ -407,19 +386,19 @@ fn raster_tile<const K: usize>(
     depth: &[f32],
     p: &mut [f32],
     q: &mut [f32],
-    [cover, snow_cover]: [&mut [f32]; 2],
+    covers: [&mut [f32]; PARTICLE_LAYERS.len()],
 ) {
     let px = p.len();
     let mut planes = q.chunks_exact_mut(px);
     let q: [&mut [f32]; K] = std::array::from_fn(|_| planes.next().unwrap_or_default());
-    let cut = |c: &mut [f32]| c.len().min(px);
-    let (nc, ns) = (cut(cover), cut(snow_cover));
-    let (cover, snow_cover) = (&mut cover[..nc], &mut snow_cover[..ns]);
-    let mut acc = AffineAccumulator::<K> {
-        p,
-        q,
-        cover,
-        snow_cover,
+    let covers = covers.map(|c| {
+        let n = c.len().min(px);
+        &mut c[..n]
+    });
+    let mut acc = Accumulator {
+        colour: AffineBlend::<K> { p, q },
+        // the 8-bit output keeps no particle's depth
+        cover: Cover::new(covers, std::array::from_fn(|_| <&mut [f32]>::default())),
     };
     if let Some(far) = far {
         far.composite(y0, rows, w, cols.clone(), depth, &mut acc);

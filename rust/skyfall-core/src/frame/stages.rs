@@ -24,7 +24,7 @@ use crate::scene::camera::Camera;
 use crate::scene::camera::Defocus;
 use crate::snow::streaks::{SnowFrame, SnowStats};
 use crate::stage::layers::{Layer, LayerSet};
-use crate::stage::{Declared, Output, Plan, Stage};
+use crate::stage::{Declared, Kind, Output, Plan, Stage};
 use crate::wet::stage::{Surfaces, WetFrame, WetStage};
 use crate::windshield::stage::{Glass, WindshieldStage};
 
@@ -108,7 +108,7 @@ impl<'a> Frame<'a> {
         let light = self.light;
         let photo = self.boxes().is_none();
         let mut plan = vec![Declared {
-            name: "scene",
+            kind: Kind::Scene,
             layers: LayerSet::EMPTY
                 .with_if(Layer::SnowDepth, light.snow.is_some())
                 .with_if(Layer::SunTransmittance, light.sun.is_some()),
@@ -123,7 +123,7 @@ impl<'a> Frame<'a> {
         }];
         if self.wet.is_some() {
             plan.push(Declared {
-                name: "wet",
+                kind: Kind::Wet,
                 layers: crate::wet::stage::LAYERS,
                 srgb8: false,
                 // A box scene's wet stage lives in the GPU's scene pass (its mirror ray needs the
@@ -143,7 +143,7 @@ impl<'a> Frame<'a> {
         }
         if light.clouds.is_some() {
             plan.push(Declared {
-                name: "clouds",
+                kind: Kind::Clouds,
                 layers: crate::cloud::stage::LAYERS,
                 srgb8: false,
                 gpu: true,
@@ -153,7 +153,7 @@ impl<'a> Frame<'a> {
         }
         if self.haze.is_some() {
             plan.push(Declared {
-                name: "haze",
+                kind: Kind::Haze,
                 layers: crate::haze::stage::LAYERS,
                 srgb8: true,
                 gpu: true,
@@ -163,7 +163,7 @@ impl<'a> Frame<'a> {
         }
         if !photo && !light.lights.is_empty() {
             plan.push(Declared {
-                name: "glow",
+                kind: Kind::Glow,
                 layers: LayerSet::EMPTY,
                 srgb8: false,
                 gpu: true,
@@ -173,7 +173,7 @@ impl<'a> Frame<'a> {
         }
         if self.rain.is_some() || self.snow.is_some() {
             plan.push(Declared {
-                name: "particles",
+                kind: Kind::Particles,
                 layers: passes::layers(self.rain.is_some(), self.snow.is_some()),
                 srgb8: true,
                 gpu: true,
@@ -183,7 +183,7 @@ impl<'a> Frame<'a> {
         }
         if self.windshield.is_some() {
             plan.push(Declared {
-                name: "windshield",
+                kind: Kind::Windshield,
                 layers: crate::windshield::stage::LAYERS,
                 srgb8: false,
                 gpu: true,
@@ -253,6 +253,7 @@ impl<'a> Frame<'a> {
             .map(|(glass, defocus)| WindshieldStage::new(glass, cam, defocus.as_ref()))
             .transpose()?;
         Ok(Prepared {
+            plan: plan.clone(),
             scene: SceneStage {
                 scene: self.scene,
                 cam,
@@ -279,6 +280,8 @@ pub enum PreparedParticles {
 
 /// A frame's stages, made for it, in drawing order.
 pub struct Prepared<'a> {
+    /// The frame's plan: its stages' declarations, in drawing order.
+    pub plan: Plan,
     /// The scene: the box scene ray cast (with its snow cover and the sun), or the photo.
     pub scene: SceneStage<'a>,
     /// The wet surfaces, when the rain wets them.
@@ -296,26 +299,23 @@ pub struct Prepared<'a> {
 }
 
 impl Prepared<'_> {
-    /// The stages, in drawing order.
+    /// The stages, in the plan's order (the particles when binned for the float output).
     pub fn stages(&self) -> Vec<&dyn Stage> {
-        let mut list: Vec<&dyn Stage> = vec![&self.scene];
-        if let Some(s) = &self.wet {
-            list.push(s);
-        }
-        if let Some(s) = &self.clouds {
-            list.push(s);
-        }
-        if let Some(s) = &self.haze {
-            list.push(s);
-        }
-        if let Some(s) = &self.glow {
-            list.push(s);
-        }
-        if let Some(PreparedParticles::Binned(s)) = &self.particles {
-            list.push(s);
-        }
-        if let Some(s) = &self.windshield {
-            list.push(s);
+        let mut list: Vec<&dyn Stage> = Vec::with_capacity(self.plan.0.len());
+        for d in &self.plan.0 {
+            let stage: Option<&dyn Stage> = match d.kind {
+                Kind::Scene => Some(&self.scene),
+                Kind::Wet => self.wet.as_ref().map(|s| s as &dyn Stage),
+                Kind::Clouds => self.clouds.as_ref().map(|s| s as &dyn Stage),
+                Kind::Haze => self.haze.as_ref().map(|s| s as &dyn Stage),
+                Kind::Glow => self.glow.as_ref().map(|s| s as &dyn Stage),
+                Kind::Particles => match &self.particles {
+                    Some(PreparedParticles::Binned(s)) => Some(s),
+                    _ => None,
+                },
+                Kind::Windshield => self.windshield.as_ref().map(|s| s as &dyn Stage),
+            };
+            list.extend(stage);
         }
         list
     }

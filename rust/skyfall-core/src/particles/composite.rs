@@ -1,14 +1,15 @@
 //! The compositor: a band's streaks composited far to near with the depth test, into an
-//! [`Accumulator`]. Both CPU outputs use it: the float frame composites the colour in place
-//! ([`ColourAccumulator`]); the 8-bit output accumulates each pixel's affine map P·C + Q
-//! before the background is decoded (see [`crate::photo8`]).
+//! [`Accumulator`]: the colour by a [`Blend`], the particle layers by [`Cover`] (one for every
+//! output, indexed by [`PARTICLE_LAYERS`]). The float frame blends the colour in place
+//! ([`ColourBlend`]); the 8-bit output accumulates each pixel's affine map P·C + Q before the
+//! background is decoded (`frame::srgb8`).
 //!
 //! A fragment deeper than the scene at its pixel is hidden (z ≥ depth, tested as
 //! 1 ≥ depth/z without the division); the accumulators receive its coverage as 0, which they
 //! must treat as nothing (no branch on it).
 
 use super::binning::bin_by_tiles;
-use super::streak::{LAYER_SNOW, ScreenStreak};
+use super::streak::{PARTICLE_LAYERS, ScreenStreak};
 use super::walk::{for_each_fragment_in, for_each_fragment_x4};
 use crate::error::Result;
 use crate::scene::camera::Camera;
@@ -17,21 +18,127 @@ use glam::{Vec3, Vec4, Vec4Swizzles};
 /// Rows per band of the float frame (a task).
 pub const BAND_ROWS: usize = 16;
 
-/// What a band's streaks are composited into. `i` indexes the band's pixels; `a` is a
-/// fragment's α·coverage after the depth test (0: hidden or missed), `inv_z` its inverse
-/// depth, 1/m.
-pub trait Accumulator {
-    /// Per-streak values the accumulator needs (its light, arranged as the accumulator reads
-    /// it), made once per streak and band.
-    type Streak;
-    /// The per-streak values of `light`, the streak's received light per channel, `r`,
-    /// the share of it the streak shows, and `layer`, the effect whose layers it draws into
-    /// ([`super::streak::LAYER_RAIN`], [`super::streak::LAYER_SNOW`]).
-    fn streak(&self, light: Vec3, r: f32, layer: u8) -> Self::Streak;
+/// How a band's streaks change its colour: `a` is a fragment's α·coverage after the depth test
+/// (0: hidden or missed), `r` the share of its light the streak shows. The float output blends
+/// the colour in place ([`ColourBlend`]); the 8-bit output accumulates each pixel's affine map
+/// (`frame::srgb8`). The layers are [`Cover`]'s, the same for both.
+pub trait Blend {
+    /// Per-streak values the blend needs (its light, arranged as it reads it, and r), made
+    /// once per streak and band.
+    type Light;
+    /// The per-streak values of `light`, the streak's received light per channel, and `r`.
+    fn light(&self, light: Vec3, r: f32) -> Self::Light;
     /// Four consecutive pixels of a row from `i` (i + 4 ≤ the band's pixels).
-    fn add_x4(&mut self, s: &Self::Streak, i: usize, a: Vec4, inv_z: Vec4);
+    fn blend_x4(&mut self, l: &Self::Light, i: usize, a: Vec4);
     /// One pixel.
-    fn add(&mut self, s: &Self::Streak, i: usize, a: f32, inv_z: f32);
+    fn blend(&mut self, l: &Self::Light, i: usize, a: f32);
+}
+
+/// The particle layers of a band ([`PARTICLE_LAYERS`], indexed by a particle's layer index):
+/// per layer the coverage product ∏(1 − a) while compositing (1 − it after
+/// [`Cover::finish`]) and, for a layer with a depth, the nearest visible particle's depth
+/// (inf: none). A buffer is empty where it is not kept (a layer the frame does not draw).
+pub struct Cover<'a> {
+    product: [&'a mut [f32]; PARTICLE_LAYERS.len()],
+    depth_m: [&'a mut [f32]; PARTICLE_LAYERS.len()],
+}
+
+impl<'a> Cover<'a> {
+    /// The layers over buffers the caller has started (products at 1, depths at inf, on the
+    /// pixels drawn). A layer without a depth in [`PARTICLE_LAYERS`] keeps no depth buffer.
+    pub fn new(
+        product: [&'a mut [f32]; PARTICLE_LAYERS.len()],
+        mut depth_m: [&'a mut [f32]; PARTICLE_LAYERS.len()],
+    ) -> Self {
+        for (d, l) in depth_m.iter_mut().zip(&PARTICLE_LAYERS) {
+            if l.depth.is_none() {
+                *d = &mut [];
+            }
+        }
+        Cover { product, depth_m }
+    }
+
+    /// [`Self::new`], the buffers started: the coverage products at 1, no depth.
+    pub fn started(
+        mut product: [&'a mut [f32]; PARTICLE_LAYERS.len()],
+        depth_m: [&'a mut [f32]; PARTICLE_LAYERS.len()],
+    ) -> Self {
+        for p in product.iter_mut() {
+            p.fill(1.0);
+        }
+        let mut cover = Self::new(product, depth_m);
+        for d in cover.depth_m.iter_mut() {
+            d.fill(f32::INFINITY);
+        }
+        cover
+    }
+
+    /// The products as coverages, 1 − ∏(1 − aᵢ).
+    pub fn finish(self) {
+        for p in self.product {
+            for a in p.iter_mut() {
+                *a = 1.0 - *a;
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn add_x4(&mut self, layer: usize, i: usize, a: Vec4, inv_z: Vec4) {
+        let end = i + 4;
+        if let Some(p) = self.product.get_mut(layer).and_then(|p| p.get_mut(i..end)) {
+            (Vec4::from_slice(p) * (Vec4::ONE - a)).write_to_slice(p);
+        }
+        if let Some(d) = self.depth_m.get_mut(layer).and_then(|d| d.get_mut(i..end)) {
+            let z = Vec4::select(a.cmpgt(Vec4::ZERO), Vec4::ONE / inv_z, Vec4::INFINITY);
+            Vec4::from_slice(d).min(z).write_to_slice(d);
+        }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, layer: usize, i: usize, a: f32, inv_z: f32) {
+        if let Some(p) = self.product.get_mut(layer).and_then(|p| p.get_mut(i)) {
+            *p *= 1.0 - a;
+        }
+        if let Some(d) = self.depth_m.get_mut(layer).and_then(|d| d.get_mut(i)) {
+            let z = if a > 0.0 { 1.0 / inv_z } else { f32::INFINITY };
+            *d = d.min(z);
+        }
+    }
+}
+
+/// What a band's streaks are composited into: the colour by a [`Blend`], the layers by
+/// [`Cover`]. `i` indexes the band's pixels; `a` is a fragment's α·coverage after the depth
+/// test (0: hidden or missed, which must change nothing: no branch on it), `inv_z` its
+/// inverse depth, 1/m.
+pub struct Accumulator<'a, B> {
+    /// The colour.
+    pub colour: B,
+    /// The particle layers.
+    pub cover: Cover<'a>,
+}
+
+impl<B: Blend> Accumulator<'_, B> {
+    /// The per-streak values of a streak: its light per channel, `r`, the share of it the
+    /// streak shows, and `layer`, the effect whose layers it draws into
+    /// ([`super::streak::LAYER_RAIN`], [`super::streak::LAYER_SNOW`]).
+    #[inline(always)]
+    pub fn streak(&self, light: Vec3, r: f32, layer: u8) -> (B::Light, usize) {
+        (self.colour.light(light, r), usize::from(layer))
+    }
+
+    /// Four consecutive pixels of a row from `i` (i + 4 ≤ the band's pixels).
+    #[inline(always)]
+    pub fn add_x4(&mut self, (l, layer): &(B::Light, usize), i: usize, a: Vec4, inv_z: Vec4) {
+        self.colour.blend_x4(l, i, a);
+        self.cover.add_x4(*layer, i, a, inv_z);
+    }
+
+    /// One pixel.
+    #[inline(always)]
+    pub fn add(&mut self, (l, layer): &(B::Light, usize), i: usize, a: f32, inv_z: f32) {
+        self.colour.blend(l, i, a);
+        self.cover.add(*layer, i, a, inv_z);
+    }
 }
 
 /// Composites the streaks `list` (indices into `streaks`, far to near) over a band: rows
@@ -39,7 +146,7 @@ pub trait Accumulator {
 /// band's scene depth (at least its pixels). Steep streaks are walked four pixels at a time.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn composite_band<A: Accumulator>(
+pub fn composite_band<B: Blend>(
     streaks: &[ScreenStreak],
     list: &[u32],
     y0: usize,
@@ -47,7 +154,7 @@ pub fn composite_band<A: Accumulator>(
     w: usize,
     cols: std::ops::Range<usize>,
     depth: &[f32],
-    acc: &mut A,
+    acc: &mut Accumulator<'_, B>,
 ) {
     let px = rows * w;
     // Cut to the band: one check per four pixels below (i + 4 ≤ px) covers every slice.
@@ -80,56 +187,22 @@ pub fn composite_band<A: Accumulator>(
     }
 }
 
-/// The float frame's accumulator over a band: the colour composited in place,
-/// C ← C + a·r·(I_R − C) (r per streak); per layer, the coverage product ∏(1 − a) (in
-/// `alpha` for the rain's particles and `snow_alpha` for the snow's, turned into 1 − it by
-/// [`ColourAccumulator::finish`]) and the rain's nearest visible fragment's depth. A layer's
-/// buffers may be empty when the list holds no particle of its effect.
-pub struct ColourAccumulator<'a> {
+/// The float frame's colour, composited in place over a band: C ← C + a·r·(L − C).
+pub struct ColourBlend<'a> {
     /// Linear RGB of the band, 3 per pixel.
     pub rgb: &'a mut [f32],
-    /// ∏(1 − a) of the rain's particles per pixel while compositing.
-    pub alpha: &'a mut [f32],
-    /// Nearest visible rain particle's depth per pixel, m (inf: none).
-    pub rain_depth_m: &'a mut [f32],
-    /// ∏(1 − a) of the snow's particles per pixel while compositing.
-    pub snow_alpha: &'a mut [f32],
 }
 
-impl<'a> ColourAccumulator<'a> {
-    /// Starts a band: the coverage products at 1, no depth.
-    pub fn new(
-        rgb: &'a mut [f32],
-        alpha: &'a mut [f32],
-        rain_depth_m: &'a mut [f32],
-        snow_alpha: &'a mut [f32],
-    ) -> Self {
-        alpha.fill(1.0);
-        rain_depth_m.fill(f32::INFINITY);
-        snow_alpha.fill(1.0);
-        ColourAccumulator {
-            rgb,
-            alpha,
-            rain_depth_m,
-            snow_alpha,
-        }
-    }
+/// The float frame's accumulator over a band.
+pub type ColourAccumulator<'a> = Accumulator<'a, ColourBlend<'a>>;
 
-    /// Ends the band: the coverages 1 − ∏(1 − aᵢ).
-    pub fn finish(self) {
-        for a in self.alpha.iter_mut().chain(self.snow_alpha.iter_mut()) {
-            *a = 1.0 - *a;
-        }
-    }
-}
-
-impl Accumulator for ColourAccumulator<'_> {
+impl Blend for ColourBlend<'_> {
     /// The light per channel, and as the three vectors of four pixels' twelve interleaved
-    /// colour values: R G B R | G B R G | B R G B; r; whether it is the snow's.
-    type Streak = ([f32; 3], [Vec4; 3], f32, bool);
+    /// colour values: R G B R | G B R G | B R G B; r.
+    type Light = ([f32; 3], [Vec4; 3], f32);
 
     #[inline(always)]
-    fn streak(&self, light: Vec3, r: f32, layer: u8) -> Self::Streak {
+    fn light(&self, light: Vec3, r: f32) -> Self::Light {
         let [lr, lg, lb] = light.to_array();
         (
             [lr, lg, lb],
@@ -139,46 +212,27 @@ impl Accumulator for ColourAccumulator<'_> {
                 Vec4::new(lb, lr, lg, lb),
             ],
             r,
-            layer == LAYER_SNOW,
         )
     }
 
     #[inline(always)]
-    fn add_x4(&mut self, (_, lv, r, snow): &Self::Streak, i: usize, a: Vec4, inv_z: Vec4) {
-        let end = i + 4;
-        // As `add`, lane by lane (same bits).
+    fn blend_x4(&mut self, (_, lv, r): &Self::Light, i: usize, a: Vec4) {
+        // As `blend`, lane by lane (same bits).
         let ar = a * *r;
         let ars = [ar.xxxy(), ar.yyzz(), ar.zwww()];
-        let c = &mut self.rgb[3 * i..3 * end];
+        let c = &mut self.rgb[3 * i..3 * (i + 4)];
         for (m, (ar, l)) in ars.iter().zip(lv).enumerate() {
             let cv = Vec4::from_slice(&c[4 * m..4 * m + 4]);
             (cv + *ar * (*l - cv)).write_to_slice(&mut c[4 * m..4 * m + 4]);
         }
-        if *snow {
-            let sa = &mut self.snow_alpha[i..end];
-            (Vec4::from_slice(sa) * (Vec4::ONE - a)).write_to_slice(sa);
-            return;
-        }
-        let alpha = &mut self.alpha[i..end];
-        (Vec4::from_slice(alpha) * (Vec4::ONE - a)).write_to_slice(alpha);
-        let z = Vec4::select(a.cmpgt(Vec4::ZERO), Vec4::ONE / inv_z, Vec4::INFINITY);
-        let rd = &mut self.rain_depth_m[i..end];
-        Vec4::from_slice(rd).min(z).write_to_slice(rd);
     }
 
     #[inline(always)]
-    fn add(&mut self, (light, _, r, snow): &Self::Streak, i: usize, a: f32, inv_z: f32) {
+    fn blend(&mut self, (light, _, r): &Self::Light, i: usize, a: f32) {
         let ar = a * r;
         for (c, l) in self.rgb[3 * i..3 * i + 3].iter_mut().zip(light) {
             *c += ar * (l - *c);
         }
-        if *snow {
-            self.snow_alpha[i] *= 1.0 - a;
-            return;
-        }
-        self.alpha[i] *= 1.0 - a;
-        let z = if a > 0.0 { 1.0 / inv_z } else { f32::INFINITY };
-        self.rain_depth_m[i] = self.rain_depth_m[i].min(z);
     }
 }
 
@@ -282,15 +336,18 @@ pub fn composite_band_colour(
     let px = depth.len();
     let cut = |b: &mut [f32]| b.len().min(px);
     let (na, nd, ns) = (cut(alpha), cut(rain_depth_m), cut(snow_alpha));
-    let mut acc = ColourAccumulator::new(
-        &mut rgb[..3 * px],
-        &mut alpha[..na],
-        &mut rain_depth_m[..nd],
-        &mut snow_alpha[..ns],
-    );
+    let mut acc = Accumulator {
+        colour: ColourBlend {
+            rgb: &mut rgb[..3 * px],
+        },
+        cover: Cover::started(
+            [&mut alpha[..na], &mut snow_alpha[..ns]],
+            [&mut rain_depth_m[..nd], &mut []],
+        ),
+    };
     if let Some(far) = far {
         far.composite_colour(y0, px / w, w, depth, &mut acc);
     }
     composite_band(streaks, list, y0, px / w, w, 0..w, depth, &mut acc);
-    acc.finish();
+    acc.cover.finish();
 }

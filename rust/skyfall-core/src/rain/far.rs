@@ -42,7 +42,7 @@
 use super::drops::{BinSpeeds, RainRegion};
 use super::streaks::RainShading;
 use crate::error::{Error, Param, Result};
-use crate::particles::composite::Accumulator;
+use crate::particles::composite::{Accumulator, Blend};
 use crate::particles::streak::{LAYER_RAIN, screen_streak_through};
 use crate::particles::voxels::voxel_seed;
 use crate::physics::dsd::BinSampler;
@@ -489,14 +489,14 @@ impl FarRain {
     /// Composites the shells over a band: rows `y0..y0 + rows` of a `w`-wide frame, columns
     /// `cols`, `depth` the band's scene depth (z, m), into `acc` (indexed as the band), far to
     /// near. Call before the band's streaks.
-    pub fn composite<A: Accumulator>(
+    pub fn composite<B: Blend>(
         &self,
         y0: usize,
         rows: usize,
         w: usize,
         cols: std::ops::Range<usize>,
         depth: &[f32],
-        acc: &mut A,
+        acc: &mut Accumulator<'_, B>,
     ) {
         let k_n = self.radii.len();
         let size = TEXTURE_SIZE;
@@ -505,7 +505,7 @@ impl FarRain {
         let [fx, fy, cx, cy] = self.intrinsics;
         let m = self.rotation;
         let px = rows * w;
-        let mut sts: Vec<Option<A::Streak>> = Vec::with_capacity(k_n);
+        let mut sts: Vec<Option<(B::Light, usize)>> = Vec::with_capacity(k_n);
         let turn = std::f32::consts::TAU * self.inv_delta;
         for row in 0..rows {
             let y = y0 + row;
@@ -602,7 +602,7 @@ impl FarRain {
                         );
                         Some((t * scale).min(Vec4::ONE) * wgt)
                     };
-                    let mut add = |st: &A::Streak, a: Vec4, inv_z: Vec4| {
+                    let mut add = |st: &(B::Light, usize), a: Vec4, inv_z: Vec4| {
                         if lanes == 4 && i + 4 <= px {
                             acc.add_x4(st, i, a, inv_z);
                         } else {

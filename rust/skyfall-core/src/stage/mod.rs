@@ -276,12 +276,48 @@ impl Output {
     }
 }
 
-/// A stage as a frame declares it before drawing: its name, its layers and the outputs
-/// that draw it.
+/// Which stage a declaration is. Every output draws a frame by walking its plan's list and
+/// drawing each stage by its kind in one exhaustive `match`, so a new kind does not compile until
+/// every output draws it (or its declaration says that output does not).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// The box scene's ray cast, or the photo.
+    Scene,
+    /// The wet surfaces.
+    Wet,
+    /// The clouds.
+    Clouds,
+    /// The haze.
+    Haze,
+    /// The lights' glows.
+    Glow,
+    /// The particles (rain and snow).
+    Particles,
+    /// The windshield.
+    Windshield,
+}
+
+impl Kind {
+    /// The stage's name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Kind::Scene => "scene",
+            Kind::Wet => "wet",
+            Kind::Clouds => "clouds",
+            Kind::Haze => "haze",
+            Kind::Glow => "glow",
+            Kind::Particles => "particles",
+            Kind::Windshield => "windshield",
+        }
+    }
+}
+
+/// A stage as a frame declares it before drawing: its kind, its layers and the outputs that
+/// draw it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Declared {
-    /// The stage's name (`"scene"`, `"clouds"`, `"haze"`, `"glow"`, `"particles"`, ...).
-    pub name: &'static str,
+    /// Which stage it is.
+    pub kind: Kind,
     /// What it draws.
     pub layers: LayerSet,
     /// Whether the fused 8-bit output draws it.
@@ -296,6 +332,11 @@ pub struct Declared {
 }
 
 impl Declared {
+    /// The stage's name (`"scene"`, `"clouds"`, `"haze"`, `"glow"`, `"particles"`, ...).
+    pub const fn name(&self) -> &'static str {
+        self.kind.name()
+    }
+
     /// Whether `output` draws the stage.
     pub const fn drawn_by(&self, output: Output) -> bool {
         match output {
@@ -336,7 +377,7 @@ impl Plan {
                 message: format!(
                     "{} does not draw the {} stage: {}",
                     output.name(),
-                    d.name,
+                    d.name(),
                     d.why_not
                 ),
             }),
@@ -345,7 +386,7 @@ impl Plan {
 
     /// The stages' names, in order.
     pub fn names(&self) -> impl Iterator<Item = &'static str> + '_ {
-        self.0.iter().map(|d| d.name)
+        self.0.iter().map(Declared::name)
     }
 }
 
@@ -408,8 +449,8 @@ mod tests {
 
     #[test]
     fn a_plan_names_the_first_stage_an_output_cannot_draw() {
-        let stage = |name, srgb8, gpu| Declared {
-            name,
+        let stage = |kind, srgb8, gpu| Declared {
+            kind,
             layers: LayerSet::EMPTY,
             srgb8,
             gpu,
@@ -417,14 +458,14 @@ mod tests {
             why_not: "reason",
         };
         let plan = Plan(vec![
-            stage("scene", true, true),
+            stage(Kind::Scene, true, true),
             Declared {
                 layers: LayerSet::of(&[Layer::CloudAlpha]),
-                ..stage("clouds", false, true)
+                ..stage(Kind::Clouds, false, true)
             },
             Declared {
                 layers: LayerSet::of(&[Layer::Transmittance]),
-                ..stage("haze", true, true)
+                ..stage(Kind::Haze, true, true)
             },
         ]);
         assert_eq!(

@@ -1,5 +1,5 @@
 use super::*;
-use crate::particles::composite::ColourAccumulator;
+use crate::particles::composite::{Accumulator, ColourBlend, Cover};
 
 fn region(rate: f64, near: f64, far: f64, seed: u64) -> RainRegion {
     let mut r = RainRegion::new(rate, &[1.0, 1.5, 2.0], near, [0.0; 3], 0.0, seed).unwrap();
@@ -117,9 +117,12 @@ fn coverage(far: &FarRain, cam: &Camera, depth: f32) -> Vec<f32> {
     let mut alpha = vec![0.0f32; w * h];
     let mut rd = vec![0.0f32; w * h];
     let depth = vec![depth; w * h];
-    let mut acc = ColourAccumulator::new(&mut rgb, &mut alpha, &mut rd, &mut []);
+    let mut acc = Accumulator {
+        colour: ColourBlend { rgb: &mut rgb },
+        cover: Cover::started([&mut alpha, &mut []], [&mut rd, &mut []]),
+    };
     far.composite(0, h, w, 0..w, &depth, &mut acc);
-    acc.finish();
+    acc.cover.finish();
     alpha
 }
 
