@@ -107,25 +107,7 @@ def _scene(rgb: NDArray[Any], depth_m: Any, camera: Camera | None, changes: dict
     scene = PhotoScene(rgb, depth_m, camera=camera, encoding=encoding)
     if not changes:
         return scene
-    return PhotoScene(rgb, scene.depth_m, camera=_camera(scene.camera, changes), encoding=encoding)
-
-
-def _camera(base: Camera, changes: dict[str, Any]) -> Camera:
-    kw: dict[str, Any] = {
-        "yaw_deg": base.yaw_deg,
-        "pitch_deg": base.pitch_deg,
-        "vertical_fov_deg": base.vertical_fov_deg,
-        "width": base.width,
-        "height": base.height,
-        "exposure_s": base.exposure_s,
-        "velocity_m_s": tuple(base.velocity_m_s),
-        "focal_length_mm": base.focal_length_mm,
-        "sensor_width_mm": base.sensor_width_mm,
-        "f_number": base.f_number,
-        "focus_distance_m": base.focus_distance_m,
-    }
-    kw.update(changes)
-    return Camera(tuple(base.position_m), **kw)
+    return PhotoScene(rgb, scene.depth_m, camera=scene.camera.replaced(**changes), encoding=encoding)
 
 
 def _one(

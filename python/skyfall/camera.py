@@ -156,20 +156,33 @@ class Camera:
             raise ValueError(
                 f"camera intrinsics were given for {self.width}x{self.height}, the frame is {width}x{height}"
             )
-        return Camera(
-            tuple(self.position_m),
-            yaw_deg=self.yaw_deg,
-            pitch_deg=self.pitch_deg,
-            vertical_fov_deg=self.vertical_fov_deg,
-            width=width,
-            height=height,
-            exposure_s=self.exposure_s,
-            velocity_m_s=tuple(self.velocity_m_s),
-            focal_length_mm=self.focal_length_mm,
-            sensor_width_mm=self.sensor_width_mm,
-            f_number=self.f_number,
-            focus_distance_m=self.focus_distance_m,
-        )
+        return self.replaced(width=width, height=height)
+
+    def replaced(self, **changes: Any) -> Camera:
+        """This camera with the constructor's keywords in ``changes`` set anew (its position,
+        orientation, field of view, resolution, exposure, motion and lens otherwise kept; given
+        intrinsics are not carried over).
+
+        Examples
+        --------
+        >>> Camera((0.0, 1.6, 0.0), exposure_s=1 / 60).replaced(exposure_s=1 / 250).exposure_s
+        0.004
+        """
+        kw: dict[str, Any] = {
+            "yaw_deg": self.yaw_deg,
+            "pitch_deg": self.pitch_deg,
+            "vertical_fov_deg": self.vertical_fov_deg,
+            "width": self.width,
+            "height": self.height,
+            "exposure_s": self.exposure_s,
+            "velocity_m_s": tuple(self.velocity_m_s),
+            "focal_length_mm": self.focal_length_mm,
+            "sensor_width_mm": self.sensor_width_mm,
+            "f_number": self.f_number,
+            "focus_distance_m": self.focus_distance_m,
+        }
+        kw.update(changes)
+        return Camera(tuple(self.position_m), **kw)
 
     def intrinsics(self) -> tuple[float, float, float, float]:
         """(fx, fy, cx, cy) in px; needs the resolution."""
