@@ -5,7 +5,11 @@ before, so its ambient-light map is always made again: from the scene's horizon
 (``_core.AmbientHorizon``, found at the first frame) as skyfall does now, and, for the
 comparison, from scratch as it did before (the horizon switched off for that row). A new sky
 brightness E needs no new map (the map is relative to E). Also: the first map of a scene with
-and without its horizon, the horizon's size, and the relit map against the direct one.
+and without its horizon, the horizon's size, and the relit map against the direct one; and the
+street dataset (issue 31, item 5): items of ``skyfall dataset --scene street`` (a jittered camera,
+a new rain rate and visibility per item) rendered in this process with the map's extent around
+the camera widened to ``sky.CAMERA_BOUNDS_STEP_M`` and, as before, not widened, and the CLI's
+items/s on 1 and 2 workers.
 
 Writes benches/results/sweeps.md and .json. Run with ``make bench``.
 """
@@ -16,6 +20,10 @@ import itertools
 import json
 import os
 import platform
+import re
+import subprocess
+import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -82,9 +90,10 @@ def main() -> None:
         relit = model.light_map(horizon)
         first["light"].append(time.perf_counter() - t)
     same = bool(np.array_equal(direct.values, relit.values) and np.array_equal(direct.solid, relit.solid))
+    data = dataset_rows()
     fm = {k: 1e3 * float(np.median(v)) for k, v in first.items()}
     summary = {"rows": rows, "first_map_ms": fm, "horizon_mb": horizon.nbytes / 1e6, "map_nodes": int(np.prod(direct.dims)),
-               "relit_equals_direct": same}
+               "relit_equals_direct": same, "dataset": data}
     lines = [
         "# Sweeps at the speed of a frame: the ambient map lit from the scene's horizon",
         "",
@@ -101,11 +110,84 @@ def main() -> None:
         f"its horizon found {fm['horizon']:.0f} ms, then lit {fm['light']:.0f} ms. The horizon holds {summary['horizon_mb']:.0f} MB. "
         f"The relit map equals the directly built one bit for bit: {same}.",
         "",
+        "## The street dataset",
+        "",
+        f"Items {DATASET_ITEMS[0]}-{DATASET_ITEMS[1] - 1} of `skyfall dataset --scene street` at {W}x{H} (rain 1-50 mm/h, visibility "
+        "300-3000 m, the camera jittered by +-0.5 m and +-5 deg), each item's weather frame and clean frame rendered in this "
+        "process after the items before them (so the scene's maps and horizon are warm), the median per item:",
+        "",
+        "| map extent around the camera | ms per item | the same frame equal |",
+        "|---|---|---|",
+        f"| as before (each camera's own) | {data['unwidened_ms']:.0f} | |",
+        f"| widened to {sky.CAMERA_BOUNDS_STEP_M:g} m steps | {data['widened_ms']:.0f} | {data['frames_equal']} |",
+        "",
+        f"The CLI, {DATASET_N} items from a cold start (worker processes importing skyfall, each worker's first maps and "
+        "horizon included): " + ", ".join(f"{k} worker(s) {v:.2f} items/s" for k, v in data["cli_items_s"].items()) + ".",
+        "",
     ]
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "sweeps.md").write_text("\n".join(lines))
     (RESULTS / "sweeps.json").write_text(json.dumps(summary, indent=1))
     print("\n".join(lines))
+
+
+DATASET_ITEMS = (4, 12)
+DATASET_N = 48
+
+
+def _unwidened_bounds(scene: object, spacing_m: float, around_m: object = None, radius_m: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """``sky.default_bounds`` before the camera's cube was widened: the cube as it is."""
+    boxes = sky._occluders(scene).astype(np.float64)
+    c = np.asarray(around_m, dtype=np.float64).reshape(1, 3)
+    pts = np.concatenate([boxes[:, 0:3], boxes[:, 3:6], c - radius_m, c + radius_m], axis=0)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    lo[1] = max(lo[1], 0.0)
+    hi[1] = max(hi[1], lo[1]) + spacing_m
+    return lo, hi
+
+
+def dataset_rows() -> dict[str, object]:
+    from skyfall.dataset.item import _street_camera, _weather
+    from skyfall.dataset.sample import DatasetConfig, sample_item
+
+    cfg = DatasetConfig(out=tempfile.gettempdir(), scene="street", width=W, height=H, rain_rate_mm_h=(1.0, 50.0), visibility_m=(300.0, 3000.0))
+    street = scenes.street()
+
+    def per_item(bounds: object) -> tuple[float, list[np.ndarray]]:
+        original = sky.default_bounds
+        sky.default_bounds = bounds  # type: ignore[assignment]
+        try:
+            r = Renderer(W, H, backend="cpu")
+            times, frames = [], []
+            for i in range(DATASET_ITEMS[1]):
+                p = sample_item(cfg, i)
+                cam = _street_camera(street.camera, p)
+                t = time.perf_counter()
+                frames.append(r.render_srgb8(street, _weather(cfg, p), camera=cam, seed=p.render_seed))
+                r.render_srgb8(street, Weather(), camera=cam)
+                times.append(time.perf_counter() - t)
+            return float(np.median(times[DATASET_ITEMS[0]:])), frames
+        finally:
+            sky.default_bounds = original  # type: ignore[assignment]
+
+    before_s, before = per_item(_unwidened_bounds)
+    after_s, after = per_item(sky.default_bounds)
+    cli = {}
+    for workers in (1, 2):
+        with tempfile.TemporaryDirectory() as out:
+            run = subprocess.run(
+                [str(Path(sys.executable).with_name("skyfall")), "dataset", "--scene", "street", "--out", out, "--variants", str(DATASET_N), "--width", str(W),
+                 "--height", str(H), "--rain-rate", "1:50", "--visibility-m", "300:3000", "--workers", str(workers), "--no-progress"],
+                capture_output=True, text=True, check=True,
+            )
+            found = re.search(r"([0-9.]+) items/s", run.stdout + run.stderr)
+            cli[workers] = float(found.group(1)) if found else float("nan")
+    return {
+        "unwidened_ms": 1e3 * before_s,
+        "widened_ms": 1e3 * after_s,
+        "frames_equal": all(np.array_equal(a, b) for a, b in zip(before, after)),
+        "cli_items_s": cli,
+    }
 
 
 if __name__ == "__main__":

@@ -417,3 +417,42 @@ def test_bad_points_raise_value_errors(points):
     else:
         with pytest.raises(ValueError, match="points_m"):
             m.sample(arr)
+
+
+def test_nearby_cameras_share_one_map_extent_and_frames_keep_their_bits(monkeypatch):
+    # The cube a frame's map must cover around its camera is widened outwards to
+    # CAMERA_BOUNDS_STEP_M steps: a dataset's jittered cameras (+-0.5 m) share one extent, hence
+    # one cached horizon and map per sky. The nodes stay on the scene's lattice, so a frame reads
+    # the same values as from the camera's own (unwidened) extent: the same bits.
+    street = scenes.street()
+    eye = np.asarray(street.camera.position_m, dtype=np.float64)
+    reach = 6.0
+    extents = {tuple(np.concatenate(sky.default_bounds(street, 1.0, around_m=eye + [dx, 0.0, dz], radius_m=reach)))
+               for dx in (-0.5, 0.0, 0.5) for dz in (-0.5, 0.0, 0.5)}
+    assert len(extents) == 1
+    lo, hi = (np.asarray(v) for v in np.split(np.array(next(iter(extents))), 2))
+    # the cube is inside (down to the ground, where the street's map starts)
+    assert (lo[[0, 2]] <= (eye - reach - 0.5)[[0, 2]]).all() and lo[1] == 0.0 and (hi >= eye + reach + 0.5).all()
+    boxes = sky._occluders(street).astype(np.float64)
+    np.testing.assert_array_equal(lo, [boxes[:, 0].min(), 0.0, boxes[:, 2].min()])  # the lattice's origin: the scene's
+    step = sky.CAMERA_BOUNDS_STEP_M
+    assert hi[2] % step == 0 and hi[2] > boxes[:, 5].max()  # widened past the boxes, to a whole step
+
+    def unwidened(scene, spacing_m, around_m=None, radius_m=0.0):
+        b = sky._occluders(scene).astype(np.float64)
+        c = np.asarray(around_m, dtype=np.float64).reshape(1, 3)
+        pts = np.concatenate([b[:, 0:3], b[:, 3:6], c - radius_m, c + radius_m])
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        lo[1] = max(lo[1], 0.0)
+        hi[1] = max(hi[1], lo[1]) + spacing_m
+        return lo, hi
+
+    camera = Camera(tuple(eye + [0.3, 0.0, -0.2]), yaw_deg=4.0)
+    weather = Weather(rain_rate_mm_h=17.0, visibility_m=900.0)
+    r = Renderer(96, 54, backend="cpu")
+    widened = r.render(street, weather, camera=camera, seed=3)
+    monkeypatch.setattr(sky, "default_bounds", unwidened)
+    own = r.render(street, weather, camera=camera, seed=3)
+    np.testing.assert_array_equal(widened.rgb, own.rgb)
+    for name in widened.layers:
+        np.testing.assert_array_equal(widened.layers[name], own.layers[name])

@@ -24,10 +24,11 @@ a depth map seen from one viewpoint says nothing of what hangs above a drop behi
 
 from __future__ import annotations
 
+import math
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -359,17 +360,32 @@ def cached_core_map(
     return built
 
 
+CAMERA_BOUNDS_STEP_M: Final = 8.0
+"""In a box scene, the cube around the camera that a frame's map must cover is widened outwards
+to multiples of this (a whole number of spacings, at least one), so cameras a few metres apart
+(a dataset's jittered street, a clip's moving camera) share one map extent, and with it the
+scene's cached horizon and maps: before, each jittered camera made a new map extent and its map
+from scratch (``benches/results/sweeps.md``). The nodes stay on the scene's lattice, so frames
+keep their bits."""
+
+
 def default_bounds(
     scene: BoxScene | PhotoScene | None, spacing_m: float, around_m: Any = None, radius_m: float = 0.0
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The map's default extent: a box scene's boxes, from the ground (y = 0) to a spacing above
-    the tallest roof, plus a ``radius_m`` cube around ``around_m`` (a camera's rain region).
-    A photo scene's occluders only count within that cube: its map serves the drops."""
+    the tallest roof, plus a ``radius_m`` cube around ``around_m`` (a camera's rain region;
+    for a box scene widened outwards to multiples of :data:`CAMERA_BOUNDS_STEP_M`). A photo
+    scene's occluders only count within that cube: its map serves the drops (and stays as small
+    as they need: a photo's camera does not move)."""
     boxes = _occluders(scene).astype(np.float64)
     corners = [boxes[:, 0:3], boxes[:, 3:6]] if not isinstance(scene, PhotoScene) or around_m is None else []
     if around_m is not None:
         c = np.asarray(around_m, dtype=np.float64).reshape(1, 3)
-        corners += [c - radius_m, c + radius_m]
+        lo_c, hi_c = c - radius_m, c + radius_m
+        if isinstance(scene, BoxScene):
+            step = spacing_m * math.ceil(CAMERA_BOUNDS_STEP_M / spacing_m) if spacing_m > 0 else CAMERA_BOUNDS_STEP_M
+            lo_c, hi_c = np.floor(lo_c / step) * step, np.ceil(hi_c / step) * step
+        corners += [lo_c, hi_c]
     pts = np.concatenate(corners, axis=0) if corners else np.zeros((0, 3))
     if pts.size == 0:
         return np.zeros(3), np.zeros(3)
