@@ -289,7 +289,7 @@ _CACHE_SIZE = 8
 # What the boxes fix of a map (_core.AmbientHorizon: each node's visible sky per azimuth), per
 # (geometry, bounds, spacing, samples): a map under a new sky (another rain rate, visibility,
 # sky type or sun) is then lit from it, bit for bit the map built from scratch, at a fraction
-# of the cost. Two kept (the bundled street's is about 90 MB).
+# of the cost. Two kept (the bundled street's is 74 MB at 1 m and 64 azimuths).
 _horizons: OrderedDict[tuple[Any, ...], _core.AmbientHorizon | None] = OrderedDict()
 _geometries: OrderedDict[tuple[Any, ...], None] = OrderedDict()  # geometries with a map built
 _HORIZONS = 2

@@ -200,11 +200,6 @@ impl WindshieldStage {
         &self.refraction
     }
 
-    /// Whether the drops are in focus (an output with its own in-focus pass may draw them).
-    pub fn in_focus(&self) -> bool {
-        self.refraction.blur_px == 0.0
-    }
-
     /// The (compressed) metaball field over the frame.
     pub fn field(&self) -> Result<Vec<f32>> {
         let v = &self.view;
