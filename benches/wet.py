@@ -52,7 +52,9 @@ def main() -> None:
         "medians of 5 alternating blocks of 3 calls (benches/wet.py). The stage's share is (wet - dry) / wet. "
         "The box scenes' wet stage casts each surface pixel's ray again, its three shelter rays, its mirror ray (lit with "
         "the lights' shadow rays) and its highlights' shadow rays; the photo's marches 64 steps through the depth map per "
-        "surface pixel, and its dry frame takes the fused 8-bit path where the wet one takes the banded path.",
+        "surface pixel, and its dry frame takes the fused 8-bit path where the wet one takes the banded path. Both "
+        "look up the puddles' relief on level faces, draw the film's microfacet normal per pixel and average the film's "
+        "image along each row (16 px each side at this size).",
         "",
         "| frame | dry, ms | wet, ms | wet / dry (median of the blocks' ratios) | the wet stage's share of the wet frame |",
         "|---|---|---|---|---|",

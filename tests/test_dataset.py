@@ -284,6 +284,12 @@ def test_the_command_line_and_its_config_file(photos, tmp_path, capsys):
     text = capsys.readouterr().out
     for option in ("--rain-rate", "--visibility-m", "--exposure-s", "--f-number", "--workers", "--resume", "--config", "--png-compression"):
         assert option in text
+    # --layers' help names every layer an item can write (the core's list)
+    from skyfall import _core
+
+    layers_help = re.sub(r"\s+", " ", text.rsplit("--layers NAMES", 1)[1].split(" --", 1)[0])
+    for name in _core.LAYERS:
+        assert name in layers_help, name
     common = ["--scene", "street", "--width", str(W), "--height", str(H), "--variants", "3", "--ambient-spacing-m", "8", "--no-progress"]
     assert cli.main(["dataset", *common, "--rain-rate", "3:30", "--seed", "8", "--out", str(tmp_path / "a")]) == 0
     toml = tmp_path / "run.toml"

@@ -104,7 +104,7 @@ def test_layers_a_frame_did_not_draw_are_what_a_drawing_pass_leaves_untouched(re
             untouched = sunny.layers[name][cloudless]
         elif name == "sun_transmittance":
             untouched = sunny.layers[name][sky_px]
-        elif name == "wetness":
+        elif name in ("wetness", "puddle_mask"):
             untouched = wet.layers[name][wet_sky]
         else:
             untouched = rain.layers[name][empty]

@@ -49,7 +49,19 @@ pub fn shared_constants() -> String {
         f("WET_FILM_MM", skyfall_core::wet::film::WET_FILM_MM as f32),
         f("WATER_INDEX", skyfall_core::wet::optics::WATER_INDEX as f32),
         f("FILM_ROUGHNESS", skyfall_core::wet::optics::FILM_ROUGHNESS),
+        f(
+            "PUDDLE_ROUGHNESS",
+            skyfall_core::wet::optics::PUDDLE_ROUGHNESS,
+        ),
         u("MARCH_STEPS", skyfall_core::wet::stage::MARCH_STEPS),
+        f("RELIEF_MM", skyfall_core::wet::puddles::RELIEF_MM as f32),
+        f("RELIEF_SCALE_M", skyfall_core::wet::puddles::RELIEF_SCALE_M),
+        f("LEVEL_MIN_UP", skyfall_core::wet::puddles::LEVEL_MIN_UP),
+        f("GRAIN_CELL_M", skyfall_core::wet::puddles::GRAIN_CELL_M),
+        u(
+            "RELIEF_QUANTILES",
+            skyfall_core::wet::puddles::RELIEF_QUANTILES,
+        ),
     ]
     .concat()
 }

@@ -346,6 +346,10 @@ pub struct WetPhotoUniform {
     pub sky: [f32; 4],
     /// Sheltering occluders (x), lights (y), snow depth bound (z), wetness written (w).
     pub counts: [u32; 4],
+    /// puddle_mask written (x).
+    pub flags: [u32; 4],
+    /// The relief noise's quantiles (`skyfall_core::wet::puddles::relief_quantiles`), 33 of 36.
+    pub relief: [[f32; 4]; 9],
 }
 
 /// `CloudInfo` in `shaders/cloud.wgsl`.

@@ -10,10 +10,12 @@ use skyfall_core::wet::stage::{WetGpu, WetPhotoGpu};
 use std::sync::OnceLock;
 
 const SOURCE: &str = include_str!("shaders/wet_photo.wgsl");
+const GRAIN: &str = include_str!("shaders/wet_grain.wgsl");
 
-/// The pass, compiled at the first wet photo (a renderer that draws none pays nothing).
+/// The pass and its grain's denoising (`shaders/wet_grain.wgsl`), compiled at the first wet
+/// photo (a renderer that draws none pays nothing).
 #[derive(Debug, Default)]
-pub struct WetPhotoPass(OnceLock<ComputePass>);
+pub struct WetPhotoPass(OnceLock<(ComputePass, ComputePass)>);
 
 impl FramePass for WetPhotoPass {
     /// The film, and the photo's own inputs.
@@ -31,15 +33,18 @@ impl FramePass for WetPhotoPass {
         (wet, photo): Self::Input<'_>,
     ) -> Result<(), GpuError> {
         use Binding::*;
-        let pass = self.0.get_or_init(|| {
-            ComputePass::new(
-                f.ctx,
-                "wet_photo",
-                SOURCE,
-                &[
-                    Uniform, Uniform, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly, ReadOnly,
-                    ReadOnly,
-                ],
+        let (pass, grain_pass) = self.0.get_or_init(|| {
+            (
+                ComputePass::new(
+                    f.ctx,
+                    "wet_photo",
+                    SOURCE,
+                    &[
+                        Uniform, Uniform, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly,
+                        ReadOnly, ReadOnly, ReadWrite, ReadWrite,
+                    ],
+                ),
+                ComputePass::new(f.ctx, "wet_grain", GRAIN, &[Uniform, ReadOnly, ReadWrite]),
             )
         });
         f.ctx
@@ -49,6 +54,14 @@ impl FramePass for WetPhotoPass {
         let lights = LightElement::list(photo.lamps);
         let wet_layer = t.layers.get(Layer::Wetness);
         let snow = t.layers.get(Layer::SnowDepth);
+        let puddle_layer = t.layers.get(Layer::PuddleMask);
+        let mut relief = [[0.0f32; 4]; 9];
+        for (k, q) in skyfall_core::wet::puddles::relief_quantiles()
+            .iter()
+            .enumerate()
+        {
+            relief[k / 4][k % 4] = *q;
+        }
         let block = WetPhotoUniform {
             dirs: wet.directions.map(v),
             film: [wet.mm_per_exposure.unwrap_or(-1.0), wet.dried_mm, 0.0, 0.0],
@@ -69,8 +82,11 @@ impl FramePass for WetPhotoPass {
                 u32::from(snow.is_some()),
                 u32::from(wet_layer.is_some()),
             ],
+            flags: [u32::from(puddle_layer.is_some()), 0, 0, 0],
+            relief,
         };
         let dummy = f.target("wet_dummy", 1);
+        let grain = f.target("wet grain", 4 * (f.cam.width * f.cam.height) as usize);
         let buffers = [
             f.uniform("camera", &CameraUniform::new(f.cam)),
             f.uniform("wet_photo", &block),
@@ -91,10 +107,17 @@ impl FramePass for WetPhotoPass {
                 occluders,
                 lights,
                 snow.unwrap_or(&dummy),
+                puddle_layer.unwrap_or(&dummy),
+                &grain,
             ],
         );
+        let params = f.uniform(
+            "wet grain params",
+            &[f.cam.width, f.cam.height, wet.grain_radius_px as u32, 0],
+        );
+        f.dispatch(grain_pass, &[&params, &grain, t.rgb]);
         f.hold(buffers);
-        f.hold([dummy]);
+        f.hold([dummy, grain, params]);
         Ok(())
     }
 }

@@ -117,6 +117,30 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
             bits(skyfall_core::wet::optics::FILM_ROUGHNESS),
         ),
         ("MARCH_STEPS", skyfall_core::wet::stage::MARCH_STEPS as f64),
+        (
+            "PUDDLE_ROUGHNESS",
+            bits(skyfall_core::wet::optics::PUDDLE_ROUGHNESS),
+        ),
+        (
+            "RELIEF_MM",
+            bits(skyfall_core::wet::puddles::RELIEF_MM as f32),
+        ),
+        (
+            "RELIEF_SCALE_M",
+            bits(skyfall_core::wet::puddles::RELIEF_SCALE_M),
+        ),
+        (
+            "LEVEL_MIN_UP",
+            bits(skyfall_core::wet::puddles::LEVEL_MIN_UP),
+        ),
+        (
+            "GRAIN_CELL_M",
+            bits(skyfall_core::wet::puddles::GRAIN_CELL_M),
+        ),
+        (
+            "RELIEF_QUANTILES",
+            skyfall_core::wet::puddles::RELIEF_QUANTILES as f64,
+        ),
     ];
     assert_eq!(seen.len(), want.len(), "{seen:?}");
     for (name, v) in want {

@@ -30,6 +30,9 @@ pub enum Layer {
     /// The share of the visible surface under the rain's water film, 0–1; 0 on the sky, dry
     /// and snow-covered surfaces (the wet stage).
     Wetness,
+    /// 1 where the visible surface is a puddle (standing water in a level surface's low
+    /// points), else 0 (the wet stage).
+    PuddleMask,
 }
 
 /// A set of layers: what a stage draws ([`super::Stage::layers`]), and what a frame's stages
@@ -89,7 +92,7 @@ impl LayerSet {
 }
 
 /// How many layers there are.
-pub const LAYER_COUNT: usize = 10;
+pub const LAYER_COUNT: usize = 11;
 
 impl Layer {
     /// Every layer, in the order frames list them.
@@ -104,6 +107,7 @@ impl Layer {
         Layer::DropMask,
         Layer::DropHeight,
         Layer::Wetness,
+        Layer::PuddleMask,
     ];
 
     /// The layer's name, as users see it (`frame.layers[name]`, EXR channel names).
@@ -119,6 +123,7 @@ impl Layer {
             Layer::CloudAlpha => "cloud_alpha",
             Layer::SunTransmittance => "sun_transmittance",
             Layer::Wetness => "wetness",
+            Layer::PuddleMask => "puddle_mask",
         }
     }
 
@@ -139,6 +144,9 @@ impl Layer {
                 "share of direct sunlight reaching the visible surface (boxes' and clouds' shadows)"
             }
             Layer::Wetness => "share of the visible surface under the rain's water film, 0-1",
+            Layer::PuddleMask => {
+                "1 where the visible surface is a puddle of standing water, else 0"
+            }
         }
     }
 
@@ -154,7 +162,7 @@ impl Layer {
             Layer::DropMask | Layer::DropHeight => 0.0,
             Layer::CloudAlpha => 0.0,
             Layer::SunTransmittance => 1.0,
-            Layer::Wetness => 0.0,
+            Layer::Wetness | Layer::PuddleMask => 0.0,
         }
     }
 

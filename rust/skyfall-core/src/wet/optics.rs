@@ -11,6 +11,11 @@ pub const WATER_INDEX: f64 = 1.33;
 /// the streak seen in night-time photos (α = 0 would be a point).
 pub const FILM_ROUGHNESS: f32 = 0.12;
 
+/// The roughness α of a puddle's surface, dimpled by the arriving drops but otherwise still: a
+/// chosen value, which keeps a lamp's reflection in a puddle a bright spot a few times the
+/// lamp's own size.
+pub const PUDDLE_ROUGHNESS: f32 = 0.04;
+
 /// Fresnel's reflectance of unpolarised light arriving from air at a flat surface of index
 /// `n`, at incidence cos θ = `cos_i` (0.020 at normal incidence for water, 1 at grazing).
 pub fn fresnel(cos_i: f64, n: f64) -> f64 {

@@ -3,16 +3,19 @@
 //! share of what the mirrored ray sees (on a box scene the ray cast through the boxes, lit as
 //! the scene stage lights surfaces, or the sky; on a photo a screen-space march through its
 //! depth map, the photo's own sky where the ray leaves the frame) and the highlights of the
-//! lamps and the sun on the rippled film (a GGX lobe, [`super::optics::brdf`]). It draws
-//! the `wetness` layer (0 on the sky, dry and snow-covered surfaces).
+//! lamps and the sun on the rippled film (a GGX lobe, [`super::optics::brdf`]). The film's
+//! mirror ray leaves about a microfacet normal of its GGX grain, a puddle's about the face's
+//! own normal ([`super::puddles`]). It draws the `wetness` layer (0 on the sky, dry and
+//! snow-covered surfaces) and the `puddle_mask` layer (1 on a puddle, else 0).
 //!
 //! A wet surface's light is its dry light times (1 − w) + w·darkening(a) per channel, plus
 //! w·(reflection): w the wetness as the share of the surface under the film. The dry light
 //! of a Lambertian face is its albedo a times the light it receives, so the factor applies to
 //! all of it; a photo's albedo is read from its pixel (linear, at most 1).
 
-use super::film::{Film, RainDirections};
-use super::optics::{FILM_ROUGHNESS, WATER_INDEX, Wetting, brdf, fresnel};
+use super::film::{Film, RainDirections, WET_FILM_MM};
+use super::optics::{FILM_ROUGHNESS, PUDDLE_ROUGHNESS, WATER_INDEX, Wetting, brdf, fresnel};
+use super::puddles::{in_puddle, reflected};
 use crate::scene::SurfaceLight;
 use crate::scene::boxes::{BoxScene, SceneBox, surface_albedo, trace};
 use crate::scene::camera::Camera;
@@ -23,7 +26,7 @@ use crate::stage::{Row, Stage};
 use glam::Vec3;
 
 /// The layers the wet stage draws.
-pub const LAYERS: LayerSet = LayerSet::of(&[Layer::Wetness]);
+pub const LAYERS: LayerSet = LayerSet::of(&[Layer::Wetness, Layer::PuddleMask]);
 
 /// Surfaces are lifted off their face by this before a reflected or shelter ray, m.
 pub const OFFSET_M: f32 = 1e-3;
@@ -63,6 +66,8 @@ pub struct WetGpu {
     pub internal_reflectance: f32,
     /// Whether the boxes keep the rain off what they cover.
     pub sheltered: bool,
+    /// The row's denoising window of the film's grain, px each side ([`grain_radius_px`]).
+    pub grain_radius_px: usize,
 }
 
 /// Steps of a photo's screen-space march.
@@ -96,6 +101,14 @@ pub struct WetStage<'a> {
     wetting: Wetting,
     /// A photo's sky colour for reflected rays that leave the frame (its sky pixels' mean).
     photo_sky: Vec3,
+    /// The row's denoising window of the film's grain, px each side ([`grain_radius_px`]).
+    grain_radius: usize,
+}
+
+/// The window over which a row's film grain is averaged, px each side, for a camera of focal
+/// length `fx_px`: an eighth of the film's GGX lobe's width α on the screen (α·fx/8), 1–16 px.
+pub fn grain_radius_px(fx_px: f32) -> usize {
+    (FILM_ROUGHNESS * fx_px / 8.0).round().clamp(1.0, 16.0) as usize
 }
 
 /// What the wet stage reads from its frame.
@@ -142,6 +155,7 @@ impl<'a> WetStage<'a> {
             sun: frame.sun,
             wetting: Wetting::new(WATER_INDEX),
             photo_sky,
+            grain_radius: grain_radius_px(frame.cam.fx),
         })
     }
 
@@ -158,6 +172,7 @@ impl<'a> WetStage<'a> {
                 as f32,
             internal_reflectance: w.internal_reflectance as f32,
             sheltered: !self.shelter.is_empty(),
+            grain_radius_px: self.grain_radius,
         }
     }
 
@@ -175,29 +190,71 @@ impl<'a> WetStage<'a> {
         }
     }
 
-    /// The wetness of a face of normal `n` at `p`.
-    pub fn wetness(&self, p: Vec3, n: Vec3) -> f32 {
+    /// The water on a face of normal `n` at `p`, mm.
+    pub fn water_mm(&self, p: Vec3, n: Vec3) -> f64 {
         let lifted = p + n * OFFSET_M;
         let exposure = self.rain.exposure(n, |up| {
             occluded_within(self.shelter, lifted, up, SHELTER_RAY_M)
         });
-        self.film.wetness(exposure)
+        self.film.water_mm(exposure)
     }
 
-    /// The wet light of a surface: `dry` (its dry radiance, albedo `a`) darkened by the film
-    /// of wetness `w`, plus w times the film's `reflection`.
-    fn wet(&self, dry: Vec3, a: Vec3, w: f32, reflection: Vec3) -> Vec3 {
+    /// The film at `p` on a face of normal `n`, seen along unit `d`: its wetness (0: dry),
+    /// whether it is a puddle, and the direction it mirrors.
+    fn film_at(&self, p: Vec3, n: Vec3, d: Vec3) -> (f32, bool, Vec3) {
+        let water = self.water_mm(p, n);
+        let w = (water / WET_FILM_MM).min(1.0) as f32;
+        let still = in_puddle(p, n, water);
+        (w, still, reflected(d, n, p, still, FILM_ROUGHNESS))
+    }
+
+    /// The wet pixel of a surface: `dry` (its dry radiance, albedo `a`) darkened by the film
+    /// of wetness `w`, plus w times the film's reflection: the `highlights`, and `mirrored`
+    /// (Fresnel's share of what the reflected ray sees), which a puddle (`still`) adds here
+    /// and the film's grain leaves to the row's denoising ([`WetPixel::grain`]).
+    fn wet(
+        &self,
+        dry: Vec3,
+        a: Vec3,
+        w: f32,
+        still: bool,
+        mirrored: Vec3,
+        highlights: Vec3,
+    ) -> WetPixel {
         let k = a.to_array().map(|c| {
             let d = self.wetting.darkening(f64::from(c)) as f32;
             1.0 - w + w * d
         });
-        dry * Vec3::from(k) + w * reflection
+        let darkened = dry * Vec3::from(k) + w * highlights;
+        if still {
+            WetPixel {
+                rgb: darkened + w * mirrored,
+                wetness: w,
+                puddle: true,
+                grain: None,
+            }
+        } else {
+            WetPixel {
+                rgb: darkened,
+                wetness: w,
+                puddle: false,
+                grain: Some(w * mirrored),
+            }
+        }
     }
 
     /// The highlights of the lamps (shadowed by `boxes`) and the sun (`sun_share` of it
-    /// reaching the face) on a film of normal `n` at `p` seen along unit `v` (towards the
-    /// camera), relative to E.
-    fn highlights(&self, boxes: &[SceneBox], p: Vec3, n: Vec3, v: Vec3, sun_share: f32) -> Vec3 {
+    /// reaching the face) on water of roughness `alpha` and normal `n` at `p` seen along unit
+    /// `v` (towards the camera), relative to E.
+    fn highlights(
+        &self,
+        boxes: &[SceneBox],
+        p: Vec3,
+        n: Vec3,
+        v: Vec3,
+        sun_share: f32,
+        alpha: f32,
+    ) -> Vec3 {
         let index = WATER_INDEX as f32;
         let lifted = p + n * OFFSET_M;
         let mut sum = Vec3::ZERO;
@@ -206,7 +263,7 @@ impl<'a> WetStage<'a> {
             if e.max_element() <= 0.0 {
                 continue;
             }
-            let f = brdf(n, v, dir, FILM_ROUGHNESS, index);
+            let f = brdf(n, v, dir, alpha, index);
             if f > 0.0 && !occluded_within(boxes, lifted, dir, r - OFFSET_M) {
                 sum += e * (f * self.inv_sky_lux);
             }
@@ -215,32 +272,24 @@ impl<'a> WetStage<'a> {
             && sun_share > 0.0
         {
             let cos = n.dot(s).max(0.0);
-            sum += Vec3::splat(brdf(n, v, s, FILM_ROUGHNESS, index) * rel * cos * sun_share);
+            sum += Vec3::splat(brdf(n, v, s, alpha, index) * rel * cos * sun_share);
         }
         sum
     }
 
-    /// One pixel of a box scene: its new light and wetness (None: not a wet surface).
-    fn box_pixel(
-        &self,
-        scene: &BoxScene,
-        x: u32,
-        y: u32,
-        dry: Vec3,
-        sun: f32,
-    ) -> Option<(Vec3, f32)> {
+    /// One pixel of a box scene (None: not a surface).
+    fn box_pixel(&self, scene: &BoxScene, x: u32, y: u32, dry: Vec3, sun: f32) -> Option<WetPixel> {
         let eye = self.cam.eye();
         let dir = self.cam.ray_direction(x, y);
         let (t, n, albedo) = trace(scene, eye, dir)?;
         let p = eye + dir * t;
-        let w = self.wetness(p, n);
+        let d = dir.normalize();
+        let (w, still, r) = self.film_at(p, n, d);
         if w <= 0.0 {
-            return Some((dry, 0.0));
+            return Some(WetPixel::dry(dry));
         }
         let a = surface_albedo(albedo, n, p);
-        let d = dir.normalize();
         let v = -d;
-        let r = d - 2.0 * d.dot(n) * n;
         let lifted = p + n * OFFSET_M;
         let seen = match trace(scene, lifted, r) {
             Some((t2, n2, a2)) => {
@@ -251,35 +300,27 @@ impl<'a> WetStage<'a> {
             None => Vec3::splat(self.light.sky_pixel(r)),
         };
         let f = fresnel(f64::from(n.dot(v)), WATER_INDEX) as f32;
-        let reflection = seen * f + self.highlights(&scene.boxes, p, n, v, sun);
-        Some((self.wet(dry, a, w, reflection), w))
+        let highlights = self.highlights(&scene.boxes, p, n, v, sun, roughness(still));
+        Some(self.wet(dry, a, w, still, seen * f, highlights))
     }
 
-    /// One pixel of a photo: its new light and wetness.
-    fn photo_pixel(
-        &self,
-        rgb: &[f32],
-        depth_m: &[f32],
-        x: usize,
-        y: usize,
-        dry: Vec3,
-    ) -> (Vec3, f32) {
+    /// One pixel of a photo.
+    fn photo_pixel(&self, rgb: &[f32], depth_m: &[f32], x: usize, y: usize, dry: Vec3) -> WetPixel {
         let w_px = self.cam.width as usize;
         let Some((p, n)) = photo_surface(self.cam, depth_m, x, y) else {
-            return (dry, 0.0);
+            return WetPixel::dry(dry);
         };
-        let w = self.wetness(p, n);
+        let d = (p - self.cam.eye()).normalize();
+        let (w, still, r) = self.film_at(p, n, d);
         if w <= 0.0 {
-            return (dry, 0.0);
+            return WetPixel::dry(dry);
         }
         let a = dry.min(Vec3::ONE);
-        let d = (p - self.cam.eye()).normalize();
         let v = -d;
-        let r = d - 2.0 * d.dot(n) * n;
         let seen = self.march(rgb, depth_m, w_px, p, n, r);
         let f = fresnel(f64::from(n.dot(v)), WATER_INDEX) as f32;
-        let reflection = seen * f + self.highlights(&[], p, n, v, 1.0);
-        (self.wet(dry, a, w, reflection), w)
+        let highlights = self.highlights(&[], p, n, v, 1.0, roughness(still));
+        self.wet(dry, a, w, still, seen * f, highlights)
     }
 
     /// What a photo's surface at `p` (normal `n`) mirrors along unit `r`: the photo's pixel
@@ -314,6 +355,66 @@ impl<'a> WetStage<'a> {
             return Vec3::from_slice(&rgb[3 * (py * w + px)..]);
         }
         self.photo_sky
+    }
+}
+
+/// The roughness of the water's highlights: a puddle's ([`PUDDLE_ROUGHNESS`]) or the film's.
+fn roughness(still: bool) -> f32 {
+    if still {
+        PUDDLE_ROUGHNESS
+    } else {
+        FILM_ROUGHNESS
+    }
+}
+
+/// One pixel as the wet stage draws it.
+#[derive(Debug, Clone, Copy)]
+struct WetPixel {
+    /// Its light, but for the film's grain.
+    rgb: Vec3,
+    /// Its wetness.
+    wetness: f32,
+    /// Whether it is a puddle.
+    puddle: bool,
+    /// The film's grained mirror image, w·F·(what the grained ray sees), added after the
+    /// row's denoising ([`denoise_grain`]); None: none (dry, a puddle).
+    grain: Option<Vec3>,
+}
+
+impl WetPixel {
+    /// A dry surface's pixel.
+    fn dry(rgb: Vec3) -> Self {
+        WetPixel {
+            rgb,
+            wetness: 0.0,
+            puddle: false,
+            grain: None,
+        }
+    }
+}
+
+/// Adds the film's grained mirror images of a row to its `rgb`: each pixel's the mean over the
+/// pixels within `radius` of it along the row that have one and whose depth is within 5 % of
+/// its own (the same surface). Each pixel's own is one draw from the film's GGX lobe
+/// ([`super::puddles::reflected`]); the mean of a window of them estimates the lobe's
+/// blurred image, as a rough wet road shows, where one draw alone would be noise.
+pub fn denoise_grain(grain: &[Option<Vec3>], depth_m: &[f32], radius: usize, rgb: &mut [f32]) {
+    for (x, own) in grain.iter().enumerate() {
+        if own.is_none() {
+            continue;
+        }
+        let d = depth_m[x];
+        let (mut sum, mut n) = (Vec3::ZERO, 0u32);
+        for j in x.saturating_sub(radius)..(x + radius + 1).min(grain.len()) {
+            if let Some(g) = grain[j]
+                && (depth_m[j] - d).abs() <= 0.05 * d
+            {
+                sum += g;
+                n += 1;
+            }
+        }
+        let c = Vec3::from_slice(&rgb[3 * x..]) + sum / n.max(1) as f32;
+        rgb[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
     }
 }
 
@@ -415,18 +516,20 @@ impl Stage for WetStage<'_> {
 
     fn row(&self, row: &mut Row<'_>) {
         let y = row.y;
-        let [wet, snow, sun] = row
+        let [wet, puddle, snow, sun] = row
             .layers
             .0
             .get_disjoint_mut([
                 Layer::Wetness.index(),
+                Layer::PuddleMask.index(),
                 Layer::SnowDepth.index(),
                 Layer::SunTransmittance.index(),
             ])
-            .unwrap_or_else(|_| unreachable!("three distinct layers"));
+            .unwrap_or_else(|_| unreachable!("four distinct layers"));
         let width = row.depth_m.len();
+        let mut grain: Vec<Option<Vec3>> = vec![None; width];
         for x in 0..width {
-            let mut w = 0.0;
+            let (mut w, mut still) = (0.0, false);
             let snowed = snow.as_deref().is_some_and(|s| s[x] > 0.0);
             if row.depth_m[x].is_finite() && !snowed {
                 let dry = Vec3::from_slice(&row.rgb[3 * x..]);
@@ -439,15 +542,19 @@ impl Stage for WetStage<'_> {
                         Some(self.photo_pixel(rgb, depth_m, x, y as usize, dry))
                     }
                 };
-                if let Some((c, wx)) = lit {
-                    row.rgb[3 * x..3 * x + 3].copy_from_slice(&c.to_array());
-                    w = wx;
+                if let Some(px) = lit {
+                    row.rgb[3 * x..3 * x + 3].copy_from_slice(&px.rgb.to_array());
+                    (w, still, grain[x]) = (px.wetness, px.puddle, px.grain);
                 }
             }
             if let Some(l) = wet.as_deref_mut() {
                 l[x] = w;
             }
+            if let Some(l) = puddle.as_deref_mut() {
+                l[x] = f32::from(u8::from(still));
+            }
         }
+        denoise_grain(&grain, row.depth_m, self.grain_radius, row.rgb);
     }
 }
 

@@ -118,8 +118,9 @@ fn fresnel(cos_i: f32, n: f32) -> f32 {
     return 0.5 * (rs * rs + rp * rp);
 }
 
-// wet::optics::brdf: the film's GGX lobe (Smith's masking, Fresnel at v.h), 1/sr.
-fn wet_brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
+// wet::optics::brdf: the water's GGX lobe of roughness alpha (Smith's masking, Fresnel at v.h),
+// 1/sr.
+fn wet_brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, alpha: f32) -> f32 {
     let nv = dot(n, v);
     let nl = dot(n, l);
     if nv <= 0.0 || nl <= 0.0 {
@@ -132,7 +133,7 @@ fn wet_brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
         h = hv / hl;
     }
     let nh = max(dot(n, h), 0.0);
-    let a2 = FILM_ROUGHNESS * FILM_ROUGHNESS;
+    let a2 = alpha * alpha;
     let q = nh * nh * (a2 - 1.0) + 1.0;
     let d = a2 / (PI * q * q);
     let g_v = 2.0 * nv / (nv + sqrt(a2 + (1.0 - a2) * nv * nv));
@@ -140,9 +141,9 @@ fn wet_brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
     return fresnel(dot(v, h), WATER_INDEX) * d * g_v * g_l / (4.0 * nv * nl);
 }
 
-// wet::film::Film::wetness of a face of `exposure`: `film` holds the water per unit exposure, mm
+// wet::film::Film::water_mm of a face of `exposure`: `film` holds the water per unit exposure, mm
 // (x; < 0: the storage, filled) and the water dried since the rain stopped, mm (y).
-fn wet_film(exposure: f32, film: vec4<f32>) -> f32 {
+fn wet_water(exposure: f32, film: vec4<f32>) -> f32 {
     if exposure < MIN_EXPOSURE {
         return 0.0;
     }
@@ -150,5 +151,10 @@ fn wet_film(exposure: f32, film: vec4<f32>) -> f32 {
     if film.x >= 0.0 {
         filled = min(film.x * exposure, STORAGE_MM);
     }
-    return min(max(filled - film.y, 0.0) / WET_FILM_MM, 1.0);
+    return max(filled - film.y, 0.0);
+}
+
+// wet::film::Film::wetness of a face of `exposure`.
+fn wet_film(exposure: f32, film: vec4<f32>) -> f32 {
+    return min(wet_water(exposure, film) / WET_FILM_MM, 1.0);
 }

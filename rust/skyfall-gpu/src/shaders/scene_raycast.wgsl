@@ -555,14 +555,14 @@ fn wet_light(c: vec3<f32>, a: vec3<f32>, w: f32, p: vec3<f32>, n: vec3<f32>, dir
             if max(max(s.e.x, s.e.y), s.e.z) <= 0.0 {
                 continue;
             }
-            let f = wet_brdf(n, v, s.dir);
+            let f = wet_brdf(n, v, s.dir, FILM_ROUGHNESS);
             if f > 0.0 && !occluded_within(lifted, s.dir, s.r - WET_OFFSET_M) {
                 reflection += s.e * (f * lamps.params.x);
             }
         }
         if sun.flags.x != 0u && share > 0.0 {
             let cs = max(dot(n, sun.dir.xyz), 0.0);
-            reflection += vec3<f32>(wet_brdf(n, v, sun.dir.xyz) * sun.dir.w * cs * share);
+            reflection += vec3<f32>(wet_brdf(n, v, sun.dir.xyz, FILM_ROUGHNESS) * sun.dir.w * cs * share);
         }
     }
     let k = vec3<f32>(1.0 - w) + w * wet.optics.x / (vec3<f32>(1.0) - wet.optics.y * a);

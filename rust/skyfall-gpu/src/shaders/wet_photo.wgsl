@@ -1,8 +1,8 @@
 // The wet stage of a photo: its surfaces and normals from the depth map, each film darkening the
 // photo and mirroring what a march through the depth map finds (the photo's sky where the ray
 // leaves the frame), and the lights' highlights. CPU reference: skyfall_core::wet::stage
-// (WetStage::photo_pixel, photo_surface, march), kept line-for-line comparable. Prepended with
-// common.wgsl.
+// (WetStage::photo_pixel, photo_surface, march) and skyfall_core::wet::puddles (the relief, the
+// puddles, the film's grain), kept line-for-line comparable. Prepended with common.wgsl.
 
 struct WetPhotoInfo {
     dirs: array<vec4<f32>, 3>,   // the quartile drops' directions of fall
@@ -10,6 +10,8 @@ struct WetPhotoInfo {
     optics: vec4<f32>,           // Lekner & Dorf's (1 - R)(1 - p), p, 1/E (1/lux)
     sky: vec4<f32>,              // the photo's mean sky (linear rgb)
     counts: vec4<u32>,           // occluders that shelter, lights, snow depth bound, wetness written
+    flags: vec4<u32>,            // puddle_mask written
+    relief: array<vec4<f32>, 9>, // the relief noise's RELIEF_QUANTILES quantiles (puddles::relief_quantiles)
 }
 
 @group(0) @binding(0) var<uniform> cam: Camera;
@@ -21,8 +23,106 @@ struct WetPhotoInfo {
 @group(0) @binding(6) var<storage, read> occluders: array<SceneBox>;
 @group(0) @binding(7) var<storage, read> lights: array<LightElement>;
 @group(0) @binding(8) var<storage, read> snow_depth: array<f32>;
+@group(0) @binding(9) var<storage, read_write> puddle_out: array<f32>;
+@group(0) @binding(10) var<storage, read_write> grain_out: array<vec4<f32>>; // w·F·mirrored, depth (-1: none)
 
-// MARCH_STEPS comes from the core (pass::shared_constants).
+// MARCH_STEPS and the puddles' constants come from the core (pass::shared_constants).
+
+// puddles::hash (Chris Wellons' lowbias32).
+fn lowbias(x0: u32) -> u32 {
+    var x = x0;
+    x ^= x >> 16u;
+    x *= 0x7feb352du;
+    x ^= x >> 15u;
+    x *= 0x846ca68bu;
+    x ^= x >> 16u;
+    return x;
+}
+
+fn unit24(h: u32) -> f32 {
+    return f32(h >> 8u) * (1.0 / 16777216.0);
+}
+
+fn lattice(i: i32, j: i32, salt: u32) -> f32 {
+    return unit24(lowbias(bitcast<u32>(i) ^ lowbias(bitcast<u32>(j) ^ lowbias(salt))));
+}
+
+// puddles::value_noise
+fn value_noise(x: f32, z: f32, salt: u32) -> f32 {
+    let fx = floor(x);
+    let fz = floor(z);
+    let i = i32(fx);
+    let j = i32(fz);
+    let tx = x - fx;
+    let tz = z - fz;
+    let sx = tx * tx * (3.0 - 2.0 * tx);
+    let sz = tz * tz * (3.0 - 2.0 * tz);
+    let v00 = lattice(i, j, salt);
+    let v10 = lattice(i + 1, j, salt);
+    let v01 = lattice(i, j + 1, salt);
+    let v11 = lattice(i + 1, j + 1, salt);
+    let a = v00 + (v10 - v00) * sx;
+    let b = v01 + (v11 - v01) * sx;
+    return a + (b - a) * sz;
+}
+
+fn relief_q(k: u32) -> f32 {
+    return wet.relief[k / 4u][k % 4u];
+}
+
+// puddles::relief_u: three octaves through the tabulated distribution, uniform on [0, 1].
+fn relief_u(x: f32, z: f32) -> f32 {
+    var scale = 1.0 / RELIEF_SCALE_M;
+    let n = (value_noise(x * scale, z * scale, 0u) + 0.5 * value_noise(x * scale * 2.0, z * scale * 2.0, 1u)
+        + 0.25 * value_noise(x * scale * 4.0, z * scale * 4.0, 2u)) / 1.75;
+    var k = 0u;
+    for (var i = 0u; i < RELIEF_QUANTILES; i++) {
+        if relief_q(i) <= n {
+            k = i + 1u;
+        }
+    }
+    k = clamp(k, 1u, RELIEF_QUANTILES - 1u);
+    let lo = relief_q(k - 1u);
+    let hi = relief_q(k);
+    var t = 0.0;
+    if hi > lo {
+        t = clamp((n - lo) / (hi - lo), 0.0, 1.0);
+    }
+    return (f32(k - 1u) + t) / f32(RELIEF_QUANTILES - 1u);
+}
+
+// puddles::puddle_share
+fn puddle_share(water: f32) -> f32 {
+    return min(sqrt(2.0 * max(water - WET_FILM_MM, 0.0) / RELIEF_MM), 1.0);
+}
+
+// puddles::reflected: about n in a puddle, else about the film's GGX grain at p.
+fn reflected(d: vec3<f32>, n: vec3<f32>, p: vec3<f32>, still: bool) -> vec3<f32> {
+    let mirror = d - 2.0 * dot(d, n) * n;
+    if still {
+        return mirror;
+    }
+    let c = floor(p / GRAIN_CELL_M);
+    let h = lowbias(bitcast<u32>(i32(c.x)) ^ lowbias(bitcast<u32>(i32(c.y)) ^ lowbias(bitcast<u32>(i32(c.z)) ^ 0x9e37u)));
+    let u1 = unit24(h);
+    let u2 = unit24(lowbias(h));
+    let tn = FILM_ROUGHNESS * sqrt(u1 / (1.0 - u1));
+    let cos_t = 1.0 / sqrt(1.0 + tn * tn);
+    let sin_t = tn * cos_t;
+    let phi = 2.0 * PI * u2;
+    var a = vec3<f32>(0.0, 0.0, 1.0);
+    if abs(n.x) < 0.9 {
+        a = vec3<f32>(1.0, 0.0, 0.0);
+    }
+    let t = normalize(cross(n, a));
+    let b = cross(n, t);
+    let m = normalize(n * cos_t + (t * cos(phi) + b * sin(phi)) * sin_t);
+    let r = d - 2.0 * dot(d, m) * m;
+    if dot(r, n) > 0.0 {
+        return r;
+    }
+    return mirror;
+}
 
 fn finite(d: f32) -> bool {
     return d < 3.0e38;
@@ -144,6 +244,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let y = gid.y;
     let i = y * w + x;
     var wetness = 0.0;
+    var still = false;
+    var grain = vec4<f32>(0.0, 0.0, 0.0, -1.0);
     let snowed = wet.counts.z != 0u && snow_depth[i] > 0.0;
     let here = point(x, y);
     if here.ok && !snowed {
@@ -182,14 +284,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                     sum += hit / -v.y;
                 }
             }
-            wetness = wet_film(sum / 3.0, wet.film);
+            let water = wet_water(sum / 3.0, wet.film);
+            wetness = min(water / WET_FILM_MM, 1.0);
             if wetness > 0.0 {
+                still = n.y >= LEVEL_MIN_UP && water > WET_FILM_MM && relief_u(p.x, p.z) < puddle_share(water);
                 let dry = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);
                 let a = min(dry, vec3<f32>(1.0));
                 let d = normalize(p - cam.pos.xyz);
                 let v = -d;
-                let r = d - 2.0 * dot(d, n) * n;
-                var reflection = march(p, n, r) * fresnel(dot(n, v), WATER_INDEX);
+                let r = reflected(d, n, p, still);
+                let mirrored = march(p, n, r) * fresnel(dot(n, v), WATER_INDEX);
+                var highlights = vec3<f32>(0.0);
                 for (var l = 0u; l < wet.counts.y; l++) {
                     let to = lights[l].pos_cd.xyz - p;
                     let dist = max(length(to), 1e-2);
@@ -202,10 +307,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                     if max(max(e.x, e.y), e.z) <= 0.0 {
                         continue;
                     }
-                    reflection += e * (wet_brdf(n, v, dir) * wet.optics.z);
+                    highlights += e * (wet_brdf(n, v, dir, select(FILM_ROUGHNESS, PUDDLE_ROUGHNESS, still)) * wet.optics.z);
                 }
                 let k = vec3<f32>(1.0 - wetness) + wetness * wet.optics.x / (vec3<f32>(1.0) - wet.optics.y * a);
-                let c = dry * k + wetness * reflection;
+                var c = dry * k + wetness * highlights;
+                if still {
+                    c += wetness * mirrored;
+                } else {
+                    grain = vec4<f32>(wetness * mirrored, depth[i]);
+                }
                 rgb[3u * i] = c.x;
                 rgb[3u * i + 1u] = c.y;
                 rgb[3u * i + 2u] = c.z;
@@ -215,4 +325,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if wet.counts.w != 0u {
         wet_out[i] = wetness;
     }
+    if wet.flags.x != 0u {
+        puddle_out[i] = select(0.0, 1.0, still);
+    }
+    grain_out[i] = grain;
 }
