@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from skimage.metrics import structural_similarity
 
 from skyfall import PhotoScene, Renderer, Weather, io, scenes
-from skyfall._demo import DEMO_FRAMES, STREET_RAIN_DAY, STREET_WET, rain_alpha_png
+from skyfall._demo import DEMO_FRAMES, STREET_RAIN_DAY, rain_alpha_png
 from skyfall._demo.photo import PHOTO_FRAMES
 from skyfall._demo.snow import SNOW_DEMOS, png8
 
@@ -63,17 +63,11 @@ def street_photo() -> PhotoScene:
     return PhotoScene(io.to_srgb8(clear.rgb), clear.depth_m, camera=street.camera)
 
 
-def render_all(backend: str) -> dict[str, NDArray[np.uint8] | str]:
-    """Every golden's picture, 8-bit sRGB, from ``backend`` (for a frame the backend refuses,
-    its error's message: the GPU does not draw a wet box scene, see frame::stages)."""
+def render_all(backend: str) -> dict[str, NDArray[np.uint8]]:
+    """Every golden's picture, 8-bit sRGB, from ``backend``."""
     renderer = Renderer(W, H, backend=backend)
-    images: dict[str, NDArray[np.uint8] | str] = {}
+    images: dict[str, NDArray[np.uint8]] = {}
     for demo in DEMO_FRAMES:
-        if backend == "gpu" and demo is STREET_WET:
-            with pytest.raises(ValueError) as refused:
-                demo.render(renderer)
-            images[demo.name] = str(refused.value)
-            continue
         frame = demo.render(renderer)
         images[demo.name] = demo.png8(frame)
         if demo is STREET_RAIN_DAY:
@@ -107,7 +101,6 @@ def goldens() -> dict[str, NDArray[np.uint8]]:
     if UPDATE:
         GOLDEN.mkdir(parents=True, exist_ok=True)
         for name, image in render_all("cpu").items():
-            assert not isinstance(image, str), image
             io.write_image(GOLDEN / f"{name}_{W}x{H}.png", image)  # uint8: written as it is
     return {name: read_golden(name) for name in NAMES}
 
@@ -121,9 +114,6 @@ def rendered(request: pytest.FixtureRequest) -> tuple[str, dict[str, NDArray[np.
 def test_frames_match_their_goldens(rendered, goldens, name):
     backend, images = rendered
     image = images[name]
-    if isinstance(image, str):  # refused by name, saying which backend draws it
-        assert (backend, name) == ("gpu", "street_wet") and "rain_duration_s" in image and 'backend="cpu"' in image, image
-        return
     stats = compare(image, goldens[name])
     assert within(stats, backend), f"{name} on {backend}: SSIM {stats[0]:.5f}, mean {stats[1]:.4f} codes, {stats[2]:.3%} > 1 code (bounds {BOUNDS[backend]})"
 

@@ -342,9 +342,9 @@ class Renderer:
         Frame size, px, in [1, 16384].
     backend : {"auto", "cpu", "gpu"}
         See the module docstring. ``"gpu"`` raises :class:`skyfall.GpuUnavailableError` when
-        no Vulkan adapter exists, with what to install, and refuses by name a frame with a
-        stage the GPU does not draw (today a wet box scene: ``rain_duration_s``); ``"auto"``
-        draws such a frame on the CPU.
+        no Vulkan adapter exists, with what to install, and would refuse by name a frame with
+        a stage the GPU does not draw (the core's plan; today it draws every stage);
+        ``"auto"`` draws such a frame on the CPU.
 
     Attributes
     ----------

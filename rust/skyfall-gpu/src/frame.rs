@@ -10,7 +10,7 @@ use crate::pool::Pooled;
 use crate::rain::RainPass;
 use crate::rain_far::FarPass;
 use crate::scene_raycast::SceneRaycastPass;
-use crate::wet::WetPhotoPass;
+use crate::wet::WetPass;
 use crate::windshield::WindshieldPass;
 use skyfall_core::frame::layers::{Layer, Layers};
 use skyfall_core::frame::passes::Particles;
@@ -34,7 +34,7 @@ pub struct GpuRenderer {
     far: FarPass,
     cloud: CloudPass,
     windshield: WindshieldPass,
-    wet_photo: WetPhotoPass,
+    wet: WetPass,
     pool: BufferPool,
 }
 
@@ -53,7 +53,7 @@ impl GpuRenderer {
             ))
         })?;
         let windshield = WindshieldPass::new(&ctx)?;
-        let wet_photo = WetPhotoPass::new(&ctx);
+        let wet = WetPass::new(&ctx);
         Ok(GpuRenderer {
             ctx,
             raycast,
@@ -63,7 +63,7 @@ impl GpuRenderer {
             far,
             cloud,
             windshield,
-            wet_photo,
+            wet,
             pool: BufferPool::default(),
         })
     }
@@ -145,19 +145,34 @@ impl GpuRenderer {
             // nothing for, such as glows with no light in view, records nothing).
             for d in &prepared.plan.0 {
                 match d.kind {
-                    // A box scene's ray cast (its wet surfaces are declared not drawn here);
-                    // a photo is its upload.
+                    // A box scene's ray cast; a photo is its upload.
                     Kind::Scene => {
                         if let SceneRef::Boxes(b) = scene {
-                            let wet = prepared.wet.as_ref().map(|w| w.gpu());
-                            self.raycast.encode(&mut f, &targets, (b, light, wet))?;
+                            self.raycast.encode(&mut f, &targets, (b, light))?;
                         }
                     }
+                    // A photo's pass, or the scene pass's wet entry point, then the grain's
+                    // row averaging.
                     Kind::Wet => {
-                        if let Some(w) = &prepared.wet
-                            && let Some(photo) = w.photo_gpu()
-                        {
-                            self.wet_photo.encode(&mut f, &targets, (w.gpu(), photo))?;
+                        if let Some(w) = &prepared.wet {
+                            let film = w.gpu();
+                            match (w.photo_gpu(), scene) {
+                                (Some(photo), _) => {
+                                    self.wet.encode(&mut f, &targets, (film, photo))?;
+                                }
+                                (None, SceneRef::Boxes(b)) => {
+                                    let wet = &self.wet;
+                                    let grain = self.raycast.encode_wet(
+                                        &mut f,
+                                        &targets,
+                                        (b, light),
+                                        |f, faces| wet.film(f, &targets, &film, w.shelter(), faces),
+                                    )?;
+                                    self.wet
+                                        .denoise(&mut f, &targets, grain, film.grain_radius_px);
+                                }
+                                (None, _) => {}
+                            }
                         }
                     }
                     Kind::Clouds => {

@@ -106,6 +106,19 @@ impl ComputePass {
         bindings: &[Binding],
         constants: &[(&str, f64)],
     ) -> Self {
+        Self::with_entry(ctx, label, source, bindings, constants, "main")
+    }
+
+    /// [`ComputePass::with_constants`] with the entry point `entry` (a second stage in one
+    /// shader's file: the box scene's wet stage, `wet_main`).
+    pub fn with_entry(
+        ctx: &GpuContext,
+        label: &'static str,
+        source: &str,
+        bindings: &[Binding],
+        constants: &[(&str, f64)],
+        entry: &str,
+    ) -> Self {
         let code = assemble(source);
         let module = ctx
             .device
@@ -155,7 +168,7 @@ impl ComputePass {
                 label: Some(label),
                 layout: Some(&pipeline_layout),
                 module: &module,
-                entry_point: Some("main"),
+                entry_point: Some(entry),
                 compilation_options: wgpu::PipelineCompilationOptions {
                     constants,
                     ..Default::default()

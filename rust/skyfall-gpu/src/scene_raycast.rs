@@ -2,15 +2,15 @@
 
 use crate::context::{GpuContext, GpuError};
 use crate::pass::{Binding, ComputePass, FrameEncoder, FramePass, FrameTargets};
+use crate::pool::Pooled;
 use crate::uniforms::{
     AmbientUniform, BoxElement, CameraUniform, LampUniform, LightElement, SceneUniform, SkyUniform,
-    SnowUniform, SunUniform, VolumeUniform, WetUniform,
+    SnowUniform, SunUniform, VolumeUniform,
 };
 use skyfall_core::frame::layers::Layer;
 use skyfall_core::frame::scene::SceneLight;
 use skyfall_core::scene::boxes::BoxScene;
 use skyfall_core::sky::cie::SkyKind;
-use skyfall_core::wet::stage::WetGpu;
 use std::sync::OnceLock;
 
 const SOURCE: &str = include_str!("shaders/scene_raycast.wgsl");
@@ -18,16 +18,33 @@ const SOURCE: &str = include_str!("shaders/scene_raycast.wgsl");
 /// The compiled pass, twice: with the lights' code, and without it (`LIT = false`) for scenes
 /// without lights, so that an effect switched off costs nothing (on lavapipe the lit pipeline
 /// made the unlit street 1.18x slower even though its light loop never ran); and both again
-/// with the snow cover's code (`SNOW = true`), for frames with a cover; the four again with
-/// the wet stage's code (`WET = true`), compiled at the first wet frame.
+/// with the snow cover's code (`SNOW = true`), for frames with a cover. The wet stage of a box
+/// scene takes three more of this shader's pipelines, compiled at the first wet frame, around
+/// `shaders/wet_film.wgsl` (`crate::wet`): `wet_face` (each pixel's face), `wet_lights` (the
+/// highlights) and `main` with `MIRROR = true` (the mirror rays cast and lit as view rays are),
+/// lit and unlit. Fewer, larger pipelines made lavapipe's compiler (Mesa 22.3) write into
+/// freed memory (valgrind's memcheck, in vkCreateComputePipelines); these compile cleanly.
 #[derive(Debug)]
 pub struct SceneRaycastPass {
     lit: ComputePass,
     unlit: ComputePass,
     lit_snow: ComputePass,
     unlit_snow: ComputePass,
-    /// lit, unlit, lit_snow, unlit_snow with `WET = true`.
+    /// `wet_face`, `wet_lights`, then `main` with `MIRROR` lit and unlit.
     wet: OnceLock<[ComputePass; 4]>,
+}
+
+/// Which of the pass's pipelines a recording takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Stage {
+    /// The scene (`main`).
+    Scene,
+    /// Each pixel's face for the wet stage (`wet_face`).
+    Face,
+    /// The wet surfaces' highlights (`wet_lights`).
+    Lights,
+    /// The wet stage's mirror rays cast (`main`, `MIRROR`).
+    Mirror,
 }
 
 /// The pass's bindings, in the order of `shaders/scene_raycast.wgsl`.
@@ -35,26 +52,38 @@ const BINDINGS: [Binding; 19] = {
     use Binding::*;
     [
         Uniform, Uniform, ReadOnly, ReadWrite, ReadWrite, Uniform, Uniform, ReadOnly, ReadOnly,
-        Uniform, ReadOnly, Uniform, ReadOnly, ReadWrite, Uniform, ReadOnly, ReadWrite, Uniform,
+        Uniform, ReadOnly, Uniform, ReadOnly, ReadWrite, Uniform, ReadOnly, ReadWrite, ReadWrite,
         ReadWrite,
     ]
 };
 
-/// The pass compiled with its constants.
-fn compile(ctx: &GpuContext, lit: bool, snow: bool, wet: bool) -> ComputePass {
+/// `main` compiled with its constants.
+fn compile(ctx: &GpuContext, lit: bool, snow: bool, mirror: bool) -> ComputePass {
     let b = |v: bool| if v { 1.0 } else { 0.0 };
     ComputePass::with_constants(
         ctx,
         "scene_raycast",
         SOURCE,
         &BINDINGS,
-        &[("LIT", b(lit)), ("SNOW", b(snow)), ("WET", b(wet))],
+        &[("LIT", b(lit)), ("SNOW", b(snow)), ("MIRROR", b(mirror))],
+    )
+}
+
+/// The wet stage's entry point `entry` (with the lights' code).
+fn compile_wet(ctx: &GpuContext, entry: &str) -> ComputePass {
+    ComputePass::with_entry(
+        ctx,
+        "scene_raycast wet",
+        SOURCE,
+        &BINDINGS,
+        &[("LIT", 1.0)],
+        entry,
     )
 }
 
 impl FramePass for SceneRaycastPass {
-    /// The box scene, its light (sky, ambient-light map, lights) and its wet surfaces.
-    type Input<'i> = (&'i BoxScene, &'i SceneLight<'i>, Option<WetGpu>);
+    /// The box scene and its light (sky, ambient-light map, lights).
+    type Input<'i> = (&'i BoxScene, &'i SceneLight<'i>);
 
     fn new(ctx: &GpuContext) -> Self {
         SceneRaycastPass {
@@ -71,7 +100,49 @@ impl FramePass for SceneRaycastPass {
         &self,
         f: &mut FrameEncoder<'_>,
         t: &FrameTargets<'_>,
-        (scene, light, wet): Self::Input<'_>,
+        (scene, light): Self::Input<'_>,
+    ) -> Result<(), GpuError> {
+        self.record(f, t, scene, light, Stage::Scene, None, None)
+    }
+}
+
+impl SceneRaycastPass {
+    /// The wet stage over the frame [`FramePass::encode`] drew: each pixel's face
+    /// (`wet_face`) into a buffer that `film` (`crate::wet::WetPass::film`) makes the mirror
+    /// rays of, whose highlights (`wet_lights`, lit frames) and radiance (`main` with
+    /// `MIRROR`) are then drawn. Returns the film's grained image per pixel (w·F·seen, depth;
+    /// depth −1 where none) for its row averaging.
+    pub fn encode_wet(
+        &self,
+        f: &mut FrameEncoder<'_>,
+        t: &FrameTargets<'_>,
+        (scene, light): (&BoxScene, &SceneLight<'_>),
+        film: impl FnOnce(&mut FrameEncoder<'_>, &Pooled) -> Result<Pooled, GpuError>,
+    ) -> Result<Pooled, GpuError> {
+        let n = (f.cam.width * f.cam.height) as usize;
+        let faces = f.target("wet faces", 12 * n);
+        self.record(f, t, scene, light, Stage::Face, None, Some(&faces))?;
+        let rays = film(f, &faces)?;
+        let grain = f.target("wet grain", 4 * n);
+        if !(light.lights.is_empty() && light.sun.is_none()) {
+            self.record(f, t, scene, light, Stage::Lights, None, Some(&rays))?;
+        }
+        self.record(f, t, scene, light, Stage::Mirror, Some(&grain), Some(&rays))?;
+        f.hold([faces, rays]);
+        Ok(grain)
+    }
+
+    /// Records `stage`'s pipeline with the wet stage's `grain` and `rays` buffers where given.
+    #[allow(clippy::too_many_arguments)]
+    fn record(
+        &self,
+        f: &mut FrameEncoder<'_>,
+        t: &FrameTargets<'_>,
+        scene: &BoxScene,
+        light: &SceneLight<'_>,
+        stage: Stage,
+        grain: Option<&Pooled>,
+        rays: Option<&Pooled>,
     ) -> Result<(), GpuError> {
         f.ctx.check_buffer(
             "the ambient-light map",
@@ -197,48 +268,45 @@ impl FramePass for SceneRaycastPass {
             snow,
             cells,
         ] = &buffers;
-        // The wet stage (its code in the WET pipelines, which a wet frame takes).
-        let wet_layer = t.layers.get(Layer::Wetness);
-        let wet_info = f.uniform(
-            "wet",
-            &wet.map_or(WetUniform::default(), |w| {
-                WetUniform::new(&w, wet_layer.is_some())
-            }),
-        );
-        let wet_dummy = f.target("wet_dummy", 1);
-        let wet_out = wet_layer.unwrap_or(&wet_dummy);
+        // The wet stage's buffers (four floats: both hold vec4s).
+        let wet_dummy = f.target("wet_dummy", 4);
+        let grain_out = grain.unwrap_or(&wet_dummy);
+        let rays = rays.unwrap_or(&wet_dummy);
         let unlit = light.lights.is_empty() && light.sun.is_none();
-        let variant = match (unlit, light.snow.is_some()) {
-            (false, false) => 0,
-            (true, false) => 1,
-            (false, true) => 2,
-            (true, true) => 3,
+        let wet_pass = |k: usize| {
+            let passes = self.wet.get_or_init(|| {
+                [
+                    compile_wet(f.ctx, "wet_face"),
+                    compile_wet(f.ctx, "wet_lights"),
+                    compile(f.ctx, true, false, true),
+                    compile(f.ctx, false, false, true),
+                ]
+            });
+            &passes[k]
         };
-        let pass = match wet {
-            Some(_) => {
-                let passes = self.wet.get_or_init(|| {
-                    [
-                        compile(f.ctx, true, false, true),
-                        compile(f.ctx, false, false, true),
-                        compile(f.ctx, true, true, true),
-                        compile(f.ctx, false, true, true),
-                    ]
-                });
-                &passes[variant]
+        let pass = match stage {
+            Stage::Face => wet_pass(0),
+            Stage::Lights => wet_pass(1),
+            Stage::Mirror => wet_pass(2 + usize::from(unlit)),
+            Stage::Scene => {
+                let variant = match (unlit, light.snow.is_some()) {
+                    (false, false) => 0,
+                    (true, false) => 1,
+                    (false, true) => 2,
+                    (true, true) => 3,
+                };
+                [&self.lit, &self.unlit, &self.lit_snow, &self.unlit_snow][variant]
             }
-            None => [&self.lit, &self.unlit, &self.lit_snow, &self.unlit_snow][variant],
         };
         f.dispatch(
             pass,
             &[
                 cam, info, boxes, t.rgb, t.depth, sky, amb, values, solid, lamps, lights, snow,
-                cells, snow_out, &sun_info, &sun_gamma, sun_out, &wet_info, wet_out,
+                cells, snow_out, &sun_info, &sun_gamma, sun_out, grain_out, rays,
             ],
         );
         f.hold(buffers);
-        f.hold([
-            snow_dummy, sun_info, sun_gamma, sun_dummy, wet_info, wet_dummy,
-        ]);
+        f.hold([snow_dummy, sun_info, sun_gamma, sun_dummy, wet_dummy]);
         Ok(())
     }
 }

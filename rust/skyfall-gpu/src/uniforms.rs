@@ -304,7 +304,7 @@ pub struct SunUniform {
     pub volume: VolumeUniform,
 }
 
-/// `WetInfo` in `shaders/scene_raycast.wgsl`: the wet stage of a box scene
+/// `WetInfo` in `shaders/wet_film.wgsl`: the film of a box scene's wet stage
 /// (`skyfall_core::wet::stage::WetGpu`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default, Pod, Zeroable)]
@@ -315,21 +315,48 @@ pub struct WetUniform {
     pub film: [f32; 4],
     /// Lekner & Dorf's (1 − R̄)(1 − p) (x) and p (y).
     pub optics: [f32; 4],
-    /// Sheltered by the boxes (x), the wetness layer written (y).
+    /// Boxes that shelter (x), wetness written (y), puddle_mask written (z), a snow cover (w).
     pub flags: [u32; 4],
+    /// The relief noise's quantiles (`skyfall_core::wet::puddles::relief_quantiles`), 33 of 36.
+    pub relief: [[f32; 4]; 9],
 }
 
 impl WetUniform {
-    /// The uniform of `wet` (the wetness layer written when `layer`).
-    pub fn new(wet: &skyfall_core::wet::stage::WetGpu, layer: bool) -> Self {
+    /// The uniform of `wet` with `shelter` boxes that keep the rain off, which of its layers
+    /// are written and whether the frame has a snow cover (whose covered pixels are not wet).
+    pub fn new(
+        wet: &skyfall_core::wet::stage::WetGpu,
+        shelter: usize,
+        wetness: bool,
+        puddles: bool,
+        snow: bool,
+    ) -> Self {
         let d = |v: glam::Vec3| [v.x, v.y, v.z, 0.0];
         WetUniform {
             dirs: wet.directions.map(d),
             film: [wet.mm_per_exposure.unwrap_or(-1.0), wet.dried_mm, 0.0, 0.0],
             optics: [wet.darkening_numerator, wet.internal_reflectance, 0.0, 0.0],
-            flags: [u32::from(wet.sheltered), u32::from(layer), 0, 0],
+            flags: [
+                if wet.sheltered { shelter as u32 } else { 0 },
+                u32::from(wetness),
+                u32::from(puddles),
+                u32::from(snow),
+            ],
+            relief: relief_quantiles(),
         }
     }
+}
+
+/// The relief noise's quantiles, four to an element (`WetInfo.relief`, `WetPhotoInfo.relief`).
+pub fn relief_quantiles() -> [[f32; 4]; 9] {
+    let mut relief = [[0.0f32; 4]; 9];
+    for (k, q) in skyfall_core::wet::puddles::relief_quantiles()
+        .iter()
+        .enumerate()
+    {
+        relief[k / 4][k % 4] = *q;
+    }
+    relief
 }
 
 /// `WetPhotoInfo` in `shaders/wet_photo.wgsl`: a photo's wet stage.

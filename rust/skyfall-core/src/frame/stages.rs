@@ -126,19 +126,11 @@ impl<'a> Frame<'a> {
                 kind: Kind::Wet,
                 layers: crate::wet::stage::LAYERS,
                 srgb8: false,
-                // A box scene's wet stage lives in the GPU's scene pass (its mirror ray needs the
-                // ray cast), whose wet pipelines lavapipe's compiler (Mesa 22.3) corrupted its
-                // own heap making (valgrind's memcheck: invalid writes in
-                // vkCreateComputePipelines): drawn on the CPU until a form it compiles safely is
-                // found. A photo's has a pass of its own, which compiles cleanly.
-                gpu: photo,
+                // On the GPU a photo's in a pass of its own, a box scene's in the scene pass's
+                // second entry point (its mirror ray needs the scene's ray cast and lighting).
+                gpu: true,
                 param: "rain_duration_s",
-                why_not: if photo {
-                    "wet surfaces are drawn by the banded 8-bit output (frame::encoded)"
-                } else {
-                    "wet surfaces of box scenes are drawn by the CPU backend (backend=\"cpu\"); \
-                     the banded 8-bit output draws them too"
-                },
+                why_not: "wet surfaces are drawn by the banded 8-bit output (frame::encoded)",
             });
         }
         if light.clouds.is_some() {

@@ -176,6 +176,11 @@ impl<'a> WetStage<'a> {
         }
     }
 
+    /// The boxes that keep the rain off the surfaces (empty: none).
+    pub fn shelter(&self) -> &'a [SceneBox] {
+        self.shelter
+    }
+
     /// What the GPU's wet pass of a photo needs besides [`Self::gpu`] (None for a box scene).
     pub fn photo_gpu(&self) -> Option<WetPhotoGpu<'_>> {
         match self.surfaces {

@@ -158,3 +158,98 @@ fn wet_water(exposure: f32, film: vec4<f32>) -> f32 {
 fn wet_film(exposure: f32, film: vec4<f32>) -> f32 {
     return min(wet_water(exposure, film) / WET_FILM_MM, 1.0);
 }
+
+// --- puddles and the film's grain (skyfall_core::wet::puddles) ---------------------------------
+
+// puddles::hash (Chris Wellons' lowbias32).
+fn lowbias(x0: u32) -> u32 {
+    var x = x0;
+    x ^= x >> 16u;
+    x *= 0x7feb352du;
+    x ^= x >> 15u;
+    x *= 0x846ca68bu;
+    x ^= x >> 16u;
+    return x;
+}
+
+fn unit24(h: u32) -> f32 {
+    return f32(h >> 8u) * (1.0 / 16777216.0);
+}
+
+fn lattice(i: i32, j: i32, salt: u32) -> f32 {
+    return unit24(lowbias(bitcast<u32>(i) ^ lowbias(bitcast<u32>(j) ^ lowbias(salt))));
+}
+
+// puddles::value_noise
+fn value_noise(x: f32, z: f32, salt: u32) -> f32 {
+    let fx = floor(x);
+    let fz = floor(z);
+    let i = i32(fx);
+    let j = i32(fz);
+    let tx = x - fx;
+    let tz = z - fz;
+    let sx = tx * tx * (3.0 - 2.0 * tx);
+    let sz = tz * tz * (3.0 - 2.0 * tz);
+    let v00 = lattice(i, j, salt);
+    let v10 = lattice(i + 1, j, salt);
+    let v01 = lattice(i, j + 1, salt);
+    let v11 = lattice(i + 1, j + 1, salt);
+    let a = v00 + (v10 - v00) * sx;
+    let b = v01 + (v11 - v01) * sx;
+    return a + (b - a) * sz;
+}
+
+// puddles::relief_u: three octaves through the tabulated distribution `q` (RELIEF_QUANTILES of
+// its quantiles, four to an element: puddles::relief_quantiles), uniform on [0, 1].
+fn relief_u(x: f32, z: f32, q: array<vec4<f32>, 9>) -> f32 {
+    var scale = 1.0 / RELIEF_SCALE_M;
+    let n = (value_noise(x * scale, z * scale, 0u) + 0.5 * value_noise(x * scale * 2.0, z * scale * 2.0, 1u)
+        + 0.25 * value_noise(x * scale * 4.0, z * scale * 4.0, 2u)) / 1.75;
+    var k = 0u;
+    for (var i = 0u; i < RELIEF_QUANTILES; i++) {
+        if q[i / 4u][i % 4u] <= n {
+            k = i + 1u;
+        }
+    }
+    k = clamp(k, 1u, RELIEF_QUANTILES - 1u);
+    let lo = q[(k - 1u) / 4u][(k - 1u) % 4u];
+    let hi = q[k / 4u][k % 4u];
+    var t = 0.0;
+    if hi > lo {
+        t = clamp((n - lo) / (hi - lo), 0.0, 1.0);
+    }
+    return (f32(k - 1u) + t) / f32(RELIEF_QUANTILES - 1u);
+}
+
+// puddles::puddle_share
+fn puddle_share(water: f32) -> f32 {
+    return min(sqrt(2.0 * max(water - WET_FILM_MM, 0.0) / RELIEF_MM), 1.0);
+}
+
+// puddles::reflected: about n in a puddle, else about the film's GGX grain at p.
+fn reflected(d: vec3<f32>, n: vec3<f32>, p: vec3<f32>, still: bool) -> vec3<f32> {
+    let mirror = d - 2.0 * dot(d, n) * n;
+    if still {
+        return mirror;
+    }
+    let c = floor(p / GRAIN_CELL_M);
+    let h = lowbias(bitcast<u32>(i32(c.x)) ^ lowbias(bitcast<u32>(i32(c.y)) ^ lowbias(bitcast<u32>(i32(c.z)) ^ 0x9e37u)));
+    let u1 = unit24(h);
+    let u2 = unit24(lowbias(h));
+    let tn = FILM_ROUGHNESS * sqrt(u1 / (1.0 - u1));
+    let cos_t = 1.0 / sqrt(1.0 + tn * tn);
+    let sin_t = tn * cos_t;
+    let phi = 2.0 * PI * u2;
+    var a = vec3<f32>(0.0, 0.0, 1.0);
+    if abs(n.x) < 0.9 {
+        a = vec3<f32>(1.0, 0.0, 0.0);
+    }
+    let t = normalize(cross(n, a));
+    let b = cross(n, t);
+    let m = normalize(n * cos_t + (t * cos(phi) + b * sin(phi)) * sin_t);
+    let r = d - 2.0 * dot(d, m) * m;
+    if dot(r, n) > 0.0 {
+        return r;
+    }
+    return mirror;
+}

@@ -31,18 +31,21 @@ override LIT: bool = true;
 @group(0) @binding(14) var<uniform> sun: SunInfo;
 @group(0) @binding(15) var<storage, read> sun_gamma: array<f32>;
 @group(0) @binding(16) var<storage, read_write> sun_out: array<f32>;
-@group(0) @binding(17) var<uniform> wet: WetInfo;
-@group(0) @binding(18) var<storage, read_write> wet_out: array<f32>;
+@group(0) @binding(17) var<storage, read_write> grain_out: array<vec4<f32>>; // w·F·mirrored, depth (-1: none)
+// wet_face writes each pixel's face: (point, -), (albedo, 1 hit / -1 none), (normal, -); wet_lights
+// and MIRROR read the mirror rays wet_film.wgsl made of them: (point, w·F), (mirror direction,
+// 1 puddle / 0 film / -1 none), (normal, w).
+@group(0) @binding(18) var<storage, read_write> mirror_rays: array<vec4<f32>>;
 
-// True in the pipelines for frames with wet surfaces (skyfall_core::wet::stage, WetStage).
-override WET: bool = false;
-
-struct WetInfo {
-    dirs: array<vec4<f32>, 3>,   // the quartile drops' directions of fall
-    film: vec4<f32>,             // water per unit exposure, mm (< 0: the storage, filled), dried, mm
-    optics: vec4<f32>,           // Lekner & Dorf's (1 - R)(1 - p), p
-    flags: vec4<u32>,            // sheltered by the boxes, wetness layer written
-}
+// The wet stage (skyfall_core::wet::stage, WetStage), in four pipelines over the frame main
+// drew: wet_face here (each pixel's face, ray cast again), wet_film.wgsl (the film, the
+// puddles, the darkening and each wet pixel's mirror ray), wet_lights here (the highlights of
+// the lights and the sun, in lit frames) and main again with MIRROR (each mirror ray cast and
+// lit as a view ray is). Fewer, larger pipelines (all of it in main, as first written; the
+// face, the film and the highlights in one entry point; the film in an entry point of this
+// module) made lavapipe's compiler (Mesa 22.3) write into freed memory (valgrind's memcheck,
+// in vkCreateComputePipelines); these four compile cleanly.
+override MIRROR: bool = false;
 
 // The sun on the surfaces (skyfall_core::frame::scene::SunLight); its code runs in the LIT
 // pipelines only (a frame with a sun takes them).
@@ -519,54 +522,75 @@ fn trace(origin: vec3<f32>, dir: vec3<f32>) -> Hit {
 
 // --- wet surfaces (skyfall_core::wet) ---------------------------------------------------
 
-// wet::film: the wetness of a face of normal n at p (RainDirections::exposure, Film::wetness).
-fn wet_wetness(p: vec3<f32>, n: vec3<f32>) -> f32 {
-    let lifted = p + n * WET_OFFSET_M;
-    var sum = 0.0;
-    for (var k = 0u; k < 3u; k++) {
-        let v = wet.dirs[k].xyz;
-        let h = -dot(n, v);
-        if h > 0.0 && !(wet.flags.x != 0u && occluded_within(lifted, -v, SHELTER_RAY_M)) {
-            sum += h / -v.y;
-        }
-    }
-    return wet_film(sum / 3.0, wet.film);
-}
-
-// WetStage::box_pixel: the dry light c of a face (albedo a, normal n, at p, seen along dir,
-// receiving `share` of the sun) under a film of wetness w.
-fn wet_light(c: vec3<f32>, a: vec3<f32>, w: f32, p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, share: f32) -> vec3<f32> {
-    let d = normalize(dir);
+// WetStage::highlights: the lights' and the sun's on water of roughness alpha and normal n at
+// p (albedo a, seen along unit d, receiving `share` of the sun).
+fn wet_highlights(a: vec3<f32>, p: vec3<f32>, n: vec3<f32>, d: vec3<f32>, share: f32, alpha: f32) -> vec3<f32> {
     let v = -d;
-    let r = d - 2.0 * dot(d, n) * n;
     let lifted = p + n * WET_OFFSET_M;
-    let mirror = trace(lifted, r);
-    var seen: vec3<f32>;
-    if mirror.hit {
-        let q = lifted + r * mirror.t;
-        seen = surface_radiance(q, mirror.n, surface_albedo(mirror.a, mirror.n, q)).c;
-    } else {
-        seen = vec3<f32>(sky.e_scale.y * relative_to_zenith(r));
-    }
-    var reflection = seen * fresnel(dot(n, v), WATER_INDEX);
-    if LIT {
+    var highlights = vec3<f32>(0.0);
+    {
         for (var i = 0u; i < lamps.counts.x; i++) {
             let s = surface_lit(lights[i], p, n, a);
             if max(max(s.e.x, s.e.y), s.e.z) <= 0.0 {
                 continue;
             }
-            let f = wet_brdf(n, v, s.dir, FILM_ROUGHNESS);
+            let f = wet_brdf(n, v, s.dir, alpha);
             if f > 0.0 && !occluded_within(lifted, s.dir, s.r - WET_OFFSET_M) {
-                reflection += s.e * (f * lamps.params.x);
+                highlights += s.e * (f * lamps.params.x);
             }
         }
         if sun.flags.x != 0u && share > 0.0 {
             let cs = max(dot(n, sun.dir.xyz), 0.0);
-            reflection += vec3<f32>(wet_brdf(n, v, sun.dir.xyz, FILM_ROUGHNESS) * sun.dir.w * cs * share);
+            highlights += vec3<f32>(wet_brdf(n, v, sun.dir.xyz, alpha) * sun.dir.w * cs * share);
         }
     }
-    let k = vec3<f32>(1.0 - w) + w * wet.optics.x / (vec3<f32>(1.0) - wet.optics.y * a);
-    return c * k + w * reflection;
+    return highlights;
+}
+
+// The wet stage's third pipeline, in lit frames only (a frame without lights or a sun has no
+// highlights): each wet pixel's highlights (WetStage::highlights) times its wetness added to
+// rgb, at the face wet_film.wgsl wetted.
+@compute @workgroup_size(8, 8)
+fn wet_lights(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = cam.size.x;
+    if gid.x >= w || gid.y >= cam.size.y {
+        return;
+    }
+    let i = gid.y * w + gid.x;
+    let ray = mirror_rays[3u * i + 1u];
+    if ray.w < 0.0 {
+        return;
+    }
+    let face = mirror_rays[3u * i + 2u];
+    let n = face.xyz;
+    let p = mirror_rays[3u * i].xyz;
+    let d = normalize(ray_direction(cam, gid.x, gid.y));
+    var share = 1.0;
+    if sun.flags.z != 0u {
+        share = sun_out[i];
+    }
+    let h = face.w * wet_highlights(vec3<f32>(1.0), p, n, d, share, select(FILM_ROUGHNESS, PUDDLE_ROUGHNESS, ray.w > 0.5));
+    rgb[3u * i] += h.x;
+    rgb[3u * i + 1u] += h.y;
+    rgb[3u * i + 2u] += h.z;
+}
+
+// The wet stage's first pipeline: each pixel's ray cast again for its face (its point, its
+// albedo and whether there is one, its normal) into mirror_rays, for wet_film.wgsl.
+@compute @workgroup_size(8, 8)
+fn wet_face(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w = cam.size.x;
+    if gid.x >= w || gid.y >= cam.size.y {
+        return;
+    }
+    let i = gid.y * w + gid.x;
+    let origin = cam.pos.xyz;
+    let dir = ray_direction(cam, gid.x, gid.y);
+    let first = trace(origin, dir);
+    let p = origin + dir * first.t;
+    mirror_rays[3u * i] = vec4<f32>(p, 0.0);
+    mirror_rays[3u * i + 1u] = vec4<f32>(surface_albedo(first.a, first.n, p), select(-1.0, 1.0, first.hit));
+    mirror_rays[3u * i + 2u] = vec4<f32>(first.n, 0.0);
 }
 
 @compute @workgroup_size(8, 8)
@@ -576,14 +600,23 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= w || gid.y >= h {
         return;
     }
-    let origin = cam.pos.xyz;
-    let dir = ray_direction(cam, gid.x, gid.y);
+    let i = gid.y * w + gid.x;
+    var origin = cam.pos.xyz;
+    var dir = ray_direction(cam, gid.x, gid.y);
+    if MIRROR {
+        // A wet pixel's mirror ray (wet_main), or none.
+        if mirror_rays[3u * i + 1u].w < 0.0 {
+            grain_out[i] = vec4<f32>(0.0, 0.0, 0.0, -1.0);
+            return;
+        }
+        origin = mirror_rays[3u * i].xyz + mirror_rays[3u * i + 2u].xyz * WET_OFFSET_M;
+        dir = mirror_rays[3u * i + 1u].xyz;
+    }
     let first = trace(origin, dir);
     let hit = first.hit;
     let best_t = first.t;
     let best_n = first.n;
     let best_a = first.a;
-    let i = gid.y * w + gid.x;
     if SNOW {
         // SnowRender::shade_pixel.
         let sh = snow_trace(origin, dir, select(3.4e38, best_t, hit));
@@ -613,9 +646,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         snow_out[i] = sd;
         if found {
-            if WET && wet.flags.y != 0u {
-                wet_out[i] = 0.0;
-            }
             rgb[3u * i] = sc.c.x;
             rgb[3u * i + 1u] = sc.c.y;
             rgb[3u * i + 2u] = sc.c.z;
@@ -629,7 +659,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var c: vec3<f32>;
     var d: f32;
     var share = 1.0;
-    var wetness = 0.0;
     if hit {
         let p = origin + dir * best_t;
         let a = surface_albedo(best_a, best_n, p);
@@ -637,21 +666,26 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         c = s.c;
         share = s.share;
         d = best_t;
-        if WET {
-            wetness = wet_wetness(p, best_n);
-            if wetness > 0.0 {
-                c = wet_light(c, a, wetness, p, best_n, dir, share);
-            }
-        }
     } else {
         c = vec3<f32>(sky.e_scale.y * relative_to_zenith(normalize(dir)));
         d = infinity();
     }
+    if MIRROR {
+        // Fresnel's share of what the mirror ray sees, times the wetness: a puddle's added
+        // here, the film's left for its row averaging (wet_grain.wgsl).
+        let m = c * mirror_rays[3u * i].w;
+        if mirror_rays[3u * i + 1u].w > 0.5 {
+            rgb[3u * i] += m.x;
+            rgb[3u * i + 1u] += m.y;
+            rgb[3u * i + 2u] += m.z;
+            grain_out[i] = vec4<f32>(0.0, 0.0, 0.0, -1.0);
+        } else {
+            grain_out[i] = vec4<f32>(m, depth[i]);
+        }
+        return;
+    }
     if LIT && sun.flags.z != 0u {
         sun_out[i] = share;
-    }
-    if WET && wet.flags.y != 0u {
-        wet_out[i] = wetness;
     }
     rgb[3u * i] = c.x;
     rgb[3u * i + 1u] = c.y;
