@@ -33,9 +33,11 @@ OOM_CHILD = textwrap.dedent(
     elif sys.argv[3] == "textures":  # 24 textures of 4096^2: 1.5 GiB, within the texture budget
         from skyfall import rain
         rain.textures([1, 5, 10, 20], [1.0, 1.2, 1.4, 1.6, 1.8, 2.0], size_px=4096)
-    else:  # the sky table at the documented maximum of azimuths: 2 x 257 MiB
+    else:  # the sky table at the documented maximum of azimuths: 2 x 257 MiB (a sky with a
+        # sun: an overcast sky is the same at every azimuth and tabulated along one)
         from skyfall import sky
-        sky.horizontal_illuminance([[0.0, 1.0, 0.0]], scenes.street(), samples=65536)
+        sunny = Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=100.0)
+        sky.horizontal_illuminance([[0.0, 1.0, 0.0]], scenes.street(), weather=sunny, samples=65536)
     print("rendered")
     """
 )

@@ -286,6 +286,39 @@ def test_a_map_under_a_new_sky_is_lit_from_the_scenes_horizon():
     assert m.dims == [141, 15, 141]
 
 
+def test_a_sweep_over_rain_and_visibility_reads_the_street_within_1e_3_of_the_full_tables():
+    # Under a sky the same at every azimuth (overcast, in any rain or mist) a node's light is a
+    # dot product of weights the street fixes with the sky's integrals at 24 elevations
+    # (skyfall_core::sky::profile). Against the sky tabulated along every azimuth at 512
+    # elevations (per_azimuth=True, what every map was before), at every open node of the
+    # bundled street's frame grid: within 1e-3 of the node's light (its brightest channel), and
+    # each channel within 1e-3 of itself where it sees 1 % of E or more.
+    from skyfall import _core
+
+    street = scenes.street()
+    lo, hi = sky.default_bounds(street, 1.0)
+    boxes = sky._occluders(street)
+    kw = dict(bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=1.0, samples=sky.MAP_SAMPLES)
+    horizon = _core.ambient_horizon(boxes, **kw)
+    before = horizon.nbytes
+    for w in [Weather(), Weather(rain_rate_mm_h=2.0), Weather(rain_rate_mm_h=50.0), Weather(rain_rate_mm_h=5.0, visibility_m=300.0)]:
+        model = w.sky_model()
+        lit = model.light_map(horizon)
+        direct = model.ambient_map(boxes, **kw)
+        assert np.array_equal(lit.values, direct.values)  # one definition, however it is reached
+        ref = model.ambient_map(boxes, **kw, per_azimuth=True)
+        open_ = ~ref.solid.astype(bool)
+        a, b = lit.values[open_].astype(np.float64), ref.values[open_].astype(np.float64)
+        node = np.abs(a - b).max(axis=1) / np.maximum(np.abs(b).max(axis=1), 1e-6)
+        own = np.abs(a - b) / np.maximum(np.abs(b), 1e-2)
+        assert node.max() < 1e-3 and own.max() < 1e-3, (w, node.max(), own.max())
+        assert not np.array_equal(a, b)  # the reading differs from the reference (within the bound)
+    assert horizon.nbytes > before  # the weights, made at the first such sky and kept
+    # A sky with a sun varies with azimuth: read along every azimuth, as built directly.
+    sun = Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=140.0, rain_rate_mm_h=1.0).sky_model()
+    assert np.array_equal(sun.light_map(horizon).values, sun.ambient_map(boxes, **kw, per_azimuth=True).values)
+
+
 # ---- frames ---------------------------------------------------------------------------
 
 

@@ -167,12 +167,14 @@ class SkyModel:
         spacing_m: float,
         samples: int,
         spacing_name: str | None = None,
+        per_azimuth: bool = False,
     ) -> AmbientLightMap: ...
     def light_map(self, horizon: AmbientHorizon) -> AmbientLightMap: ...
 
 @final
 class AmbientHorizon:
-    """What a scene fixes of its ambient-light map: each open node's visible sky per azimuth."""
+    """What a scene fixes of its ambient-light map: each open node's visible sky per azimuth
+    (and, after a sky the same at every azimuth, each open node's weights for such skies)."""
 
     @property
     def dims(self) -> list[int]: ...

@@ -286,10 +286,12 @@ class AmbientLightMap:
 _cache: OrderedDict[tuple[Any, ...], _core.AmbientLightMap] = OrderedDict()
 _cache_lock = threading.Lock()
 _CACHE_SIZE = 8
-# What the boxes fix of a map (_core.AmbientHorizon: each node's visible sky per azimuth), per
-# (geometry, bounds, spacing, samples): a map under a new sky (another rain rate, visibility,
-# sky type or sun) is then lit from it, bit for bit the map built from scratch, at a fraction
-# of the cost. Two kept (the bundled street's is 74 MB at 1 m and 64 azimuths).
+# What the boxes fix of a map (_core.AmbientHorizon: each node's visible sky per azimuth, and
+# after the first overcast sky each node's weights for such skies), per (geometry, bounds,
+# spacing, samples): a map under a new sky (another rain rate, visibility, sky type or sun) is
+# then lit from it, bit for bit the map built from scratch, at a fraction of the cost (an
+# overcast sky 4 ms on the bundled street, a sky with a sun 35 ms). Two kept (the bundled
+# street's is 74 MB at 1 m and 64 azimuths, 131 MB with its weights).
 _horizons: OrderedDict[tuple[Any, ...], _core.AmbientHorizon | None] = OrderedDict()
 _geometries: OrderedDict[tuple[Any, ...], None] = OrderedDict()  # geometries with a map built
 _HORIZONS = 2

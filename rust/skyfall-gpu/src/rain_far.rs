@@ -21,6 +21,7 @@ struct FarUniform {
     dims: [u32; 4],
     misc: [f32; 4],
     shear: [f32; 4],
+    extra: [f32; 4],
 }
 
 impl FramePass for FarPass {
@@ -71,6 +72,7 @@ impl FramePass for FarPass {
             ],
             misc: [a.inv_delta, a.spacing_m, a.near_m, a.reflectance],
             shear: [a.shear[0], a.shear[1], FAR_MAX_TAN, turn],
+            extra: [a.opacity_scale, 0.0, 0.0, 0.0],
         };
         let cam_buf = f.uniform("camera", &CameraUniform::new(f.cam));
         let params_buf = f.uniform("far rain", &params);

@@ -146,8 +146,10 @@ impl SkyModel {
         })
     }
 
-    /// The ambient-light map of boxes (M, 9) over `bounds_min_m`..`bounds_max_m`.
-    #[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples, spacing_name=None))]
+    /// The ambient-light map of boxes (M, 9) over `bounds_min_m`..`bounds_max_m`;
+    /// `per_azimuth`: the sky tabulated along every azimuth at 512 elevations even when it is
+    /// the same at every azimuth (the reference the fast reading is tested against).
+    #[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples, spacing_name=None, per_azimuth=false))]
     #[allow(clippy::too_many_arguments)]
     fn ambient_map(
         &self,
@@ -158,13 +160,18 @@ impl SkyModel {
         spacing_m: f64,
         samples: usize,
         spacing_name: Option<String>,
+        per_azimuth: bool,
     ) -> PyResult<AmbientLightMap> {
         let (scene, lo, hi, nodes) =
             map_grid(&boxes, bounds_min_m, bounds_max_m, spacing_m, spacing_name)?;
         let sky = &self.sky;
         let steps = (if scene.boxes.is_empty() { 0 } else { nodes } + 512) * samples as u128;
         let map = interruptible_core(py, steps, |cancel| {
-            let s = SkyTable::new_cancellable(sky, samples, cancel)?;
+            let s = if per_azimuth {
+                SkyTable::per_azimuth(sky, samples, cancel)?
+            } else {
+                SkyTable::new_cancellable(sky, samples, cancel)?
+            };
             if scene.boxes.is_empty() {
                 // (the bounds and spacing were checked above)
                 Ok(AmbientMap::uniform(irradiance(&[], &s, Vec3::ZERO)))
@@ -177,7 +184,8 @@ impl SkyModel {
 
     /// The ambient-light map under this sky from `horizon` (`ambient_horizon`): the map
     /// `ambient_map` builds over the same boxes, bounds, spacing and samples, bit for bit,
-    /// from the sky's tables alone (what the boxes hide was found once, in the horizon).
+    /// from the sky's tables alone (what the boxes hide was found once, in the horizon; for a
+    /// sky the same at every azimuth, each node's weights, made at the first such sky).
     fn light_map(&self, py: Python<'_>, horizon: &AmbientHorizon) -> PyResult<AmbientLightMap> {
         let h = Arc::clone(&horizon.inner);
         let sky = &self.sky;

@@ -194,74 +194,32 @@ impl AmbientMap {
         is_solid: Vec<bool>,
         cancel: &AtomicBool,
     ) -> Result<Self> {
+        let plan = FillPlan::new(dims, &is_solid, cancel)?;
+        Self::finish_planned(min_m, s, dims, values, &is_solid, &plan)
+    }
+
+    /// [`Self::finish`] with the solid nodes' fill planned before ([`FillPlan::new`] of these
+    /// `dims` and `is_solid`): the same map.
+    pub(crate) fn finish_planned(
+        min_m: Vec3,
+        s: f32,
+        dims: [usize; 3],
+        mut values: Vec<f32>,
+        is_solid: &[bool],
+        plan: &FillPlan,
+    ) -> Result<Self> {
         let mut solid = try_filled("the ambient map's solid nodes", is_solid.len(), 0u32)?;
-        for (o, &b) in solid.iter_mut().zip(&is_solid) {
+        for (o, &b) in solid.iter_mut().zip(is_solid) {
             *o = u32::from(b);
         }
-        let mut map = AmbientMap {
+        plan.apply(&mut values);
+        Ok(AmbientMap {
             origin_m: min_m,
             spacing_m: s,
             dims,
             values,
             solid,
-        };
-        map.fill_solid(is_solid, cancel)?;
-        Ok(map)
-    }
-
-    /// Replaces solid nodes by the mean of their filled 6-neighbours, layer by layer inward.
-    fn fill_solid(&mut self, mut pending: Vec<bool>, cancel: &AtomicBool) -> Result<()> {
-        let [nx, ny, nz] = self.dims;
-        let idx = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
-        let mut next = try_filled("the ambient map's fill", pending.len(), false)?;
-        while pending.iter().any(|&p| p) {
-            check_cancel(cancel, "the ambient-light map")?;
-            next.copy_from_slice(&pending);
-            let mut progress = false;
-            for i in 0..nx {
-                for j in 0..ny {
-                    for k in 0..nz {
-                        let n = idx(i, j, k);
-                        if !pending[n] {
-                            continue;
-                        }
-                        let mut acc = [0.0f32; CHANNELS];
-                        let mut count = 0;
-                        let nbrs = [
-                            (i > 0).then(|| idx(i - 1, j, k)),
-                            (i + 1 < nx).then(|| idx(i + 1, j, k)),
-                            (j > 0).then(|| idx(i, j - 1, k)),
-                            (j + 1 < ny).then(|| idx(i, j + 1, k)),
-                            (k > 0).then(|| idx(i, j, k - 1)),
-                            (k + 1 < nz).then(|| idx(i, j, k + 1)),
-                        ];
-                        for m in nbrs.into_iter().flatten() {
-                            if !pending[m] {
-                                for (a, v) in acc
-                                    .iter_mut()
-                                    .zip(&self.values[m * CHANNELS..(m + 1) * CHANNELS])
-                                {
-                                    *a += v;
-                                }
-                                count += 1;
-                            }
-                        }
-                        if count > 0 {
-                            for (c, a) in acc.iter().enumerate() {
-                                self.values[n * CHANNELS + c] = a / count as f32;
-                            }
-                            next[n] = false;
-                            progress = true;
-                        }
-                    }
-                }
-            }
-            std::mem::swap(&mut pending, &mut next);
-            if !progress {
-                break; // every node solid: they stay 0
-            }
-        }
-        Ok(())
+        })
     }
 
     /// Trilinear interpolation of the five channels at `p` (clamped to the grid) over the
@@ -359,6 +317,105 @@ pub fn scene_bounds(scene: &BoxScene, extra: &[Vec3], spacing_m: f32) -> (Vec3, 
         lo.y = lo.y.max(0.0);
     }
     (lo, hi + Vec3::new(0.0, spacing_m, 0.0))
+}
+
+/// The order in which a map's solid nodes are filled, and from which neighbours: each takes
+/// the mean of its 6-neighbours filled before it, layer by layer inward (a layer's nodes read
+/// only the open nodes and the layers before). It depends only on the grid and its solid
+/// nodes, so a horizon plans it once for all its maps.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct FillPlan {
+    /// (node, its first neighbour in `from`, their count), in fill order.
+    steps: Vec<(u32, u32, u8)>,
+    /// The neighbours each step averages, step after step.
+    from: Vec<u32>,
+}
+
+impl FillPlan {
+    /// The plan for a grid of `dims` nodes whose solid ones are `is_solid`; solid nodes with no
+    /// open node to reach (a grid of solid nodes only) are left out and stay 0.
+    pub(crate) fn new(dims: [usize; 3], is_solid: &[bool], cancel: &AtomicBool) -> Result<Self> {
+        let [nx, ny, nz] = dims;
+        let idx = |i: usize, j: usize, k: usize| (i * ny + j) * nz + k;
+        let mut pending = try_filled("the ambient map's fill", is_solid.len(), false)?;
+        pending.copy_from_slice(is_solid);
+        let mut next = pending.clone();
+        let mut plan = FillPlan::default();
+        let solid_count = is_solid.iter().filter(|&&b| b).count();
+        plan.steps.try_reserve_exact(solid_count).map_err(|_| {
+            Error::out_of_memory::<(u32, u32, u8)>("the ambient map's fill", solid_count)
+        })?;
+        while pending.iter().any(|&p| p) {
+            check_cancel(cancel, "the ambient-light map")?;
+            next.copy_from_slice(&pending);
+            let pending_count = pending.iter().filter(|&&p| p).count();
+            plan.from.try_reserve(6 * pending_count).map_err(|_| {
+                Error::out_of_memory::<u32>("the ambient map's fill", 6 * pending_count)
+            })?;
+            let mut progress = false;
+            for i in 0..nx {
+                for j in 0..ny {
+                    for k in 0..nz {
+                        let n = idx(i, j, k);
+                        if !pending[n] {
+                            continue;
+                        }
+                        let nbrs = [
+                            (i > 0).then(|| idx(i - 1, j, k)),
+                            (i + 1 < nx).then(|| idx(i + 1, j, k)),
+                            (j > 0).then(|| idx(i, j - 1, k)),
+                            (j + 1 < ny).then(|| idx(i, j + 1, k)),
+                            (k > 0).then(|| idx(i, j, k - 1)),
+                            (k + 1 < nz).then(|| idx(i, j, k + 1)),
+                        ];
+                        let first = plan.from.len();
+                        plan.from.extend(
+                            nbrs.into_iter()
+                                .flatten()
+                                .filter(|&m| !pending[m])
+                                .map(|m| m as u32),
+                        );
+                        let count = plan.from.len() - first;
+                        if count > 0 {
+                            plan.steps.push((n as u32, first as u32, count as u8));
+                            next[n] = false;
+                            progress = true;
+                        }
+                    }
+                }
+            }
+            std::mem::swap(&mut pending, &mut next);
+            if !progress {
+                break; // every node solid: they stay 0
+            }
+        }
+        Ok(plan)
+    }
+
+    /// The bytes it holds.
+    pub(crate) fn bytes(&self) -> usize {
+        self.steps.len() * size_of::<(u32, u32, u8)>() + self.from.len() * size_of::<u32>()
+    }
+
+    /// Fills the planned nodes of `values` ([`CHANNELS`] per node).
+    pub(crate) fn apply(&self, values: &mut [f32]) {
+        for &(n, first, count) in &self.steps {
+            let mut acc = [0.0f32; CHANNELS];
+            for &m in &self.from[first as usize..first as usize + usize::from(count)] {
+                let m = m as usize;
+                for (a, v) in acc
+                    .iter_mut()
+                    .zip(&values[m * CHANNELS..(m + 1) * CHANNELS])
+                {
+                    *a += v;
+                }
+            }
+            let n = n as usize;
+            for (c, a) in acc.iter().enumerate() {
+                values[n * CHANNELS + c] = a / f32::from(count);
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -102,6 +102,18 @@ impl SkyKind {
         })
     }
 
+    /// Whether the sky is the same at every azimuth: the overcast sky, and the general types
+    /// whose indicatrix ignores the sun (c = e = 0: types 1, 3 and 5).
+    pub fn symmetric(&self) -> bool {
+        match *self {
+            SkyKind::Overcast => true,
+            SkyKind::General { sky_type, .. } => {
+                let p = CIE_TYPES[usize::from(sky_type) - 1];
+                p[2] == 0.0 && p[4] == 0.0
+            }
+        }
+    }
+
     /// The five parameters a–e, and the sun (for the GPU uniform); the overcast sky is
     /// encoded as a = NaN.
     pub fn params(&self) -> ([f32; 5], Vec3) {

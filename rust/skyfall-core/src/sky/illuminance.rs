@@ -16,12 +16,14 @@
 //! faces one of them; a face looking down sees no sky.
 
 use super::model::Sky;
+use super::profile;
 use crate::error::{Range, Result, check_cancel};
 use crate::scene::boxes::{BoxScene, SceneBox};
 use crate::scene::raycast::T_MIN;
 use glam::Vec3;
+use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Number of normals per point: up, +X, −X, +Z, −Z.
 pub const CHANNELS: usize = 5;
@@ -57,13 +59,26 @@ pub fn azimuth_dirs(azimuths: usize) -> Vec<(f64, f64)> {
 pub struct SkyTable {
     /// Azimuths (midpoints of equal sectors), as unit horizontal directions (sin φ, −cos φ).
     dirs: Vec<(f64, f64)>,
-    /// Per azimuth, STEPS + 1 pairs (∫₀^γ L τ sin γ cos γ dγ, ∫₀^γ L τ cos² γ dγ) / π · Δφ:
-    /// the horizontal and the vertical surfaces' cumulative integrals, side by side (a node's
-    /// edge reads both).
-    cum: Vec<[f64; 2]>,
-    /// Each azimuth's `up` and `side` read at the zenith (as [`SkyTable::at`] reads them), the
-    /// end of every node's highest visible interval.
-    top: Vec<(f64, f64)>,
+    /// The integrals, per azimuth or (a symmetric sky) at a few elevations.
+    columns: Columns,
+}
+
+/// A [`SkyTable`]'s cumulative integrals.
+#[derive(Debug, Clone, PartialEq)]
+enum Columns {
+    /// A sky that varies with azimuth (a general type with a sun).
+    Azimuths {
+        /// Per azimuth, STEPS + 1 pairs (∫₀^γ L τ sin γ cos γ dγ, ∫₀^γ L τ cos² γ dγ) / π · Δφ:
+        /// the horizontal and the vertical surfaces' cumulative integrals, side by side (a
+        /// node's edge reads both).
+        cum: Vec<[f64; 2]>,
+        /// Each azimuth's `up` and `side` read at the zenith (as [`SkyTable::at`] reads them),
+        /// the end of every node's highest visible interval.
+        top: Vec<(f64, f64)>,
+    },
+    /// A sky the same at every azimuth: one azimuth's integrals at [`profile::AT_STEP`], read
+    /// through [`profile::weights`].
+    Symmetric(Box<profile::Coarse>),
 }
 
 impl SkyTable {
@@ -73,37 +88,83 @@ impl SkyTable {
     }
 
     /// [`SkyTable::new`], stopping with [`Error::Cancelled`](crate::Error::Cancelled) soon after `cancel` is set
-    /// (checked every azimuth: 2048 sky evaluations, well under a millisecond).
+    /// (checked before every azimuth: 2048 sky evaluations, well under a millisecond; azimuths
+    /// in parallel). A sky the same
+    /// at every azimuth ([`super::cie::SkyKind::symmetric`]) is tabulated along one.
     pub fn new_cancellable(sky: &Sky, azimuths: usize, cancel: &AtomicBool) -> Result<Self> {
+        Self::tabulate(sky, azimuths, sky.kind.symmetric(), cancel)
+    }
+
+    /// The table along every azimuth, or along one read at a few elevations (`coarse`: a
+    /// symmetric sky).
+    fn tabulate(sky: &Sky, azimuths: usize, coarse: bool, cancel: &AtomicBool) -> Result<Self> {
         AZIMUTHS.check("samples", None, azimuths as f64)?;
         let dphi = TAU / azimuths as f64;
-        let h = FRAC_PI_2 / STEPS as f64;
         let dirs = azimuth_dirs(azimuths);
+        if coarse {
+            let mut cum = vec![[0.0; 2]; STEPS + 1];
+            Self::cumulative(sky, dirs[0], dphi, &mut cum);
+            let at = |c: usize| profile::AT_STEP.map(|j| cum[usize::from(j)][c]);
+            let coarse = profile::Coarse {
+                up: at(0),
+                side: at(1),
+            };
+            return Ok(SkyTable {
+                dirs,
+                columns: Columns::Symmetric(Box::new(coarse)),
+            });
+        }
         // 2 x 269 MB at 65536 azimuths: refused as OutOfMemory, not an abort.
         let n = azimuths * (STEPS + 1);
-        let mut cum = Vec::new();
-        cum.try_reserve_exact(n)
-            .map_err(|_| crate::Error::out_of_memory::<[f64; 2]>("the sky table", n))?;
-        for &(sx, sz) in &dirs {
-            check_cancel(cancel, "the sky table")?;
-            let (mut a, mut b) = (0.0, 0.0);
-            cum.push([0.0, 0.0]);
-            for j in 0..STEPS {
-                for (x, w) in GL4 {
-                    let g = (j as f64 + x) * h;
-                    let (sg, cg) = g.sin_cos();
-                    let dir = Vec3::new((cg * sx) as f32, sg as f32, (cg * sz) as f32);
-                    let l = sky.received(dir) * w * h * dphi / PI;
-                    a += l * sg * cg;
-                    b += l * cg * cg;
+        let mut cum = crate::error::try_filled("the sky table", n, [0.0f64; 2])?;
+        cum.par_chunks_mut(STEPS + 1)
+            .zip(&dirs)
+            .for_each(|(row, &dir)| {
+                if !cancel.load(Ordering::Relaxed) {
+                    Self::cumulative(sky, dir, dphi, row);
                 }
-                cum.push([a, b]);
-            }
-        }
+            });
+        check_cancel(cancel, "the sky table")?;
         let top = (0..azimuths)
             .map(|k| SkyTable::at(&cum, k, FRAC_PI_2))
             .collect();
-        Ok(SkyTable { dirs, cum, top })
+        Ok(SkyTable {
+            dirs,
+            columns: Columns::Azimuths { cum, top },
+        })
+    }
+
+    /// [`SkyTable::new`] along every azimuth at 512 elevation steps even for a symmetric sky:
+    /// the reference its reading at a few elevations ([`super::profile`]) is measured against.
+    pub fn per_azimuth(sky: &Sky, azimuths: usize, cancel: &AtomicBool) -> Result<Self> {
+        Self::tabulate(sky, azimuths, false, cancel)
+    }
+
+    /// One azimuth's STEPS + 1 cumulative pairs (up, side) along horizontal direction
+    /// (sx, sz), each times Δφ/π, into `cum`.
+    fn cumulative(sky: &Sky, (sx, sz): (f64, f64), dphi: f64, cum: &mut [[f64; 2]]) {
+        let h = FRAC_PI_2 / STEPS as f64;
+        let (mut a, mut b) = (0.0, 0.0);
+        cum[0] = [0.0, 0.0];
+        for j in 0..STEPS {
+            for (x, w) in GL4 {
+                let g = (j as f64 + x) * h;
+                let (sg, cg) = g.sin_cos();
+                let dir = Vec3::new((cg * sx) as f32, sg as f32, (cg * sz) as f32);
+                let l = sky.received(dir) * w * h * dphi / PI;
+                a += l * sg * cg;
+                b += l * cg * cg;
+            }
+            cum[j + 1] = [a, b];
+        }
+    }
+
+    /// The symmetric sky's integrals at a few elevations, if it is one.
+    pub fn coarse(&self) -> Option<&profile::Coarse> {
+        match &self.columns {
+            Columns::Symmetric(c) => Some(c),
+            Columns::Azimuths { .. } => None,
+        }
     }
 
     /// Number of azimuths.
@@ -119,10 +180,18 @@ impl SkyTable {
     /// Azimuth `k`'s cumulative values (up, side) at elevation `g` (linear between steps).
     #[inline]
     fn at(cum: &[[f64; 2]], k: usize, g: f64) -> (f64, f64) {
+        match <&[[f64; 2]; STEPS + 1]>::try_from(&cum[k * (STEPS + 1)..(k + 1) * (STEPS + 1)]) {
+            Ok(row) => Self::read(row, g),
+            Err(_) => (0.0, 0.0), // (every row is STEPS + 1 long)
+        }
+    }
+
+    /// One azimuth's `row` read at elevation `g` (linear between steps).
+    #[inline(always)]
+    fn read(row: &[[f64; 2]; STEPS + 1], g: f64) -> (f64, f64) {
         let x = (g / FRAC_PI_2 * STEPS as f64).clamp(0.0, STEPS as f64);
         let j = (x as usize).min(STEPS - 1);
         let f = x - j as f64;
-        let row = &cum[k * (STEPS + 1)..(k + 1) * (STEPS + 1)];
         let ([u0, s0], [u1, s1]) = (row[j], row[j + 1]);
         (u0 + f * (u1 - u0), s0 + f * (s1 - s0))
     }
@@ -231,23 +300,34 @@ impl VisibleSky {
     /// The illuminance on the five normals relative to E under `table`'s sky, of the point
     /// whose visible elevations are `counts` and `edges` (one count per azimuth of `table`).
     pub fn light_parts(table: &SkyTable, counts: &[u16], edges: &[f64]) -> [f32; CHANNELS] {
+        let (cum, top) = match &table.columns {
+            Columns::Symmetric(c) => {
+                return profile::light(&profile::weights(&table.dirs, counts, edges), c);
+            }
+            Columns::Azimuths { cum, top } => (cum, top),
+        };
         let mut acc = [0.0f64; CHANNELS];
         let mut at_edge = 0;
-        for (k, (&(dx, dz), &n)) in table.dirs.iter().zip(counts).enumerate() {
+        for ((&(dx, dz), &n), (row, &(ut, st))) in table
+            .dirs
+            .iter()
+            .zip(counts)
+            .zip(cum.chunks_exact(STEPS + 1).zip(top))
+        {
             let e = &edges[at_edge..at_edge + usize::from(n)];
             at_edge += usize::from(n);
+            let Ok(row) = <&[[f64; 2]; STEPS + 1]>::try_from(row) else {
+                continue; // (every row is STEPS + 1 long)
+            };
             let (mut up, mut side) = (0.0, 0.0);
             let (pairs, last) = e.as_chunks::<2>();
             for &[a, b] in pairs {
-                let ((ua, sa), (ub, sb)) = (
-                    SkyTable::at(&table.cum, k, a),
-                    SkyTable::at(&table.cum, k, b),
-                );
+                let ((ua, sa), (ub, sb)) = (SkyTable::read(row, a), SkyTable::read(row, b));
                 up += ub - ua;
                 side += sb - sa;
             }
             if let &[a] = last {
-                let ((ua, sa), (ut, st)) = (SkyTable::at(&table.cum, k, a), table.top[k]);
+                let (ua, sa) = SkyTable::read(row, a);
                 up += ut - ua;
                 side += st - sa;
             }

@@ -15,6 +15,8 @@
 //! - [`ambient`]: those five values on a uniform 3D grid, interpolated trilinearly.
 //! - [`horizon`]: what the boxes fix of such a grid (each node's visible sky per azimuth), kept
 //!   to light the map again under another sky without the boxes (a sweep over the weather).
+//! - [`profile`]: a sky the same at every azimuth read at a few elevations, so that a node's
+//!   light is a short dot product of weights the boxes fix with values the sky gives.
 //! - [`sun`]: the sun's direct normal illuminance under a clear sky.
 
 pub mod ambient;
@@ -22,6 +24,7 @@ pub mod cie;
 pub mod horizon;
 pub mod illuminance;
 mod model;
+pub mod profile;
 pub mod sun;
 
 pub use model::{Sky, cloud_base_m, sun_direction};

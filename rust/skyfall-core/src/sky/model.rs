@@ -37,6 +37,15 @@ const MU_BREAKS: [f64; 4] = [0.02, 0.08, 0.25, 0.5];
 /// rule).
 const AZIMUTHS: usize = 360;
 
+/// The sines and cosines of the normalisation's azimuths, (k + ½)·2π/[`AZIMUTHS`]: computed
+/// once (a sky's normalisation reads them 72 000 times).
+fn azimuth_sin_cos() -> &'static [(f64, f64); AZIMUTHS] {
+    static TABLE: std::sync::OnceLock<[(f64, f64); AZIMUTHS]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        std::array::from_fn(|k| ((k as f64 + 0.5) * TAU / AZIMUTHS as f64).sin_cos())
+    })
+}
+
 /// A normalised sky seen through the rain and mist below its cloud base.
 ///
 /// The cloud base emits L_c = s·ℓ(ω), ℓ the sky type's luminance relative to its zenith. Seen
@@ -105,12 +114,10 @@ impl Sky {
     pub fn new(kind: SkyKind, extinction_per_m: f64, cloud_base_m: f64) -> Result<Self> {
         Range::closed(0.0, 1e3, "1/m").check("extinction_per_m", None, extinction_per_m)?;
         crate::ranges::CLOUD_BASE_M.check(cloud_base_m)?;
-        let azimuth = |k: usize| (k as f64 + 0.5) * TAU / AZIMUTHS as f64;
-        let horizon = (0..AZIMUTHS)
-            .map(|k| {
-                let az = azimuth(k);
-                kind.relative_to_zenith(Vec3::new(az.sin() as f32, 0.0, -az.cos() as f32))
-            })
+        let azimuths = azimuth_sin_cos();
+        let horizon = azimuths
+            .iter()
+            .map(|&(sin, cos)| kind.relative_to_zenith(Vec3::new(sin as f32, 0.0, -cos as f32)))
             .sum::<f64>()
             / AZIMUTHS as f64;
         let mut sky = Sky {
@@ -124,9 +131,8 @@ impl Sky {
         let ring = |mu: f64| {
             let (s, c) = (mu, (1.0 - mu * mu).max(0.0).sqrt());
             let mut sum = 0.0;
-            for k in 0..AZIMUTHS {
-                let az = azimuth(k);
-                let dir = Vec3::new((c * az.sin()) as f32, s as f32, (-c * az.cos()) as f32);
+            for &(sin, cos) in azimuths {
+                let dir = Vec3::new((c * sin) as f32, s as f32, (-c * cos) as f32);
                 sum += kind.relative_to_zenith(dir);
             }
             let tau = sky.transmittance(mu);

@@ -9,6 +9,7 @@ struct FarParams {
     dims: vec4<u32>,   // shells K, texture side S, blocks per row, block side (px)
     misc: vec4<f32>,   // 1/delta (texels per rad), shell spacing (m), region radius (m), r
     shear: vec4<f32>,  // shear (x, z), max |tan(elevation)|, a whole turn in texels
+    extra: vec4<f32>,  // the frame's rate's cross-section over the textures' (far::opacity_scale), 0, 0, 0
 }
 
 @group(0) @binding(0) var<uniform> cam: Camera;
@@ -43,7 +44,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = (params.shear.x * -ray.z + params.shear.y * ray.x) / h;
     let a = atan2(ray.x, -ray.z) * inv_delta + s * vv + params.shear.w;
     // sec(elevation) for the oblique crossing; the visible end as a horizontal distance.
-    let scale = norm / h;
+    let scale = norm / h * params.extra.x;
     let end_h = min(depth[i] * h, params.misc.z * h / norm);
     let blk = ((gid.y / params.dims.w) * params.dims.z + gid.x / params.dims.w) * k_n;
     var c = vec3<f32>(rgb[3u * i], rgb[3u * i + 1u], rgb[3u * i + 2u]);

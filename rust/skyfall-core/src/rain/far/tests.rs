@@ -63,7 +63,7 @@ fn a_shells_texture_holds_the_opacity_of_its_drops() {
     let r = region(10.0, 5.0, 2.0, 1);
     let delta = texel_angle(935.0);
     for radius in [2.5, 4.5] {
-        let tex = shell_texture(&r, 1.0 / 60.0, radius, 1.0, delta, 0).unwrap();
+        let tex = shell_texture(&r, r.rain_rate_mm_h, 1.0 / 60.0, radius, 1.0, delta, 0).unwrap();
         let mean = tex.iter().map(|&a| f64::from(a)).sum::<f64>() / tex.len() as f64;
         let mut want = 0.0;
         for &(lo, hi) in &r.bins {
@@ -91,7 +91,10 @@ fn textures_are_cached_with_the_same_bits() {
     let a = textures(&r, 0.02, &radii, dr, delta).unwrap();
     let b = textures(&r, 0.02, &radii, dr, delta).unwrap();
     assert_eq!(a, b);
-    let fresh = shell_texture(&r, 0.02, radii[1], dr, delta, 1).unwrap();
+    // (drawn at the grid's rate and exposure)
+    let (rate, exposure) = (quantised_rate(7.0), quantised_exposure(0.02));
+    assert!((rate / 7.0 - 1.0).abs() < 0.155 && (exposure / 0.02 - 1.0).abs() < 0.045);
+    let fresh = shell_texture(&r, rate, exposure, radii[1], dr, delta, 1).unwrap();
     let s2 = TEXTURE_SIZE * TEXTURE_SIZE;
     for (t, f) in a.0[s2..2 * s2].iter().zip(&fresh) {
         assert_eq!(t.to_bits(), f.to_bits());
@@ -279,4 +282,56 @@ fn the_voxels_skipped_beyond_far_m_hold_none_of_the_near_drops() {
     .collect();
     assert!(!all.is_empty());
     assert_eq!(all, fewer);
+}
+
+#[test]
+fn nearby_rates_share_textures_and_keep_their_own_mean_opacity() {
+    // A frame at a rate off the textures' grid draws the grid rate's textures with their
+    // opacity scaled by the cross-section ratio. Its textures' mean opacity, so scaled, against
+    // textures drawn at the frame's own rate and exposure (each mean over 6 independent
+    // textures, 1024² texels, so that the drops' own Poisson noise, about 0.3 %, stays well
+    // under the bound): within 1 %, the bound, for rates across a decade and
+    // exposures off the grid.
+    let delta = texel_angle(288.0);
+    let (radius, dr) = (3.5, 1.5);
+    let mean = |r: &RainRegion, rate: f64, exposure: f64| {
+        (0..6u64)
+            .map(|k| {
+                let t = shell_texture(r, rate, exposure, radius, dr, delta, k).unwrap();
+                t.iter().map(|&a| f64::from(a)).sum::<f64>() / t.len() as f64
+            })
+            .sum::<f64>()
+            / 6.0
+    };
+    let mut worst = 0.0f64;
+    for (rate, exposure) in [(2.2, 1.0 / 60.0), (7.3, 1.0 / 30.0), (17.0, 1.0 / 100.0)] {
+        let r = region(rate, 5.0, 2.0, 11);
+        let scale = opacity_scale(rate, &r.bins);
+        let got = scale * mean(&r, quantised_rate(rate), quantised_exposure(exposure));
+        let want = mean(&r, rate, exposure);
+        let err = got / want - 1.0;
+        worst = worst.max(err.abs());
+        assert!(
+            err.abs() < 0.01,
+            "{rate} mm/h, {exposure} s: {got} vs {want}"
+        );
+        assert!((0.8..1.25).contains(&scale), "{scale}");
+    }
+    eprintln!("worst mean-opacity error {worst:.2e}");
+    // A frame carries the scale; rates on one grid step share one set of textures.
+    let cam = camera(320, 180, 5.0);
+    let r = region(7.3, 5.0, 2.0, 1);
+    let far = far_of(&r, &cam, false).unwrap().unwrap();
+    assert_eq!(far.opacity_scale, opacity_scale(7.3, &r.bins) as f32);
+    let delta = texel_angle(cam.fy);
+    let (radii, dr) = shells(2.0, 5.0);
+    let (a, b) = (region(5.0, 5.0, 2.0, 1), region(5.4, 5.0, 2.0, 2));
+    assert_eq!(quantised_rate(5.0), quantised_rate(5.4));
+    let (ta, tb) = (
+        textures(&a, 1.0 / 60.0, &radii, dr, delta).unwrap(),
+        textures(&b, 1.0 / 61.0, &radii, dr, delta).unwrap(),
+    );
+    assert!(Arc::ptr_eq(&ta.0, &tb.0));
+    // on the grid the scale is 1 exactly
+    assert_eq!(opacity_scale(10.0, &a.bins), 1.0);
 }
