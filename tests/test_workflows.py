@@ -181,6 +181,7 @@ def test_explore_renders_what_its_sliders_say():
     street = scenes.street()
     explorer = widgets.explore(street, width=W, height=H, seed=2)
     assert set(explorer.sliders) == {"rain_rate_mm_h", "wind_x_m_s", "visibility_m", "exposure_s", "time_s"}
+    assert all(s.continuous_update for s in explorer.sliders.values())  # every slider renders as it moves
     start = explorer.image.value
     direct = Renderer(W, H, backend="cpu")
     np.testing.assert_array_equal(decode_png(start), direct.render_srgb8(street, Weather(rain_rate_mm_h=10.0), seed=2))

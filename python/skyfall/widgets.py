@@ -109,9 +109,10 @@ def explore(
     backend: str = "cpu",
 ) -> Explorer:
     """Sliders for rain rate, wind, visibility, exposure and time over a scene, re-rendering a
-    small frame as they move (the rain rate and visibility when let go: they change the sky,
-    whose ambient-light map is built anew, about 0.6 s for the street; a move of the others
-    renders a 320 x 180 street frame in about 30 ms on 2 cores).
+    small frame as they move (a 320 x 180 street frame in about 30 ms on 2 cores; a move of the
+    rain rate or the visibility, which change the sky, adds its ambient-light map lit from the
+    scene's horizon: about 5 ms under an overcast sky, 35 ms under a sky with a sun, after a
+    first move that finds the horizon, about 0.4 s).
 
     Parameters
     ----------
@@ -155,16 +156,17 @@ def explore(
         lo, hi = SLIDER_SPANS[name]
         return min(max(value, lo), hi)
 
-    # The rain rate and the visibility change the sky, whose ambient-light map is then built
-    # anew (0.6 s for the street on 2 cores): those sliders render when let go, the others
-    # (30 ms a 320 x 180 frame) as they move.
-    def linear(name: str, description: str, value: float, step: float, live: bool = True) -> Any:
+    # Every slider renders as it moves (about 30 ms a 320 x 180 frame of the street on 2 cores).
+    # The rain rate and the visibility change the sky: its ambient-light map is lit from the
+    # scene's horizon, found at the first such move (about 0.4 s, once), then about 5 ms a move
+    # under an overcast sky and 35 ms under a sky with a sun (benches/results/sweeps.md).
+    def linear(name: str, description: str, value: float, step: float) -> Any:
         lo, hi = SLIDER_SPANS[name]
         return ipywidgets.FloatSlider(
-            value=start(name, value), min=lo, max=hi, step=step, description=description, readout_format=".3g", continuous_update=live
+            value=start(name, value), min=lo, max=hi, step=step, description=description, readout_format=".3g", continuous_update=True
         )
 
-    def log(name: str, description: str, value: float, live: bool = True) -> Any:
+    def log(name: str, description: str, value: float) -> Any:
         lo, hi = SLIDER_SPANS[name]
         return ipywidgets.FloatLogSlider(
             value=start(name, value),
@@ -174,13 +176,13 @@ def explore(
             step=0.05,
             description=description,
             readout_format=".3g",
-            continuous_update=live,
+            continuous_update=True,
         )
 
     sliders: dict[str, Any] = {
-        "rain_rate_mm_h": linear("rain_rate_mm_h", "rain mm/h", weather.rain_rate_mm_h, 0.5, live=False),
+        "rain_rate_mm_h": linear("rain_rate_mm_h", "rain mm/h", weather.rain_rate_mm_h, 0.5),
         "wind_x_m_s": linear("wind_x_m_s", "wind x m/s", weather.wind_m_s[0], 0.5),
-        "visibility_m": log("visibility_m", "visibility m", weather.visibility_m, live=False),
+        "visibility_m": log("visibility_m", "visibility m", weather.visibility_m),
     }
     if isinstance(scene, BoxScene):
         sliders["exposure_s"] = log("exposure_s", "exposure s", scene.camera.exposure_s)

@@ -95,20 +95,17 @@ pub fn weights(dirs: &[(f64, f64)], counts: &[u16], edges: &[f64]) -> Weights {
     for (&(dx, dz), &n) in dirs.iter().zip(counts) {
         let e = &edges[at_edge..at_edge + usize::from(n)];
         at_edge += usize::from(n);
-        // This azimuth's share of each channel: up, then n·ω / cos γ of +X, −X, +Z, −Z.
-        let share = [
-            1.0,
-            dx.max(0.0),
-            (-dx).max(0.0),
-            dz.max(0.0),
-            (-dz).max(0.0),
-        ];
+        if e.is_empty() {
+            continue;
+        }
+        // This azimuth's share of each channel: all of up, and n·ω / cos γ of the one vertical
+        // normal of ±X and of ±Z it faces (+X, −X, +Z, −Z are channels 1 to 4).
+        let (cx, fx) = if dx >= 0.0 { (1, dx) } else { (2, -dx) };
+        let (cz, fz) = if dz >= 0.0 { (3, dz) } else { (4, -dz) };
         let mut add = |b: usize, v: f64| {
-            for (row, f) in acc.iter_mut().zip(share) {
-                if f > 0.0 {
-                    row[b] += v * f;
-                }
-            }
+            acc[0][b] += v;
+            acc[cx][b] += v * fx;
+            acc[cz][b] += v * fz;
         };
         // Visible from a to b: +C(b) − C(a); an odd last edge's interval ends at the zenith,
         // the last node exactly.
