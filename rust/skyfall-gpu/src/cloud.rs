@@ -52,7 +52,17 @@ impl FramePass for CloudPass {
             bytes: (zenith_len * 4) as u64,
             limit: u64::from(u32::MAX) * 4,
         })?;
-        let mut packed: Vec<[f32; 8]> = s.splats.iter().map(|p| p.packed()).collect();
+        // (each splat's distance from the camera in its second pad: the pass's early end)
+        let mut packed: Vec<[f32; 8]> = s
+            .splats
+            .iter()
+            .zip(&s.distances)
+            .map(|(p, &dist)| {
+                let mut a = p.packed();
+                a[6] = dist;
+                a
+            })
+            .collect();
         if packed.is_empty() {
             packed.push([0.0; 8]); // a binding may not be empty; the tile lists are empty
         }
@@ -74,7 +84,7 @@ impl FramePass for CloudPass {
             ],
             sun_g: sun_dir,
             sun_light: [l.sun.x, l.sun.y, l.sun.z, if s.diffuse { 1.0 } else { 0.0 }],
-            sky_light: [l.sky.x, l.sky.y, l.sky.z, 0.0],
+            sky_light: [l.sky.x, l.sky.y, l.sky.z, s.reach_m],
             sun_volume: VolumeUniform::new(sun_view, sun_offset),
             zenith_volume: VolumeUniform::new(Some(&s.zenith), 0),
         };

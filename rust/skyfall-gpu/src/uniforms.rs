@@ -389,7 +389,8 @@ pub struct CloudUniform {
     pub sun_g: [f32; 4],
     /// The sun's normal illuminance over E per channel (xyz); the diffuse light on (w = 1).
     pub sun_light: [f32; 4],
-    /// The open sky's light per channel (xyz).
+    /// The open sky's light per channel (xyz); the splats' farthest reach from their centres,
+    /// m (w: `CloudSplats::reach_m`).
     pub sky_light: [f32; 4],
     /// The sun's Γ.
     pub sun_volume: VolumeUniform,

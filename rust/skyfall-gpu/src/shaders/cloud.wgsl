@@ -7,14 +7,14 @@ struct CloudInfo {
     counts: vec4<u32>,   // tiles across, tile side (px), sun present, cloud_alpha written
     sun_g: vec4<f32>,    // towards the sun, g
     sun_light: vec4<f32>,   // the sun's light (xyz), diffuse light on (w != 0)
-    sky_light: vec4<f32>,
+    sky_light: vec4<f32>,   // the sky's light (xyz), the splats' farthest reach (w, m)
     sun_volume: VolumeBox,
     zenith_volume: VolumeBox,
 }
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<uniform> info: CloudInfo;
-@group(0) @binding(2) var<storage, read> splats: array<vec4<f32>>;   // 2 per splat
+@group(0) @binding(2) var<storage, read> splats: array<vec4<f32>>;   // 2 per splat: centre, r; tau, albedo, distance, 0
 @group(0) @binding(3) var<storage, read> offsets: array<u32>;
 @group(0) @binding(4) var<storage, read> indices: array<u32>;
 @group(0) @binding(5) var<storage, read> gammas: array<f32>;   // the zenith's volume, then the sun's
@@ -111,12 +111,18 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let dep = depth[i];
         var acc = vec3<f32>(0.0);
         var trans = 1.0;
+        // The splats end at the first whose centre is farther than the scene by more than
+        // any support (CloudSplats::apply_row).
+        let beyond = (dep / axial + info.sky_light.w) * 1.001 + 0.01;
         // Near to far (the lists are far to near), stopped once the light from behind is
         // below MIN_TRANSMITTANCE (CloudSplats::apply_row).
         for (var j = end; j > start; j--) {
             let k = indices[j - 1u];
             let s0 = splats[2u * k];
             let s1 = splats[2u * k + 1u];
+            if s1.z >= beyond {
+                break;
+            }
             let centre = s0.xyz;
             let along = dot(centre, d);
             if along <= 0.0 || along * axial >= dep {
