@@ -313,6 +313,7 @@ def test_a_sweep_over_rain_and_visibility_reads_the_street_within_1e_3_of_the_fu
         own = np.abs(a - b) / np.maximum(np.abs(b), 1e-2)
         assert node.max() < 1e-3 and own.max() < 1e-3, (w, node.max(), own.max())
         assert not np.array_equal(a, b)  # the reading differs from the reference (within the bound)
+        assert lit.values.min() >= 0.0  # light is never negative (the weights' rounding is clamped)
     assert horizon.nbytes > before  # the weights, made at the first such sky and kept
     # A sky with a sun varies with azimuth: read along every azimuth, as built directly.
     sun = Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=140.0, rain_rate_mm_h=1.0).sky_model()

@@ -124,17 +124,19 @@ pub fn weights(dirs: &[(f64, f64)], counts: &[u16], edges: &[f64]) -> Weights {
 }
 
 /// The illuminance on the five normals relative to E of a point with weights `w` under the
-/// symmetric sky `c`.
+/// symmetric sky `c`, at least 0 (where a point sees no sky on a normal, its weights' sum
+/// rounds to about ±1e-7 rather than 0; light is never negative).
 #[inline]
 pub fn light(w: &Weights, c: &Coarse) -> [f32; CHANNELS] {
     let mut out = [0.0f32; CHANNELS];
     for (ch, (o, row)) in out.iter_mut().zip(w).enumerate() {
         let col = if ch == 0 { &c.up } else { &c.side };
-        *o = row
+        *o = (row
             .iter()
             .zip(col)
             .map(|(&wb, &cb)| f64::from(wb) * cb)
-            .sum::<f64>() as f32;
+            .sum::<f64>() as f32)
+            .max(0.0);
     }
     out
 }
