@@ -351,6 +351,11 @@ pub fn drawn_share(rain_rate_mm_h: f64, diameters_mm: &[f64]) -> f64 {
     let Ok(bins) = crate::rain::bins::diameter_bins(diameters_mm) else {
         return 0.0;
     };
+    bins_share(rain_rate_mm_h, &bins)
+}
+
+/// [`drawn_share`] of diameter bins (lo, hi) already made, mm.
+pub fn bins_share(rain_rate_mm_h: f64, bins: &[(f64, f64)]) -> f64 {
     if rain_rate_mm_h <= 0.0 {
         return 0.0;
     }

@@ -195,31 +195,31 @@ impl AmbientMap {
         cancel: &AtomicBool,
     ) -> Result<Self> {
         let plan = FillPlan::new(dims, &is_solid, cancel)?;
-        Self::finish_planned(min_m, s, dims, values, &is_solid, &plan)
+        let mut solid = try_filled("the ambient map's solid nodes", is_solid.len(), 0u32)?;
+        for (o, &b) in solid.iter_mut().zip(&is_solid) {
+            *o = u32::from(b);
+        }
+        Ok(Self::finish_planned(min_m, s, dims, values, solid, &plan))
     }
 
     /// [`Self::finish`] with the solid nodes' fill planned before ([`FillPlan::new`] of these
-    /// `dims` and `is_solid`): the same map.
+    /// `dims` and solid nodes), `solid` those nodes as the map holds them: the same map.
     pub(crate) fn finish_planned(
         min_m: Vec3,
         s: f32,
         dims: [usize; 3],
         mut values: Vec<f32>,
-        is_solid: &[bool],
+        solid: Vec<u32>,
         plan: &FillPlan,
-    ) -> Result<Self> {
-        let mut solid = try_filled("the ambient map's solid nodes", is_solid.len(), 0u32)?;
-        for (o, &b) in solid.iter_mut().zip(is_solid) {
-            *o = u32::from(b);
-        }
+    ) -> Self {
         plan.apply(&mut values);
-        Ok(AmbientMap {
+        AmbientMap {
             origin_m: min_m,
             spacing_m: s,
             dims,
             values,
             solid,
-        })
+        }
     }
 
     /// Trilinear interpolation of the five channels at `p` (clamped to the grid) over the

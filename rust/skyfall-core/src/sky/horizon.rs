@@ -50,7 +50,9 @@ pub struct Horizon {
     azimuths: usize,
     /// Columns (x, height) in the map's order, each its z nodes.
     columns: Vec<Column>,
-    /// How the solid nodes are filled from the open ones.
+    /// The solid nodes as a map holds them (1 inside a box), and how they are filled from the
+    /// open ones.
+    solid: Vec<u32>,
     fill: FillPlan,
     /// Each column's open nodes' weights under a symmetric sky ([`profile::weights`]), made
     /// at the first one; None when there was no memory for them (each node's are then made as
@@ -137,7 +139,12 @@ impl Horizon {
             out.copy_from_slice(&col.solid);
         }
         let fill = FillPlan::new(dims, &is_solid, cancel)?;
+        let mut solid = try_filled("the ambient map's solid nodes", is_solid.len(), 0u32)?;
+        for (o, &b) in solid.iter_mut().zip(&is_solid) {
+            *o = u32::from(b);
+        }
         Ok(Horizon {
+            solid,
             fill,
             origin_m: min_m,
             spacing_m: s,
@@ -165,6 +172,7 @@ impl Horizon {
             _ => 0,
         };
         weights
+            + 4 * self.solid.len()
             + self.fill.bytes()
             + self
                 .columns
@@ -219,7 +227,8 @@ impl Horizon {
         let [nx, ny, nz] = self.dims;
         let nodes = nx * ny * nz;
         let mut values = try_filled("the ambient map's values", nodes * CHANNELS, 0.0f32)?;
-        let mut is_solid = try_filled("the ambient map's solid nodes", nodes, false)?;
+        let mut solid = try_filled("the ambient map's solid nodes", nodes, 0u32)?;
+        solid.copy_from_slice(&self.solid);
         let n_az = self.azimuths;
         let coarse = table.coarse();
         let weights = coarse.and_then(|_| {
@@ -229,11 +238,9 @@ impl Horizon {
         });
         values
             .par_chunks_mut(nz * CHANNELS)
-            .zip(is_solid.par_chunks_mut(nz))
             .zip(self.columns.par_iter())
             .enumerate()
-            .for_each(|(ci, ((column, solid_col), col))| {
-                solid_col.copy_from_slice(&col.solid);
+            .for_each(|(ci, (column, col))| {
                 let (mut node, mut edge) = (0, 0);
                 for k in 0..nz {
                     if col.solid[k] {
@@ -254,14 +261,14 @@ impl Horizon {
                 }
             });
         check_cancel(cancel, "the ambient-light map")?;
-        AmbientMap::finish_planned(
+        Ok(AmbientMap::finish_planned(
             self.origin_m,
             self.spacing_m,
             self.dims,
             values,
-            &is_solid,
+            solid,
             &self.fill,
-        )
+        ))
     }
 }
 

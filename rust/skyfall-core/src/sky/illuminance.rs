@@ -72,7 +72,7 @@ enum Columns {
         /// the horizontal and the vertical surfaces' cumulative integrals, side by side (a
         /// node's edge reads both).
         cum: Vec<[f64; 2]>,
-        /// Each azimuth's `up` and `side` read at the zenith (as [`SkyTable::at`] reads them),
+        /// Each azimuth's `up` and `side` read at the zenith (as [`SkyTable::read`] reads them),
         /// the end of every node's highest visible interval.
         top: Vec<(f64, f64)>,
     },
@@ -125,8 +125,12 @@ impl SkyTable {
                 }
             });
         check_cancel(cancel, "the sky table")?;
-        let top = (0..azimuths)
-            .map(|k| SkyTable::at(&cum, k, FRAC_PI_2))
+        let top = cum
+            .chunks_exact(STEPS + 1)
+            .map(|row| {
+                <&[[f64; 2]; STEPS + 1]>::try_from(row)
+                    .map_or((0.0, 0.0), |r| Self::read(r, FRAC_PI_2))
+            })
             .collect();
         Ok(SkyTable {
             dirs,
@@ -175,15 +179,6 @@ impl SkyTable {
     /// The azimuths, as unit horizontal directions (sin φ, −cos φ).
     pub fn dirs(&self) -> &[(f64, f64)] {
         &self.dirs
-    }
-
-    /// Azimuth `k`'s cumulative values (up, side) at elevation `g` (linear between steps).
-    #[inline]
-    fn at(cum: &[[f64; 2]], k: usize, g: f64) -> (f64, f64) {
-        match <&[[f64; 2]; STEPS + 1]>::try_from(&cum[k * (STEPS + 1)..(k + 1) * (STEPS + 1)]) {
-            Ok(row) => Self::read(row, g),
-            Err(_) => (0.0, 0.0), // (every row is STEPS + 1 long)
-        }
     }
 
     /// One azimuth's `row` read at elevation `g` (linear between steps).
