@@ -343,28 +343,13 @@ impl SkySpec {
     }
 }
 
-/// The drawn bins' share of the rain's extinction: Marshall–Palmer's ∫ N D² dD over the
-/// bins of `diameters_mm` over that over [0, ∞), in closed form (the D² moment of e^(−ΛD)
-/// below x = ΛD is 2·P(3, x), P the regularised incomplete gamma function:
-/// 1 − e^(−x)(1 + x + x²/2)). 0 for bins that cannot be made.
+/// The drawn bins' share of the rain's extinction: [`crate::physics::extinction::bins_share`]
+/// of the bins of `diameters_mm`; 0 for bins that cannot be made.
 pub fn drawn_share(rain_rate_mm_h: f64, diameters_mm: &[f64]) -> f64 {
     let Ok(bins) = crate::rain::bins::diameter_bins(diameters_mm) else {
         return 0.0;
     };
-    bins_share(rain_rate_mm_h, &bins)
-}
-
-/// [`drawn_share`] of diameter bins (lo, hi) already made, mm.
-pub fn bins_share(rain_rate_mm_h: f64, bins: &[(f64, f64)]) -> f64 {
-    if rain_rate_mm_h <= 0.0 {
-        return 0.0;
-    }
-    let lam = crate::physics::dsd::mp_slope_per_mm(rain_rate_mm_h);
-    let below = |d: f64| {
-        let x = lam * d;
-        -(-x).exp_m1() - (-x).exp() * (x + 0.5 * x * x)
-    };
-    bins.iter().map(|&(lo, hi)| below(hi) - below(lo)).sum()
+    crate::physics::extinction::bins_share(rain_rate_mm_h, &bins)
 }
 
 impl TryFrom<&Weather> for crate::snow::cover::CoverWeather {

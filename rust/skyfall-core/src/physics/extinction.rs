@@ -17,6 +17,22 @@ pub fn rain_extinction_per_m(rain_rate_mm_h: f64) -> f64 {
     std::f64::consts::PI * MP_N0_PER_M3_MM / lam.powi(3) * 1e-6
 }
 
+/// The share of the rain's extinction that diameter bins (lo, hi) mm carry: Marshall–Palmer's
+/// ∫ N D² dD over the bins over that over [0, ∞), in closed form (the D² moment of e^(−ΛD)
+/// below x = ΛD is 2·P(3, x), P the regularised incomplete gamma function:
+/// 1 − e^(−x)(1 + x + x²/2)); 0 for R = 0.
+pub fn bins_share(rain_rate_mm_h: f64, bins: &[(f64, f64)]) -> f64 {
+    if rain_rate_mm_h <= 0.0 {
+        return 0.0;
+    }
+    let lam = mp_slope_per_mm(rain_rate_mm_h);
+    let below = |d: f64| {
+        let x = lam * d;
+        -(-x).exp_m1() - (-x).exp() * (x + 0.5 * x * x)
+    };
+    bins.iter().map(|&(lo, hi)| below(hi) - below(lo)).sum()
+}
+
 /// Vectorised [`rain_extinction_per_m`].
 pub fn rain_extinction_many(rain_rate_mm_h: &[f64]) -> Result<Vec<f64>> {
     RAIN_RATE_MM_H.check_all("rain_rate_mm_h", rain_rate_mm_h)?;

@@ -231,10 +231,10 @@ fn on_log_grid(x: f64, base: f64, log: fn(f64) -> f64, steps: f64) -> f64 {
 
 /// The drops' cross-section per m³ of air, Σ over `bins` of ∫ N(D)·πD²/4 dD (Marshall–Palmer
 /// at `rain_rate_mm_h`), m²/m³: what a shell's mean opacity is proportional to. Half the rain's
-/// extinction (Q = 2) times the bins' share of it ([`crate::weather::bins_share`]).
+/// extinction (Q = 2) times the bins' share of it ([`crate::physics::extinction::bins_share`]).
 pub fn cross_section_per_m3(rain_rate_mm_h: f64, bins: &[(f64, f64)]) -> f64 {
     0.5 * crate::physics::extinction::rain_extinction_per_m(rain_rate_mm_h)
-        * crate::weather::bins_share(rain_rate_mm_h, bins)
+        * crate::physics::extinction::bins_share(rain_rate_mm_h, bins)
 }
 
 /// What a frame at `rain_rate_mm_h` scales its textures' opacity by: its rate's cross-section
