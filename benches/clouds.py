@@ -2,8 +2,10 @@
 
 For generated cumuli of 9 382 / 32 914 / 60 134 particles (the paper's counts): Harris' sorted
 recurrence (the reference and the baseline), the attenuation volume's build at 128^3 / 256^3 /
-384^3 with its error against Harris at the particle centres, and the memory floor (numpy
-allocating and writing a volume of the same size once), all in this run.
+384^3 with its error against Harris at the particle centres, and two memory floors, all in this
+run: numpy allocating and writing a volume of the same size once (the output alone), and numpy
+writing one float32 per voxel of the particles' footprints (the discs of radius 2.5 r across the
+light, in the volume's voxels: what any splatting build must touch at least once).
 
 Then the cloud pass in frames: the demo's street under the "broken" preset at 1920 x 1080 on
 both backends against the same frame without clouds, and the preset's two volumes' build.
@@ -37,6 +39,26 @@ def floor_s(resolution: int) -> float:
 
     def write() -> None:
         a = np.empty((resolution,) * 3, np.float32)
+        a.fill(1.0)
+
+    return median_s(write, 5)
+
+
+def footprint_voxels(cloud: clouds.Cloud, vol: clouds.AttenuationVolume) -> int:
+    """Voxels of the particles' footprints across the light, summed: each particle's disc of
+    radius CUTOFF_RADII r over the area of a voxel's face across the light (at least one)."""
+    edges = vol.world_from_volume[:3, :3]
+    r = vol.resolution
+    face = np.linalg.norm(edges[:, 0]) / r * np.linalg.norm(edges[:, 1]) / r
+    cut = 2.5 * np.asarray(cloud.radii_m)
+    return int(np.maximum(np.pi * cut**2 / face, 1.0).sum())
+
+
+def write_floor_s(n: int) -> float:
+    """Allocating and writing n float32 once, seconds (median)."""
+
+    def write() -> None:
+        a = np.empty(n, np.float32)
         a.fill(1.0)
 
     return median_s(write, 5)
@@ -77,6 +99,7 @@ def main() -> None:
             vol = clouds.attenuation_volume(cloud, SUN, resolution=r)
             err = np.abs(vol.sample(cloud.positions_m).astype(np.float64) / harris - 1.0)
             build = median_s(lambda c=cloud, r=r: clouds.attenuation_volume(c, SUN, resolution=r), 3 if r < 384 else 1)
+            footprints = footprint_voxels(cloud, vol)
             rows.append(
                 {
                     "particles": n,
@@ -84,6 +107,8 @@ def main() -> None:
                     "harris_s": harris_s,
                     "volume_s": build,
                     "floor_s": floors[r],
+                    "footprint_voxels": footprints,
+                    "footprint_floor_s": write_floor_s(footprints),
                     "median_rel_err": float(np.median(err)),
                     "p95_rel_err": float(np.percentile(err, 95)),
                 }
@@ -109,18 +134,22 @@ def main() -> None:
         "Generated cumuli (`clouds.particles('cumulus', n_particles=N, seed=0)`, 1500 m wide), sun",
         "(0.4, 0.8, -0.3). Harris: the sorted recurrence with exact footprints (one thread: it is",
         "sequential). Volume: `attenuation_volume` (splat + prefix sum, the thread pool). Floor: numpy",
-        "allocating and writing an (R, R, R) float32 array once. Error: |Gamma(centre) / Harris - 1| over",
-        "the particles. Paper: its Table 1 on a GeForce 8800 GTX (Harris | volume), seconds.",
+        "allocating and writing an (R, R, R) float32 array once (the output alone). Footprints: the",
+        "particles' footprint voxels across the light (discs of 2.5 r in the volume's voxels), which any",
+        "splatting build writes at least once; their floor: numpy allocating and writing that many float32",
+        "once. Error: |Gamma(centre) / Harris - 1| over the particles. Paper: its Table 1 on a GeForce",
+        "8800 GTX (Harris | volume), seconds.",
         "",
-        "| particles | R | Harris | volume | floor | volume / floor | Harris / volume | median err | p95 err | paper Harris | paper volume |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| particles | R | Harris | volume | floor | volume / floor | footprints | their floor | volume / their floor | Harris / volume | median err | p95 err | paper Harris | paper volume |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
         paper = PAPER[row["particles"]]
         pv = paper[1 + RESOLUTIONS.index(row["resolution"])]
         lines.append(
             f"| {row['particles']:,} | {row['resolution']}³ | {row['harris_s'] * 1e3:.0f} ms | {row['volume_s'] * 1e3:.1f} ms | "
-            f"{row['floor_s'] * 1e3:.1f} ms | {row['volume_s'] / row['floor_s']:.1f} | {row['harris_s'] / row['volume_s']:.1f} | "
+            f"{row['floor_s'] * 1e3:.1f} ms | {row['volume_s'] / row['floor_s']:.1f} | {row['footprint_voxels'] / 1e6:.1f} M | "
+            f"{row['footprint_floor_s'] * 1e3:.1f} ms | {row['volume_s'] / row['footprint_floor_s']:.1f} | {row['harris_s'] / row['volume_s']:.1f} | "
             f"{row['median_rel_err']:.3f} | {row['p95_rel_err']:.3f} | {paper[0]:.3f} s | {pv * 1e3:.0f} ms |"
         )
     lines += [
@@ -138,7 +167,8 @@ def main() -> None:
         "caches the cloud's volumes; 'without' is the same frame with `clouds=None` (the sun and its",
         "box shadows still drawn). The cloud pass: splats sorted far to near on the CPU, listed per",
         "16 px tile by an exact sphere-against-pyramid test, composited near to far per pixel with",
-        "both volumes read per fragment, stopping below 1/1024 transmittance.",
+        "both volumes read per fragment, stopping below 1/1024 transmittance; on the CPU a tile's row",
+        "of 16 pixels walks its list together (`CloudSplats::composite`).",
         "",
         f"Building the preset's two volumes (sun and zenith, {frames['resolution']}³ each): {frames['build_s'] * 1e3:.0f} ms.",
         "",

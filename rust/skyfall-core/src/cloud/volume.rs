@@ -47,6 +47,10 @@ pub struct AttenuationVolume {
     pub resolution: usize,
     /// Γ per voxel, R³ values (layout in the module's notes).
     pub gamma: Vec<f32>,
+    /// Γ at the far face (the last voxel of each column along the light), R² values: where
+    /// the light leaves the box. The same values as `gamma`'s, kept together so that a frame,
+    /// which reads them per fragment, finds them in cache.
+    pub exit: Vec<f32>,
     /// The box: world position of its corner and its three edges.
     pub grid: VolumeBox,
 }
@@ -165,9 +169,12 @@ impl AttenuationVolume {
         let n = ranges::RESOLUTION.check(resolution as f64)? as usize;
         let mut gamma = try_filled_par("the attenuation volume", n * n * n, 0.0f32)?;
         let grid = Self::build_into(cloud, sun, n, &mut gamma)?;
+        let mut exit = crate::error::try_with_capacity("the attenuation volume", n * n)?;
+        exit.extend(gamma.chunks_exact(n).map(|column| column[n - 1]));
         Ok(AttenuationVolume {
             resolution: n,
             gamma,
+            exit,
             grid,
         })
     }

@@ -55,22 +55,20 @@ fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
     return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
 }
 
-// skyfall_core::cloud::frame::diffuse_share: the two-stream transmission of the column.
-fn diffuse_share(gamma: f32, g: f32) -> f32 {
-    let tau = -log(max(gamma, 1e-30)) / (1.0 - g * g);
-    return 1.0 / (1.0 + 0.75 * (1.0 - g) * tau);
-}
-
-// skyfall_core::cloud::frame::diffuse_light.
+// skyfall_core::cloud::frame::diffuse_light: with k = 3/4/(1 + g), a = -k ln(gamma) and
+// b = k ln(gamma/exit), D = 1/(1 + a) and D R = b/((1 + a)(1 + b)).
 fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
-    let d = diffuse_share(gamma, g);
-    let below = max(log(max(gamma, 1e-30)) - log(max(exit, 1e-30)), 0.0) / (1.0 - g * g);
-    let r = 1.0 - 1.0 / (1.0 + 0.75 * (1.0 - g) * below);
+    let k = 0.75 / (1.0 + g);
+    let ln_gamma = log(max(gamma, 1e-30));
+    let above = -k * ln_gamma;
+    let below = max(k * (ln_gamma - log(max(exit, 1e-30))), 0.0);
+    let q = 1.0 / ((1.0 + above) * (1.0 + below));
+    let d = (1.0 + below) * q;
     var reaching = max(d - gamma, 0.0);
     if with_direct {
         reaching = d;
     }
-    return reaching + 0.5 * d * r;
+    return reaching + 0.5 * below * q;
 }
 
 // CloudSplats::source.
