@@ -494,6 +494,8 @@ pub struct Metaball {
 pub struct Windshield {
     pub(super) config: WindshieldConfig,
     wetting: Wetting,
+    /// `wetting.volume_per_a3()`, kept: a drop's base radius is asked for per drop and step.
+    volume_per_a3: f64,
     pub(super) nx: usize,
     pub(super) ny: usize,
     affinity: Vec<f32>,
@@ -542,6 +544,7 @@ impl Windshield {
             .collect();
         let mut w = Windshield {
             wetting: config.wetting(),
+            volume_per_a3: config.wetting().volume_per_a3(),
             bins: config.bins(),
             lumps: config.lumps(),
             nx,
@@ -611,7 +614,13 @@ impl Windshield {
 
     /// A drop's base radius, mm.
     pub fn base_radius_mm(&self, mass_kg: f64) -> f64 {
-        self.wetting.base_radius_m(mass_kg / WATER_DENSITY_KG_M3) * 1e3
+        self.base_radius_m(mass_kg / WATER_DENSITY_KG_M3) * 1e3
+    }
+
+    /// The base radius a, m, of a cap of volume `volume_m3` ([`Wetting::base_radius_m`] from
+    /// the kept volume per a³).
+    fn base_radius_m(&self, volume_m3: f64) -> f64 {
+        (volume_m3.max(0.0) / self.volume_per_a3).cbrt()
     }
 
     /// The largest mesh drop's base radius, mm (0 on dry glass).
@@ -825,7 +834,7 @@ impl Windshield {
 
     /// The quasi-steady sliding speed, m/s (signed along y), of a drop of `mass`.
     pub fn slide_speed_m_s(&self, mass: f64) -> f64 {
-        let a = self.wetting.base_radius_m(mass / WATER_DENSITY_KG_M3);
+        let a = self.base_radius_m(mass / WATER_DENSITY_KG_M3);
         let f = self.drive_n(mass, a);
         let excess = f.abs() - self.wetting.retention_n(a);
         if excess <= 0.0 || a <= SLIP_LENGTH_M {
@@ -1021,11 +1030,22 @@ impl Windshield {
 
     /// Whether (x, y) lies within `margin` mm of wiper `w`'s blade at `theta`, or was swept
     /// over between `theta0` and `theta1`.
+    /// Whether (x, y) lies within `margin` mm of wiper `w`'s reach (as [`Self::swept`] first
+    /// asks: a point outside it is never swept with that margin or a smaller one).
+    fn within_reach(w: &Wiper, x: f64, y: f64, margin: f64) -> bool {
+        let (dx, dy) = (x - w.pivot_mm[0], w.pivot_mm[1] - y);
+        let rho = (dx * dx + dy * dy).sqrt();
+        rho <= w.length_mm + margin && rho > 1e-9
+    }
+
     fn swept(w: &Wiper, x: f64, y: f64, theta0: f64, theta1: f64, margin: f64) -> bool {
-        let (rho, phi) = Self::polar(w, x, y);
+        // ρ first: most drops lie beyond a blade's reach, and the angle costs an atan2.
+        let (dx, dy) = (x - w.pivot_mm[0], w.pivot_mm[1] - y);
+        let rho = (dx * dx + dy * dy).sqrt();
         if rho > w.length_mm + margin || rho <= 1e-9 {
             return false;
         }
+        let phi = dy.atan2(dx);
         let m = ((0.5 * w.width_mm + margin) / rho).min(std::f64::consts::PI);
         let (lo, hi) = (theta0.min(theta1) - m, theta0.max(theta1) + m);
         phi >= lo && phi <= hi
@@ -1044,18 +1064,25 @@ impl Windshield {
         let r = self.config.particle_radius_mm;
         let m_p = self.particle_mass_kg();
         let wipers = self.config.wipers.clone();
-        // mesh -> particles: drops the blades touch or sweep over (found in parallel)
+        // mesh -> particles: drops the blades touch or sweep over (found in parallel); a drop
+        // beyond every blade's reach by the largest drop's radius is passed over before its
+        // own radius (a cube root) is computed
+        let a_max = self.largest_base_radius_mm();
         let touched: Vec<bool> = self
             .state
             .drops
             .par_iter()
             .map(|d| {
-                d.mass_kg > 0.0 && {
-                    let a = self.base_radius_mm(d.mass_kg);
-                    wipers
+                d.mass_kg > 0.0
+                    && wipers
                         .iter()
-                        .any(|w| Self::swept(w, d.x_mm, d.y_mm, theta0, theta1, a))
-                }
+                        .any(|w| Self::within_reach(w, d.x_mm, d.y_mm, a_max))
+                    && {
+                        let a = self.base_radius_mm(d.mass_kg);
+                        wipers
+                            .iter()
+                            .any(|w| Self::swept(w, d.x_mm, d.y_mm, theta0, theta1, a))
+                    }
             })
             .collect();
         for (i, &hit) in touched.iter().enumerate() {
@@ -1194,10 +1221,31 @@ impl Windshield {
             })
             .collect();
         order.sort_unstable();
-        let find = |bx: i64, by: i64| -> &[(i64, i64, u32)] {
-            let lo = order.partition_point(|&(y, x, _)| (y, x) < (by, bx));
-            let hi = order.partition_point(|&(y, x, _)| (y, x) <= (by, bx));
-            &order[lo..hi]
+        // Each row of cells' run of `order` (its first entry), so that a particle finds its
+        // three rows with one search among the rows, then its three cells within each row:
+        // the same entries, in the same order, as a search of the whole list per cell.
+        let mut rows: Vec<(i64, usize)> = Vec::new();
+        for (n, &(y, _, _)) in order.iter().enumerate() {
+            if rows.last().is_none_or(|r| r.0 != y) {
+                rows.push((y, n));
+            }
+        }
+        // Per row by − 1 ..= by + 1, cells bx − 1 ..= bx + 1: contiguous in `order`, sorted by
+        // (y, x, index).
+        let near = |bx: i64, by: i64| -> [&[(i64, i64, u32)]; 3] {
+            let mut out: [&[(i64, i64, u32)]; 3] = [&[]; 3];
+            let mut k = rows.partition_point(|r| r.0 < by - 1);
+            for (o, y) in (by - 1..=by + 1).enumerate() {
+                if k < rows.len() && rows[k].0 == y {
+                    let end = rows.get(k + 1).map_or(order.len(), |r| r.1);
+                    let run = &order[rows[k].1..end];
+                    let lo = run.partition_point(|&(_, x, _)| x < bx - 1);
+                    let hi = lo + run[lo..].partition_point(|&(_, x, _)| x <= bx + 1);
+                    out[o] = &run[lo..hi];
+                    k += 1;
+                }
+            }
+            out
         };
         let gain = 0.5 * (1.0 + self.config.penalty);
         let moves: Vec<(f64, f64)> = ps
@@ -1207,35 +1255,33 @@ impl Windshield {
                 let (bx, by) = key(p);
                 let (mut mx, mut my) = (0.0, 0.0);
                 let mut met = 0usize;
-                'cells: for oy in -1..=1 {
-                    for ox in -1..=1 {
-                        for &(_, _, j) in find(bx + ox, by + oy) {
-                            let j = j as usize;
-                            if j == i {
-                                continue;
-                            }
-                            let q = &ps[j];
-                            let (dx, dy) = (p.x_mm - q.x_mm, p.y_mm - q.y_mm);
-                            let d2 = dx * dx + dy * dy;
-                            if d2 >= d0 * d0 {
-                                continue;
-                            }
-                            met += 1;
-                            if met > MAX_NEIGHBOURS {
-                                break 'cells;
-                            }
-                            let dist = d2.sqrt();
-                            let overlap = d0 - dist;
-                            let (ux, uy) = if dist > 1e-9 {
-                                (dx / dist, dy / dist)
-                            } else {
-                                // coincident: apart along a direction fixed by the pair
-                                let a = if i < j { 0.0 } else { std::f64::consts::PI };
-                                (a.cos(), a.sin())
-                            };
-                            mx += gain * overlap * ux;
-                            my += gain * overlap * uy;
+                'cells: for run in near(bx, by) {
+                    for &(_, _, j) in run {
+                        let j = j as usize;
+                        if j == i {
+                            continue;
                         }
+                        let q = &ps[j];
+                        let (dx, dy) = (p.x_mm - q.x_mm, p.y_mm - q.y_mm);
+                        let d2 = dx * dx + dy * dy;
+                        if d2 >= d0 * d0 {
+                            continue;
+                        }
+                        met += 1;
+                        if met > MAX_NEIGHBOURS {
+                            break 'cells;
+                        }
+                        let dist = d2.sqrt();
+                        let overlap = d0 - dist;
+                        let (ux, uy) = if dist > 1e-9 {
+                            (dx / dist, dy / dist)
+                        } else {
+                            // coincident: apart along a direction fixed by the pair
+                            let a = if i < j { 0.0 } else { std::f64::consts::PI };
+                            (a.cos(), a.sin())
+                        };
+                        mx += gain * overlap * ux;
+                        my += gain * overlap * uy;
                     }
                 }
                 (mx, my)
