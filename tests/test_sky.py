@@ -286,6 +286,27 @@ def test_a_map_under_a_new_sky_is_lit_from_the_scenes_horizon():
     assert m.dims == [141, 15, 141]
 
 
+def test_expect_sweeps_lights_the_first_sky_from_the_horizon_with_the_same_bits():
+    # After expect_sweeps() a geometry's first map finds its horizon at once (the dataset
+    # workers' path); the map equals the one built directly, and False restores the default
+    # (a new geometry's first map built directly, no horizon found).
+    boxes = sky._occluders(canyon(11.0, 9.0))
+    lo, hi = np.array([-3.0, 0.0, -3.0]), np.array([3.0, 2.0, 3.0])
+    w = Weather(rain_rate_mm_h=7.0)
+    direct = w.sky_model().ambient_map(boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=1.0, samples=128)
+    try:
+        sky.expect_sweeps()
+        m = sky.cached_core_map(boxes, w, lo, hi, 1.0, 128)
+        key = (boxes.tobytes(), boxes.shape, tuple(lo), tuple(hi), 1.0, 128)
+        assert sky._horizons.get(key) is not None
+        assert np.array_equal(m.values, direct.values) and np.array_equal(m.solid, direct.solid)
+    finally:
+        sky.expect_sweeps(False)
+    lo2 = lo - 1.0
+    sky.cached_core_map(boxes, w, lo2, hi, 1.0, 128)
+    assert (boxes.tobytes(), boxes.shape, tuple(lo2), tuple(hi), 1.0, 128) not in sky._horizons
+
+
 def test_a_sweep_over_rain_and_visibility_reads_the_street_within_1e_3_of_the_full_tables():
     # Under a sky the same at every azimuth (overcast, in any rain or mist) a node's light is a
     # dot product of weights the street fixes with the sky's integrals at 24 elevations

@@ -44,6 +44,7 @@ __all__ = [
     "AmbientLightMap",
     "ambient_light_map",
     "cloud_base_m",
+    "expect_sweeps",
     "horizontal_illuminance",
     "luminance",
 ]
@@ -297,6 +298,29 @@ _geometries: OrderedDict[tuple[Any, ...], None] = OrderedDict()  # geometries wi
 _HORIZONS = 2
 
 
+_sweeping = False  # expect_sweeps(): every geometry's first sky lit from its horizon
+
+
+def expect_sweeps(on: bool = True) -> None:
+    """Light the first sky over each scene from the scene's horizon, in this process.
+
+    A box scene's ambient map under its first sky is built directly (324 ms on the bundled
+    street); a second sky over the same scene finds the scene's horizon (what its boxes hide,
+    about 260 ms) and lights every later sky from it (about 5 ms overcast, 35 ms with a sun). A
+    process that will render many weathers over a scene (a parameter sweep, a dataset worker:
+    ``skyfall dataset --scene`` turns this on in each worker) saves the first direct build by
+    finding the horizon at once. The maps are the same bits either way; the horizon costs memory
+    (131 MB for the street with its overcast weights).
+
+    Parameters
+    ----------
+    on : bool
+        True (default) from now on; False restores the default (the first sky built directly).
+    """
+    global _sweeping
+    _sweeping = bool(on)
+
+
 def _horizon(
     boxes: NDArray[np.float32], lo: NDArray[np.float64], hi: NDArray[np.float64], spacing: float, samples: int, spacing_name: str
 ) -> _core.AmbientHorizon | None:
@@ -341,10 +365,11 @@ def cached_core_map(
             _cache.move_to_end(key)
             return _cache[key]
     # The first sky over a geometry builds its map directly; a second one (a sweep) finds the
-    # geometry's horizon and lights every later sky from it.
+    # geometry's horizon and lights every later sky from it; after expect_sweeps() the first
+    # does.
     geometry = (boxes.tobytes(), boxes.shape, tuple(lo), tuple(hi), spacing, samples)
     with _cache_lock:
-        swept = geometry in _geometries
+        swept = _sweeping or geometry in _geometries
         _geometries[geometry] = None
         while len(_geometries) > _CACHE_SIZE:
             _geometries.popitem(last=False)

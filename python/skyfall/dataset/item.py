@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import skyfall
-from skyfall import io, scenes
+from skyfall import io, scenes, sky
 from skyfall.camera import Camera
 from skyfall.dataset.io import DEPTH_EXTENSIONS, NpyStack, atomic_write, read_depth, read_photo, sha256_file, write_json, write_npy, write_png
 from skyfall.dataset.sample import DatasetConfig, ItemParams, sample_item
@@ -131,6 +131,10 @@ class Worker:
         """The bundled street, made once."""
         if self._street is None:
             self._street = scenes.street()
+            # A worker renders the street under many weathers: its first sky is lit from the
+            # street's horizon, which every later one reuses (the same bits, one direct build
+            # fewer per worker).
+            sky.expect_sweeps()
         return self._street
 
 
