@@ -616,31 +616,24 @@ impl<'a> CloudSplats<'a> {
     }
 }
 
-/// The share of a diffuse field's flux that reaches a point below the column whose direct
-/// beam keeps `gamma`: the two-stream (Eddington) transmission of a conservative layer,
-/// 1/(1 + ¾(1 − g)τ), with τ = −ln Γ / (1 − g²) the column's optical depth (Γ keeps the share
-/// e^(−(1 − g²)τ), the δ-M direct beam): 1/(1 − k ln Γ) with k = ¾/(1 + g).
-#[inline]
-pub fn diffuse_share(gamma: f32, g: f32) -> f32 {
-    1.0 / (1.0 - two_stream_k(g) * ln_normal(gamma.max(1e-30)))
-}
-
-/// ¾(1 − g)/(1 − g²) = ¾/(1 + g): the two-stream's optical depth per unit of −ln Γ.
+/// ¾(1 − g)/(1 − g²) = ¾/(1 + g): the two-stream's optical depth, times ¾(1 − g), per unit
+/// of −ln Γ (Γ keeps the share e^(−(1 − g²)τ) of the light, the δ-M direct beam).
 #[inline(always)]
 fn two_stream_k(g: f32) -> f32 {
     0.75 / (1.0 + g)
 }
 
 /// The diffuse light at a point, per unit of its light's flux, from Γ there (`gamma`) and
-/// where the light leaves the cloud (`exit`): D(τ_a) + D(τ_a) R(τ_b)/2, D the two-stream
-/// transmission of the column above ([`diffuse_share`]; less the direct beam Γ unless
-/// `with_direct`), R(τ_b) = 1 − D(τ_b) the two-stream reflection of the column below, τ_b =
+/// where the light leaves the cloud (`exit`): D(τ_a) + D(τ_a) R(τ_b)/2, D the share of a
+/// diffuse field's flux that reaches the point below the column above, the two-stream
+/// (Eddington) transmission of a conservative layer 1/(1 + ¾(1 − g)τ_a), τ_a = −ln Γ/(1 − g²)
+/// (less the direct beam Γ unless `with_direct`), R(τ_b) = 1 − D(τ_b) the two-stream reflection of the column below, τ_b =
 /// ln(Γ/Γ_exit) / (1 − g²), halved as the mean cosine of incidence over a sphere's sunlit
 /// half is ½ (the two-stream slab faces its light). At the lit face of a thick cloud this is
 /// about R/2, deep under it about D. Measured against the path tracer
 /// (`benches/results/clouds_reference.md`) it still makes a thick cumulus too bright.
 ///
-/// With a = k τ_a and b = k τ_b ([`diffuse_share`]'s k), D = 1/(1 + a) and D R = b/((1 + a)
+/// With a = −k ln Γ and b = k ln(Γ/Γ_exit) (k from [`two_stream_k`]), D = 1/(1 + a) and D R = b/((1 + a)
 /// (1 + b)): one division for both (this runs per fragment and volume).
 #[inline]
 pub fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
@@ -828,6 +821,14 @@ mod tests {
             "{} vs {want}",
             rgb[3 * mid]
         );
+    }
+
+    /// The two-stream transmission D = 1/(1 + ¾(1 − g)τ) of the column whose direct beam
+    /// keeps `gamma`, τ = −ln Γ/(1 − g²), written from the definition (libm's ln): the
+    /// reference `diffuse_light`'s D is checked against.
+    fn diffuse_share(gamma: f32, g: f32) -> f32 {
+        let tau = -gamma.max(1e-30).ln() / (1.0 - g * g);
+        1.0 / (1.0 + 0.75 * (1.0 - g) * tau)
     }
 
     #[test]

@@ -24,6 +24,13 @@ pub struct Wetting {
     pub receding_rad: f64,
 }
 
+/// The base radius a, m, of a cap of volume `volume_m3` whose volume per a³ is
+/// `volume_per_a3` ([`Wetting::volume_per_a3`]; a caller asking per drop keeps it).
+#[inline]
+pub fn cap_base_radius_m(volume_m3: f64, volume_per_a3: f64) -> f64 {
+    (volume_m3.max(0.0) / volume_per_a3).cbrt()
+}
+
 impl Wetting {
     /// From angles in degrees.
     pub fn from_deg(advancing_deg: f64, receding_deg: f64) -> Self {
@@ -52,7 +59,7 @@ impl Wetting {
 
     /// The base radius a, m, of a cap of volume `volume_m3`.
     pub fn base_radius_m(&self, volume_m3: f64) -> f64 {
-        (volume_m3.max(0.0) / self.volume_per_a3()).cbrt()
+        cap_base_radius_m(volume_m3, self.volume_per_a3())
     }
 
     /// The volume, m³, of a cap of base radius `a_m`.

@@ -620,7 +620,7 @@ impl Windshield {
     /// The base radius a, m, of a cap of volume `volume_m3` ([`Wetting::base_radius_m`] from
     /// the kept volume per a³).
     fn base_radius_m(&self, volume_m3: f64) -> f64 {
-        (volume_m3.max(0.0) / self.volume_per_a3).cbrt()
+        super::furmidge::cap_base_radius_m(volume_m3, self.volume_per_a3)
     }
 
     /// The largest mesh drop's base radius, mm (0 on dry glass).
@@ -1014,11 +1014,19 @@ impl Windshield {
         self.state.particles.retain(|p| p.mass_kg > 0.0);
     }
 
+    /// (x, y) relative to wiper `w`'s pivot: (dx, dy, ρ) mm, dy towards the top, ρ the
+    /// distance.
+    #[inline]
+    fn offset(w: &Wiper, x: f64, y: f64) -> (f64, f64, f64) {
+        let (dx, dy) = (x - w.pivot_mm[0], w.pivot_mm[1] - y);
+        (dx, dy, (dx * dx + dy * dy).sqrt())
+    }
+
     /// Polar coordinates (ρ mm, φ rad) of (x, y) about wiper `w`'s pivot (φ from the glass's
     /// x axis towards the top).
     fn polar(w: &Wiper, x: f64, y: f64) -> (f64, f64) {
-        let (dx, dy) = (x - w.pivot_mm[0], w.pivot_mm[1] - y);
-        ((dx * dx + dy * dy).sqrt(), dy.atan2(dx))
+        let (dx, dy, rho) = Self::offset(w, x, y);
+        (rho, dy.atan2(dx))
     }
 
     fn from_polar(w: &Wiper, rho: f64, phi: f64) -> (f64, f64) {
@@ -1028,21 +1036,18 @@ impl Windshield {
         )
     }
 
-    /// Whether (x, y) lies within `margin` mm of wiper `w`'s blade at `theta`, or was swept
-    /// over between `theta0` and `theta1`.
-    /// Whether (x, y) lies within `margin` mm of wiper `w`'s reach (as [`Self::swept`] first
-    /// asks: a point outside it is never swept with that margin or a smaller one).
-    fn within_reach(w: &Wiper, x: f64, y: f64, margin: f64) -> bool {
-        let (dx, dy) = (x - w.pivot_mm[0], w.pivot_mm[1] - y);
-        let rho = (dx * dx + dy * dy).sqrt();
+    /// Whether a point at distance `rho` mm from wiper `w`'s pivot lies within `margin` mm of
+    /// its reach: outside it a point is never swept with that margin or a smaller one.
+    fn within_reach(w: &Wiper, rho: f64, margin: f64) -> bool {
         rho <= w.length_mm + margin && rho > 1e-9
     }
 
+    /// Whether (x, y) lies within `margin` mm of wiper `w`'s blade at `theta`, or was swept
+    /// over between `theta0` and `theta1`.
     fn swept(w: &Wiper, x: f64, y: f64, theta0: f64, theta1: f64, margin: f64) -> bool {
         // ρ first: most drops lie beyond a blade's reach, and the angle costs an atan2.
-        let (dx, dy) = (x - w.pivot_mm[0], w.pivot_mm[1] - y);
-        let rho = (dx * dx + dy * dy).sqrt();
-        if rho > w.length_mm + margin || rho <= 1e-9 {
+        let (dx, dy, rho) = Self::offset(w, x, y);
+        if !Self::within_reach(w, rho, margin) {
             return false;
         }
         let phi = dy.atan2(dx);
@@ -1053,7 +1058,7 @@ impl Windshield {
 
     fn in_region(&self, w: &Wiper, x: f64, y: f64, theta: f64) -> bool {
         let half = 0.5 * w.width_mm + 8.0 * self.config.particle_radius_mm;
-        let (dx, dy) = (x - w.pivot_mm[0], w.pivot_mm[1] - y);
+        let (dx, dy, _) = Self::offset(w, x, y);
         let (c, s) = (theta.cos(), theta.sin());
         let along = dx * c + dy * s;
         let across = -dx * s + dy * c;
@@ -1076,7 +1081,7 @@ impl Windshield {
                 d.mass_kg > 0.0
                     && wipers
                         .iter()
-                        .any(|w| Self::within_reach(w, d.x_mm, d.y_mm, a_max))
+                        .any(|w| Self::within_reach(w, Self::offset(w, d.x_mm, d.y_mm).2, a_max))
                     && {
                         let a = self.base_radius_mm(d.mass_kg);
                         wipers
