@@ -227,6 +227,10 @@ class SnowCoverGrid:
     def steps(self) -> tuple[int, float]: ...
     @property
     def fall_velocity_m_s(self) -> tuple[float, float, float]: ...
+    @property
+    def blown_kg(self) -> tuple[float, float]: ...
+    @property
+    def canopy(self) -> tuple[float, float, float]: ...
 
 def snow_cover_boxes(
     boxes: NDArray[np.float32],
@@ -240,6 +244,8 @@ def snow_cover_boxes(
     dt_s: float,
     roughness: float,
     seed: int,
+    turbulence: float,
+    redistribute: bool,
 ) -> SnowCoverGrid: ...
 def snow_cover_photo(
     camera: Camera,
@@ -251,6 +257,8 @@ def snow_cover_photo(
     dt_s: float,
     roughness: float,
     seed: int,
+    turbulence: float,
+    redistribute: bool,
 ) -> SnowCoverGrid: ...
 
 @final

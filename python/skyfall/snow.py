@@ -2,18 +2,23 @@
 
 After Koitabashi, Matsubara, Moriya & Takahashi, *Snowfall and snow-cover scenes with wind*
 (Tokyo Denki University), made physical: the ground and the box tops (or a photo's surfaces,
-from its depth map through its camera) are a height field of square cells; each step a shadow
-buffer rendered along the snow's mean fall direction (the wind plus the flakes' mass-weighted
-fall speed, downward) decides which cells the snow reaches, and those grow by the depth that
+from its depth map through its camera) are a height field of square cells; each step shadow
+buffers rendered along a spread of fall paths (each flake size at its own fall speed, through
+the wind's gusts, the wind slowed below the roofs by Macdonald's urban canopy profile) decide
+how much of the snow reaches each cell, and those grow by the depth that
 the rate, the step and the snow's density give, R * dt * rho_water / rho_snow, times the flux
 through the cell's own surface (1 on level ground, more on faces turned to the wind, less on
 faces turned from it); then the paper's random factor r (seeded, moving snow between cells
 without making any) and its 4-neighbour smoothing (of the step's increment, on each surface).
-The snow's own height enters the height field, so drifts build. The method is described in
-full in ``rust/skyfall-core/src/snow/cover/mod.rs``.
+The snow's own height enters the height field, so drifts build. Above fresh snow's threshold
+(about 4.3 m/s at 10 m) the wind also moves the snow that lies (Pomeroy & Gray's saltation
+flux, settling in Werner's 15-degree lee of every crest): roofs are scoured, drifts form in the
+lee of walls and boxes. The method is described in full in
+``rust/skyfall-core/src/snow/cover/mod.rs`` and its ``wind.rs`` and ``drift.rs``.
 
-Mass is kept: the snow that fell on the catchment's lit cells (``fallen_kg``) is the snow lying
-on it (``lying_kg``); the open sky's share over the same area (``open_sky_kg``) differs from it
+Mass is kept: the snow that fell on the catchment's lit cells (``fallen_kg``), plus what the
+wind blew in across its edges less what it blew out, is the snow lying on it (``lying_kg``);
+the open sky's share over the same area (``open_sky_kg``) differs from it
 by the wind's shadows and what it carried across the catchment's sides.
 
 Rendering: the cover is part of the weather, ``Weather(snow_cover=cover)`` (or
@@ -70,9 +75,16 @@ class SnowCover:
     shape : tuple of 2 int
         (nz, nx).
     fallen_kg, lying_kg, open_sky_kg : float
-        Snow that fell on the catchment's lit cells, snow lying on it at the end (equal: mass
-        is kept), and snow that fell through the level plane over its surface cells
-        (R * rho_water * area * duration), kg.
+        Snow that fell on the catchment's lit cells, snow lying on it at the end (equal to
+        ``fallen_kg + blown_in_kg - blown_out_kg``: mass is kept), and snow that fell through
+        the level plane over its surface cells (R * rho_water * area * duration), kg.
+    blown_in_kg, blown_out_kg : float
+        Snow the wind carried in across the grid's upwind edge and out across its downwind
+        edge (0 below fresh snow's threshold of about 4.3 m/s at 10 m), kg.
+    canopy : tuple of 3 float
+        The canopy the wind blew through: its height above the lowest surface (m), Macdonald's
+        attenuation a (the wind at the ground is exp(-a) of the wind above the roofs) and the
+        frontal area index lambda_f; zeros in still air or without buildings.
     open_depth_m : float
         The depth the run lays on level open ground, R * duration * rho_water / rho_snow, m.
     steps : int
@@ -95,6 +107,9 @@ class SnowCover:
     steps: int
     dt_s: float
     fall_velocity_m_s: tuple[float, float, float]
+    blown_in_kg: float
+    blown_out_kg: float
+    canopy: tuple[float, float, float]
     core: _core.SnowCoverGrid = field(repr=False, compare=False)
 
     @property
@@ -161,6 +176,8 @@ def accumulate(
     seed: int = 0,
     roughness: float = 0.1,
     extent_m: Any = None,
+    turbulence: float = 0.4,
+    redistribute: bool = True,
 ) -> SnowCover:
     """Let ``weather``'s snow fall on ``scene`` for ``duration_s`` and return the cover.
 
@@ -187,6 +204,13 @@ def accumulate(
     extent_m : array_like of 4 float, optional
         A box scene's grid, (x0, z0, x1, z1) in world metres; by default its boxes and its
         camera with 10 m around them (an empty scene: 30 m around the camera).
+    turbulence : float
+        In [0, 2]: the wind's gusts, the standard deviation of each horizontal component as a
+        share of the mean wind (over cities 0.3-0.4, the default 0.4); with the flakes' spread
+        of fall speeds they spread the fall directions, so shadows are soft. 0: no gusts.
+    redistribute : bool
+        Whether the wind moves snow that has landed (saltation into the lee of walls and
+        boxes; only where the wind exceeds fresh snow's threshold, about 4.3 m/s at 10 m).
 
     Returns
     -------
@@ -211,18 +235,23 @@ def accumulate(
     dur = in_range("duration_s", duration_s)
     dt = in_range("dt_s", dt_s)
     rough = in_range("roughness", roughness)
+    turb = in_range("turbulence", turbulence)
+    if not isinstance(redistribute, bool | np.bool_):
+        raise TypeError(f"redistribute must be a bool, got {type(redistribute).__name__}")
     seed_ = integer("seed", seed, 0, 2**64 - 1)
     if isinstance(scene, BoxScene):
         lo, hi = _extent(scene, extent_m)
         boxes = np.ascontiguousarray(scene.boxes, dtype=np.float32).reshape(-1, 9)
         grid = _core.snow_cover_boxes(
-            boxes, bool(scene.ground), weather, lo, hi, resolution_m=res, duration_s=dur, dt_s=dt, roughness=rough, seed=seed_
+            boxes, bool(scene.ground), weather, lo, hi, resolution_m=res, duration_s=dur, dt_s=dt, roughness=rough, seed=seed_,
+            turbulence=turb, redistribute=bool(redistribute),
         )
     elif isinstance(scene, PhotoScene):
         if extent_m is not None:
             raise ValueError("extent_m sets a box scene's grid; a photo's follows its depth map")
         grid = _core.snow_cover_photo(
-            scene.camera, scene.depth_m, weather, resolution_m=res, duration_s=dur, dt_s=dt, roughness=rough, seed=seed_
+            scene.camera, scene.depth_m, weather, resolution_m=res, duration_s=dur, dt_s=dt, roughness=rough, seed=seed_,
+            turbulence=turb, redistribute=bool(redistribute),
         )
     else:
         raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
@@ -241,5 +270,8 @@ def accumulate(
         steps=steps,
         dt_s=dt_used,
         fall_velocity_m_s=grid.fall_velocity_m_s,
+        blown_in_kg=grid.blown_kg[0],
+        blown_out_kg=grid.blown_kg[1],
+        canopy=grid.canopy,
         core=grid,
     )

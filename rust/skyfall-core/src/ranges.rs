@@ -109,6 +109,13 @@ pub const ROUGHNESS: Limit = Limit::new(
     Range::closed(0.0, 1.0, ""),
     "amplitude of the snow cover's random factor r = 1 + roughness u, u in [-1, 1]",
 );
+/// The gusts of the snow cover's wind, as a share of the mean wind.
+pub const TURBULENCE: Limit = Limit::new(
+    "turbulence",
+    Range::closed(0.0, 2.0, ""),
+    "standard deviation of each horizontal component of the snow cover's gusts, as a share of \
+     the mean wind (over cities 0.3-0.4; 0: no gusts)",
+);
 /// How long the rain has fallen on the surfaces (`Weather.rain_duration_s`).
 pub const RAIN_DURATION_S: Limit = Limit::new(
     "rain_duration_s",
@@ -558,6 +565,7 @@ pub const ALL: &[Limit] = &[
     DT_S,
     RESOLUTION_M,
     ROUGHNESS,
+    TURBULENCE,
     RAIN_DURATION_S,
     DRY_S,
     VISIBILITY_M,

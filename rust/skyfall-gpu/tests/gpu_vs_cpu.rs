@@ -624,6 +624,8 @@ fn gpu_matches_cpu_with_a_snow_cover_on_boxes_and_on_a_photo() {
         dt_s: 300.0,
         roughness: 0.2,
         seed: 1,
+        turbulence: 0.4,
+        redistribute: true,
     };
     let cover = accumulate(field, &weather, &params, None).unwrap();
     let snow = SnowRender::boxes(&cover).unwrap();

@@ -77,6 +77,19 @@ impl SnowCoverGrid {
         let v = self.cover.fall_velocity_m_s;
         (v[0], v[1], v[2])
     }
+
+    /// (blown_in_kg, blown_out_kg): snow the wind carried across the grid's edges.
+    #[getter]
+    fn blown_kg(&self) -> (f64, f64) {
+        (self.cover.blown_in_kg, self.cover.blown_out_kg)
+    }
+
+    /// (height_m, attenuation, frontal_area_index) of the canopy the wind blew through.
+    #[getter]
+    fn canopy(&self) -> (f64, f64, f64) {
+        let c = self.cover.canopy;
+        (c.height_m, c.attenuation, c.frontal_area_index)
+    }
 }
 
 fn run(
@@ -99,7 +112,7 @@ fn run(
 /// The cover of a box scene (its (N, 9) box rows, ground) over x ∈ [lo[0], hi[0]],
 /// z ∈ [lo[1], hi[1]] in `resolution_m` cells.
 #[pyfunction]
-#[pyo3(signature = (boxes, ground, weather, lo_m, hi_m, *, resolution_m, duration_s, dt_s, roughness, seed))]
+#[pyo3(signature = (boxes, ground, weather, lo_m, hi_m, *, resolution_m, duration_s, dt_s, roughness, seed, turbulence, redistribute))]
 #[allow(clippy::too_many_arguments)]
 pub fn snow_cover_boxes(
     py: Python<'_>,
@@ -113,6 +126,8 @@ pub fn snow_cover_boxes(
     dt_s: f64,
     roughness: f64,
     seed: u64,
+    turbulence: f64,
+    redistribute: bool,
 ) -> PyResult<SnowCoverGrid> {
     let scene = box_scene(&boxes, ground, [0.0; 3])?;
     let grid = Grid::covering(lo_m, hi_m, resolution_m).map_err(CoreError)?;
@@ -122,13 +137,15 @@ pub fn snow_cover_boxes(
         dt_s,
         roughness,
         seed,
+        turbulence,
+        redistribute,
     };
     run(py, field, weather, params)
 }
 
 /// The cover of a photo: its surfaces from `depth_m` through `camera`.
 #[pyfunction]
-#[pyo3(signature = (camera, depth_m, weather, *, resolution_m, duration_s, dt_s, roughness, seed))]
+#[pyo3(signature = (camera, depth_m, weather, *, resolution_m, duration_s, dt_s, roughness, seed, turbulence, redistribute))]
 #[allow(clippy::too_many_arguments)]
 pub fn snow_cover_photo(
     py: Python<'_>,
@@ -140,6 +157,8 @@ pub fn snow_cover_photo(
     dt_s: f64,
     roughness: f64,
     seed: u64,
+    turbulence: f64,
+    redistribute: bool,
 ) -> PyResult<SnowCoverGrid> {
     let cam = camera.camera;
     let d = depth_m.as_slice()?;
@@ -156,6 +175,8 @@ pub fn snow_cover_photo(
         dt_s,
         roughness,
         seed,
+        turbulence,
+        redistribute,
     };
     run(py, field, weather, params)
 }

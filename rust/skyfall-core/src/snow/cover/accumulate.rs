@@ -2,8 +2,10 @@
 //! smoothing.
 
 use super::SnowCover;
+use super::drift::{Moved, redistribute};
 use super::heightfield::HeightField;
 use super::shadow::ShadowBuffer;
+use super::wind::{Canopy, FallPaths};
 use crate::error::{Error, Param, Result, check_cancel, try_filled};
 use crate::physics::snow::{Snowfall, WATER_KG_M3, snow_depth_rate_m_s};
 use crate::ranges;
@@ -27,6 +29,11 @@ pub struct CoverParams {
     pub roughness: f64,
     /// Seeds r.
     pub seed: u64,
+    /// The gusts' standard deviation per horizontal component, as a share of the mean wind
+    /// ([`super::wind`]; 0: the flakes' sizes alone spread the fall directions).
+    pub turbulence: f64,
+    /// Whether the wind moves lying snow ([`super::drift`]; only above its threshold).
+    pub redistribute: bool,
 }
 
 /// What the cover takes of a frame's weather (`weather::Weather` converts itself, validated,
@@ -62,6 +69,7 @@ pub fn accumulate<W: TryInto<CoverWeather, Error = Error>>(
     ranges::DURATION_S.check(params.duration_s)?;
     ranges::DT_S.check(params.dt_s)?;
     ranges::ROUGHNESS.check(params.roughness)?;
+    ranges::TURBULENCE.check(params.turbulence)?;
     let grid = field.grid;
     let n = grid.cells();
     if field.base_m.len() != n {
@@ -120,13 +128,17 @@ pub fn accumulate<W: TryInto<CoverWeather, Error = Error>>(
     let mut top = try_filled("snow cover", n, 0.0f64)?;
     let rho_s = weather.snow_density_kg_m3;
     let flat_m = snow_depth_rate_m_s(rate, rho_s) * dt;
-    let vy = -v[1];
-    let drift = if vy > 0.0 {
-        [v[0] / vy, v[2] / vy]
+    let paths = FallPaths::new(rate, weather.wind_m_s, params.turbulence);
+    let canopy = if paths.windy() {
+        Canopy::of(&field, [v[0], v[2]])
     } else {
-        [0.0, 0.0]
+        Canopy::none(0.0)
     };
-    let slope_max = 1.0 + (drift[0] * drift[0] + drift[1] * drift[1]).sqrt();
+    let mut lifted = if paths.windy() {
+        try_filled("snow cover", n, 0.0f64)?
+    } else {
+        Vec::new()
+    };
     let (nx, sp) = (grid.nx, grid.spacing_m);
     let base = &field.base_m;
     let linked = |i: usize, j: usize| {
@@ -134,20 +146,38 @@ pub fn accumulate<W: TryInto<CoverWeather, Error = Error>>(
         !b.is_nan() && !c.is_nan() && (b - c).abs() <= sp
     };
     let mut fallen_m = 0.0f64;
-    for _ in 0..steps {
+    let mut moved = Moved::default();
+    for step in 0..steps {
         if let Some(c) = cancel {
             check_cancel(c, "snow.accumulate")?;
         }
         for (t, (&b, &d)) in top.iter_mut().zip(base.iter().zip(depth.iter())) {
             *t = b + d;
         }
-        let shadow = ShadowBuffer::render(&grid, &top, drift)?;
-        // 1–2: lit cells and their flux, per unit of horizontal area, as a depth of snow.
+        // 1: which paths reach each cell. In still air every cell is reached, straight down.
+        let step_paths = paths.step(step);
+        let shadows = if paths.windy() {
+            for (g, &t) in lifted.iter_mut().zip(top.iter()) {
+                *g = canopy.lift_m(t);
+            }
+            step_paths
+                .par_iter()
+                .map(|p| ShadowBuffer::render(&grid, &lifted, p.drift))
+                .collect::<Result<Vec<_>>>()?
+        } else {
+            Vec::new()
+        };
+        // 2: the lit paths' flux through each cell, per unit of horizontal area, as a depth of
+        // snow.
         a.par_chunks_mut(nx).enumerate().for_each(|(k, row)| {
             for (i, out) in row.iter_mut().enumerate() {
                 let c = k * nx + i;
                 *out = 0.0;
-                if base[c].is_nan() || !shadow.lit(grid.centre(i, k), top[c]) {
+                if base[c].is_nan() {
+                    continue;
+                }
+                if shadows.is_empty() {
+                    *out = flat_m;
                     continue;
                 }
                 let g = |lo: Option<usize>, hi: Option<usize>| {
@@ -163,8 +193,19 @@ pub fn accumulate<W: TryInto<CoverWeather, Error = Error>>(
                 };
                 let gx = g((i > 0).then(|| c - 1), (i + 1 < nx).then_some(c + 1));
                 let gz = g((k > 0).then(|| c - nx), (k + 1 < grid.nz).then_some(c + nx));
-                let f = (1.0 + drift[0] * gx + drift[1] * gz).clamp(0.0, slope_max);
-                *out = flat_m * f;
+                let share = canopy.wind_share(top[c]);
+                let centre = grid.centre(i, k);
+                let mut flux = 0.0;
+                for (p, shadow) in step_paths.iter().zip(shadows.iter()) {
+                    if shadow.lit(centre, lifted[c]) {
+                        // The path's slope where it meets the cell: its drift times the wind's
+                        // share there.
+                        let s = [p.drift[0] * share, p.drift[1] * share];
+                        let most = 1.0 + (s[0] * s[0] + s[1] * s[1]).sqrt();
+                        flux += p.weight * (1.0 + s[0] * gx + s[1] * gz).clamp(0.0, most);
+                    }
+                }
+                *out = flat_m * flux;
             }
         });
         // 3: the random factor, scaled to move snow without making any.
@@ -206,12 +247,21 @@ pub fn accumulate<W: TryInto<CoverWeather, Error = Error>>(
             *d += x;
         }
         fallen_m += sum;
+        // 5: the wind moves what lies, where it is strong enough.
+        if params.redistribute {
+            let m = redistribute(&grid, base, &mut depth, &canopy, [v[0], v[2]], rho_s, dt)?;
+            moved.in_kg += m.in_kg;
+            moved.out_kg += m.out_kg;
+        }
     }
     let area = grid.cell_area_m2();
     let lying_m: f64 = depth.iter().sum();
     let surface = base.iter().filter(|b| !b.is_nan()).count() as f64;
     Ok(SnowCover {
         fallen_kg: fallen_m * area * rho_s,
+        blown_in_kg: moved.in_kg,
+        blown_out_kg: moved.out_kg,
+        canopy,
         lying_kg: lying_m * area * rho_s,
         open_sky_kg: rate * 1e-3 / 3600.0
             * WATER_KG_M3

@@ -9,13 +9,16 @@
 //! drifts build on drifts.
 //!
 //! **Each step** (the paper's §4.2, [`accumulate`]):
-//! 1. a shadow buffer is rendered along the snow's mean fall direction v = (wind_x,
-//!    wind_y − v_f, wind_z), v_f = [`crate::physics::snow::Snowfall::mean_fall_speed_m_s`] (the
-//!    velocity the falling flakes use: the wind horizontally, the mass-weighted fall speed
-//!    downward): every surface point is projected along v onto the plane y = 0 and the buffer
-//!    keeps, per texel, the highest point that projects there ([`shadow::ShadowBuffer`]);
-//!    a cell lower than what its texel holds is in the shadow of something upstream and
-//!    receives nothing;
+//! 1. the snow falls along a spread of paths ([`wind`]): each flake size at its own fall speed
+//!    v_f(D) ([`crate::physics::snow`]), through the wind's gusts, and slowed among the
+//!    buildings by Macdonald's canopy profile, so each path drifts s = u/v_f per metre of
+//!    *lift* G (the height, shortened below the roofs where the wind is weaker). Per path a
+//!    shadow buffer is rendered ([`shadow::ShadowBuffer`]): every surface point is projected
+//!    along the path onto the plane G = G₀ and the buffer keeps, per texel, the highest point
+//!    that projects there; a cell lower than what its texel holds is in the shadow of
+//!    something upstream and that path's snow does not reach it. [`wind::DIRECTIONS`] paths per
+//!    step share the snow equally (in still air one, straight down: every cell is reached), so
+//!    shadows have soft edges and a narrow street is not shaded whole by a breeze;
 //! 2. a lit cell grows by the paper's d(t) = w·k(t)·(v·n) made physical: k(t)·w, the flakes'
 //!    number times a conversion factor, is the snow's mass flux, the rate R as a depth of water
 //!    per second, turned into a depth of snow by ρ_w/ρ_snow; (v·n) is the flux through the
@@ -31,19 +34,26 @@
 //!    between cells, it does not make any;
 //! 4. the paper's 4-neighbour smoothing, of the step's increment: each cell keeps 1/5 of it
 //!    and hands 1/5 to each neighbour on the same surface (bases within one cell's width),
-//!    keeping the shares of the others; mass is moved, never made or lost.
+//!    keeping the shares of the others; mass is moved, never made or lost;
+//! 5. above fresh snow's threshold (about 4.3 m/s at 10 m) the wind moves what lies
+//!    ([`drift`]): saltation at Pomeroy & Gray's flux, from where the wind is strong to where
+//!    it is sheltered (Werner's 15° shadow behind every crest), so roofs are scoured and drifts
+//!    form in the lee of walls and boxes.
 //!
 //! **Mass bookkeeping.** What falls on the catchment (the lit cells' R·dt·f·ρ_w per unit of
 //! horizontal area, summed over the steps: [`SnowCover::fallen_kg`]) equals what lies on it
-//! (Σ depth·ρ_snow·cell area: [`SnowCover::lying_kg`]) exactly: r and the smoothing only move
-//! snow. The open sky's share (R·ρ_w·area·duration: [`SnowCover::open_sky_kg`]) differs from
+//! (Σ depth·ρ_snow·cell area: [`SnowCover::lying_kg`]) exactly, once the snow the wind carried
+//! across the grid's edges is counted ([`SnowCover::blown_in_kg`], [`SnowCover::blown_out_kg`]):
+//! r, the smoothing and the drift only move snow. The open sky's share (R·ρ_w·area·duration: [`SnowCover::open_sky_kg`]) differs from
 //! it by what the wind blew in and out of the catchment across its sides and what the
 //! shadows of its edges hold back: in still air over level ground the three are equal.
 
 pub mod accumulate;
+pub mod drift;
 pub mod heightfield;
 pub mod render;
 pub mod shadow;
+pub mod wind;
 
 pub use accumulate::{CoverParams, CoverWeather, accumulate, fall_velocity_m_s};
 pub use heightfield::{Grid, HeightField};
@@ -59,8 +69,15 @@ pub struct SnowCover {
     pub depth_m: Vec<f64>,
     /// Snow that fell on the catchment's lit cells, kg.
     pub fallen_kg: f64,
-    /// Snow lying on the catchment at the end, kg (Σ depth · ρ_snow · cell area).
+    /// Snow lying on the catchment at the end, kg (Σ depth · ρ_snow · cell area): fallen +
+    /// blown in − blown out.
     pub lying_kg: f64,
+    /// Snow the wind blew in across the grid's upwind edge, kg ([`drift`]).
+    pub blown_in_kg: f64,
+    /// Snow the wind blew out across the grid's downwind edge, kg.
+    pub blown_out_kg: f64,
+    /// The canopy the wind blew through ([`wind::Canopy`]; none in still air).
+    pub canopy: wind::Canopy,
     /// Snow that fell through the horizontal plane over the catchment, R·ρ_w·area·duration, kg.
     pub open_sky_kg: f64,
     /// The depth the run lays on level open ground, m: R·duration·ρ_w/ρ_snow.

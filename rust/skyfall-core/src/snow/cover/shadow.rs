@@ -1,12 +1,16 @@
-//! The shadow buffer of the paper's §4.2, rendered along the snow's fall direction instead of
-//! a light's: every point of the height field (cell tops, and the sides a cell shows above its
-//! lowest neighbour) is projected along the fall velocity v onto the level plane y = y₀ (the
-//! lowest surface), q = (x, z) + s·(y − y₀) with s = v_h/|v_y| the horizontal drift per metre of
-//! fall, into texels of the grid's cell size; a texel keeps the highest point that projects
-//! into it (the first surface the snow falling along that line meets). A cell is lit when its
-//! own top is that highest point, within [`ShadowBuffer::bias_m`] (half a texel of fall,
-//! Δx/(2|s|), which keeps slopes up to half as steep as the fall line from shadowing
-//! themselves).
+//! The shadow buffer of the paper's §4.2, rendered along one of the snow's fall paths instead
+//! of a light's rays: every point of the height field (cell tops, and the sides a cell shows
+//! above its lowest neighbour, sampled once per texel along the drift's major axis; a side lower
+//! than the bias by its top alone) is projected along the path onto the level y = y₀ (the
+//! lowest surface), q = (x, z) + s·(y − y₀) with s the path's horizontal drift per metre, into
+//! texels of the grid's cell size; a texel keeps the highest point that projects into it (the first
+//! surface the snow falling along that line meets). A cell is lit when its own top is that
+//! highest point, within [`ShadowBuffer::bias_m`] (half a texel of fall, Δx/(2|s|), which keeps
+//! slopes up to half as steep as the fall line from shadowing themselves).
+//!
+//! The heights need not be metres of height: the cover passes each point's *lift* (its height
+//! with the canopy's slower wind below the roofs folded in, [`super::wind::Canopy::lift_m`]),
+//! under which a curved path is straight; any height that grows with the height works.
 
 use super::heightfield::Grid;
 
@@ -76,9 +80,11 @@ impl ShadowBuffer {
             y0_m: y0,
             bias_m,
         };
-        // Sample the sides every half texel of drift.
-        let dy = if ds > 0.0 {
-            0.5 * s / ds
+        // Sample the sides once per texel along the drift's major axis (a line drawn as
+        // Bresenham draws it: each column or row of texels it crosses once).
+        let major = drift[0].abs().max(drift[1].abs());
+        let dy = if major > 0.0 {
+            s / major
         } else {
             f64::INFINITY
         };
@@ -102,7 +108,9 @@ impl ShadowBuffer {
                     .min(top(ii, kk + 1))
                     .min(t);
                 let c = grid.centre(i, k);
-                let n = if t > low && dy.is_finite() {
+                // A side lower than half a texel of fall is drawn by its top alone: the points
+                // below it could only shade what lies within the lit test's bias of them.
+                let n = if t - low >= bias_m && dy.is_finite() {
                     (((t - low) / dy).ceil() as usize).min(8 * (nx + nz))
                 } else {
                     0
@@ -131,8 +139,10 @@ impl ShadowBuffer {
         let h = y - self.y0_m;
         let qx = c[0] + self.drift[0] * h;
         let qz = c[1] + self.drift[1] * h;
-        let fi = ((qx - self.origin_m[0]) / self.spacing_m).floor();
-        let fk = ((qz - self.origin_m[1]) / self.spacing_m).floor();
+        let fi = (qx - self.origin_m[0]) / self.spacing_m;
+        let fk = (qz - self.origin_m[1]) / self.spacing_m;
+        // floor(f) >= 0 and < n exactly when 0 <= f < n: then truncation is the floor (and
+        // it needs no call into libm, which baseline x86-64 makes for `floor`).
         if fi >= 0.0 && fk >= 0.0 && fi < self.nx as f64 && fk < self.nz as f64 {
             Some(fk as usize * self.nx + fi as usize)
         } else {
