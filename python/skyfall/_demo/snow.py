@@ -3,10 +3,10 @@ and a real photo with a measured depth map under snow.
 
 - ``street_snow.png``: :func:`skyfall.scenes.street` after an hour of 4 mm/h (water
   equivalent; 4 cm of fresh snow at 100 kg/m^3) in a wind of 1.5 m/s along the street towards
-  the camera and 0.3 m/s across it: the street white, a bare strip in the lee of the buildings
-  on the left (each as wide as its height times 0.3 / v_fall) and a bare stretch before the
-  tall block closing the view (its height times 1.5 / v_fall), with the snow's edge lifted
-  where it ends.
+  the camera and 0.3 m/s across it: the street white to the buildings' feet (below the roofs
+  the wind is slowed by the canopy, and the snow's paths spread over the flakes' speeds and
+  the gusts, so the shadows are short and soft) and a thinner stretch before the tall block
+  closing the view, with the snow's edge lifted where it ends.
 - ``photo_snow.png``: scikit-image's ``stereo_motorcycle`` (the left view of Middlebury's 2014
   *Motorcycle*, Scharstein et al., GCPR 2014) before and after 6 mm/h for an hour in still air:
   its depth from the bundled disparity through the dataset's calibration (f = 3979.911 px,
