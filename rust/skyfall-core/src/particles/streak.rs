@@ -110,12 +110,16 @@ pub const SPRITE_AGGREGATE: u8 = 3;
 /// The narrowest projected arm of a star, as a share of its half-width (an arm along the path
 /// projects to a line: it is given this width instead).
 pub const ARM_MIN: f32 = 0.2;
+/// A lump's round end, 6/π: its density (6/π)·√(1 − r²) has mean 1 over a quarter square.
+const ROUND_LUMP: f32 = 6.0 / std::f32::consts::PI;
+/// An aggregate's round end, 8/π: (8/π)·(1 − r²) has mean 1 over a quarter square.
+const ROUND_AGGREGATE: f32 = 8.0 / std::f32::consts::PI;
 
 /// A procedural sprite: the particle's shape seen across its motion, a density p(x) over
 /// x = across / half-width in [0, 1] with mean 1 (so the streak's opacity-area α·w·L is kept).
 /// A streak long against its width is its sprite averaged along the path, which is the
 /// sprite's projection onto the axis across it: that projection is what is drawn, times the
-/// same profile along the path within half a width of either end ([`Sprite::end_profile`]).
+/// flake's own round density within half a width of either end ([`Sprite::density`]).
 /// `ScreenStreak::packed` carries it as one float (layer·8 + kind + θ/(π/3)); `rain.wgsl`'s
 /// `sprite_profile` mirrors [`Sprite::profile`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -183,28 +187,40 @@ impl Sprite {
         }
     }
 
-    /// The sprite along the path at its ends: `e` px in from the nearer end of a band
-    /// `half_w` px in half-width, the profile at 1 − e/half_w within half a width of the end
-    /// (so a dot, a path as long as the flake is wide, is the profile across times the profile
-    /// along, a soft round blob rather than a square), 1 further in. Its mean over an end's
-    /// half-width is the profile's, 1: the opacity-area is kept.
+    /// The sprite's density at x = across / half-width (≥ 0), `e` px in from the nearer end of
+    /// a band `half_w` px in half-width. Further in than half a width: the profile across.
+    /// Within it, u = 1 − e/half_w along: a lump or an aggregate is round there, the disc's own
+    /// density at r = √(x² + u²) (a sphere's projection (6/π)·√(1 − r²), a flat aggregate's
+    /// (8/π)·(1 − r²)), so a path's ends are the flake's half-discs (a moving disc's smear is a
+    /// capsule) and a dot, a path as long as the flake is wide, a disc rather than a square;
+    /// a star keeps the profile across times the profile along (its arms). Every end's mean
+    /// over the quarter square x, u ∈ [0, 1] is 1, as the profile's: the opacity-area is kept.
     #[inline(always)]
-    pub fn end_profile(&self, e: f32, half_w: f32) -> f32 {
-        if e < half_w {
-            self.profile(1.0 - e / half_w)
-        } else {
-            1.0
+    pub fn density(&self, x: f32, e: f32, half_w: f32) -> f32 {
+        if e >= half_w {
+            return self.profile(x);
+        }
+        let u = 1.0 - e / half_w;
+        let one_minus = pos(1.0 - x * x - u * u);
+        match self.kind {
+            SPRITE_LUMP => ROUND_LUMP * one_minus.sqrt(),
+            SPRITE_AGGREGATE => ROUND_AGGREGATE * one_minus,
+            _ => self.profile(x) * self.profile(u),
         }
     }
 
-    /// [`Self::end_profile`] for four values, lane for lane the same bits.
+    /// [`Self::density`] for four values, lane for lane the same bits.
     #[inline(always)]
-    pub fn end_profile_x4(&self, e: Vec4, half_w: Vec4) -> Vec4 {
-        Vec4::select(
-            e.cmplt(half_w),
-            self.profile_x4(Vec4::ONE - e / half_w),
-            Vec4::ONE,
-        )
+    pub fn density_x4(&self, x: Vec4, e: Vec4, half_w: Vec4) -> Vec4 {
+        let across = self.profile_x4(x);
+        let u = Vec4::ONE - e / half_w;
+        let one_minus = (Vec4::ONE - x * x - u * u).max(Vec4::ZERO);
+        let end = match self.kind {
+            SPRITE_LUMP => Vec4::splat(ROUND_LUMP) * one_minus.sqrt(),
+            SPRITE_AGGREGATE => Vec4::splat(ROUND_AGGREGATE) * one_minus,
+            _ => across * self.profile_x4(u),
+        };
+        Vec4::select(e.cmplt(half_w), end, across)
     }
 
     /// [`Self::profile`] for four values, lane for lane the same bits.
@@ -611,8 +627,9 @@ impl ScreenStreak {
             width * (1.0 - across).clamp(0.0, 1.0)
         };
         if self.sprite.kind != SPRITE_FLAT && width >= 1.0 {
-            let p = self.sprite.profile(across / (0.5 * width))
-                * self.sprite.end_profile(along.min(len - along), 0.5 * width);
+            let p =
+                self.sprite
+                    .density(across / (0.5 * width), along.min(len - along), 0.5 * width);
             cov_across *= 1.0 + sprite_ramp(width) * (p - 1.0);
         }
         let cov_along = (along + 0.5)
@@ -647,10 +664,11 @@ impl ScreenStreak {
             width * clamp01(1.0 - across)
         };
         if !THIN && self.sprite.kind != SPRITE_FLAT && width >= 1.0 {
-            let p = self.sprite.profile(across / (0.5 * width))
-                * self
-                    .sprite
-                    .end_profile(least(along, self.len - along), 0.5 * width);
+            let p = self.sprite.density(
+                across / (0.5 * width),
+                least(along, self.len - along),
+                0.5 * width,
+            );
             cov_across *= 1.0 + sprite_ramp(width) * (p - 1.0);
         }
         let cov_along = clamp01(least(along, self.len - along) + 0.5);
@@ -678,10 +696,11 @@ impl ScreenStreak {
         };
         if !THIN && self.sprite.kind != SPRITE_FLAT {
             // As `coverage`, lane by lane: only where the band is a pixel wide or more.
-            let p = self.sprite.profile_x4(across / (half * width))
-                * self
-                    .sprite
-                    .end_profile_x4(along.min(Vec4::splat(self.len) - along), half * width);
+            let p = self.sprite.density_x4(
+                across / (half * width),
+                along.min(Vec4::splat(self.len) - along),
+                half * width,
+            );
             let ramp = clamp01(half * width - one);
             let shaped = cov_across * (one + ramp * (p - one));
             cov_across = Vec4::select(width.cmpge(one), shaped, cov_across);

@@ -271,6 +271,44 @@ mod tests {
                 }
             }
         }
+        // The ends: each kind's density has mean 1 over the end's quarter square (midpoint
+        // rule), density_x4 is density lane for lane, and a lump's and an aggregate's ends are
+        // round: nothing at the square's corner beyond the unit circle, the disc's density on it.
+        for kind in [SPRITE_LUMP, SPRITE_STAR, SPRITE_AGGREGATE] {
+            let s = Sprite::new(kind, 0.3);
+            let n = 1000;
+            let mut sum = 0.0f64;
+            for i in 0..n {
+                for j in 0..n {
+                    let x = (i as f32 + 0.5) / n as f32;
+                    let e = (j as f32 + 0.5) / n as f32 * 4.0;
+                    sum += f64::from(s.density(x, e, 4.0));
+                }
+            }
+            let mean = sum / (n * n) as f64;
+            assert!((mean - 1.0).abs() < 2e-3, "kind {kind}: {mean}");
+            for k in 0..300 {
+                let x = Vec4::new(0.0, 0.3, 0.77, 1.2) + Vec4::splat(k as f32 * 0.0037);
+                let e = Vec4::new(0.0, 1.1, 2.9, 5.0) + Vec4::splat(k as f32 * 0.011);
+                let v = s.density_x4(x, e, Vec4::splat(4.0)).to_array();
+                for l in 0..4 {
+                    assert_eq!(v[l].to_bits(), s.density(x[l], e[l], 4.0).to_bits());
+                }
+            }
+            // Further in than half a width: the profile across.
+            assert_eq!(s.density(0.4, 4.0, 4.0), s.profile(0.4));
+        }
+        for kind in [SPRITE_LUMP, SPRITE_AGGREGATE] {
+            let s = Sprite::new(kind, 0.0);
+            // x = u = 0.75: r = 1.06, outside the disc; the product of profiles was not 0.
+            assert_eq!(s.density(0.75, 1.0, 4.0), 0.0);
+            assert!(s.profile(0.75) * s.profile(0.75) > 0.4);
+            // The same radius across (x = 0.6, u ≈ 0) and along (x = 0, u = 0.6), the same
+            // density: round.
+            let across = s.density(0.6, 4.0 * 0.999_999, 4.0);
+            let along = s.density(0.0, 4.0 * 0.4, 4.0);
+            assert!((across - along).abs() < 1e-3, "{across} {along}");
+        }
         // A wide flake's pixels still sum to its opacity-area, sprite and all.
         let c = Camera::new(
             400,

@@ -103,11 +103,21 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if kind != 0u && width >= 1.0 {
             let turn = rest - f32(kind);
             let half_w = 0.5 * width;
-            var p = sprite_profile(kind, turn, across / half_w);
-            // Sprite::end_profile: the profile along too, within half a width of either end.
+            let x = across / half_w;
+            var p = sprite_profile(kind, turn, x);
+            // Sprite::density: within half a width of either end a lump or an aggregate is
+            // round (the disc's density at r = |(x, u)|), a star the profile along times across.
             let e = min(along, len - along);
             if e < half_w {
-                p *= sprite_profile(kind, turn, 1.0 - e / half_w);
+                let u = 1.0 - e / half_w;
+                let one_minus = max(1.0 - x * x - u * u, 0.0);
+                if kind == 1u {
+                    p = 1.9098593 * sqrt(one_minus);
+                } else if kind == 3u {
+                    p = 2.5464791 * one_minus;
+                } else {
+                    p *= sprite_profile(kind, turn, u);
+                }
             }
             cov_across *= 1.0 + clamp(0.5 * width - 1.0, 0.0, 1.0) * (p - 1.0);
         }
