@@ -8,8 +8,9 @@
 //!   ground) with that side's normal.
 //! - **Photos**: each pixel's world point (depth through the camera) and its normal from the
 //!   depth map's neighbours; the snow of its cell lies on it when the point is on the cell's
-//!   top surface and the normal faces up ([`photo_depth_m`]); the pixel whitens towards the
-//!   snow's radiance by the cover's coverage.
+//!   top surface and the normal faces up ([`photo_depth_m`]), then the depth map's noise is
+//!   cleaned away (holes in a covered surface filled, lone specks removed, edges kept); the
+//!   pixel whitens towards the snow's radiance by the cover's coverage.
 //!
 //! - Beyond the grid, upward faces of a box scene carry the open ground's cover
 //!   ([`super::SnowCover::open_depth_m`], not lifted): the far ground of an open scene.
@@ -447,6 +448,8 @@ impl SnowRender {
 /// depth map's noise) and its normal (from the
 /// depth map through the camera, [`NORMAL_SPAN_FRACTION`] of the width across) faces up, weighted from 0 at 60° from level to 1 at 37°;
 /// pixels beyond [`PHOTO_RANGE_M`] get the open ground's cover, as level ground in the open.
+/// Then the depth map's noise is cleaned away ([`clean_speckles`]: holes in a covered surface
+/// filled, lone specks removed).
 pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Result<Vec<f32>> {
     let g = cover.field.grid;
     let (w, h) = (cam.width as usize, cam.height as usize);
@@ -533,6 +536,74 @@ pub fn photo_depth_m(cover: &SnowCover, cam: &Camera, depth_m: &[f32]) -> Result
             out[y * w + x] = d * up;
         }
     }
+    clean_speckles(&out, depth_m, w, h)
+}
+
+/// The window of [`clean_speckles`], as a share of the image's width either side (2 px at 480, at
+/// least 2).
+const CLEAN_SPAN_FRACTION: f32 = 1.0 / 240.0;
+/// Neighbours on the same surface as a pixel: depths within this share of its own.
+const SAME_SURFACE: f32 = 0.02;
+/// A pixel with snow keeps it when at least this share of its neighbours on its surface have
+/// snow too.
+const KEEP_MIN: f32 = 0.3;
+/// A pixel without snow takes its neighbours' mean depth when more than this share of them
+/// have snow.
+const FILL_MIN: f32 = 0.7;
+
+/// A depth map's noise tips single pixels' normals past the test for an upward surface: a
+/// covered floor gets holes and a wall specks. Within a window of [`CLEAN_SPAN_FRACTION`] of the
+/// width, among the neighbours on the pixel's own surface (depth within [`SAME_SURFACE`]):
+/// a pixel with snow where fewer than [`KEEP_MIN`] of them have any loses it (a speck); a pixel
+/// without snow where more than [`FILL_MIN`] of them have some takes their mean depth (a hole).
+/// Where a floor meets a wall about half the neighbours have snow: the edge stays where it was.
+pub(crate) fn clean_speckles(
+    snow_m: &[f32],
+    depth_m: &[f32],
+    w: usize,
+    h: usize,
+) -> Result<Vec<f32>> {
+    use rayon::prelude::*;
+    let mut out = try_filled("the snow cover's depth per pixel", w * h, 0.0f32)?;
+    let r = ((w as f32 * CLEAN_SPAN_FRACTION).round() as usize).max(2);
+    out.par_chunks_mut(w.max(1))
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, o) in row.iter_mut().enumerate() {
+                let c = y * w + x;
+                let own = snow_m[c];
+                *o = own;
+                let d = depth_m[c];
+                if !(d.is_finite() && d > 0.0) {
+                    continue;
+                }
+                let (mut n, mut with, mut sum) = (0u32, 0u32, 0.0f32);
+                for yy in y.saturating_sub(r)..(y + r + 1).min(h) {
+                    for xx in x.saturating_sub(r)..(x + r + 1).min(w) {
+                        let j = yy * w + xx;
+                        // (NaN or infinite depths are on no surface.)
+                        let same = (depth_m[j] - d).abs() <= SAME_SURFACE * d;
+                        if j == c || !same {
+                            continue;
+                        }
+                        n += 1;
+                        if snow_m[j] > 0.0 {
+                            with += 1;
+                            sum += snow_m[j];
+                        }
+                    }
+                }
+                if n == 0 {
+                    continue;
+                }
+                let share = with as f32 / n as f32;
+                if own > 0.0 && share < KEEP_MIN {
+                    *o = 0.0;
+                } else if own <= 0.0 && share > FILL_MIN {
+                    *o = sum / with as f32;
+                }
+            }
+        });
     Ok(out)
 }
 

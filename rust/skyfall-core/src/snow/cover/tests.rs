@@ -520,3 +520,92 @@ fn the_canopy_slows_the_wind_below_the_roofs_as_macdonald_writes() {
     let along = super::wind::Canopy::of(&field, [0.0, 1.0]);
     assert!(along.attenuation < 0.3 * c.attenuation, "{along:?}");
 }
+
+#[test]
+fn a_photos_specks_and_holes_are_cleaned_and_its_edges_kept() {
+    // A floor (depth 5 m, 1 cm of snow) below a wall (depth 5 m too where they meet, then
+    // nearer: same surface only within 2 %), with a hole in the floor's snow and specks on the
+    // wall: the hole is filled with the floor's depth, the specks go, the edge stays.
+    let (w, h) = (240usize, 60usize);
+    let mut depth = vec![5.0f32; w * h];
+    let mut snow = vec![0.0f32; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            if y >= 30 {
+                snow[y * w + x] = 0.01;
+            } else {
+                depth[y * w + x] = 5.0 - 0.01 * (30 - y) as f32;
+            }
+        }
+    }
+    snow[45 * w + 100] = 0.0; // a hole
+    snow[10 * w + 50] = 0.01; // a speck
+    snow[12 * w + 51] = 0.008; // another
+    let out = super::render::clean_speckles(&snow, &depth, w, h).unwrap();
+    assert!((out[45 * w + 100] - 0.01).abs() < 1e-8);
+    assert_eq!(out[10 * w + 50], 0.0);
+    assert_eq!(out[12 * w + 51], 0.0);
+    // The floor's first row and the wall's last row keep what they had: the edge.
+    for x in 0..w {
+        assert_eq!(out[30 * w + x], 0.01, "{x}");
+        assert_eq!(out[29 * w + x], 0.0, "{x}");
+    }
+    // Nothing else changed.
+    let changed = (0..w * h).filter(|&i| out[i] != snow[i]).count();
+    assert_eq!(changed, 3);
+}
+
+#[test]
+fn a_noisy_photo_of_level_ground_is_covered_whole() {
+    // A camera 1.6 m over level ground, pitched 20° down; the ground's depth with 0.5 % of
+    // seeded noise (a depth map's), which tips single pixels' normals past 60° from up.
+    use crate::scene::camera::Camera;
+    use glam::Mat3;
+    let (w, h) = (240u32, 135u32);
+    let f = 200.0;
+    let cam = Camera::new(
+        w,
+        h,
+        [f, f, w as f32 / 2.0, h as f32 / 2.0],
+        Vec3::new(0.0, 1.6, 0.0),
+        Mat3::from_rotation_x(-20f32.to_radians()),
+    )
+    .unwrap();
+    let mut depth = vec![f32::INFINITY; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let d = cam.ray_direction(x, y);
+            if d.y < -0.05 {
+                let i = (y * w + x) as u64;
+                let u = (crate::seed::splitmix64(i ^ 0x5eed) >> 40) as f32 / (1u64 << 24) as f32;
+                depth[(y * w + x) as usize] = 1.6 / -d.y * (1.0 + 0.005 * (2.0 * u - 1.0));
+            }
+        }
+    }
+    let field = HeightField::from_depth_map(&cam, &depth, 0.25).unwrap();
+    let c = accumulate(
+        field,
+        &weather(1.0, [0.0; 3]),
+        &params(3600.0, 600.0, 0.0),
+        None,
+    )
+    .unwrap();
+    let per_pixel = super::render::photo_depth_m(&c, &cam, &depth).unwrap();
+    let ground: Vec<f32> = per_pixel
+        .iter()
+        .zip(&depth)
+        .filter(|(_, d)| d.is_finite())
+        .map(|(s, _)| *s)
+        .collect();
+    let covered = ground.iter().filter(|&&s| s > 0.0).count() as f64 / ground.len() as f64;
+    let bare: Vec<(u32, u32)> = (0..w * h)
+        .filter(|&i| depth[i as usize].is_finite() && per_pixel[i as usize] <= 0.0)
+        .map(|i| (i % w, i / w))
+        .take(40)
+        .collect();
+    assert!(covered > 0.995, "{covered} {bare:?}");
+    let mut sorted = ground.clone();
+    sorted.sort_by(f32::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    assert!((median / 0.01 - 1.0).abs() < 1e-3, "{median}");
+}
