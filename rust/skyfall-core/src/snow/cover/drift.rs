@@ -190,6 +190,7 @@ pub fn redistribute(
             if q_out > q_in {
                 q_out = q_in + ((q_out - q_in) * dt_s).min(held) / dt_s;
             }
+            let mut changed = q_in != q_out;
             let mut kg = held + (q_in - q_out) * dt_s;
             let (mut ox, mut oz) = (q_out * share_x, q_out * (1.0 - share_x));
             let down_x = if east {
@@ -208,6 +209,7 @@ pub fn redistribute(
                     Some(j) if base_m[j].is_nan() => {
                         // Nothing there to carry it: it settles here.
                         kg += *out * dt_s;
+                        changed |= *out != 0.0;
                         *out = 0.0;
                     }
                     Some(_) => {}
@@ -215,7 +217,9 @@ pub fn redistribute(
             }
             fx[c] = ox;
             fz[c] = oz;
-            depth_m[c] = (kg / cell_kg).max(0.0);
+            if changed {
+                depth_m[c] = (kg / cell_kg).max(0.0);
+            }
         }
     }
     Ok(moved)
