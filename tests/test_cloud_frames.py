@@ -272,3 +272,31 @@ def test_the_sun_on_a_snow_cover_is_its_surfaces_share_on_both_backends() -> Non
     lit, shaded = covered & (st > 0.9), covered & (st == 0.0)
     assert (clear.rgb[lit][:, 1] > dark.rgb[lit][:, 1] + 1.0).all()  # the sun on the snow
     np.testing.assert_array_equal(clear.rgb[shaded], dark.rgb[shaded])  # none in the shadow
+
+
+def test_clouds_drift_with_the_wind_in_a_sequence() -> None:
+    # A cumulus ahead of the camera, the wind 20 m/s along +x: at t = 5 s the frame is the one
+    # of the same cloud moved 100 m along x, at t = 0 the cloud's own frame (bit for bit), and
+    # across a sequence the cloud's coverage moves right by the projection of wind * t.
+    c = clouds.particles("cumulus", n_particles=300, extent_m=500.0, altitude_m=800.0, seed=2)
+    c = c.translated((0.0, 0.0, -2500.0))
+    cam = Camera((0.0, 1.6, 0.0), pitch_deg=20.0, vertical_fov_deg=40.0)
+    scene = scenes.boxes([], camera=cam)
+    r = Renderer(W, H, backend="cpu")
+    wind = (20.0, 0.0, 0.0)
+    still = r.render(scene, Weather(clouds=c))
+    at0 = r.render(scene, Weather(clouds=c, wind_m_s=wind))
+    np.testing.assert_array_equal(at0.rgb, still.rgb)
+    at5 = r.render(scene, Weather(clouds=c, wind_m_s=wind), time_s=5.0)
+    moved = r.render(scene, Weather(clouds=c.translated((100.0, 0.0, 0.0)), wind_m_s=wind))
+    np.testing.assert_array_equal(at5.rgb, moved.rgb)
+    np.testing.assert_array_equal(at5.layers["cloud_alpha"], moved.layers["cloud_alpha"])
+    frames = r.render_sequence(scene, Weather(clouds=c, wind_m_s=wind), n_frames=3, fps=0.2)
+    xs = np.arange(W) + 0.5
+    centres = [float((f.layers["cloud_alpha"].sum(axis=0) * xs).sum() / f.layers["cloud_alpha"].sum()) for f in frames]
+    # 100 m at about 2.6 km (the cloud's distance) is fx * 100 / z px to the right per frame.
+    z = float(np.linalg.norm(c.positions_m.mean(axis=0) - np.array(cam.position_m)))
+    fx = cam.with_resolution(W, H).intrinsics()[0]
+    step = fx * 100.0 / z
+    assert centres[1] - centres[0] == pytest.approx(step, rel=0.1), (centres, step)
+    assert centres[2] - centres[1] == pytest.approx(step, rel=0.1), (centres, step)

@@ -37,6 +37,7 @@ __all__ = [
     "KINDS",
     "PRESETS",
     "Part",
+    "drifted",
     "frame_field",
     "preset",
     "AttenuationVolume",
@@ -375,6 +376,56 @@ def preset(name: str) -> Cloud:
 
 
 _FIELDS: weakref.WeakKeyDictionary[Cloud, dict[tuple[Any, int, bool], Any]] = weakref.WeakKeyDictionary()
+_DRIFTED: weakref.WeakKeyDictionary[Cloud, tuple[tuple[float, float, float], Cloud]] = weakref.WeakKeyDictionary()
+
+
+def drifted(clouds: Cloud | str, wind_m_s: Any, time_s: float) -> Cloud:
+    """The clouds as the wind has carried them at ``time_s``: translated by the wind's
+    horizontal components times the time, (wind_x t, 0, wind_z t) m (they neither rise nor
+    sink). Frames call it with ``Weather.wind_m_s`` and the frame's ``time_s``, so clouds drift
+    across the sky in :meth:`skyfall.Renderer.render_sequence`; at ``time_s = 0`` or in still
+    air the cloud itself is returned, and its frames are unchanged.
+
+    The drifted cloud's attenuation volumes are built anew (the last drift of each cloud is
+    kept, so frames at one time share them).
+
+    Parameters
+    ----------
+    clouds : Cloud or str
+        A cloud, or a name of :data:`PRESETS`.
+    wind_m_s : sequence of 3 float
+        The wind, m/s (its vertical component is ignored).
+    time_s : float
+        Time since the clouds stood where ``clouds`` places them, s.
+
+    Returns
+    -------
+    Cloud
+
+    Examples
+    --------
+    >>> from skyfall import clouds
+    >>> c = clouds.preset("cumulus")
+    >>> moved = clouds.drifted(c, (10.0, 0.0, 0.0), 6.0)
+    >>> float((moved.positions_m - c.positions_m)[0, 0])
+    60.0
+    >>> clouds.drifted(c, (10.0, 0.0, 0.0), 0.0) is c
+    True
+    """
+    cloud = preset(clouds) if isinstance(clouds, str) else _cloud(clouds)
+    w = float_array("wind_m_s", wind_m_s).reshape(-1)
+    if w.shape != (3,):
+        raise ValueError(f"wind_m_s must have 3 components, got shape {w.shape}")
+    t = in_range("time_s", time_s)
+    offset = (float(w[0]) * t, 0.0, float(w[2]) * t)
+    if offset[0] == 0.0 and offset[2] == 0.0:
+        return cloud
+    last = _DRIFTED.get(cloud)
+    if last is not None and last[0] == offset:
+        return last[1]
+    moved = cloud.translated(offset)
+    _DRIFTED[cloud] = (offset, moved)
+    return moved
 
 
 def frame_field(clouds: Cloud | str, sun_direction: tuple[float, float, float] | None, resolution: int = FRAME_RESOLUTION, *, diffuse: bool = True) -> Any:

@@ -801,7 +801,9 @@ class Renderer:
         if weather.clouds is not None:
             from skyfall import clouds as _clouds
 
-            request["clouds"] = _clouds.frame_field(weather.clouds, weather.sun_direction)
+            # Carried by the wind since time 0 (unchanged at time 0 or in still air).
+            moving = _clouds.drifted(weather.clouds, weather.wind_m_s, t)
+            request["clouds"] = _clouds.frame_field(moving, weather.sun_direction)
         if weather.snow_cover is not None:
             request["snow_cover"] = weather.snow_cover.core
         if weather.windshield is not None:

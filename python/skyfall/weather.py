@@ -133,8 +133,10 @@ class Weather:
         ``Cloud`` in world metres, or a preset's name (:data:`skyfall.clouds.PRESETS`). They are
         composited over the sky (and whatever lies behind them) before the haze, lit by the
         sun through their attenuation volume and by the sky's light from above, and draw
-        ``layers["cloud_alpha"]``; under a sky with a sun they shade the ground. None
-        (default): no clouds, the frame's bits unchanged.
+        ``layers["cloud_alpha"]``; under a sky with a sun they shade the ground. They drift
+        with ``wind_m_s`` (a frame at ``time_s`` draws them moved by its horizontal components
+        times ``time_s``, :func:`skyfall.clouds.drifted`). None (default): no clouds, the
+        frame's bits unchanged.
     windshield : skyfall.windshield.Windshield or str, optional
         Look through a windshield in the rain (:mod:`skyfall.windshield`): a ``Windshield``
         as it stands (the caller steps it), or a preset's name (:data:`skyfall.windshield.PRESETS`,
