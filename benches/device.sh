@@ -30,7 +30,10 @@ site=$(mktemp -d)/site
 "$PY" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target "$site" "$wheel"
 export PYTHONPATH="$site${PYTHONPATH:+:$PYTHONPATH}"
 
-if ! ldconfig -p | grep -q 'libvulkan\.so\.1'; then
+# (The loader list is read whole first: under pipefail, `ldconfig -p | grep -q` fails whenever
+# grep's early exit cuts ldconfig off with SIGPIPE, which made this check flaky.)
+loaders=$(ldconfig -p)
+if ! grep -q 'libvulkan\.so\.1' <<<"$loaders"; then
   if compgen -G ".gl/*.deb" >/dev/null; then
     echo "device.sh: no Vulkan loader here: unpacking the carried .gl/*.deb"
     for f in .gl/*.deb; do dpkg -x "$f" /; done
