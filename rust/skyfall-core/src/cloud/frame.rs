@@ -15,7 +15,9 @@
 //! ray nearest the centre, read trilinearly from the volumes per fragment, θ the scattering
 //! angle (cos θ = view direction · sun direction), p_HG the Henyey–Greenstein phase with the
 //! droplets' g, L_sky the open sky's light (1 in relative units, times a photo's units). The
-//! first term is the sun's single scattering (the paper's); F ([`diffuse_light`]) the diffuse
+//! first term is the sun's single scattering (the paper's), its Γ_sun the full extinction
+//! towards the sun ([`unscattered`]: the volume keeps the δ-M share, which with the full phase
+//! would scatter the forward peak twice); F ([`diffuse_light`]) the diffuse
 //! light at x, scattered towards the viewer as from an isotropic field: the two-stream
 //! transmission D of the column above x towards its light (the sun's less its direct beam; the
 //! sky's whole), plus D times half the two-stream reflection of the column below x (the light
@@ -601,8 +603,8 @@ impl<'a> CloudSplats<'a> {
                     let sky = self.light.sky * sky[l];
                     let source = match &self.sun {
                         Some(_) => {
-                            self.light.sun * (std::f32::consts::PI * phase[l] * gs[l] + sun[l])
-                                + sky
+                            let beam = unscattered(gs[l], s.albedo, self.g);
+                            self.light.sun * (std::f32::consts::PI * phase[l] * beam + sun[l]) + sky
                         }
                         None => sky,
                     };
@@ -614,6 +616,18 @@ impl<'a> CloudSplats<'a> {
         }
         (trans, acc)
     }
+}
+
+/// The sun's unscattered beam at a point of a particle of albedo `albedo`, from the sun
+/// volume's Γ. The volume keeps the δ-M direct beam, exp(−Σ(1 − a_i g²)τ_i): what the diffuse
+/// term ([`diffuse_light`]) takes as direct, forward-scattered light included. Single scattering
+/// with the full Henyey–Greenstein phase must see the full extinction exp(−Στ_i), or the
+/// forward peak is scattered twice (the frames' single scattering was 1.5x the path tracer's
+/// first order at the clouds' depths): Γ^(1/(1 − a g²)), exact for a cloud of one albedo (every
+/// generated cloud). Branch-free (`ln_normal`, `exp_neg`); `cloud.wgsl` mirrors it.
+#[inline(always)]
+pub fn unscattered(gamma: f32, albedo: f32, g: f32) -> f32 {
+    exp_neg(ln_normal(gamma.max(1e-30)) / (1.0 - albedo * g * g))
 }
 
 /// ¾(1 − g)/(1 − g²) = ¾/(1 + g): the two-stream's optical depth, times ¾(1 − g), per unit
@@ -792,8 +806,27 @@ mod tests {
     }
 
     #[test]
+    fn the_unscattered_beam_is_the_delta_m_share_to_its_power() {
+        // Γ_δM = e^(−(1 − a g²)τ) ⇒ e^(−τ), against libm over the range a frame meets.
+        for a in [0.5f32, 0.9, 0.999_9, 1.0] {
+            for tau in [0.0f32, 0.01, 0.3, 2.0, 7.0, 20.0] {
+                let g = 0.864f32;
+                let delta_m = (-(1.0 - a * g * g) * tau).exp();
+                let want = (-tau).exp();
+                let got = unscattered(delta_m, a, g);
+                assert!(
+                    (got - want).abs() <= 2e-6 * want + 1e-30,
+                    "a {a} tau {tau}: {got} vs {want}"
+                );
+            }
+        }
+        // Γ = 0 (or a denormal) gives 0, not NaN.
+        assert_eq!(unscattered(0.0, 1.0, 0.86), 0.0);
+    }
+
+    #[test]
     fn the_sun_lights_by_the_phase_function() {
-        // Sun at 90° to the view: S = α a (E_sun/E) (π Γ p_HG(0) + D(Γ) − Γ).
+        // Sun at 90° to the view: S = α a (E_sun/E) (π Γ_full p_HG(0) + D(Γ) − Γ).
         let c = cam(17, 17);
         let tau = 0.5;
         let field = CloudField::new(one(tau), Some([1.0, 0.0, 0.0]), 64).unwrap();
@@ -814,8 +847,11 @@ mod tests {
         let (direct, exit) = view.sample_with_exit(Vec3::new(0.0, 1000.0, 0.0));
         assert!((direct - gamma).abs() < 1e-5);
         let diffuse = diffuse_light(direct, exit, 0.86, false);
-        let want =
-            (1.0 - (-tau as f32).exp()) * 10.0 * (std::f32::consts::PI * p * gamma + diffuse);
+        // Single scattering sees the full extinction: the δ-M Γ to the power 1/(1 − a g²),
+        // a = 1 (libm's powf as the reference for `unscattered`).
+        let full = gamma.powf(1.0 / (1.0 - 0.86f32 * 0.86));
+        assert!(full < 0.9 * gamma);
+        let want = (1.0 - (-tau as f32).exp()) * 10.0 * (std::f32::consts::PI * p * full + diffuse);
         assert!(
             (rgb[3 * mid] - want).abs() < 1e-3 * want.max(1.0),
             "{} vs {want}",

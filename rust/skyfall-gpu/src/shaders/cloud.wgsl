@@ -72,7 +72,15 @@ fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
 }
 
 // CloudSplats::source.
-fn source(x: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+// The sun's unscattered beam at a point of a particle of albedo `albedo`: the sun volume keeps
+// the δ-M share exp(−Σ(1 − a g²)τ) (the diffuse term's direct beam); single scattering with the
+// full phase needs the full extinction exp(−Στ), that share to the power 1/(1 − a g²) (exact
+// for a cloud of one albedo). Mirrors skyfall_core::cloud::frame::unscattered.
+fn unscattered(gamma: f32, albedo: f32, g: f32) -> f32 {
+    return exp(log(max(gamma, 1e-30)) / (1.0 - albedo * g * g));
+}
+
+fn source(x: vec3<f32>, d: vec3<f32>, albedo: f32) -> vec3<f32> {
     let g = info.sun_g.w;
     let diffuse_on = info.sun_light.w != 0.0;
     let z = sample_volume(info.zenith_volume, x);
@@ -89,7 +97,7 @@ fn source(x: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     if diffuse_on {
         diffuse = diffuse_light(s.x, s.y, g, false);
     }
-    return info.sun_light.xyz * (PI * phase * s.x + diffuse) + sky;
+    return info.sun_light.xyz * (PI * phase * unscattered(s.x, albedo, g) + diffuse) + sky;
 }
 
 @compute @workgroup_size(8, 8)
@@ -135,7 +143,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             let t_k = exp(-s1.x * exp(-rho2 / r2));
             let a = 1.0 - t_k;
-            acc = acc + source(x_near, d) * (trans * a * s1.y);
+            acc = acc + source(x_near, d, s1.y) * (trans * a * s1.y);
             trans = trans * t_k;
             if trans < MIN_TRANSMITTANCE {
                 break;
