@@ -589,6 +589,15 @@ impl<'a> CloudSplats<'a> {
                     }
                 }
             }
+            // The sun's unscattered beam ([`unscattered`]) of every lane at once, its power once
+            // per splat.
+            let mut beam = [0.0f32; LANES];
+            if self.sun.is_some() {
+                let power = unscattered_power(s.albedo, self.g);
+                for l in 0..LANES {
+                    beam[l] = unscattered(gs[l], power);
+                }
+            }
             let mut sky = gz;
             let mut sun = [0.0f32; LANES];
             if self.diffuse {
@@ -603,8 +612,8 @@ impl<'a> CloudSplats<'a> {
                     let sky = self.light.sky * sky[l];
                     let source = match &self.sun {
                         Some(_) => {
-                            let beam = unscattered(gs[l], s.albedo, self.g);
-                            self.light.sun * (std::f32::consts::PI * phase[l] * beam + sun[l]) + sky
+                            self.light.sun * (std::f32::consts::PI * phase[l] * beam[l] + sun[l])
+                                + sky
                         }
                         None => sky,
                     };
@@ -618,16 +627,23 @@ impl<'a> CloudSplats<'a> {
     }
 }
 
-/// The sun's unscattered beam at a point of a particle of albedo `albedo`, from the sun
-/// volume's Γ. The volume keeps the δ-M direct beam, exp(−Σ(1 − a_i g²)τ_i): what the diffuse
-/// term ([`diffuse_light`]) takes as direct, forward-scattered light included. Single scattering
+/// The sun's unscattered beam at a point, from the sun volume's Γ and the particle's
+/// [`unscattered_power`]. The volume keeps the δ-M direct beam, exp(−Σ(1 − a_i g²)τ_i): what
+/// the diffuse term ([`diffuse_light`]) takes as direct, forward-scattered light included.
+/// Single scattering
 /// with the full Henyey–Greenstein phase must see the full extinction exp(−Στ_i), or the
 /// forward peak is scattered twice (the frames' single scattering was 1.5x the path tracer's
 /// first order at the clouds' depths): Γ^(1/(1 − a g²)), exact for a cloud of one albedo (every
 /// generated cloud). Branch-free (`ln_normal`, `exp_neg`); `cloud.wgsl` mirrors it.
 #[inline(always)]
-pub fn unscattered(gamma: f32, albedo: f32, g: f32) -> f32 {
-    exp_neg(ln_normal(gamma.max(1e-30)) / (1.0 - albedo * g * g))
+pub fn unscattered(gamma: f32, power: f32) -> f32 {
+    exp_neg(ln_normal(gamma.max(1e-30)) * power)
+}
+
+/// [`unscattered`]'s power for a particle of albedo `albedo`: 1/(1 − a g²).
+#[inline(always)]
+pub fn unscattered_power(albedo: f32, g: f32) -> f32 {
+    1.0 / (1.0 - albedo * g * g)
 }
 
 /// ¾(1 − g)/(1 − g²) = ¾/(1 + g): the two-stream's optical depth, times ¾(1 − g), per unit
@@ -813,7 +829,7 @@ mod tests {
                 let g = 0.864f32;
                 let delta_m = (-(1.0 - a * g * g) * tau).exp();
                 let want = (-tau).exp();
-                let got = unscattered(delta_m, a, g);
+                let got = unscattered(delta_m, unscattered_power(a, g));
                 assert!(
                     (got - want).abs() <= 2e-6 * want + 1e-30,
                     "a {a} tau {tau}: {got} vs {want}"
@@ -821,7 +837,7 @@ mod tests {
             }
         }
         // Γ = 0 (or a denormal) gives 0, not NaN.
-        assert_eq!(unscattered(0.0, 1.0, 0.86), 0.0);
+        assert_eq!(unscattered(0.0, unscattered_power(1.0, 0.86)), 0.0);
     }
 
     #[test]

@@ -77,7 +77,7 @@ fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
 // full phase needs the full extinction exp(−Στ), that share to the power 1/(1 − a g²) (exact
 // for a cloud of one albedo). Mirrors skyfall_core::cloud::frame::unscattered.
 fn unscattered(gamma: f32, albedo: f32, g: f32) -> f32 {
-    return exp(log(max(gamma, 1e-30)) / (1.0 - albedo * g * g));
+    return exp(log(max(gamma, 1e-30)) * (1.0 / (1.0 - albedo * g * g)));
 }
 
 fn source(x: vec3<f32>, d: vec3<f32>, albedo: f32) -> vec3<f32> {
