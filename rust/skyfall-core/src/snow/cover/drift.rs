@@ -136,16 +136,13 @@ pub fn redistribute(
     // Flux out across each cell's downwind x and z sides, kg/s.
     let mut fx = try_filled("snow drift", n, 0.0f64)?;
     let mut fz = try_filled("snow drift", n, 0.0f64)?;
-    let order = |m: usize, forward: bool| -> Box<dyn Iterator<Item = usize>> {
-        if forward {
-            Box::new(0..m)
-        } else {
-            Box::new((0..m).rev())
-        }
-    };
     let (east, south) = (e[0] >= 0.0, e[1] >= 0.0);
-    for k in order(nz, south) {
-        for i in order(nx, east) {
+    // Upwind cells first: the j-th row (column) of the sweep counted from the upwind side.
+    let upwind_first = |j: usize, m: usize, forward: bool| if forward { j } else { m - 1 - j };
+    for kk in 0..nz {
+        let k = upwind_first(kk, nz, south);
+        for ii in 0..nx {
+            let i = upwind_first(ii, nx, east);
             let c = k * nx + i;
             if base_m[c].is_nan() {
                 continue;
