@@ -15,9 +15,11 @@ import numpy as np
 import pytest
 from skimage.metrics import structural_similarity
 
-from skyfall import Camera, PhotoScene, Renderer, Weather, clouds, scenes
+from skyfall import Camera, PhotoScene, Renderer, Weather, clouds, scenes, sky
 
 W, H = 64, 40
+LUMA = np.array([0.2126, 0.7152, 0.0722])
+"""Rec. 709 luminance weights: the sun's light in a box scene has the sun's colour, of luminance 1."""
 SUNNY = {"sky": 12, "sun_elevation_deg": 35.0, "sun_azimuth_deg": 160.0}
 
 
@@ -39,8 +41,9 @@ def _clear_sky_sun_lux(elevation_deg: float) -> float:
 
 
 def test_the_sun_lights_open_ground_by_the_clear_sky_model() -> None:
-    # No clouds: open ground of albedo a receives a (E_amb + E_sun/E sin h); the sky's share
-    # is the frame without a sun (the same sky, sun_illuminance_lux=0).
+    # No clouds: open ground of albedo a receives a (E_amb + E_sun/E sin h c_sun), c_sun the
+    # sun's colour (luminance 1: tested against colour-science in test_sky_colour.py); the
+    # sky's share is the frame without a sun (the same sky, sun_illuminance_lux=0).
     scene = scenes.empty(ground_albedo=(0.3, 0.3, 0.3), camera=Camera(pitch_deg=-30.0))
     r = Renderer(W, H, backend="cpu")
     lit = r.render(scene, Weather(**SUNNY))
@@ -49,7 +52,9 @@ def test_the_sun_lights_open_ground_by_the_clear_sky_model() -> None:
     ground = np.isfinite(lit.depth_m)
     assert ground.mean() > 0.5
     rel = _clear_sky_sun_lux(35.0) / 10_000.0
-    want = dark.rgb[ground] + 0.3 * rel * math.sin(math.radians(35.0))
+    sun_rgb = np.array(sky.colours(weather=Weather(**SUNNY)).sun)
+    assert sun_rgb @ [0.2126, 0.7152, 0.0722] == pytest.approx(1.0, rel=1e-5)
+    want = dark.rgb[ground] + 0.3 * rel * math.sin(math.radians(35.0)) * sun_rgb
     np.testing.assert_allclose(lit.rgb[ground], want, rtol=2e-5)
     assert Weather(**SUNNY).sun_relative == pytest.approx(rel, rel=1e-6)
     np.testing.assert_array_equal(lit.layers["sun_transmittance"][ground], 1.0)
@@ -81,7 +86,7 @@ def test_cloud_shadow_on_open_ground_is_the_volume_along_the_sun_ray() -> None:
     got = f.layers["sun_transmittance"][ground]
     assert want.min() < 0.5 and want.max() > 0.99, "the test should see shadow and sun"
     np.testing.assert_allclose(got, want, atol=2e-3)
-    rel = Weather(**sun_at).sun_relative
+    rel = Weather(**sun_at).sun_relative * sky.colours(weather=Weather(**sun_at)).sun[0]
     np.testing.assert_allclose(f.rgb[ground][:, 0], clear.rgb[ground][:, 0] + 0.3 * rel * math.sin(math.radians(60.0)) * got, rtol=1e-4)
 
 
@@ -213,7 +218,7 @@ def test_thin_clouds_single_scattering_matches_the_path_tracer() -> None:
     )
     w = Weather(sky=12, sun_elevation_deg=30.0, sun_azimuth_deg=120.0)
     r = Renderer(n, n, backend="cpu")
-    got = _sun_light(r, scenes.boxes([], ground=False, camera=cam), w, thin, diffuse=False)[0][..., 1].reshape(-1)
+    got = _sun_light(r, scenes.boxes([], ground=False, camera=cam), w, thin, diffuse=False)[0].reshape(-1, 3) @ LUMA
     c = cam.with_resolution(n, n)
     d = _unit_rays(c)
     mc, single, err = clouds.path_traced(thin, w.sun_direction, sun_relative=w.sun_relative, eye_m=c.position_m, directions=d, paths=4000, max_orders=3, seed=2)
@@ -230,7 +235,7 @@ def test_thin_clouds_single_scattering_matches_the_path_tracer() -> None:
     thick = clouds.Cloud(thin.positions_m, thin.radii_m, np.array([1.0, 1.5]), thin.albedos)
     for sun in ((30.0, 120.0), (35.0, 10.0)):
         ws = Weather(sky=12, sun_elevation_deg=sun[0], sun_azimuth_deg=sun[1])
-        got = _sun_light(r, scenes.boxes([], ground=False, camera=cam), ws, thick, diffuse=False)[0][..., 1].reshape(-1)
+        got = _sun_light(r, scenes.boxes([], ground=False, camera=cam), ws, thick, diffuse=False)[0].reshape(-1, 3) @ LUMA
         _, first, _ = clouds.path_traced(thick, ws.sun_direction, sun_relative=ws.sun_relative, eye_m=c.position_m, directions=d, paths=2000, max_orders=1, seed=2)
         lit = first > 0.2 * first.max()
         assert lit.sum() >= 20

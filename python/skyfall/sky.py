@@ -17,6 +17,12 @@ elevations are found exactly and the sky is integrated over the visible ones fro
 precomputed per sky (512 elevation steps, 4-point Gauss-Legendre each). The error so falls
 as 1/samples^2 even where occluders cut the sky (``benches/results/sky.md`` tabulates it).
 
+Colour: a sky with a sun (CIE types 6-15) has the colour of Hosek & Wilkie's clear-sky model
+(*An Analytic Model for Full Spectral Sky-Dome Radiance*, 2012, RGB form) at a turbidity per
+type, with the CIE luminance kept (:func:`luminance_rgb`); its sun has the colour of a 5778 K
+black body through Rayleigh and aerosol extinction (:func:`colours`). The overcast skies
+(``"overcast"``, 1-5) stay neutral. Colours are linear Rec. 709 (sRGB primaries, D65 white).
+
 Occluders: the boxes of a :class:`~skyfall.scenes.BoxScene`, or the ``occluders`` a
 :class:`~skyfall.PhotoScene` was given (a photo's depth map is not turned into geometry:
 a depth map seen from one viewpoint says nothing of what hangs above a drop behind it).
@@ -43,10 +49,13 @@ __all__ = [
     "SKY_TYPES",
     "AmbientLightMap",
     "ambient_light_map",
+    "SkyColours",
     "cloud_base_m",
+    "colours",
     "expect_sweeps",
     "horizontal_illuminance",
     "luminance",
+    "luminance_rgb",
 ]
 
 CHANNELS = ("up", "+x", "-x", "+z", "-z")
@@ -177,6 +186,103 @@ def luminance(
     dirs, shape = _directions(elevation_deg, azimuth_deg)
     rel = w.sky_model().luminance_relative(dirs, received=True) * w.luminance_scale_cd_m2
     return float(rel[0]) if shape == () else rel.reshape(shape)
+
+
+def luminance_rgb(
+    elevation_deg: Any,
+    azimuth_deg: Any,
+    *,
+    sky: str | int | None = None,
+    horizontal_illuminance_lux: float | None = None,
+    sun_elevation_deg: float | None = None,
+    sun_azimuth_deg: float | None = None,
+    weather: Weather | None = None,
+) -> NDArray[np.float64]:
+    """The sky seen from the ground in colour: linear Rec. 709 RGB, cd/m^2 per channel.
+
+    The CIE luminance of :func:`luminance` times the sky's chroma there (Hosek & Wilkie's RGB
+    model divided by its own luminance), so ``0.2126 R + 0.7152 G + 0.0722 B`` is
+    :func:`luminance`. Through rain the cloud base's colour is mixed with the airlight's (the
+    horizon's colour). Overcast skies give R = G = B.
+
+    Parameters
+    ----------
+    elevation_deg, azimuth_deg, sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg, weather
+        As for :func:`luminance`.
+
+    Returns
+    -------
+    ndarray
+        float64, the broadcast shape of the directions plus a last axis of 3 (R, G, B).
+
+    Examples
+    --------
+    >>> from skyfall import sky
+    >>> r, g, b = sky.luminance_rgb(90.0, 0.0, sky=12, sun_elevation_deg=60.0, sun_azimuth_deg=180.0)
+    >>> bool(b > g > r)
+    True
+    """
+    w = _weather(weather, sky, horizontal_illuminance_lux, sun_elevation_deg, sun_azimuth_deg)
+    dirs, shape = _directions(elevation_deg, azimuth_deg)
+    rel = w.sky_model().rgb_relative(dirs, received=True) * w.luminance_scale_cd_m2
+    return rel.reshape((*shape, 3))
+
+
+@dataclass(frozen=True)
+class SkyColours:
+    """The colours of a sky's light: linear Rec. 709 RGB of luminance 1 each, (1, 1, 1) under
+    an overcast sky.
+
+    Attributes
+    ----------
+    horizon : tuple of float
+        The horizon's colour (its luminance-weighted mean over the azimuths): the colour the
+        haze's airlight takes, so distance fades to it.
+    sky_light : tuple of float
+        The colour of the light the open sky gives a horizontal surface, through the rain: the
+        renderer tints the ambient-light map with it (shadows under a clear sky are blue).
+    sun : tuple of float
+        The colour of the sun's direct light (white-yellow high, orange near the horizon).
+    """
+
+    horizon: tuple[float, float, float]
+    sky_light: tuple[float, float, float]
+    sun: tuple[float, float, float]
+
+
+def colours(
+    *,
+    sky: str | int | None = None,
+    sun_elevation_deg: float | None = None,
+    sun_azimuth_deg: float | None = None,
+    weather: Weather | None = None,
+) -> SkyColours:
+    """The colours of a sky's horizon, of its light on the ground and of its sun.
+
+    Parameters
+    ----------
+    sky, sun_elevation_deg, sun_azimuth_deg, weather
+        As for :func:`luminance`.
+
+    Returns
+    -------
+    SkyColours
+
+    Examples
+    --------
+    >>> from skyfall import sky
+    >>> c = sky.colours(sky=12, sun_elevation_deg=5.0, sun_azimuth_deg=180.0)
+    >>> r, g, b = c.sun
+    >>> bool(r > g > b)
+    True
+    """
+    w = _weather(weather, sky, None, sun_elevation_deg, sun_azimuth_deg)
+    horizon, light, sun = w.sky_model().colours
+
+    def rgb(c: list[float]) -> tuple[float, float, float]:
+        return (float(c[0]), float(c[1]), float(c[2]))
+
+    return SkyColours(horizon=rgb(horizon), sky_light=rgb(light), sun=rgb(sun))
 
 
 def _occluders(scene: BoxScene | PhotoScene | None) -> NDArray[np.float32]:

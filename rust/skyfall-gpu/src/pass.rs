@@ -20,6 +20,9 @@ pub fn shared_constants() -> String {
     [
         f("PI", std::f32::consts::PI),
         f("HALF_PI", std::f32::consts::FRAC_PI_2),
+        f("LUMA_R", skyfall_core::sky::colour::LUMA.x),
+        f("LUMA_G", skyfall_core::sky::colour::LUMA.y),
+        f("LUMA_B", skyfall_core::sky::colour::LUMA.z),
         f("CUTOFF_RADII", skyfall_core::cloud::CUTOFF_RADII as f32),
         f(
             "MIN_TRANSMITTANCE",

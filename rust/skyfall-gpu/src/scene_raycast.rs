@@ -162,10 +162,31 @@ impl SceneRaycastPass {
         };
         let p = if kind == 0.0 { [0.0; 5] } else { p };
         let scale = light.sky.scale as f32;
+        let lc = light.sky.light_colour;
+        let (colour_sun, model) = match &light.sky.colour {
+            Some(c) => {
+                let mut m = [0.0f32; 32];
+                m[..27].copy_from_slice(&c.params);
+                m[27..30].copy_from_slice(&c.radiances);
+                m[30] = c.saturation;
+                let model: [[f32; 4]; 8] =
+                    std::array::from_fn(|i| [m[4 * i], m[4 * i + 1], m[4 * i + 2], m[4 * i + 3]]);
+                ([c.sun.x, c.sun.y, c.sun.z, 0.0], model)
+            }
+            None => ([0.0, 1.0, 0.0, 0.0], [[0.0; 4]; 8]),
+        };
         let sky = SkyUniform {
             abcd: [p[0], p[1], p[2], p[3]],
             e_scale: [p[4], scale, kind, 0.0],
             sun: [sun.x, sun.y, sun.z, 0.0],
+            colour: [
+                lc.x,
+                lc.y,
+                lc.z,
+                f32::from(u8::from(light.sky.colour.is_some())),
+            ],
+            colour_sun,
+            model,
         };
         let m = light.ambient;
         let o = m.origin_m;
@@ -225,6 +246,7 @@ impl SceneRaycastPass {
                     0,
                 ],
                 volume: VolumeUniform::new(s.clouds.as_ref(), 0),
+                colour: [s.colour.x, s.colour.y, s.colour.z, 0.0],
             },
             None => SunUniform::default(),
         };

@@ -138,6 +138,13 @@ pub struct SkyUniform {
     pub e_scale: [f32; 4],
     /// Unit vector towards the sun.
     pub sun: [f32; 4],
+    /// The sky light's colour (xyz: `Sky::light_colour`) and whether the sky has a colour (w).
+    pub colour: [f32; 4],
+    /// Towards the sun as the colour model takes it (its elevation clamped to [0°, 90°]).
+    pub colour_sun: [f32; 4],
+    /// The colour model (`skyfall_core::sky::colour::SkyColour`): its 27 parameters, its 3
+    /// radiance scales, its saturation, 0.
+    pub model: [[f32; 4]; 8],
 }
 
 /// `AmbientInfo` in `shaders/scene_raycast.wgsl`.
@@ -302,6 +309,8 @@ pub struct SunUniform {
     pub flags: [u32; 4],
     /// The clouds' Γ for the sun.
     pub volume: VolumeUniform,
+    /// The colour of its light (xyz, luminance 1).
+    pub colour: [f32; 4],
 }
 
 /// `WetInfo` in `shaders/wet_film.wgsl`: the film of a box scene's wet stage

@@ -66,6 +66,9 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
     let want = [
         ("PI", bits(std::f32::consts::PI)),
         ("HALF_PI", bits(std::f32::consts::FRAC_PI_2)),
+        ("LUMA_R", bits(skyfall_core::sky::colour::LUMA.x)),
+        ("LUMA_G", bits(skyfall_core::sky::colour::LUMA.y)),
+        ("LUMA_B", bits(skyfall_core::sky::colour::LUMA.z)),
         (
             "CUTOFF_RADII",
             bits(skyfall_core::cloud::CUTOFF_RADII as f32),

@@ -116,6 +116,42 @@ impl SkyModel {
         })
     }
 
+    /// [`Self::luminance_relative`] in colour: linear Rec. 709 RGB (N, 3) whose luminance
+    /// (0.2126 R + 0.7152 G + 0.0722 B) is the luminance there.
+    #[pyo3(signature = (dirs, *, received))]
+    fn rgb_relative<'py>(
+        &self,
+        py: Python<'py>,
+        dirs: PyReadonlyArray2<'py, f32>,
+        received: bool,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let d = points(&dirs, "directions")?;
+        filled::<f64, Ix2>(py, &[d.len(), 3], |out| {
+            for (o, v) in out.chunks_exact_mut(3).zip(&d) {
+                let u = v.normalize_or_zero();
+                let c = if received {
+                    self.sky.received_rgb(u)
+                } else {
+                    self.sky.chroma(u) * self.sky.emitted(u) as f32
+                };
+                o.copy_from_slice(&c.to_array().map(f64::from));
+            }
+            Ok(())
+        })
+    }
+
+    /// The colour of the horizon (the airlight's), of the light the open sky gives a
+    /// horizontal surface, and of the sun's direct light: linear Rec. 709 RGB of luminance 1
+    /// each, (1, 1, 1) for an overcast sky.
+    #[getter]
+    fn colours(&self) -> ([f32; 3], [f32; 3], [f32; 3]) {
+        (
+            self.sky.horizon_colour.to_array(),
+            self.sky.light_colour.to_array(),
+            self.sky.sun_colour.to_array(),
+        )
+    }
+
     /// Illuminance relative to E on the five normals (up, +X, −X, +Z, −Z) at points (N, 3)
     /// among boxes (M, 9), points in parallel.
     #[pyo3(signature = (points_m, boxes, *, samples))]

@@ -184,7 +184,13 @@ impl FrameSetup {
             }
             None => Vec3::ONE,
         };
-        let airlight = (units * sky_airlight * e_view).to_array();
+        // A box scene's airlight has the horizon's colour (neutral under an overcast sky); a
+        // photo's is its own.
+        let tint = match photo_airlight {
+            Some(_) => Vec3::ONE,
+            None => sky.horizon_colour,
+        };
+        let airlight = (units * tint * sky_airlight * e_view).to_array();
         let haze = w.haze(airlight, req.camera.position_m.y)?;
         let rain = match w.rain_region(req.time_s, req.seed)? {
             Some(region) => {
@@ -274,11 +280,16 @@ impl FrameSetup {
                 let rel = sun.map_or(0.0, |(_, r)| r as f32);
                 // A photo's units carry its horizon sky's colour, which the sky's light on the
                 // clouds takes; the sun's light keeps only their luminance (Rec. 709 weights):
-                // sunlit clouds stay white under a blue sky.
+                // sunlit clouds stay white under a blue sky. A box scene's clouds take the
+                // sky's colours: the sun's (orange at sunset) and the sky light's.
                 let grey = units.dot(LUMINANCE_WEIGHTS);
+                let (sun_colour, sky_colour) = match photo_airlight {
+                    Some(_) => (Vec3::ONE, Vec3::ONE),
+                    None => (sky.sun_colour, sky.light_colour),
+                };
                 let light = CloudLight {
-                    sun: Vec3::splat(grey * rel),
-                    sky: units,
+                    sun: sun_colour * (grey * rel),
+                    sky: units * sky_colour,
                 };
                 Some((Arc::clone(field), light))
             }
@@ -319,6 +330,7 @@ impl FrameSetup {
         let sun = self.sun.map(|(direction, relative)| SunLight {
             direction,
             relative,
+            colour: self.sky.sun_colour,
             clouds: self
                 .clouds
                 .as_ref()

@@ -60,6 +60,8 @@ pub struct SunLight<'a> {
     pub direction: Vec3,
     /// The sun's normal illuminance over E.
     pub relative: f32,
+    /// The colour of its light (linear RGB of luminance 1: [`crate::sky::Sky::sun_colour`]).
+    pub colour: Vec3,
     /// The clouds' Γ for the sun, seen from the camera, when there are clouds.
     pub clouds: Option<VolumeView<'a>>,
     /// The camera, for the clouds' camera-relative volume.
@@ -256,11 +258,7 @@ pub fn shade_pixel_sun(
             let (c, share) = light.surface_radiance_sun(&scene.boxes, p, n, a);
             (c, t, share)
         }
-        None => (
-            Vec3::splat(light.sky.sky_pixel(dir.normalize())),
-            f32::INFINITY,
-            1.0,
-        ),
+        None => (light.sky.sky_pixel_rgb(dir.normalize()), f32::INFINITY, 1.0),
     }
 }
 
@@ -277,11 +275,11 @@ impl crate::scene::SurfaceLight for SceneLight<'_> {
         a: Vec3,
     ) -> (Vec3, f32) {
         let e = AmbientMap::channel(n).map_or(0.0, |c| self.ambient.sample(p)[c]);
-        let mut sky_lit = a * e;
+        let mut sky_lit = a * (self.sky.light_colour * e);
         let mut share = 1.0;
         if let Some(sun) = &self.sun {
             share = sun.share(boxes, p, n);
-            sky_lit += a * sun.illuminance(n, share);
+            sky_lit += a * (sun.colour * sun.illuminance(n, share));
         }
         if self.lights.is_empty() {
             return (sky_lit, share);
@@ -293,8 +291,8 @@ impl crate::scene::SurfaceLight for SceneLight<'_> {
     }
 
     #[inline]
-    fn sky_pixel(&self, dir: Vec3) -> f32 {
-        self.sky.sky_pixel(dir)
+    fn sky_pixel(&self, dir: Vec3) -> Vec3 {
+        self.sky.sky_pixel_rgb(dir)
     }
 }
 

@@ -237,7 +237,7 @@ impl<'a> Frame<'a> {
                 light,
                 lamps: light.lights,
                 sky_illuminance_lux: light.sky_illuminance_lux,
-                sun: light.sun.map(|s| (s.direction, s.relative)),
+                sun: light.sun.map(|s| (s.direction, s.colour * s.relative)),
             })
         });
         let windshield = self

@@ -23,6 +23,6 @@ pub trait SurfaceLight {
         a: Vec3,
     ) -> (Vec3, f32);
 
-    /// The sky's radiance seen along the unit direction `dir` (relative).
-    fn sky_pixel(&self, dir: Vec3) -> f32;
+    /// The sky's radiance seen along the unit direction `dir` (relative, linear RGB).
+    fn sky_pixel(&self, dir: Vec3) -> Vec3;
 }

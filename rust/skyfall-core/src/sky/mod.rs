@@ -18,9 +18,11 @@
 //! - [`profile`]: a sky the same at every azimuth read at a few elevations, so that a node's
 //!   light is a short dot product of weights the boxes fix with values the sky gives.
 //! - [`sun`]: the sun's direct normal illuminance under a clear sky.
+//! - [`colour`]: the colour of a sky with a sun (Hosek & Wilkie) and of its sun.
 
 pub mod ambient;
 pub mod cie;
+pub mod colour;
 pub mod horizon;
 pub mod illuminance;
 mod model;

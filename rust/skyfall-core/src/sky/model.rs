@@ -2,6 +2,7 @@
 //! direction, and the normalisation to the user's horizontal illuminance.
 
 use super::cie::SkyKind;
+use super::colour::{SkyColour, chroma_of, sun_colour};
 use crate::error::{Range, Result};
 use crate::haze::path_to_ceiling_m;
 use crate::physics::quadrature::integrate;
@@ -83,6 +84,16 @@ pub struct Sky {
     pub airlight: f64,
     /// ℓ̄_h, the horizon's mean of ℓ.
     horizon: f64,
+    /// The sky's colour (Hosek & Wilkie's), None for a neutral (overcast) sky.
+    pub colour: Option<SkyColour>,
+    /// The horizon's colour: ℓ-weighted mean chroma over its azimuths, the airlight's colour
+    /// (linear RGB of luminance 1; neutral without a colour).
+    pub horizon_colour: Vec3,
+    /// The colour of the light the open sky gives a horizontal surface through the rain
+    /// (luminance 1), which tints the ambient-light map.
+    pub light_colour: Vec3,
+    /// The colour of the sun's direct light (luminance 1; neutral without a colour).
+    pub sun_colour: Vec3,
 }
 
 /// Skies [`Sky::cached`] keeps: a frame's sky is the same from frame to frame of a sequence or
@@ -120,6 +131,7 @@ impl Sky {
             .map(|&(sin, cos)| kind.relative_to_zenith(Vec3::new(sin as f32, 0.0, -cos as f32)))
             .sum::<f64>()
             / AZIMUTHS as f64;
+        let colour = SkyColour::new(kind);
         let mut sky = Sky {
             kind,
             extinction_per_m,
@@ -127,6 +139,10 @@ impl Sky {
             scale: 1.0,
             airlight: horizon,
             horizon,
+            colour,
+            horizon_colour: Vec3::ONE,
+            light_colour: Vec3::ONE,
+            sun_colour: Vec3::ONE,
         };
         let ring = |mu: f64| {
             let (s, c) = (mu, (1.0 - mu * mu).max(0.0).sqrt());
@@ -145,7 +161,35 @@ impl Sky {
         let total = integrate(ring, 0.0, 1.0, &breaks, 4);
         sky.scale = PI / total;
         sky.airlight = sky.scale * horizon;
+        if let Some(c) = colour {
+            sky.horizon_colour = horizon_colour(kind, &c);
+            sky.light_colour = sky.sky_light_colour(&c);
+            let elevation_deg = f64::from(c.sun.y.clamp(0.0, 1.0).asin().to_degrees());
+            sky.sun_colour = sun_colour(elevation_deg, f64::from(c.turbidity));
+        }
         Ok(sky)
+    }
+
+    /// The colour of the light the open sky gives a horizontal surface:
+    /// ∫ (ℓτ·chroma + ℓ̄_h(1 − τ)·horizon colour) cos θ dω over its luminance (a midpoint rule,
+    /// 48 steps in sin(elevation), 96 in azimuth: a tint, not a normalisation).
+    fn sky_light_colour(&self, c: &SkyColour) -> Vec3 {
+        let (n_mu, n_az) = (48, 96);
+        let mut sum = Vec3::ZERO;
+        for i in 0..n_mu {
+            let mu = (i as f64 + 0.5) / n_mu as f64;
+            let cos_el = (1.0 - mu * mu).sqrt();
+            let tau = self.transmittance(mu);
+            let mut ring = Vec3::ZERO;
+            for k in 0..n_az {
+                let (sin, cos) = ((k as f64 + 0.5) * TAU / n_az as f64).sin_cos();
+                let dir = Vec3::new((cos_el * sin) as f32, mu as f32, (-cos_el * cos) as f32);
+                ring += c.chroma(dir) * (self.kind.relative_to_zenith(dir) * tau) as f32;
+            }
+            sum += (ring / n_az as f32 + self.horizon_colour * (self.horizon * (1.0 - tau)) as f32)
+                * mu as f32;
+        }
+        chroma_of(sum, 1.0)
     }
 
     /// τ(μ) = e^(−σ d(μ)), the cloud base's transmittance down to the ground along a direction
@@ -175,12 +219,46 @@ impl Sky {
         self.emitted(dir) as f32
     }
 
+    /// The sky's chroma along unit `dir` (linear RGB of luminance 1; neutral without a colour).
+    #[inline]
+    pub fn chroma(&self, dir: Vec3) -> Vec3 {
+        self.colour.map_or(Vec3::ONE, |c| c.chroma(dir))
+    }
+
+    /// A frame's sky pixel in colour: [`Sky::sky_pixel`] times the sky's chroma there.
+    #[inline]
+    pub fn sky_pixel_rgb(&self, dir: Vec3) -> Vec3 {
+        match &self.colour {
+            None => Vec3::splat(self.sky_pixel(dir)),
+            Some(c) => c.chroma(dir) * self.sky_pixel(dir),
+        }
+    }
+
+    /// [`Sky::received`] in colour: L_c·τ·chroma + A·(1 − τ)·horizon colour (linear RGB whose
+    /// luminance is [`Sky::received`]).
+    pub fn received_rgb(&self, dir: Vec3) -> Vec3 {
+        let tau = self.transmittance(f64::from(dir.y));
+        let lc = self.scale * self.kind.relative_to_zenith(dir) * tau;
+        let a = self.scale * self.horizon * (1.0 - tau);
+        self.chroma(dir) * lc as f32 + self.horizon_colour * a as f32
+    }
+
     /// Luminance reaching the ground along `dir`, relative to E/π: L_c·τ + A·(1 − τ).
     #[inline]
     pub fn received(&self, dir: Vec3) -> f64 {
         let tau = self.transmittance(f64::from(dir.y));
         self.scale * (self.kind.relative_to_zenith(dir) * tau + self.horizon * (1.0 - tau))
     }
+}
+
+/// The horizon's colour: Σ ℓ·chroma / Σ ℓ over [`AZIMUTHS`] azimuths at elevation 0.
+fn horizon_colour(kind: SkyKind, c: &SkyColour) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    for &(sin, cos) in azimuth_sin_cos() {
+        let dir = Vec3::new(sin as f32, 0.0, -cos as f32);
+        sum += c.chroma(dir) * kind.relative_to_zenith(dir) as f32;
+    }
+    chroma_of(sum, 1.0)
 }
 
 #[cfg(test)]
@@ -207,6 +285,7 @@ mod tests {
         sum * (FRAC_PI_2 / n_el as f64) * (TAU / n_az as f64)
     }
 
+    use crate::sky::colour::LUMA;
     use std::f64::consts::FRAC_PI_2;
 
     #[test]
@@ -263,5 +342,46 @@ mod tests {
         );
         let sun = sun_direction(30.0, 90.0);
         assert!((sun - Vec3::new(0.866_025_4, 0.5, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn a_colour_sky_keeps_its_luminance_and_the_overcast_one_stays_grey() {
+        let sun = Some(sun_direction(50.0, 150.0));
+        for sigma in [0.0, 1.5e-3] {
+            let clear = Sky::new(SkyKind::general(12, sun).unwrap(), sigma, 1500.0).unwrap();
+            for dir in [
+                Vec3::Y,
+                Vec3::new(0.5, 0.3, -0.8).normalize(),
+                Vec3::new(0.0, 0.05, 1.0).normalize(),
+            ] {
+                let rgb = clear.sky_pixel_rgb(dir);
+                let l = LUMA.dot(rgb);
+                assert!((l / clear.sky_pixel(dir) - 1.0).abs() < 1e-5, "{dir}: {l}");
+                let r = LUMA.dot(clear.received_rgb(dir)) as f64;
+                assert!((r / clear.received(dir) - 1.0).abs() < 1e-5, "{dir}: {r}");
+            }
+            // In clear air the sky light on the ground is blue, paler than the zenith (in rain
+            // it tends to the horizon's near-white); the sun is warm.
+            let (zen, light) = (clear.chroma(Vec3::Y), clear.light_colour);
+            if sigma == 0.0 {
+                assert!(light.z > light.y && light.y > light.x, "{light}");
+                assert!(light.z < zen.z, "{light} vs zenith {zen}");
+            }
+            assert!(clear.sun_colour.x > clear.sun_colour.z);
+            assert!((LUMA.dot(light) - 1.0).abs() < 1e-5);
+        }
+        // In dense fog the sky light is the horizon's colour.
+        let fog = Sky::new(SkyKind::general(12, sun).unwrap(), 0.04, 900.0).unwrap();
+        assert!((fog.light_colour - fog.horizon_colour).length() < 1e-4);
+        let grey = Sky::new(SkyKind::Overcast, 1.5e-3, 900.0).unwrap();
+        assert!(grey.colour.is_none());
+        assert_eq!(
+            grey.sky_pixel_rgb(Vec3::Y),
+            Vec3::splat(grey.sky_pixel(Vec3::Y))
+        );
+        assert_eq!(
+            (grey.light_colour, grey.horizon_colour, grey.sun_colour),
+            (Vec3::ONE, Vec3::ONE, Vec3::ONE)
+        );
     }
 }

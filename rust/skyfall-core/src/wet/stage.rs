@@ -97,7 +97,7 @@ pub struct WetStage<'a> {
     light: &'a (dyn SurfaceLight + Sync),
     lamps: &'a [Light],
     inv_sky_lux: f32,
-    sun: Option<(Vec3, f32)>,
+    sun: Option<(Vec3, Vec3)>,
     wetting: Wetting,
     /// A photo's sky colour for reflected rays that leave the frame (its sky pixels' mean).
     photo_sky: Vec3,
@@ -129,8 +129,9 @@ pub struct WetFrame<'a> {
     pub lamps: &'a [Light],
     /// The sky's horizontal illuminance E, lux (the lamps' unit).
     pub sky_illuminance_lux: f32,
-    /// Towards the sun, and its normal illuminance over E, when the sky has a sun.
-    pub sun: Option<(Vec3, f32)>,
+    /// Towards the sun, and its normal illuminance over E in colour (linear RGB), when the sky
+    /// has a sun.
+    pub sun: Option<(Vec3, Vec3)>,
 }
 
 impl<'a> WetStage<'a> {
@@ -277,7 +278,7 @@ impl<'a> WetStage<'a> {
             && sun_share > 0.0
         {
             let cos = n.dot(s).max(0.0);
-            sum += Vec3::splat(brdf(n, v, s, alpha, index) * rel * cos * sun_share);
+            sum += rel * (brdf(n, v, s, alpha, index) * cos * sun_share);
         }
         sum
     }
@@ -302,7 +303,7 @@ impl<'a> WetStage<'a> {
                 let a2 = surface_albedo(a2, n2, q);
                 self.light.surface_radiance_sun(&scene.boxes, q, n2, a2).0
             }
-            None => Vec3::splat(self.light.sky_pixel(r)),
+            None => self.light.sky_pixel(r),
         };
         let f = fresnel(f64::from(n.dot(v)), WATER_INDEX) as f32;
         let highlights = self.highlights(&scene.boxes, p, n, v, sun, roughness(still));

@@ -53,6 +53,7 @@ struct SunInfo {
     dir: vec4<f32>,      // towards the sun, normal illuminance over E (w)
     flags: vec4<u32>,    // sun on, clouds' volume present, sun_transmittance written
     volume: VolumeBox,
+    colour: vec4<f32>,   // the colour of its light (xyz, luminance 1)
 }
 
 // True in the pipelines for frames with a snow cover (skyfall_core::snow::cover::render).
@@ -73,6 +74,9 @@ struct SkyInfo {
     abcd: vec4<f32>,      // CIE a, b, c, d
     e_scale: vec4<f32>,   // CIE e, scale (pi / normalisation), kind (0 overcast, 1 general)
     sun: vec4<f32>,       // unit vector towards the sun
+    colour: vec4<f32>,    // the sky light's colour (xyz), the sky has a colour (w = 1)
+    colour_sun: vec4<f32>, // towards the sun as the colour model takes it
+    model: array<vec4<f32>, 8>, // Hosek-Wilkie: 27 parameters, 3 radiances, saturation, 0
 }
 
 struct AmbientInfo {
@@ -106,6 +110,39 @@ fn relative_to_zenith(dir: vec3<f32>) -> f32 {
     let f_chi = 1.0 + c * (exp(d * chi) - exp(d * HALF_PI)) + e * cos(chi) * cos(chi);
     let f_zs = 1.0 + c * (exp(d * zs) - exp(d * HALF_PI)) + e * cos(zs) * cos(zs);
     return phi * f_chi / (phi0 * f_zs);
+}
+
+// Element i of the sky's colour model.
+fn sky_model(i: u32) -> f32 {
+    return sky.model[i / 4u][i % 4u];
+}
+
+// The sky's chroma along unit `dir`, linear RGB of luminance 1
+// (skyfall_core::sky::colour::SkyColour::chroma; neutral without a colour).
+fn sky_chroma(dir: vec3<f32>) -> vec3<f32> {
+    if sky.colour.w == 0.0 {
+        return vec3<f32>(1.0);
+    }
+    let cos_theta = max(dir.y, 0.0);
+    let cos_gamma = clamp(dot(dir, sky.colour_sun.xyz), -1.0, 1.0);
+    let gamma = acos(cos_gamma);
+    let zenith = sqrt(cos_theta);
+    var rgb = vec3<f32>(0.0);
+    for (var k = 0u; k < 3u; k = k + 1u) {
+        let b = 9u * k;
+        let p8 = sky_model(b + 8u);
+        let mie = (1.0 + cos_gamma * cos_gamma) / pow(1.0 + p8 * p8 - 2.0 * p8 * cos_gamma, 1.5);
+        let lhs = 1.0 + sky_model(b) * exp(sky_model(b + 1u) / (cos_theta + 0.01));
+        let rhs = sky_model(b + 2u) + sky_model(b + 3u) * exp(sky_model(b + 4u) * gamma)
+            + sky_model(b + 5u) * cos_gamma * cos_gamma + sky_model(b + 6u) * mie
+            + sky_model(b + 7u) * zenith;
+        rgb[k] = max(sky_model(27u + k) * lhs * rhs, 0.0);
+    }
+    let y = dot(vec3<f32>(LUMA_R, LUMA_G, LUMA_B), rgb);
+    if !(y > 0.0) {
+        return vec3<f32>(1.0);
+    }
+    return vec3<f32>(1.0) + (rgb / y - vec3<f32>(1.0)) * sky_model(30u);
 }
 
 // Lower node and fraction along one axis of `n` nodes, clamped to the grid.
@@ -464,11 +501,11 @@ fn surface_radiance(p: vec3<f32>, n: vec3<f32>, a: vec3<f32>) -> Shaded {
     if ch < CHANNELS {
         e = ambient_sample(p, ch);
     }
-    var c = a * e;
+    var c = a * (sky.colour.xyz * e);
     var share = 1.0;
     if LIT && sun.flags.x != 0u {
         share = sun_share(p, n);
-        c = c + a * (sun.dir.w * max(dot(n, sun.dir.xyz), 0.0) * share);
+        c = c + a * (sun.colour.xyz * (sun.dir.w * max(dot(n, sun.dir.xyz), 0.0) * share));
     }
     if LIT && lamps.counts.x != 0u {
         c = c + a * lamp_light(p, n, a, c);
@@ -541,7 +578,7 @@ fn wet_highlights(a: vec3<f32>, p: vec3<f32>, n: vec3<f32>, d: vec3<f32>, share:
         }
         if sun.flags.x != 0u && share > 0.0 {
             let cs = max(dot(n, sun.dir.xyz), 0.0);
-            highlights += vec3<f32>(wet_brdf(n, v, sun.dir.xyz, alpha) * sun.dir.w * cs * share);
+            highlights += sun.colour.xyz * (wet_brdf(n, v, sun.dir.xyz, alpha) * sun.dir.w * cs * share);
         }
     }
     return highlights;
@@ -667,7 +704,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         share = s.share;
         d = best_t;
     } else {
-        c = vec3<f32>(sky.e_scale.y * relative_to_zenith(normalize(dir)));
+        let u = normalize(dir);
+        c = sky_chroma(u) * (sky.e_scale.y * relative_to_zenith(u));
         d = infinity();
     }
     if MIRROR {

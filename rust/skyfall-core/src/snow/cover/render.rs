@@ -398,12 +398,7 @@ impl SnowRender {
                     let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
                     (rad, t, 0.0, sun)
                 }
-                None => (
-                    Vec3::splat(light.sky_pixel(dir.normalize())),
-                    f32::INFINITY,
-                    0.0,
-                    1.0,
-                ),
+                None => (light.sky_pixel(dir.normalize()), f32::INFINITY, 0.0, 1.0),
             },
         }
     }
