@@ -15,8 +15,9 @@ use std::sync::OnceLock;
 
 const SOURCE: &str = include_str!("shaders/scene_raycast.wgsl");
 
-/// The compiled pass, twice: with the lights' code, and without it (`LIT = false`) for scenes
-/// without lights, so that an effect switched off costs nothing (on lavapipe the lit pipeline
+/// The compiled pass, twice: with the lights' code (and the sky's colour), and without it
+/// (`LIT = false`) for scenes without lights, a sun or a sky in colour, so that an effect
+/// switched off costs nothing (on lavapipe the lit pipeline
 /// made the unlit street 1.18x slower even though its light loop never ran); and both again
 /// with the snow cover's code (`SNOW = true`), for frames with a cover. The wet stage of a box
 /// scene takes three more of this shader's pipelines, compiled at the first wet frame, around
@@ -294,7 +295,8 @@ impl SceneRaycastPass {
         let wet_dummy = f.target("wet_dummy", 4);
         let grain_out = grain.unwrap_or(&wet_dummy);
         let rays = rays.unwrap_or(&wet_dummy);
-        let unlit = light.lights.is_empty() && light.sun.is_none();
+        // A sky in colour takes the lit pipelines too (they alone have its code).
+        let unlit = light.lights.is_empty() && light.sun.is_none() && light.sky.colour.is_none();
         let wet_pass = |k: usize| {
             let passes = self.wet.get_or_init(|| {
                 [
