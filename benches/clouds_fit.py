@@ -10,9 +10,12 @@ is c = (M - S) / F; a constant c over the grid is a fitted correction, a c that 
 optical depth or the sun is a model error.
 
 Clouds: the generated cumulus (600 particles, 300 m, seed 4 and seed 9) with every particle's
-optical depth times 0.25, 1 and 4; suns front-lit (35 deg, behind the camera), side-lit (30 deg,
-east) and high (70 deg). Writes benches/results/clouds_fit.md and .json. Run with
-`python benches/clouds_fit.py` (about 10 minutes on 2 cores at 48 paths per pixel).
+optical depth times 0.25, 1 and 4. Two views: from the side (1.2 km away at the cloud's mid
+height, as `clouds_reference.py`) under suns front-lit (35 deg, behind the camera), side-lit
+(30 deg, east) and high (70 deg); and from below (700 m under the cloud's centre and 300 m
+south, pitched 60 deg up: a ground camera's view) under suns 50 deg up in the south and 30 deg
+up in the east. Writes benches/results/clouds_fit.md and .json. Run with
+`python benches/clouds_fit.py` (about 12 minutes on 2 cores at 48 paths per pixel).
 """
 
 from __future__ import annotations
@@ -34,64 +37,85 @@ from skyfall import Camera, Renderer, Weather, clouds, scenes  # noqa: E402
 RESULTS = Path(__file__).parent / "results"
 SIZE = int(os.environ.get("SKYFALL_FIT_SIZE", "24"))
 PATHS = int(os.environ.get("SKYFALL_FIT_PATHS", "48"))
-SUNS = {"front 35": (35.0, 160.0), "side 30": (30.0, 90.0), "high 70": (70.0, 200.0)}
+VIEWS = {
+    # name: (eye offset from the cloud's centre (m), pitch (deg), vertical FOV (deg), suns)
+    "side": ((0.0, 0.0, 1200.0), 0.0, 18.0, {"front 35": (35.0, 160.0), "side 30": (30.0, 90.0), "high 70": (70.0, 200.0)}),
+    "below": ((0.0, -700.0, 300.0), 60.0, 30.0, {"south 50": (50.0, 180.0), "east 30": (30.0, 90.0)}),
+}
 DEPTHS = (0.25, 1.0, 4.0)
 SEEDS = (4, 9)
+HELD_OUT = {
+    # Not used to fit the diffuse term's weights (skyfall_core::cloud::frame::PHASE_SHARE):
+    # another cloud, another optical depth, other suns.
+    "seed": 13,
+    "depths": (2.0,),
+    "views": {
+        "side": ((0.0, 0.0, 1200.0), 0.0, 18.0, {"south-east 45": (45.0, 120.0)}),
+        "below": ((0.0, -700.0, 300.0), 60.0, 30.0, {"west 60": (60.0, 250.0)}),
+    },
+}
 
 
 def main() -> None:
     rows = []
-    for seed in SEEDS:
+    plan = [(seed, DEPTHS, VIEWS, False) for seed in SEEDS] + [(HELD_OUT["seed"], HELD_OUT["depths"], HELD_OUT["views"], True)]
+    for seed, depths, views, held_out in plan:
         base = clouds.particles("cumulus", n_particles=600, extent_m=300.0, altitude_m=1000.0, seed=seed)
         centre = base.positions_m.mean(axis=0)
-        eye = centre + np.array([0.0, 0.0, 1200.0])
-        cam = Camera(eye, vertical_fov_deg=18.0, width=SIZE, height=SIZE)
-        sky_only = scenes.boxes([], ground=False, camera=cam)
-        r = Renderer(SIZE, SIZE, backend="cpu")
-        dirs = directions(cam.with_resolution(SIZE, SIZE))
-        for k in DEPTHS:
-            cloud = dataclasses.replace(base, optical_depths=base.optical_depths * k)
-            for name, (el, az) in SUNS.items():
-                w = Weather(sky=12, sun_elevation_deg=el, sun_azimuth_deg=az)
-                with_d = sun_light(r, sky_only, w, cloud, True).reshape(-1)
-                single = sun_light(r, sky_only, w, cloud, False).reshape(-1)
-                t0 = time.perf_counter()
-                mc, mc1, err = clouds.path_traced(cloud, w.sun_direction, sun_relative=w.sun_relative, eye_m=eye, directions=dirs, paths=PATHS, max_orders=512, seed=1)
-                mask = mc > 0.05 * mc.max()
-                s, f, m, m1 = (float(a[mask].sum()) for a in (single, with_d - single, mc, mc1))
-                row = {
-                    "seed": seed,
-                    "depth_scale": k,
-                    "sun": name,
-                    "pixels": int(mask.sum()),
-                    "mc_s": time.perf_counter() - t0,
-                    "mc_rel_err": float(np.sqrt((err[mask] ** 2).sum()) / m),
-                    "S": s,
-                    "F": f,
-                    "M": m,
-                    "M1": m1,
-                    "frames_over_mc": (s + f) / m,
-                    "c": (m - s) / f if f > 0 else float("nan"),
-                    "median_tau": float(np.median(cloud.optical_depths)),
-                }
-                rows.append(row)
-                print(json.dumps(row), flush=True)
+        for view, (offset, pitch, fov, suns) in views.items():
+            eye = centre + np.array(offset)
+            cam = Camera(eye, pitch_deg=pitch, vertical_fov_deg=fov, width=SIZE, height=SIZE)
+            sky_only = scenes.boxes([], ground=False, camera=cam)
+            r = Renderer(SIZE, SIZE, backend="cpu")
+            dirs = directions(cam.with_resolution(SIZE, SIZE))
+            for k in depths:
+                cloud = dataclasses.replace(base, optical_depths=base.optical_depths * k)
+                for name, (el, az) in suns.items():
+                    w = Weather(sky=12, sun_elevation_deg=el, sun_azimuth_deg=az)
+                    with_d = sun_light(r, sky_only, w, cloud, True).reshape(-1)
+                    single = sun_light(r, sky_only, w, cloud, False).reshape(-1)
+                    t0 = time.perf_counter()
+                    mc, mc1, err = clouds.path_traced(cloud, w.sun_direction, sun_relative=w.sun_relative, eye_m=eye, directions=dirs, paths=PATHS, max_orders=512, seed=1)
+                    mask = mc > 0.05 * mc.max()
+                    s, f, m, m1 = (float(a[mask].sum()) for a in (single, with_d - single, mc, mc1))
+                    row = {
+                        "seed": seed,
+                        "held_out": held_out,
+                        "view": view,
+                        "depth_scale": k,
+                        "sun": name,
+                        "pixels": int(mask.sum()),
+                        "mc_s": time.perf_counter() - t0,
+                        "mc_rel_err": float(np.sqrt((err[mask] ** 2).sum()) / m),
+                        "S": s,
+                        "F": f,
+                        "M": m,
+                        "M1": m1,
+                        "frames_over_mc": (s + f) / m,
+                        "c": (m - s) / f if f > 0 else float("nan"),
+                        "median_tau": float(np.median(cloud.optical_depths)),
+                    }
+                    rows.append(row)
+                    print(json.dumps(row), flush=True)
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / "clouds_fit.json").write_text(json.dumps({"date": time.strftime("%Y-%m-%d"), "size": SIZE, "paths": PATHS, "rows": rows}, indent=2))
     lines = [
         "# The clouds' diffuse term against the path tracer: the scale it needs",
         "",
-        f"{time.strftime('%Y-%m-%d')}. `benches/clouds_fit.py`: generated cumulus (600 particles, 300 m) seen from 1.2 km,",
+        f"{time.strftime('%Y-%m-%d')}. `benches/clouds_fit.py`: generated cumulus (600 particles, 300 m), from the side and from below,",
         f"{SIZE} x {SIZE} px, the sun's light alone; reference `clouds.path_traced` at {PATHS} paths per pixel, every",
         "order. Sums over the pixels the reference lights: S the frames' single scattering, F their",
-        "diffuse part, M the reference; c = (M - S) / F is the scale F would need.",
+        "diffuse part, M the reference; c = (M - S) / F is the scale F would need. The frames weight the",
+        "diffuse term's two streams by the view (`skyfall_core::cloud::frame::stream_weights`, fitted to the",
+        "rows of seeds 4 and 9 at optical depths x1 and x4); `clouds_fit_before.md` has the two-stream sum",
+        "they replaced (this script without its held-out rows, run on the code before the weights).",
         "",
-        "| seed | optical depth x | sun | pixels | MC rel. err. of the sum | frames / MC | MC first order / MC | c |",
-        "|---|---|---|---|---|---|---|---|",
+        "| seed | view | optical depth x | sun | pixels | MC rel. err. of the sum | frames / MC | MC first order / MC | c |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
         lines.append(
-            f"| {row['seed']} | {row['depth_scale']} | {row['sun']} | {row['pixels']} | {row['mc_rel_err']:.1%} | "
+            f"| {row['seed']}{' (held out)' if row['held_out'] else ''} | {row['view']} | {row['depth_scale']} | {row['sun']} | {row['pixels']} | {row['mc_rel_err']:.1%} | "
             f"{row['frames_over_mc']:.2f} | {row['M1'] / row['M']:.2f} | {row['c']:.3f} |"
         )
     (RESULTS / "clouds_fit.md").write_text("\n".join(lines) + "\n")

@@ -23,6 +23,8 @@ from skyfall import Camera, Renderer, Weather, _core, clouds, scenes
 RESULTS = Path(__file__).parent / "results"
 SIZE = 32
 PATHS = int(os.environ.get("SKYFALL_REF_PATHS", "96"))
+LUMA = np.array([0.2126, 0.7152, 0.0722])
+"""Rec. 709 luminance: the sun's light has the sun's colour, of luminance 1 (`sky.colours`)."""
 SUNS = {"front-lit (sun behind the camera, 35 deg up)": (35.0, 160.0), "side-lit (sun to the east, 30 deg up)": (30.0, 90.0)}
 
 
@@ -33,14 +35,15 @@ def directions(cam: Camera) -> np.ndarray:
 
 
 def sun_light(r: Renderer, scene: scenes.BoxScene, w: Weather, cloud: clouds.Cloud, diffuse: bool) -> np.ndarray:
-    """The frame's light from the sun alone, relative units (H, W): the frame under the sun
-    less the frame without it (the sky behind, dimmed alike, and the sky's light cancel)."""
+    """The frame's light from the sun alone, relative units (H, W), its luminance: the frame
+    under the sun less the frame without it (the sky behind, dimmed alike, and the sky's light
+    cancel)."""
     out = []
     for weather in (w, Weather(sky=w.sky, sun_elevation_deg=w.sun_elevation_deg, sun_azimuth_deg=w.sun_azimuth_deg, sun_illuminance_lux=0.0)):
         req = r._request(scene, weather)
         req["clouds"] = clouds.frame_field(cloud, weather.sun_direction, diffuse=diffuse)
         rgb, _, _, _ = _core.render_frame(req)
-        out.append(rgb[..., 1].astype(np.float64))
+        out.append(rgb.astype(np.float64) @ LUMA)
     return out[0] - out[1]
 
 

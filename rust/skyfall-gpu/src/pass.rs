@@ -20,6 +20,10 @@ pub fn shared_constants() -> String {
     [
         f("PI", std::f32::consts::PI),
         f("HALF_PI", std::f32::consts::FRAC_PI_2),
+        f("STREAM_WIDTH", skyfall_core::cloud::frame::STREAM_WIDTH),
+        f("PHASE_SHARE", skyfall_core::cloud::frame::PHASE_SHARE),
+        f("K_THROUGH", skyfall_core::cloud::frame::K_THROUGH),
+        f("K_BACK", skyfall_core::cloud::frame::K_BACK),
         f("LUMA_R", skyfall_core::sky::colour::LUMA.x),
         f("LUMA_G", skyfall_core::sky::colour::LUMA.y),
         f("LUMA_B", skyfall_core::sky::colour::LUMA.z),

@@ -66,6 +66,13 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
     let want = [
         ("PI", bits(std::f32::consts::PI)),
         ("HALF_PI", bits(std::f32::consts::FRAC_PI_2)),
+        (
+            "STREAM_WIDTH",
+            bits(skyfall_core::cloud::frame::STREAM_WIDTH),
+        ),
+        ("PHASE_SHARE", bits(skyfall_core::cloud::frame::PHASE_SHARE)),
+        ("K_THROUGH", bits(skyfall_core::cloud::frame::K_THROUGH)),
+        ("K_BACK", bits(skyfall_core::cloud::frame::K_BACK)),
         ("LUMA_R", bits(skyfall_core::sky::colour::LUMA.x)),
         ("LUMA_G", bits(skyfall_core::sky::colour::LUMA.y)),
         ("LUMA_B", bits(skyfall_core::sky::colour::LUMA.z)),

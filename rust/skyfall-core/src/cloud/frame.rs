@@ -17,17 +17,17 @@
 //! droplets' g, L_sky the open sky's light (1 in relative units, times a photo's units). The
 //! first term is the sun's single scattering (the paper's), its Γ_sun the full extinction
 //! towards the sun ([`unscattered`]: the volume keeps the δ-M share, which with the full phase
-//! would scatter the forward peak twice); F ([`diffuse_light`]) the diffuse
-//! light at x, scattered towards the viewer as from an isotropic field: the two-stream
-//! transmission D of the column above x towards its light (the sun's less its direct beam; the
-//! sky's whole), plus D times half the two-stream reflection of the column below x (the light
-//! that comes back out of the cloud beneath; half, the mean cosine of incidence over a sphere's
-//! lit half). Both columns are read from the volume: Γ at x, and at
-//! the far face, where the light leaves the cloud. That diffuse part is an approximation of
-//! multiple scattering that has not been measured against a multiple-scattering reference (a
-//! Monte Carlo path tracer); without it a cloud more than a few optical depths thick renders
-//! black, and its sunlit face, which real clouds make their brightest, would be as dark as its
-//! base.
+//! would scatter the forward peak twice); F ([`diffuse_light`]) the diffuse light at x: the
+//! two-stream field's two streams along the light, the flux coming through the column above x
+//! (the two-stream transmission D: the sun's less its direct beam; the sky's whole) and the
+//! flux coming back up out of the column below (D times its two-stream reflection), each
+//! weighted by the share a Henyey–Greenstein particle scatters towards the viewer
+//! ([`stream_weights`]: a view from below the cloud sees mostly the stream coming through, a
+//! view of its lit face the one coming back), with three weights fitted to a Monte Carlo path
+//! tracer (`benches/clouds_fit.py`, `benches/results/clouds_fit.md`). Both columns are read
+//! from the volume: Γ at x, and at the far face, where the light leaves the cloud. Without the
+//! diffuse part a cloud more than a few optical depths thick renders black, and its sunlit
+//! face, which real clouds make their brightest, would be as dark as its base.
 //!
 //! Everything per fragment is f32 relative to the camera, in the order the GPU pass
 //! (`skyfall-gpu`'s `cloud.wgsl`) computes it.
@@ -526,6 +526,8 @@ impl<'a> CloudSplats<'a> {
         let mut deep = [0.0f32; LANES];
         let mut beyond = [0.0f32; LANES];
         let mut phase = [0.0f32; LANES];
+        let mut w_sun = [(0.0f32, 0.0f32); LANES];
+        let mut w_sky = [(0.0f32, 0.0f32); LANES];
         let mut live = [false; LANES];
         for (l, &dep) in depth.iter().enumerate() {
             let d = cam.ray_direction((x0 + l) as u32, y).normalize();
@@ -541,6 +543,12 @@ impl<'a> CloudSplats<'a> {
             // would skip every splat past it anyway).
             beyond[l] = (dep / axial[l] + self.reach_m) * 1.001 + 0.01;
             phase[l] = self.phase(d);
+            // The light leaves towards the camera, along −d: against a stream travelling
+            // along −s (the sun's) μ = d·s, along −Y (the sky's) μ = d.y.
+            w_sky[l] = stream_weights(d.y, self.g);
+            if let Some((s, _)) = &self.sun {
+                w_sun[l] = stream_weights(d.dot(*s), self.g);
+            }
             live[l] = true;
         }
         let mut acc = [Vec3::ZERO; LANES];
@@ -602,8 +610,8 @@ impl<'a> CloudSplats<'a> {
             let mut sun = [0.0f32; LANES];
             if self.diffuse {
                 for l in 0..LANES {
-                    sky[l] = diffuse_light(gz[l], gz_exit[l], self.g, true);
-                    sun[l] = diffuse_light(gs[l], gs_exit[l], self.g, false);
+                    sky[l] = diffuse_light(gz[l], gz_exit[l], self.g, true, w_sky[l]);
+                    sun[l] = diffuse_light(gs[l], gs_exit[l], self.g, false, w_sun[l]);
                 }
             }
             for l in 0..LANES {
@@ -653,20 +661,64 @@ fn two_stream_k(g: f32) -> f32 {
     0.75 / (1.0 + g)
 }
 
+/// The share of the light of a stream travelling along t that a Henyey–Greenstein particle of
+/// asymmetry `g` scatters towards a viewer, the light leaving along v, μ = v·t: the phase
+/// function integrated over the stream's hemisphere of directions, P(μ) = ∫_{ω·t > 0} p(ω·v) dω.
+/// P(−μ) = 1 − P(μ), P(0) = ½, P(1) = (1 + g)/2g − (1 − g²)/(2g√(1 + g²)) the phase's forward
+/// share (0.967 at g = 0.86); between, P(μ) ≈ ½ + (P(1) − ½)·sign μ·(1 − e^(−|μ|/w))/(1 −
+/// e^(−1/w)), w = [`STREAM_WIDTH`], within 0.015 of the integral at g = 0.86 (tested; the
+/// width is fitted there, the generated clouds' g).
+#[inline]
+pub fn stream_share(mu: f32, g: f32) -> f32 {
+    let forward = if g.abs() < 1e-4 {
+        0.5
+    } else {
+        (1.0 + g) / (2.0 * g) - (1.0 - g * g) / (2.0 * g * (1.0 + g * g).sqrt())
+    };
+    let rise =
+        (1.0 - exp_neg(-mu.abs().min(1.0) / STREAM_WIDTH)) / (1.0 - exp_neg(-1.0 / STREAM_WIDTH));
+    0.5 + (forward - 0.5) * rise.copysign(mu)
+}
+
+/// The width in μ over which [`stream_share`] turns from one stream to the other.
+pub const STREAM_WIDTH: f32 = 0.19;
+
+/// The fitted weights of the diffuse light's two streams ([`diffuse_light`]): the light coming
+/// through the column above (towards the light's travel) weighs `K_THROUGH`·w, the light
+/// coming back up out of the column below `K_BACK`·(1 − w), w = ½ + `PHASE_SHARE`·(P(μ) − ½)
+/// ([`stream_share`]). Fitted (a grid search minimising the worst |ln(frames / reference)|)
+/// to the Monte Carlo path tracer's summed light (`benches/clouds_fit.py`: two cumulus,
+/// optical depths ×1 and ×4, five suns, a side and a ground view), and checked on a third
+/// cloud at another depth under other suns (`benches/results/clouds_fit.md`): the two-stream
+/// slab's reflection overstates a finite cloud's (light leaves through its sides), its
+/// transmission understates what a forward-scattering particle sends on along the light.
+pub const PHASE_SHARE: f32 = 0.5;
+/// See [`PHASE_SHARE`].
+pub const K_THROUGH: f32 = 1.75;
+/// See [`PHASE_SHARE`].
+pub const K_BACK: f32 = 0.48;
+
+/// The weights (through, back) of [`diffuse_light`]'s streams for a viewer the light leaves
+/// towards along v, μ = v·t, t the direction the stream's light travels ([`PHASE_SHARE`]).
+#[inline]
+pub fn stream_weights(mu: f32, g: f32) -> (f32, f32) {
+    let w = 0.5 + PHASE_SHARE * (stream_share(mu, g) - 0.5);
+    (K_THROUGH * w, K_BACK * (1.0 - w))
+}
+
 /// The diffuse light at a point, per unit of its light's flux, from Γ there (`gamma`) and
-/// where the light leaves the cloud (`exit`): D(τ_a) + D(τ_a) R(τ_b)/2, D the share of a
-/// diffuse field's flux that reaches the point below the column above, the two-stream
+/// where the light leaves the cloud (`exit`), seen by a viewer whose stream weights are
+/// `weights` ([`stream_weights`]): w_t·D(τ_a) + w_b·D(τ_a) R(τ_b). D is the share of the light's
+/// flux that comes through the column above the point (along the light), the two-stream
 /// (Eddington) transmission of a conservative layer 1/(1 + ¾(1 − g)τ_a), τ_a = −ln Γ/(1 − g²)
-/// (less the direct beam Γ unless `with_direct`), R(τ_b) = 1 − D(τ_b) the two-stream reflection of the column below, τ_b =
-/// ln(Γ/Γ_exit) / (1 − g²), halved as the mean cosine of incidence over a sphere's sunlit
-/// half is ½ (the two-stream slab faces its light). At the lit face of a thick cloud this is
-/// about R/2, deep under it about D. Measured against the path tracer
-/// (`benches/results/clouds_reference.md`) it still makes a thick cumulus too bright.
+/// (less the direct beam Γ unless `with_direct`); D R comes back out of the column below,
+/// R(τ_b) = 1 − D(τ_b) its two-stream reflection, τ_b = ln(Γ/Γ_exit)/(1 − g²). At the lit face
+/// of a thick cloud this is about w_b R, deep under it about w_t D.
 ///
 /// With a = −k ln Γ and b = k ln(Γ/Γ_exit) (k from [`two_stream_k`]), D = 1/(1 + a) and D R = b/((1 + a)
 /// (1 + b)): one division for both (this runs per fragment and volume).
 #[inline]
-pub fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
+pub fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool, weights: (f32, f32)) -> f32 {
     let k = two_stream_k(g);
     // Γ ≤ 1 clamped to a normal number: ln without a libm call.
     let ln_gamma = ln_normal(gamma.max(1e-30));
@@ -675,7 +727,7 @@ pub fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
     let q = 1.0 / ((1.0 + above) * (1.0 + below));
     let d = (1.0 + below) * q;
     let reaching = if with_direct { d } else { (d - gamma).max(0.0) };
-    reaching + 0.5 * below * q
+    weights.0 * reaching + weights.1 * (below * q)
 }
 
 #[cfg(test)]
@@ -777,7 +829,8 @@ mod tests {
         // Lit by the sky alone (L = 1) over a black background, looking up through a particle
         // at 1000 m and another at 1300 m: the lower one's direct light from above is cut by
         // the upper one's G = e^(−(1 − a f) τ) (a particle reads none of its own G, as in
-        // Harris' recurrence), and the centre pixel is α_l D(Γ_l) + T_l α_u D(Γ_u).
+        // Harris' recurrence), and the centre pixel is α_l F(Γ_l) + T_l α_u F(Γ_u), F the
+        // diffuse light weighted for a view straight up the sky light's stream (μ = 1).
         let c = cam(17, 17);
         let (tau_l, tau_u) = (1.5, 2.0);
         let two = Cloud::new(
@@ -794,7 +847,7 @@ mod tests {
         let view = VolumeView::new(&field.zenith, DVec3::ZERO);
         let f = |p: Vec3| {
             let (a, b) = view.sample_with_exit(p);
-            diffuse_light(a, b, 0.86, true)
+            diffuse_light(a, b, 0.86, true, stream_weights(1.0, 0.86))
         };
         let (d_l, d_u) = (
             f(Vec3::new(0.0, 1000.0, 0.0)),
@@ -862,7 +915,8 @@ mod tests {
         let view = VolumeView::new(&field.sun.as_ref().unwrap().1, DVec3::ZERO);
         let (direct, exit) = view.sample_with_exit(Vec3::new(0.0, 1000.0, 0.0));
         assert!((direct - gamma).abs() < 1e-5);
-        let diffuse = diffuse_light(direct, exit, 0.86, false);
+        // The sun along +X, the centre pixel's view straight up: μ = 0.
+        let diffuse = diffuse_light(direct, exit, 0.86, false, stream_weights(0.0, 0.86));
         // Single scattering sees the full extinction: the δ-M Γ to the power 1/(1 − a g²),
         // a = 1 (libm's powf as the reference for `unscattered`).
         let full = gamma.powf(1.0 / (1.0 - 0.86f32 * 0.86));
@@ -890,14 +944,54 @@ mod tests {
         let gamma = (-(1.0f32 - 0.86 * 0.86) * 10.0).exp();
         assert!((diffuse_share(gamma, 0.86) - 1.0 / 2.05).abs() < 1e-4);
         assert!(diffuse_share(0.0, 0.86) > 0.0 && diffuse_share(0.0, 0.86) < 0.05);
-        // The diffuse light: none in open air; at the lit face of a thick cloud (τ_b = 50 below)
-        // half its reflection, 1 − 1/(1 + 0.75·0.14·50); deep under it the transmission alone.
-        assert_eq!(diffuse_light(1.0, 1.0, 0.86, false), 0.0);
+        // The diffuse light's streams, each at weight 1: none in open air; at the lit face of
+        // a thick cloud (τ_b = 50 below) its reflection, 1 − 1/(1 + 0.75·0.14·50); deep under
+        // it the transmission alone; the weights scale each stream.
+        let ones = (1.0, 1.0);
+        assert_eq!(diffuse_light(1.0, 1.0, 0.86, false, ones), 0.0);
         let thick = (-(1.0f32 - 0.86 * 0.86) * 50.0).exp();
         let r = 1.0 - 1.0 / (1.0 + 0.75 * 0.14 * 50.0);
-        assert!((diffuse_light(1.0, thick, 0.86, false) - 0.5 * r).abs() < 1e-4);
-        let under = diffuse_light(thick, thick, 0.86, true);
+        assert!((diffuse_light(1.0, thick, 0.86, false, ones) - r).abs() < 1e-4);
+        assert!((diffuse_light(1.0, thick, 0.86, false, (0.3, 0.7)) - 0.7 * r).abs() < 1e-4);
+        let under = diffuse_light(thick, thick, 0.86, true, ones);
         assert!((under - diffuse_share(thick, 0.86)).abs() < 1e-6);
+        let under_w = diffuse_light(thick, thick, 0.86, true, (0.3, 0.7));
+        assert!((under_w - 0.3 * diffuse_share(thick, 0.86)).abs() < 1e-6);
+    }
+
+    /// P(μ) by a midpoint rule over the stream's hemisphere (400 x 800), in f64.
+    fn stream_share_quadrature(mu: f64, g: f64) -> f64 {
+        let v = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
+        let (n, m) = (400, 800);
+        let mut sum = 0.0;
+        for i in 0..n {
+            let c = (i as f64 + 0.5) / n as f64;
+            let s = (1.0 - c * c).sqrt();
+            for j in 0..m {
+                let phi = (j as f64 + 0.5) / m as f64 * std::f64::consts::TAU;
+                let cos = s * phi.cos() * v[0] + c * v[2];
+                sum += henyey_greenstein(cos, g);
+            }
+        }
+        sum / n as f64 * std::f64::consts::TAU / m as f64
+    }
+
+    #[test]
+    fn the_stream_share_is_the_phase_over_the_streams_hemisphere() {
+        for mu in [-1.0f32, -0.77, -0.32, -0.1, 0.0, 0.1, 0.35, 0.6, 1.0] {
+            let want = stream_share_quadrature(f64::from(mu), 0.86);
+            let got = f64::from(stream_share(mu, 0.86));
+            assert!((got - want).abs() < 0.015, "μ {mu}: {got} vs {want}");
+            let back = f64::from(stream_share(-mu, 0.86));
+            assert!((got + back - 1.0).abs() < 1e-6);
+        }
+        // Isotropic particles scatter half of each stream every way.
+        assert_eq!(stream_share(0.7, 0.0), 0.5);
+        // The weights: a side view (μ = 0) takes K_THROUGH/2 and K_BACK/2.
+        let (t, b) = stream_weights(0.0, 0.86);
+        assert!((t - 0.5 * K_THROUGH).abs() < 1e-6 && (b - 0.5 * K_BACK).abs() < 1e-6);
+        let (t_below, b_below) = stream_weights(0.9, 0.86);
+        assert!(t_below > t && b_below < b);
     }
 
     #[test]

@@ -57,7 +57,7 @@ fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
 
 // skyfall_core::cloud::frame::diffuse_light: with k = 3/4/(1 + g), a = -k ln(gamma) and
 // b = k ln(gamma/exit), D = 1/(1 + a) and D R = b/((1 + a)(1 + b)).
-fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
+fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool, weights: vec2<f32>) -> f32 {
     let k = 0.75 / (1.0 + g);
     let ln_gamma = log(max(gamma, 1e-30));
     let above = -k * ln_gamma;
@@ -68,7 +68,28 @@ fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool) -> f32 {
     if with_direct {
         reaching = d;
     }
-    return reaching + 0.5 * below * q;
+    return weights.x * reaching + weights.y * (below * q);
+}
+
+// skyfall_core::cloud::frame::stream_share: the share of a stream a particle scatters towards
+// a viewer the light leaves towards at mu = v . t.
+fn stream_share(mu: f32, g: f32) -> f32 {
+    var forward = 0.5;
+    if abs(g) >= 1e-4 {
+        forward = (1.0 + g) / (2.0 * g) - (1.0 - g * g) / (2.0 * g * sqrt(1.0 + g * g));
+    }
+    let rise = (1.0 - exp(-min(abs(mu), 1.0) / STREAM_WIDTH)) / (1.0 - exp(-1.0 / STREAM_WIDTH));
+    var signed = rise;
+    if mu < 0.0 {
+        signed = -rise;
+    }
+    return 0.5 + (forward - 0.5) * signed;
+}
+
+// skyfall_core::cloud::frame::stream_weights.
+fn stream_weights(mu: f32, g: f32) -> vec2<f32> {
+    let w = 0.5 + PHASE_SHARE * (stream_share(mu, g) - 0.5);
+    return vec2<f32>(K_THROUGH * w, K_BACK * (1.0 - w));
 }
 
 // CloudSplats::source.
@@ -80,13 +101,13 @@ fn unscattered(gamma: f32, albedo: f32, g: f32) -> f32 {
     return exp(log(max(gamma, 1e-30)) * (1.0 / (1.0 - albedo * g * g)));
 }
 
-fn source(x: vec3<f32>, d: vec3<f32>, albedo: f32) -> vec3<f32> {
+fn source(x: vec3<f32>, d: vec3<f32>, albedo: f32, w_sky: vec2<f32>, w_sun: vec2<f32>) -> vec3<f32> {
     let g = info.sun_g.w;
     let diffuse_on = info.sun_light.w != 0.0;
     let z = sample_volume(info.zenith_volume, x);
     var sky = info.sky_light.xyz * z.x;
     if diffuse_on {
-        sky = info.sky_light.xyz * diffuse_light(z.x, z.y, g, true);
+        sky = info.sky_light.xyz * diffuse_light(z.x, z.y, g, true, w_sky);
     }
     if info.counts.z == 0u {
         return sky;
@@ -95,7 +116,7 @@ fn source(x: vec3<f32>, d: vec3<f32>, albedo: f32) -> vec3<f32> {
     let phase = henyey_greenstein(dot(d, info.sun_g.xyz), g);
     var diffuse = 0.0;
     if diffuse_on {
-        diffuse = diffuse_light(s.x, s.y, g, false);
+        diffuse = diffuse_light(s.x, s.y, g, false, w_sun);
     }
     return info.sun_light.xyz * (PI * phase * unscattered(s.x, albedo, g) + diffuse) + sky;
 }
@@ -117,6 +138,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let dep = depth[i];
         var acc = vec3<f32>(0.0);
         var trans = 1.0;
+        // The diffuse light's stream weights of this pixel's view (CloudSplats::composite):
+        // the sky's stream travels along -Y, the sun's along -sun.
+        let w_sky = stream_weights(d.y, info.sun_g.w);
+        let w_sun = stream_weights(dot(d, info.sun_g.xyz), info.sun_g.w);
         // The splats end at the first whose centre is farther than the scene by more than
         // any support (CloudSplats::apply_row).
         let beyond = (dep / axial + info.sky_light.w) * 1.001 + 0.01;
@@ -143,7 +168,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             let t_k = exp(-s1.x * exp(-rho2 / r2));
             let a = 1.0 - t_k;
-            acc = acc + source(x_near, d, s1.y) * (trans * a * s1.y);
+            acc = acc + source(x_near, d, s1.y, w_sky, w_sun) * (trans * a * s1.y);
             trans = trans * t_k;
             if trans < MIN_TRANSMITTANCE {
                 break;
