@@ -132,7 +132,7 @@ impl SkyModel {
                 let c = if received {
                     self.sky.received_rgb(u)
                 } else {
-                    self.sky.chroma(u) * self.sky.emitted(u) as f32
+                    self.sky.sky_pixel_rgb(u)
                 };
                 o.copy_from_slice(&c.to_array().map(f64::from));
             }

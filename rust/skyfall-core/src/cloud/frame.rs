@@ -528,6 +528,7 @@ impl<'a> CloudSplats<'a> {
         let mut phase = [0.0f32; LANES];
         let mut w_sun = [(0.0f32, 0.0f32); LANES];
         let mut w_sky = [(0.0f32, 0.0f32); LANES];
+        let streams = StreamWeights::new(self.g);
         let mut live = [false; LANES];
         for (l, &dep) in depth.iter().enumerate() {
             let d = cam.ray_direction((x0 + l) as u32, y).normalize();
@@ -545,9 +546,9 @@ impl<'a> CloudSplats<'a> {
             phase[l] = self.phase(d);
             // The light leaves towards the camera, along −d: against a stream travelling
             // along −s (the sun's) μ = d·s, along −Y (the sky's) μ = d.y.
-            w_sky[l] = stream_weights(d.y, self.g);
+            w_sky[l] = streams.at(d.y);
             if let Some((s, _)) = &self.sun {
-                w_sun[l] = stream_weights(d.dot(*s), self.g);
+                w_sun[l] = streams.at(d.dot(*s));
             }
             live[l] = true;
         }
@@ -670,14 +671,44 @@ fn two_stream_k(g: f32) -> f32 {
 /// width is fitted there, the generated clouds' g).
 #[inline]
 pub fn stream_share(mu: f32, g: f32) -> f32 {
-    let forward = if g.abs() < 1e-4 {
-        0.5
-    } else {
-        (1.0 + g) / (2.0 * g) - (1.0 - g * g) / (2.0 * g * (1.0 + g * g).sqrt())
-    };
-    let rise =
-        (1.0 - exp_neg(-mu.abs().min(1.0) / STREAM_WIDTH)) / (1.0 - exp_neg(-1.0 / STREAM_WIDTH));
-    0.5 + (forward - 0.5) * rise.copysign(mu)
+    StreamWeights::new(g).share(mu)
+}
+
+/// [`stream_share`] and [`stream_weights`] for one asymmetry g: what depends on g alone
+/// (P(1) and the rise's normalisation) made once, so a pixel's weights cost one exponential.
+#[derive(Debug, Clone, Copy)]
+pub struct StreamWeights {
+    /// (P(1) − ½)/(1 − e^(−1/w)).
+    scale: f32,
+}
+
+impl StreamWeights {
+    /// The weights of particles of asymmetry `g`.
+    #[inline]
+    pub fn new(g: f32) -> Self {
+        let forward = if g.abs() < 1e-4 {
+            0.5
+        } else {
+            (1.0 + g) / (2.0 * g) - (1.0 - g * g) / (2.0 * g * (1.0 + g * g).sqrt())
+        };
+        StreamWeights {
+            scale: (forward - 0.5) / (1.0 - exp_neg(-1.0 / STREAM_WIDTH)),
+        }
+    }
+
+    /// [`stream_share`] at μ.
+    #[inline]
+    pub fn share(self, mu: f32) -> f32 {
+        let rise = 1.0 - exp_neg(-mu.abs().min(1.0) / STREAM_WIDTH);
+        0.5 + self.scale * rise.copysign(mu)
+    }
+
+    /// [`stream_weights`] at μ.
+    #[inline]
+    pub fn at(self, mu: f32) -> (f32, f32) {
+        let w = 0.5 + PHASE_SHARE * (self.share(mu) - 0.5);
+        (K_THROUGH * w, K_BACK * (1.0 - w))
+    }
 }
 
 /// The width in μ over which [`stream_share`] turns from one stream to the other.
@@ -702,8 +733,7 @@ pub const K_BACK: f32 = 0.48;
 /// towards along v, μ = v·t, t the direction the stream's light travels ([`PHASE_SHARE`]).
 #[inline]
 pub fn stream_weights(mu: f32, g: f32) -> (f32, f32) {
-    let w = 0.5 + PHASE_SHARE * (stream_share(mu, g) - 0.5);
-    (K_THROUGH * w, K_BACK * (1.0 - w))
+    StreamWeights::new(g).at(mu)
 }
 
 /// The diffuse light at a point, per unit of its light's flux, from Γ there (`gamma`) and
