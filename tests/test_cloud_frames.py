@@ -248,29 +248,34 @@ def test_thin_clouds_single_scattering_matches_the_path_tracer() -> None:
 
 
 @pytest.mark.parametrize(
-    ("view", "offset", "pitch", "fov", "sun"),
-    [("side", (0.0, 0.0, 1200.0), 0.0, 18.0, (45.0, 120.0)), ("below", (0.0, -700.0, 300.0), 60.0, 30.0, (60.0, 250.0))],
+    ("view", "offset", "pitch", "fov", "sun", "depth", "paths"),
+    [("side", (0.0, 0.0, 1200.0), 0.0, 18.0, (45.0, 120.0), 4.0, 96), ("below", (0.0, -700.0, 300.0), 60.0, 30.0, (60.0, 250.0), 2.0, 160)],
 )
-def test_a_thick_clouds_light_is_within_the_path_tracers_bounds(view: str, offset: tuple, pitch: float, fov: float, sun: tuple) -> None:
-    # A cloud the diffuse term's weights were not fitted to (seed 13, every optical depth x2,
-    # suns outside the fit's; benches/clouds_fit.py), where multiple scattering is 90 % of the
-    # light: the frames' summed sun light (single scattering + the diffuse term) within
-    # 0.8-1.25x of the path tracer's, every order (the issue's bounds), seen from the side and
-    # from below. The two-stream sum the weights replaced gave 1.3-2.8x from the side.
+def test_a_thick_clouds_light_is_within_the_path_tracers_bounds(
+    view: str, offset: tuple, pitch: float, fov: float, sun: tuple, depth: float, paths: int
+) -> None:
+    # A cloud the diffuse term's weights were not fitted to (seed 13, suns outside the fit's;
+    # benches/clouds_fit.py), where multiple scattering is 90 % of the light: the frames'
+    # summed sun light (single scattering + the diffuse term) within 0.8-1.25x of the path
+    # tracer's, every order (the issue's bounds), seen from the side and from below. The
+    # two-stream sum the weights replaced gave 1.3-2.8x from the side. The billowed cloud's
+    # reference sums have a heavy tail at optical depth x2 seen from the side: at 160 paths per
+    # pixel the ratio read 1.04-1.25 over four seeds (their sums 188-225, each claiming 3 %), so
+    # that view is tested at x4, where three seeds read 1.09-1.12.
     n = 16
     base = clouds.particles("cumulus", n_particles=600, extent_m=300.0, altitude_m=1000.0, seed=13)
-    cloud = dataclasses.replace(base, optical_depths=base.optical_depths * 2.0)
+    cloud = dataclasses.replace(base, optical_depths=base.optical_depths * depth)
     eye = base.positions_m.mean(axis=0) + np.array(offset)
     cam = Camera(eye, pitch_deg=pitch, vertical_fov_deg=fov, width=n, height=n)
     w = Weather(sky=12, sun_elevation_deg=sun[0], sun_azimuth_deg=sun[1])
     r = Renderer(n, n, backend="cpu")
     got = _sun_light(r, scenes.boxes([], ground=False, camera=cam), w, cloud)[0].reshape(-1, 3) @ LUMA
     d = _unit_rays(cam.with_resolution(n, n))
-    mc, first, err = clouds.path_traced(cloud, w.sun_direction, sun_relative=w.sun_relative, eye_m=eye, directions=d, paths=64, max_orders=512, seed=3)
+    mc, first, err = clouds.path_traced(cloud, w.sun_direction, sun_relative=w.sun_relative, eye_m=eye, directions=d, paths=paths, max_orders=512, seed=3)
     lit = mc > 0.05 * mc.max()
     assert lit.sum() >= 40 and first[lit].sum() < 0.2 * mc[lit].sum()
     noise = np.sqrt((err[lit] ** 2).sum()) / mc[lit].sum()  # the reference's own, relative
-    assert noise < 0.07, noise
+    assert noise < 0.05, noise
     ratio = got[lit].sum() / mc[lit].sum()
     assert 0.8 <= ratio <= 1.25, f"{view}: frames / path tracer {ratio:.3f} (noise {noise:.1%})"
 

@@ -147,18 +147,28 @@ def particles(
 ) -> Cloud:
     """A procedural, seeded cloud.
 
-    A kind is a density field over a box: Gaussian metaballs (``"cumulus"``: a tower of nine
-    cells above a flat base, as tall as it is wide; ``"broken"``: fourteen small cumulus cells
-    of three metaballs each scattered over a square; ``"stratocumulus"``: a layer a tenth of
-    its side thick, modulated by a grid of convective cells), multiplied by three octaves of
-    value noise. Positions are drawn uniformly in the box from a PCG64 stream seeded by
-    ``(seed, kind)`` and kept where the perturbed field exceeds a threshold, until
-    ``n_particles`` are kept. The kept share measures the cloud's volume V and the particles'
-    spacing s = (V / N)^(1/3): radii are 2 s times a uniform [0.8, 1.2], and optical depths
-    tau_i = beta V / (N pi r_i^2) make the particles' sum carry the extinction beta of the
-    kind's droplets (Mie at 550 nm; beta = 3 Q_ext LWC / (4 rho_w r_eff), Stephens 1978):
-    cumulus r_eff 10 um, LWC 1 g/m^3 (beta 0.157 /m, g 0.864); stratocumulus 5 um,
-    0.1 g/m^3 (0.032 /m, g 0.849); broken 15 um, 0.5 g/m^3 (0.052 /m, g 0.870).
+    A kind is a shape of billows (Rust: ``skyfall_core::cloud::billows``): root spheres per
+    convective cell, each sphere carrying children of about half its radius on its upper
+    surface for two or three levels (the cauliflower of a cumulus' turrets), the union cut
+    flat at the base (the condensation level) and perturbed by value noise at the smallest
+    billows' scale. ``"cumulus"``: one tower of four stacked turrets on three shoulders, about
+    as tall as it is wide; ``"broken"``: fourteen small cumulus of two or three turrets each
+    scattered over a square; ``"stratocumulus"``: a deck of cells on a jittered grid, a
+    twentieth of its side thick (at most 400 m) and cut flat at its top too (the inversion),
+    whose cells thin out towards the deck's edge so it ends in scattered cells, not a line.
+
+    Particles are small at the surface and large inside: a point at depth D below the surface
+    has the relative spacing g = min(1 + D / L, 4), L the smallest billows' mean radius.
+    Positions are drawn uniformly in the box from a PCG64 stream seeded by ``(seed, kind)`` and
+    kept inside the shape with probability g^-3 until ``n_particles`` are kept; each stands for
+    the volume v_i = V g_i^3 / sum(g^3), V the cloud's volume (the share of draws inside).
+    Radii are 2 v_i^(1/3) times a uniform [0.8, 1.2], and optical depths
+    tau_i = beta v_i / (pi r_i^2) make the particles' sum carry the extinction beta of the
+    kind's droplets everywhere inside (Mie at 550 nm; beta = 3 Q_ext LWC / (4 rho_w r_eff),
+    Stephens 1978): cumulus r_eff 10 um, LWC 1 g/m^3 (beta 0.157 /m, g 0.864); stratocumulus
+    5 um, 0.1 g/m^3 (0.032 /m, g 0.849); broken 15 um, 0.5 g/m^3 (0.052 /m, g 0.870). More
+    particles make smaller ones at the surface, so sharper edges and finer billows: a 1500 m
+    cumulus needs about 30 000 to show its turrets' turrets.
 
     Parameters
     ----------
@@ -328,14 +338,14 @@ class Part(NamedTuple):
 
 PRESETS: Final = {
     "broken": (
-        Part("broken", 24000, 2000.0, 1000.0, (-200.0, 0.0, 300.0), 5),
-        Part("cumulus", 3000, 1400.0, 1000.0, (-1200.0, 0.0, -3500.0), 10),
-        Part("cumulus", 3000, 1600.0, 1000.0, (900.0, 0.0, -5000.0), 11),
-        Part("cumulus", 3000, 2000.0, 1000.0, (-300.0, 0.0, -7500.0), 12),
-        Part("cumulus", 3000, 1000.0, 1000.0, (2500.0, 0.0, -3000.0), 13),
+        Part("broken", 60000, 2000.0, 1000.0, (-400.0, 0.0, 425.0), 24),
+        Part("cumulus", 12000, 1400.0, 1000.0, (-1200.0, 0.0, -3500.0), 10),
+        Part("cumulus", 12000, 1600.0, 1000.0, (900.0, 0.0, -5000.0), 11),
+        Part("cumulus", 12000, 2000.0, 1000.0, (-300.0, 0.0, -7500.0), 12),
+        Part("cumulus", 12000, 1000.0, 1000.0, (2500.0, 0.0, -3000.0), 13),
     ),
-    "cumulus": (Part("cumulus", 6000, 1500.0, 1200.0, (0.0, 0.0, -5000.0), 0),),
-    "stratocumulus": (Part("stratocumulus", 8000, 10000.0, 1000.0, (0.0, 0.0, -2000.0), 0),),
+    "cumulus": (Part("cumulus", 60000, 1500.0, 1200.0, (0.0, 0.0, -5000.0), 0),),
+    "stratocumulus": (Part("stratocumulus", 60000, 24000.0, 1000.0, (0.0, 0.0, -8000.0), 0),),
 }
 """The clouds ``Weather(clouds=name)`` draws: the parts' :func:`particles`, each of its kind and
 seed, moved by ``offset_m`` so that a default camera (at the origin, looking along -Z) sees
@@ -343,7 +353,10 @@ them, bases at ``altitude_m``. ``"broken"``: a broken field 2 km across over the
 shadows: under a sun 50 deg up in the south, azimuth 185, a cloud's shadow covers the near
 half of the bundled street, :func:`skyfall.scenes.street`, and the far half lies in the sun) and four cumulus 1-2 km wide, 3-7.5 km ahead
 (the clouds a camera looking along the street sees); ``"cumulus"``: one cumulus 1.5 km wide
-5 km ahead; ``"stratocumulus"``: a deck 10 km across."""
+5 km ahead; ``"stratocumulus"``: a deck 24 km across and 400 m thick, centred 8 km ahead, whose
+cells thin out from 8 km beyond the camera onwards (no line where it ends). The parts' particle
+counts (108 000, 60 000, 60 000) are what their billows need to show at 1280 x 720; fewer make
+softer, blobbier clouds (see :func:`particles`)."""
 
 FRAME_RESOLUTION: Final = 256
 """Voxels per side of the attenuation volumes frames light their clouds from."""

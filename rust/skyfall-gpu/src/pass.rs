@@ -24,6 +24,7 @@ pub fn shared_constants() -> String {
         f("PHASE_SHARE", skyfall_core::cloud::frame::PHASE_SHARE),
         f("K_THROUGH", skyfall_core::cloud::frame::K_THROUGH),
         f("K_BACK", skyfall_core::cloud::frame::K_BACK),
+        f("STREAM_DEPTH", skyfall_core::cloud::frame::STREAM_DEPTH),
         f("LUMA_R", skyfall_core::sky::colour::LUMA.x),
         f("LUMA_G", skyfall_core::sky::colour::LUMA.y),
         f("LUMA_B", skyfall_core::sky::colour::LUMA.z),

@@ -73,6 +73,10 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
         ("PHASE_SHARE", bits(skyfall_core::cloud::frame::PHASE_SHARE)),
         ("K_THROUGH", bits(skyfall_core::cloud::frame::K_THROUGH)),
         ("K_BACK", bits(skyfall_core::cloud::frame::K_BACK)),
+        (
+            "STREAM_DEPTH",
+            bits(skyfall_core::cloud::frame::STREAM_DEPTH),
+        ),
         ("LUMA_R", bits(skyfall_core::sky::colour::LUMA.x)),
         ("LUMA_G", bits(skyfall_core::sky::colour::LUMA.y)),
         ("LUMA_B", bits(skyfall_core::sky::colour::LUMA.z)),

@@ -655,11 +655,12 @@ pub fn unscattered_power(albedo: f32, g: f32) -> f32 {
     1.0 / (1.0 - albedo * g * g)
 }
 
-/// ¾(1 − g)/(1 − g²) = ¾/(1 + g): the two-stream's optical depth, times ¾(1 − g), per unit
-/// of −ln Γ (Γ keeps the share e^(−(1 − g²)τ) of the light, the δ-M direct beam).
+/// `STREAM_DEPTH`·¾(1 − g)/(1 − g²) = `STREAM_DEPTH`·¾/(1 + g): the two-stream's optical
+/// depth, times ¾(1 − g), per unit of −ln Γ (Γ keeps the share e^(−(1 − g²)τ) of the light, the
+/// δ-M direct beam), scaled by the fitted [`STREAM_DEPTH`].
 #[inline(always)]
 fn two_stream_k(g: f32) -> f32 {
-    0.75 / (1.0 + g)
+    STREAM_DEPTH * 0.75 / (1.0 + g)
 }
 
 /// The share of the light of a stream travelling along t that a Henyey–Greenstein particle of
@@ -717,17 +718,24 @@ pub const STREAM_WIDTH: f32 = 0.19;
 /// The fitted weights of the diffuse light's two streams ([`diffuse_light`]): the light coming
 /// through the column above (towards the light's travel) weighs `K_THROUGH`·w, the light
 /// coming back up out of the column below `K_BACK`·(1 − w), w = ½ + `PHASE_SHARE`·(P(μ) − ½)
-/// ([`stream_share`]). Fitted (a grid search minimising the worst |ln(frames / reference)|)
-/// to the Monte Carlo path tracer's summed light (`benches/clouds_fit.py`: two cumulus,
-/// optical depths ×1 and ×4, five suns, a side and a ground view), and checked on a third
-/// cloud at another depth under other suns (`benches/results/clouds_fit.md`): the two-stream
-/// slab's reflection overstates a finite cloud's (light leaves through its sides), its
-/// transmission understates what a forward-scattering particle sends on along the light.
+/// ([`stream_share`]); the columns' two-stream optical depths are scaled by [`STREAM_DEPTH`].
+/// Fitted (a grid search minimising the worst |ln(frames / reference)|) to the Monte Carlo path
+/// tracer's summed light (`benches/clouds_fit.py`: two generated, billowed cumulus, optical
+/// depths ×1 and ×4, five suns, a side and a ground view), and checked on a third cloud at
+/// another depth under other suns (`benches/results/clouds_fit.md`): the two-stream slab's
+/// reflection overstates a finite cloud's (light leaves through its sides), its transmission
+/// understates what a forward-scattering particle sends on along the light.
 pub const PHASE_SHARE: f32 = 0.5;
 /// See [`PHASE_SHARE`].
-pub const K_THROUGH: f32 = 1.75;
+pub const K_THROUGH: f32 = 0.975;
 /// See [`PHASE_SHARE`].
-pub const K_BACK: f32 = 0.48;
+pub const K_BACK: f32 = 0.54;
+/// The two-stream optical depth of a column, in units of the slab's ¾(1 − g)τ (fitted with
+/// [`PHASE_SHARE`]): a billowed cloud is lit through many faces, not only along the column
+/// towards the light, so its diffuse light falls with depth slower than a slab's (with the
+/// slab's 1, the fit's thick rows spread over 0.78-1.29x of the path tracer; with 0.4,
+/// 0.83-1.21x).
+pub const STREAM_DEPTH: f32 = 0.4;
 
 /// The weights (through, back) of [`diffuse_light`]'s streams for a viewer the light leaves
 /// towards along v, μ = v·t, t the direction the stream's light travels ([`PHASE_SHARE`]).
@@ -959,28 +967,29 @@ mod tests {
         );
     }
 
-    /// The two-stream transmission D = 1/(1 + ¾(1 − g)τ) of the column whose direct beam
-    /// keeps `gamma`, τ = −ln Γ/(1 − g²), written from the definition (libm's ln): the
-    /// reference `diffuse_light`'s D is checked against.
+    /// The two-stream transmission D = 1/(1 + s·¾(1 − g)τ) of the column whose direct beam
+    /// keeps `gamma`, τ = −ln Γ/(1 − g²), s = [`STREAM_DEPTH`], written from the definition
+    /// (libm's ln): the reference `diffuse_light`'s D is checked against.
     fn diffuse_share(gamma: f32, g: f32) -> f32 {
         let tau = -gamma.max(1e-30).ln() / (1.0 - g * g);
-        1.0 / (1.0 + 0.75 * (1.0 - g) * tau)
+        1.0 / (1.0 + STREAM_DEPTH * 0.75 * (1.0 - g) * tau)
     }
 
     #[test]
     fn the_diffuse_share_is_the_two_stream_transmission() {
-        // Γ = 1 (no cloud above): all of it; τ = 10 at g = 0.86: 1/(1 + 0.75·0.14·10).
+        // Γ = 1 (no cloud above): all of it; τ = 10 at g = 0.86: 1/(1 + 0.4·0.75·0.14·10).
         assert!((diffuse_share(1.0, 0.86) - 1.0).abs() < 1e-6);
         let gamma = (-(1.0f32 - 0.86 * 0.86) * 10.0).exp();
-        assert!((diffuse_share(gamma, 0.86) - 1.0 / 2.05).abs() < 1e-4);
-        assert!(diffuse_share(0.0, 0.86) > 0.0 && diffuse_share(0.0, 0.86) < 0.05);
+        assert!((diffuse_share(gamma, 0.86) - 1.0 / (1.0 + STREAM_DEPTH * 1.05)).abs() < 1e-4);
+        // Γ → 0 (clamped at 1e-30: τ = 265): 1/(1 + 0.4·0.105·265) = 0.083.
+        assert!(diffuse_share(0.0, 0.86) > 0.07 && diffuse_share(0.0, 0.86) < 0.1);
         // The diffuse light's streams, each at weight 1: none in open air; at the lit face of
-        // a thick cloud (τ_b = 50 below) its reflection, 1 − 1/(1 + 0.75·0.14·50); deep under
+        // a thick cloud (τ_b = 50 below) its reflection, 1 − 1/(1 + 0.4·0.75·0.14·50); deep under
         // it the transmission alone; the weights scale each stream.
         let ones = (1.0, 1.0);
         assert_eq!(diffuse_light(1.0, 1.0, 0.86, false, ones), 0.0);
         let thick = (-(1.0f32 - 0.86 * 0.86) * 50.0).exp();
-        let r = 1.0 - 1.0 / (1.0 + 0.75 * 0.14 * 50.0);
+        let r = 1.0 - 1.0 / (1.0 + STREAM_DEPTH * 0.75 * 0.14 * 50.0);
         assert!((diffuse_light(1.0, thick, 0.86, false, ones) - r).abs() < 1e-4);
         assert!((diffuse_light(1.0, thick, 0.86, false, (0.3, 0.7)) - 0.7 * r).abs() < 1e-4);
         let under = diffuse_light(thick, thick, 0.86, true, ones);

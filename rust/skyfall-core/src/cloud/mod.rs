@@ -23,6 +23,7 @@
 //! - [`frame`]: clouds in frames: the cloud pass (camera-facing Gaussian splats composited
 //!   back to front) and the sun's share through the clouds.
 
+pub mod billows;
 pub mod frame;
 pub mod generate;
 pub mod harris;

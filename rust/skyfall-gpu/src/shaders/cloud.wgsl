@@ -55,10 +55,10 @@ fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
     return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
 }
 
-// skyfall_core::cloud::frame::diffuse_light: with k = 3/4/(1 + g), a = -k ln(gamma) and
+// skyfall_core::cloud::frame::diffuse_light: with k = STREAM_DEPTH 3/4/(1 + g), a = -k ln(gamma) and
 // b = k ln(gamma/exit), D = 1/(1 + a) and D R = b/((1 + a)(1 + b)).
 fn diffuse_light(gamma: f32, exit: f32, g: f32, with_direct: bool, weights: vec2<f32>) -> f32 {
-    let k = 0.75 / (1.0 + g);
+    let k = STREAM_DEPTH * 0.75 / (1.0 + g);
     let ln_gamma = log(max(gamma, 1e-30));
     let above = -k * ln_gamma;
     let below = max(k * (ln_gamma - log(max(exit, 1e-30))), 0.0);
