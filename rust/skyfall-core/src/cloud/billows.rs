@@ -173,11 +173,6 @@ impl Field {
         ]
     }
 
-    /// The billows.
-    pub fn billows(&self) -> &[Billow] {
-        &self.billows
-    }
-
     /// `None` outside the cloud; inside, the depth below its surface, m (the deepest any
     /// billow or the base puts `p`, before the noise: a lower bound on the distance out).
     pub fn depth(&self, p: DVec3) -> Option<f64> {
