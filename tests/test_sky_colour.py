@@ -138,3 +138,24 @@ def test_a_rendered_sky_pixel_has_the_models_colour_on_both_backends() -> None:
         assert not np.isfinite(f.depth_m).any()
         np.testing.assert_allclose(xy(f.rgb), want, atol=2e-3)
     np.testing.assert_allclose(frames[1].rgb, frames[0].rgb, rtol=2e-3)
+
+
+def test_falling_rain_takes_the_sky_lights_colour() -> None:
+    # The drops' light from the sky has the colour of the sky's light (sky.colours' sky_light);
+    # under the overcast sky it stays grey. In front of a black wall (albedo 0, black ground)
+    # each rain pixel is C = (1 - alpha) B + alpha L: L, the drops' light, solved per pixel
+    # from the layer rain_alpha and the frame's own rain-free background B.
+    cam = Camera((0.0, 1.6, 0.0), pitch_deg=0.0, vertical_fov_deg=40.0)
+    wall = {"min": (-50.0, 0.0, -12.0), "max": (50.0, 30.0, -11.0), "albedo": 0.0}
+    for kw in ({"sky": 12, "sun_elevation_deg": 50.0, "sun_azimuth_deg": 185.0}, {}):
+        w = Weather(rain_rate_mm_h=20.0, visibility_m=100_000.0, **kw)
+        f = Renderer(192, 108, backend="cpu").render(scenes.boxes([wall], ground_albedo=0.0, camera=cam), w, seed=1)
+        a, c = f.layers["rain_alpha"][:54], f.rgb[:54].astype(np.float64)
+        background = c[a < 1e-6].mean(axis=0)
+        m = a > 0.004
+        assert m.sum() > 500
+        light = ((c[m] - background * (1.0 - a[m, None])) / a[m, None]).sum(axis=0)
+        want = np.array(sky.colours(weather=w).sky_light)
+        np.testing.assert_allclose(light / light[1], want / want[1], atol=0.02 if kw else 1e-4)
+        if kw:
+            assert light[0] / light[1] < 0.9  # bluer than grey, measurably

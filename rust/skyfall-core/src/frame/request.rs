@@ -191,6 +191,11 @@ impl FrameSetup {
             None => sky.horizon_colour,
         };
         let airlight = (units * tint * sky_airlight * e_view).to_array();
+        // The drops and flakes are lit by the sky light's colour (a photo's: its own units).
+        let drops_colour = match photo_airlight {
+            Some(_) => Vec3::ONE,
+            None => sky.light_colour,
+        };
         let haze = w.haze(airlight, req.camera.position_m.y)?;
         let rain = match w.rain_region(req.time_s, req.seed)? {
             Some(region) => {
@@ -200,6 +205,7 @@ impl FrameSetup {
                     cull_threshold: req.cull_threshold.map(|t| t as f32),
                     ambient: Some(Arc::clone(&req.ambient)),
                     radiance_scale: units,
+                    sky_colour: drops_colour,
                     ..RainShading::open_sky()
                 };
                 Some((region, shading))
@@ -217,6 +223,7 @@ impl FrameSetup {
                 cull_threshold: req.cull_threshold.map(|t| t as f32),
                 ambient: Some(Arc::clone(&req.ambient)),
                 radiance_scale: units,
+                sky_colour: drops_colour,
             };
             (region, shading, w.snow_opacity)
         });

@@ -44,6 +44,10 @@ pub struct RainShading {
     /// [`crate::frame::FrameSetup`]): multiplies the drops' light after culling, which
     /// compares relative I_R. 1 for rendered scenes.
     pub radiance_scale: Vec3,
+    /// The colour (of luminance 1) of the sky's light on the drops: the sky light's
+    /// ([`crate::sky::Sky::light_colour`], blue under a clear sky) for a rendered scene, white
+    /// for a photo (whose `radiance_scale` carries its own colour) and under grey skies.
+    pub sky_colour: Vec3,
 }
 
 impl RainShading {
@@ -58,17 +62,19 @@ impl RainShading {
             cull_threshold: None,
             ambient: None,
             radiance_scale: Vec3::ONE,
+            sky_colour: Vec3::ONE,
         }
     }
 
-    /// I_R of a drop at `p`, per channel.
+    /// I_R of a drop at `p`, per channel: the sky's share in the sky light's colour, the
+    /// lamps' in their own.
     pub fn drop_light(&self, p: Vec3) -> Vec3 {
         let lit = self
             .lights
             .iter()
             .fold(Vec3::ZERO, |acc, l| acc + l.illuminance_lux(p));
         let sky = self.ambient.as_ref().map_or(1.0, |m| m.sample(p)[0]);
-        Vec3::splat(self.drop_radiance * sky)
+        self.sky_colour * (self.drop_radiance * sky)
             + lit * (self.drop_radiance / self.sky_illuminance_lux)
     }
 }
