@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from clouds_reference import directions, sun_light  # noqa: E402
+from clouds_reference import directions, measured  # noqa: E402
 
 from skyfall import Camera, Renderer, Weather, clouds, scenes  # noqa: E402
 
@@ -75,11 +75,7 @@ def main() -> None:
                 cloud = dataclasses.replace(base, optical_depths=base.optical_depths * k)
                 for name, (el, az) in suns.items():
                     w = Weather(sky=12, sun_elevation_deg=el, sun_azimuth_deg=az)
-                    with_d = sun_light(r, sky_only, w, cloud, True).reshape(-1)
-                    single = sun_light(r, sky_only, w, cloud, False).reshape(-1)
-                    t0 = time.perf_counter()
-                    mc, mc1, err = clouds.path_traced(cloud, w.sun_direction, sun_relative=w.sun_relative, eye_m=eye, directions=dirs, paths=PATHS, max_orders=512, seed=1)
-                    mask = mc > 0.05 * mc.max()
+                    with_d, single, mc, mc1, err, mc_s, mask = measured(r, sky_only, w, cloud, eye, dirs, PATHS)
                     s, f, m, m1 = (float(a[mask].sum()) for a in (single, with_d - single, mc, mc1))
                     row = {
                         "seed": seed,
@@ -88,7 +84,7 @@ def main() -> None:
                         "depth_scale": k,
                         "sun": name,
                         "pixels": int(mask.sum()),
-                        "mc_s": time.perf_counter() - t0,
+                        "mc_s": mc_s,
                         "mc_rel_err": float(np.sqrt((err[mask] ** 2).sum()) / m),
                         "S": s,
                         "F": f,

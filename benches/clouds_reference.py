@@ -15,6 +15,7 @@ import json
 import os
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -47,6 +48,29 @@ def sun_light(r: Renderer, scene: scenes.BoxScene, w: Weather, cloud: clouds.Clo
     return out[0] - out[1]
 
 
+class Measured(NamedTuple):
+    """One cloud under one sun: the frames' sun light with and without the diffuse term, the
+    path tracer's (every order, first order, standard error), its seconds, and the pixels it
+    lights (more than 5 % of its maximum). Flat arrays over the pixels."""
+
+    with_diffuse: np.ndarray
+    single: np.ndarray
+    mc: np.ndarray
+    mc_first: np.ndarray
+    mc_err: np.ndarray
+    mc_s: float
+    mask: np.ndarray
+
+
+def measured(r: Renderer, scene: scenes.BoxScene, w: Weather, cloud: clouds.Cloud, eye: np.ndarray, dirs: np.ndarray, paths: int) -> Measured:
+    """The frames' and the path tracer's light of `cloud` under `w`'s sun (its seed 1)."""
+    with_d = sun_light(r, scene, w, cloud, True).reshape(-1)
+    single = sun_light(r, scene, w, cloud, False).reshape(-1)
+    t0 = time.perf_counter()
+    mc, mc1, err = clouds.path_traced(cloud, w.sun_direction, sun_relative=w.sun_relative, eye_m=eye, directions=dirs, paths=paths, max_orders=512, seed=1)
+    return Measured(with_d, single, mc, mc1, err, time.perf_counter() - t0, mc > 0.05 * mc.max())
+
+
 def main() -> None:
     cloud = clouds.particles("cumulus", n_particles=600, extent_m=300.0, altitude_m=1000.0, seed=4)
     centre = cloud.positions_m.mean(axis=0)
@@ -58,12 +82,7 @@ def main() -> None:
     rows = []
     for name, (el, az) in SUNS.items():
         w = Weather(sky=12, sun_elevation_deg=el, sun_azimuth_deg=az)
-        with_d = sun_light(r, sky_only, w, cloud, True).reshape(-1)
-        single_r = sun_light(r, sky_only, w, cloud, False).reshape(-1)
-        t0 = time.perf_counter()
-        mc, mc1, err = clouds.path_traced(cloud, w.sun_direction, sun_relative=w.sun_relative, eye_m=eye, directions=dirs, paths=PATHS, max_orders=512, seed=1)
-        mc_s = time.perf_counter() - t0
-        mask = mc > 0.05 * mc.max()
+        with_d, single_r, mc, mc1, err, mc_s, mask = measured(r, sky_only, w, cloud, eye, dirs, PATHS)
 
         def stats(a: np.ndarray, ref: np.ndarray) -> dict[str, float]:
             rel = a[mask] / ref[mask] - 1.0

@@ -23,7 +23,8 @@
 //! flux coming back up out of the column below (D times its two-stream reflection), each
 //! weighted by the share a Henyey–Greenstein particle scatters towards the viewer
 //! ([`stream_weights`]: a view from below the cloud sees mostly the stream coming through, a
-//! view of its lit face the one coming back), with three weights fitted to a Monte Carlo path
+//! view of its lit face the one coming back), with three weights and the columns' depth scale
+//! ([`STREAM_DEPTH`]) fitted to a Monte Carlo path
 //! tracer (`benches/clouds_fit.py`, `benches/results/clouds_fit.md`). Both columns are read
 //! from the volume: Γ at x, and at the far face, where the light leaves the cloud. Without the
 //! diffuse part a cloud more than a few optical depths thick renders black, and its sunlit
