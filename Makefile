@@ -103,6 +103,7 @@ bench: build vulkan
 	$(PY) benches/bench_rain.py
 	$(PY) benches/bench_sky.py
 	$(PY) benches/clouds.py
+	$(PY) benches/cloud_sky_light.py
 	$(PY) benches/bench_windshield.py
 	$(PY) benches/snow.py
 	$(PY) benches/snow_cover.py

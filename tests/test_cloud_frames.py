@@ -79,15 +79,25 @@ def test_cloud_shadow_on_open_ground_is_the_volume_along_the_sun_ray() -> None:
     r = Renderer(96, 64, backend="cpu")
     f = r.render(scene, Weather(**sun_at, clouds=cloud))
     clear = r.render(scene, Weather(**sun_at, sun_illuminance_lux=0.0))
+    # The particles in the sky change the sky's light a little (the ambient map's, which the
+    # clear frame's ground takes): its ratio, from the map the frame is lit by (open ground:
+    # one node; the clouds seen from the ground under the camera).
+    field = clouds.frame_field(cloud, Weather(**sun_at).sun_direction)
+    none, zero = np.zeros((0, 9), np.float32), np.zeros(3)
+    lit = sky.cached_core_map(none, Weather(**sun_at, clouds=cloud), zero, zero, 1.0, sky.MAP_SAMPLES, "s", field, zero)
+    open_sky = sky.cached_core_map(none, Weather(**sun_at), zero, zero, 1.0, sky.MAP_SAMPLES)
+    k = lit.values.reshape(-1)[0] * lit.light_colour[0] / (open_sky.values.reshape(-1)[0] * sky.colours(weather=Weather(**sun_at)).sky_light[0])
+    # (brighter: seen from the ground they lie nearly towards the sun, whose light they
+    # scatter forwards)
+    assert 1.0 < k < 1.3
     ground = np.isfinite(f.depth_m)
     pts = _points(cam.with_resolution(96, 64), f.depth_m)[ground]
-    field = clouds.frame_field(cloud, Weather(**sun_at).sun_direction)
     want = field.sun_share(np.ascontiguousarray(pts, dtype=np.float64))
     got = f.layers["sun_transmittance"][ground]
     assert want.min() < 0.5 and want.max() > 0.99, "the test should see shadow and sun"
     np.testing.assert_allclose(got, want, atol=2e-3)
     rel = Weather(**sun_at).sun_relative * sky.colours(weather=Weather(**sun_at)).sun[0]
-    np.testing.assert_allclose(f.rgb[ground][:, 0], clear.rgb[ground][:, 0] + 0.3 * rel * math.sin(math.radians(60.0)) * got, rtol=1e-4)
+    np.testing.assert_allclose(f.rgb[ground][:, 0], k * clear.rgb[ground][:, 0] + 0.3 * rel * math.sin(math.radians(60.0)) * got, rtol=1e-4)
 
 
 def test_one_particle_in_front_of_a_dark_sky_dims_it_by_its_column() -> None:
@@ -110,11 +120,12 @@ def test_one_particle_in_front_of_a_dark_sky_dims_it_by_its_column() -> None:
 
 
 def test_clouds_leave_what_they_do_not_cover_bit_for_bit() -> None:
-    # Clouds behind the camera: the frame's rgb and layers are those without clouds, plus a
-    # cloud_alpha of zeros.
+    # Clouds nowhere in the frame nor in its sky (below the horizon, far off): the frame's rgb
+    # and layers are those without clouds, plus a cloud_alpha of zeros. (Clouds anywhere in
+    # the sky change its light, the ambient map's: tests/test_cloud_sky_light.py.)
     scene = scenes.street()
     behind = clouds.particles("cumulus", n_particles=300, extent_m=500.0, altitude_m=800.0)
-    behind = clouds.Cloud(behind.positions_m + np.array([0.0, 0.0, 8000.0]), behind.radii_m, behind.optical_depths, behind.albedos)
+    behind = clouds.Cloud(behind.positions_m + np.array([0.0, -3000.0, 8000.0]), behind.radii_m, behind.optical_depths, behind.albedos)
     r = Renderer(W, H, backend="cpu")
     base = r.render(scene, Weather(rain_rate_mm_h=5.0))
     with_c = r.render(scene, Weather(rain_rate_mm_h=5.0, clouds=behind))

@@ -27,6 +27,7 @@ __all__ = [
     "atmospheric_light_pixel",
     "dark_channel",
     "AMBIENT_EXTENT_M",
+    "CLOUD_DOME_FACE_PX",
     "FRAME_BUDGET_BYTES",
     "AmbientHorizon",
     "AmbientLightMap",
@@ -43,6 +44,7 @@ __all__ = [
     "render_photo8",
     "weather_optics",
     "weather_sun",
+    "CloudDome",
     "CloudField",
     "cloud_path_traced",
     "LAYERS",
@@ -93,6 +95,7 @@ AIRLIGHT_TOP_FRACTION: float
 def dark_channel(image: NDArray[np.uint8] | NDArray[np.float32], patch_px: int) -> NDArray[np.float32]: ...
 def atmospheric_light_pixel(image: NDArray[np.uint8] | NDArray[np.float32], patch_px: int, top_fraction: float) -> tuple[int, int]: ...
 AMBIENT_EXTENT_M: float
+CLOUD_DOME_FACE_PX: int
 HORIZON_MAX_PAIRS: int
 FRAME_BUDGET_BYTES: int
 
@@ -171,8 +174,9 @@ class SkyModel:
         samples: int,
         spacing_name: str | None = None,
         per_azimuth: bool = False,
+        dome: CloudDome | None = None,
     ) -> AmbientLightMap: ...
-    def light_map(self, horizon: AmbientHorizon) -> AmbientLightMap: ...
+    def light_map(self, horizon: AmbientHorizon, *, dome: CloudDome | None = None) -> AmbientLightMap: ...
 
 @final
 class AmbientHorizon:
@@ -208,6 +212,8 @@ class AmbientLightMap:
     def values(self) -> NDArray[np.float32]: ...
     @property
     def solid(self) -> NDArray[np.bool_]: ...
+    @property
+    def light_colour(self) -> list[float] | None: ...
     def sample(self, points_m: NDArray[np.float32]) -> NDArray[np.float32]: ...
 
 @final
@@ -362,6 +368,16 @@ class CloudField:
     @property
     def has_sun(self) -> bool: ...
     def sun_share(self, points_m: NDArray[np.float64]) -> NDArray[np.float32]: ...
+
+@final
+class CloudDome:
+    """A cloud field over a point, seen along every direction above its horizon: what it
+    hides of the sky and the light it sends down."""
+    def __new__(
+        cls, field: CloudField, sky: SkyModel, eye_m: tuple[float, float, float], sun_relative: float, face_px: int = 32
+    ) -> CloudDome: ...
+    def sample(self, dirs: NDArray[np.float64]) -> tuple[NDArray[np.float32], NDArray[np.float32]]: ...
+    def sky_rgb(self, dirs: NDArray[np.float64]) -> NDArray[np.float32]: ...
 
 def cloud_path_traced(
     positions_m: NDArray[np.float64],

@@ -33,6 +33,7 @@ from skyfall import _core
 from skyfall._validate import all_in_range, choice, float_array, in_range, integer, integer_in_range
 
 __all__ = [
+    "DOME_FACE_PX",
     "FRAME_RESOLUTION",
     "KINDS",
     "PRESETS",
@@ -40,6 +41,9 @@ __all__ = [
     "drifted",
     "frame_field",
     "preset",
+    "SKY_DRIFT_STEP_M",
+    "sky_dome",
+    "sky_field",
     "AttenuationVolume",
     "Cloud",
     "attenuation_volume",
@@ -426,19 +430,48 @@ def drifted(clouds: Cloud | str, wind_m_s: Any, time_s: float) -> Cloud:
     True
     """
     cloud = preset(clouds) if isinstance(clouds, str) else _cloud(clouds)
+    return _moved(cloud, _offset(wind_m_s, time_s), _DRIFTED)
+
+
+SKY_DRIFT_STEP_M: Final = 25.0
+"""In a box scene's sky light (its ambient-light map) the clouds move in steps of this much
+drift, m: :func:`sky_field`. 25 m is under a degree for clouds a couple of kilometres away,
+below the dome's 2.8 deg pixels, and the map's light changes by well under 1 % a step."""
+_SKY_DRIFTED: weakref.WeakKeyDictionary[Cloud, tuple[tuple[float, float, float], Cloud]] = weakref.WeakKeyDictionary()
+
+
+def _offset(wind_m_s: Any, time_s: float) -> tuple[float, float, float]:
+    """The wind's drift by ``time_s``: (wind_x t, 0, wind_z t) m, checked."""
     w = float_array("wind_m_s", wind_m_s).reshape(-1)
     if w.shape != (3,):
         raise ValueError(f"wind_m_s must have 3 components, got shape {w.shape}")
     t = in_range("time_s", time_s)
-    offset = (float(w[0]) * t, 0.0, float(w[2]) * t)
+    return (float(w[0]) * t, 0.0, float(w[2]) * t)
+
+
+def _moved(cloud: Cloud, offset: tuple[float, float, float], last_of: weakref.WeakKeyDictionary[Cloud, tuple[tuple[float, float, float], Cloud]]) -> Cloud:
+    """``cloud`` translated by ``offset`` (itself for none), the last one kept per cloud in ``last_of``."""
     if offset[0] == 0.0 and offset[2] == 0.0:
         return cloud
-    last = _DRIFTED.get(cloud)
+    last = last_of.get(cloud)
     if last is not None and last[0] == offset:
         return last[1]
     moved = cloud.translated(offset)
-    _DRIFTED[cloud] = (offset, moved)
+    last_of[cloud] = (offset, moved)
     return moved
+
+
+def sky_field(clouds: Cloud | str, wind_m_s: Any, time_s: float, sun_direction: tuple[float, float, float] | None) -> Any:
+    """The clouds a box scene's sky light draws at ``time_s``: their drift rounded to
+    :data:`SKY_DRIFT_STEP_M` per axis, made ready for frames (:func:`frame_field`). In still air,
+    or at a whole step, the frame's own field; a clip in wind builds one more field (and the
+    sky light's dome and map) per step instead of per frame. Deterministic: the rounding depends
+    on the time alone."""
+    cloud = preset(clouds) if isinstance(clouds, str) else _cloud(clouds)
+    x, _, z = _offset(wind_m_s, time_s)
+    step = SKY_DRIFT_STEP_M
+    offset = (round(x / step) * step, 0.0, round(z / step) * step)
+    return frame_field(_moved(cloud, offset, _SKY_DRIFTED), sun_direction)
 
 
 def frame_field(clouds: Cloud | str, sun_direction: tuple[float, float, float] | None, resolution: int = FRAME_RESOLUTION, *, diffuse: bool = True) -> Any:
@@ -473,6 +506,67 @@ def frame_field(clouds: Cloud | str, sun_direction: tuple[float, float, float] |
         field = _core.CloudField(*cloud._args(), sun3, n, diffuse=bool(diffuse))
         cache[key] = field
     return field
+
+
+DOME_FACE_PX: Final = _core.CLOUD_DOME_FACE_PX
+"""Pixels along a side of the dome's faces (``_core.CloudDome``): about 2.8 deg a pixel. The light
+the presets' skies give the open ground is within 0.5 % of 128 px faces'
+(``benches/results/cloud_sky_light.md``)."""
+
+
+def sky_dome(weather: Any, eye_m: Any = (0.0, 0.0, 0.0), *, time_s: float = 0.0, face_px: int = DOME_FACE_PX) -> Any:
+    """The weather's clouds as the sky's light sees them from a point (``_core.CloudDome``).
+
+    The clouds (``weather.clouds``, drifted to ``time_s`` by ``weather.wind_m_s`` in steps of
+    :data:`SKY_DRIFT_STEP_M`, as frames' sky light draws them) drawn by the
+    frames' cloud pass on the five upward faces of a cube around ``eye_m``: along each
+    direction above the horizon, the share of the sky behind them that gets through (T) and the
+    light they send towards the point (S, linear RGB in the frames' relative units: a white
+    surface under the open sky is 1). A box scene's ambient-light map integrates the sky with
+    them in it, tau (L_sky T + S) + A (1 - tau) along each direction (tau and A the haze below
+    the cloud base), so the clouds dim or brighten the sky light on every surface and, through
+    the map's light at the camera, the haze's airlight. Frames build it themselves, seen from
+    the middle of the map on the ground; this function shows what they see.
+
+    Parameters
+    ----------
+    weather : skyfall.Weather
+        A weather with ``clouds``.
+    eye_m : sequence of 3 float
+        The point, m.
+    time_s : float
+        The frame's time, s (the clouds' drift).
+    face_px : int
+        Pixels along a face's side, in [4, 1024].
+
+    Returns
+    -------
+    skyfall._core.CloudDome
+        ``sample(dirs)`` (unit directions, (N, 3) float64) gives T (N,) and S (N, 3).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from skyfall import Weather, clouds
+    >>> w = Weather(sky=12, sun_elevation_deg=50.0, sun_azimuth_deg=185.0, clouds="stratocumulus")
+    >>> t, s = clouds.sky_dome(w).sample(np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]]))
+    >>> bool(t[0] < 1.0), float(t[1])  # the deck overhead; nothing below the horizon
+    (True, 1.0)
+    """
+    if weather.clouds is None:
+        raise ValueError("weather.clouds is None: a dome needs clouds (a Cloud or a preset's name)")
+    field = sky_field(weather.clouds, weather.wind_m_s, time_s, weather.sun_direction)
+    return _dome_of(field, weather, eye_m, face_px)
+
+
+def _dome_of(field: Any, weather: Any, eye_m: Any, face_px: int = DOME_FACE_PX) -> Any:
+    """``_core.CloudDome`` of a frame field (``frame_field``) under ``weather``'s sky and sun, seen
+    from ``eye_m``: what :func:`sky_dome` and the renderer's ambient-light maps build."""
+    eye = float_array("eye_m", eye_m).reshape(-1)
+    if eye.shape != (3,):
+        raise ValueError(f"eye_m must have 3 components, got shape {eye.shape}")
+    n = integer("face_px", face_px, 4, 1024)
+    return _core.CloudDome(field, weather.sky_model(), (float(eye[0]), float(eye[1]), float(eye[2])), weather.sun_relative, n)
 
 
 def path_traced(

@@ -789,6 +789,17 @@ class Renderer:
             cam = (opts.camera if opts.camera is not None else scene.camera).with_resolution(self.width, self.height)
         else:
             raise TypeError(f"scene must be a BoxScene or PhotoScene, got {type(scene).__name__}")
+        field = in_sky = None
+        if weather.clouds is not None:
+            from skyfall import clouds as _clouds
+
+            # Carried by the wind since time 0 (unchanged at time 0 or in still air).
+            moving = _clouds.drifted(weather.clouds, weather.wind_m_s, t)
+            field = _clouds.frame_field(moving, weather.sun_direction)
+            # A rendered scene's sky light has the clouds in it (their drift in whole steps); a
+            # photo keeps its own light.
+            if isinstance(scene, BoxScene):
+                in_sky = _clouds.sky_field(weather.clouds, weather.wind_m_s, t, weather.sun_direction)
         request: _Request = {
             "camera": cam,
             "weather": weather,
@@ -796,14 +807,10 @@ class Renderer:
             "time_s": t,
             "seed": opts.seed,
             "cull_threshold": opts.cull_threshold,
-            "ambient": self._ambient(scene, weather, cam, opts.ambient_spacing_m, opts.ambient_samples),
+            "ambient": self._ambient(scene, weather, cam, opts.ambient_spacing_m, opts.ambient_samples, in_sky),
         }
-        if weather.clouds is not None:
-            from skyfall import clouds as _clouds
-
-            # Carried by the wind since time 0 (unchanged at time 0 or in still air).
-            moving = _clouds.drifted(weather.clouds, weather.wind_m_s, t)
-            request["clouds"] = _clouds.frame_field(moving, weather.sun_direction)
+        if field is not None:
+            request["clouds"] = field
         if weather.snow_cover is not None:
             request["snow_cover"] = weather.snow_cover.core
         if weather.windshield is not None:
@@ -814,14 +821,25 @@ class Renderer:
 
     @staticmethod
     def _ambient(
-        scene: BoxScene | PhotoScene, weather: Weather, cam: Camera, spacing_m: float, samples: int
+        scene: BoxScene | PhotoScene,
+        weather: Weather,
+        cam: Camera,
+        spacing_m: float,
+        samples: int,
+        clouds: _core.CloudField | None = None,
     ) -> _core.AmbientLightMap:
-        """The frame's ambient-light map (a single node of open sky where nothing hides it), cached."""
+        """The frame's ambient-light map (a single node of open sky where nothing hides it), cached;
+        ``clouds`` in its sky when given."""
         s = in_range("ambient_spacing_m", spacing_m)
         n = integer("ambient_samples", samples, 4, 65_536)
         occluders = np.ascontiguousarray(scene.boxes if isinstance(scene, BoxScene) else scene.occluders, dtype=np.float32)
         if len(occluders) == 0:
-            return sky.cached_core_map(occluders, weather, np.zeros(3), np.zeros(3), s, n, "ambient_spacing_m")
+            # The clouds seen from the ground below the camera, on the same 8 m steps as a box
+            # scene's bounds (cameras a few metres apart share the map).
+            step = sky.CAMERA_BOUNDS_STEP_M
+            eye = np.round(np.asarray(cam.position_m, dtype=np.float64) / step) * step
+            eye[1] = 0.0
+            return sky.cached_core_map(occluders, weather, np.zeros(3), np.zeros(3), s, n, "ambient_spacing_m", clouds, eye)
         lo, hi = sky.default_bounds(scene, s, around_m=cam.position_m, radius_m=_particle_reach_m(weather))
         # The map spans the scene's boxes and the particles' regions around the camera: say so
         # in the user's terms when that cannot be built (the map's own message names its internals).
@@ -833,7 +851,9 @@ class Renderer:
                 f"map must span both, within [-{limit:g}, {limit:g}] m; put the camera near the boxes "
                 "(a box scene's world is the boxes' own; far from the origin, use a PhotoScene)"
             )
-        return sky.cached_core_map(occluders, weather, lo, hi, s, n, "ambient_spacing_m")
+        eye = 0.5 * (lo + hi)
+        eye[1] = lo[1]
+        return sky.cached_core_map(occluders, weather, lo, hi, s, n, "ambient_spacing_m", clouds, eye)
 
     def render_sequence(
         self,

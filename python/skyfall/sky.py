@@ -458,14 +458,19 @@ def cached_core_map(
     spacing: float,
     samples: int,
     spacing_name: str = "spacing_m",
+    clouds: _core.CloudField | None = None,
+    eye_m: Any = None,
 ) -> _core.AmbientLightMap:
-    """The core map, built once per (geometry, sky, bounds, spacing, samples) in a process;
-    errors name the spacing ``spacing_name`` (the caller's own parameter). A map under a new
-    sky over a geometry seen before is lit from the geometry's horizon, found at the second
-    sky (the same bits as a direct build)."""
+    """The core map, built once per (geometry, sky, bounds, spacing, samples, clouds) in a
+    process; errors name the spacing ``spacing_name`` (the caller's own parameter). A map under
+    a new sky over a geometry seen before is lit from the geometry's horizon, found at the
+    second sky (the same bits as a direct build). ``clouds`` (a frame's cloud field) put their
+    dome, seen from ``eye_m``, in the sky: what they hide of it and the light they send down
+    (``_core.CloudDome``)."""
     model = w.sky_model()
     sky_key = (w.sky, w.sun_elevation_deg, w.sun_azimuth_deg, w.extinction_per_m, w.cloud_base_height_m)
-    key = (boxes.tobytes(), boxes.shape, sky_key, tuple(lo), tuple(hi), spacing, samples)
+    eye = None if clouds is None else tuple(float(v) for v in np.asarray(eye_m, dtype=np.float64).reshape(3))
+    key = (boxes.tobytes(), boxes.shape, sky_key, tuple(lo), tuple(hi), spacing, samples, clouds, eye)
     with _cache_lock:
         if key in _cache:
             _cache.move_to_end(key)
@@ -480,11 +485,23 @@ def cached_core_map(
         while len(_geometries) > _CACHE_SIZE:
             _geometries.popitem(last=False)
     horizon = _horizon(boxes, lo, hi, spacing, samples, spacing_name) if swept and len(boxes) else None
+    if eye is None:
+        dome = None
+    else:
+        from skyfall.clouds import _dome_of
+
+        dome = _dome_of(clouds, w, eye)
     if horizon is not None:
-        built = model.light_map(horizon)
+        built = model.light_map(horizon, dome=dome)
     else:
         built = model.ambient_map(
-            boxes, bounds_min_m=list(lo), bounds_max_m=list(hi), spacing_m=spacing, samples=samples, spacing_name=spacing_name
+            boxes,
+            bounds_min_m=list(lo),
+            bounds_max_m=list(hi),
+            spacing_m=spacing,
+            samples=samples,
+            spacing_name=spacing_name,
+            dome=dome,
         )
     with _cache_lock:
         _cache[key] = built

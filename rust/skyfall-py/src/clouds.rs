@@ -324,3 +324,106 @@ pub fn cloud_path_traced<'py>(
         crate::alloc::from_slice::<f64, Ix1>(py, &[n], &r.std_err)?,
     ))
 }
+
+/// A dome's transmittance (N,) and light (N, 3) along N directions.
+type Sampled<'py> = (Bound<'py, PyArray1<f32>>, Bound<'py, PyArray2<f32>>);
+
+/// The clouds of a `CloudField` over a point, seen along every direction above its horizon
+/// (`skyfall_core::cloud::dome::CloudDome`): what they hide of the sky and the light they send
+/// down, which an ambient-light map built with it (`SkyModel.ambient_map(..., dome=)`) takes.
+#[pyclass(frozen, module = "skyfall._core")]
+pub struct CloudDome {
+    pub(crate) dome: std::sync::Arc<skyfall_core::cloud::dome::CloudDome>,
+    /// The sky it was built under.
+    sky: skyfall_core::sky::Sky,
+}
+
+#[pymethods]
+impl CloudDome {
+    /// The clouds of `field` under `sky` (its sun at `sun_relative`, the sun's normal
+    /// illuminance over E; 0 without a sun) seen from `eye_m` on faces `face_px` wide, the GIL
+    /// released.
+    #[new]
+    /// (`face_px`'s default is the core's `FACE_PX`, checked below; the signature needs a literal.)
+    #[pyo3(signature = (field, sky, eye_m, sun_relative, face_px=32))]
+    fn new(
+        py: Python<'_>,
+        field: &CloudField,
+        sky: &crate::sky::SkyModel,
+        eye_m: [f64; 3],
+        sun_relative: f64,
+        face_px: u32,
+    ) -> PyResult<Self> {
+        for (i, v) in eye_m.iter().enumerate() {
+            skyfall_core::ranges::POSITION_M
+                .range
+                .check("eye_m", Some(i), *v)
+                .map_err(CoreError)?;
+        }
+        skyfall_core::error::Range::closed(0.0, 1e6, "")
+            .check("sun_relative", None, sun_relative)
+            .map_err(CoreError)?;
+        let f = std::sync::Arc::clone(&field.field);
+        let light = skyfall_core::cloud::frame::CloudLight::under(&sky.sky, sun_relative as f32);
+        let dome = py
+            .detach(|| {
+                skyfall_core::cloud::dome::CloudDome::build(
+                    &f,
+                    light,
+                    glam::DVec3::from_array(eye_m),
+                    face_px,
+                )
+            })
+            .map_err(CoreError)?;
+        Ok(CloudDome {
+            dome: std::sync::Arc::new(dome),
+            sky: sky.sky,
+        })
+    }
+
+    /// The sky with these clouds in it along unit directions `dirs` (N, 3): the linear RGB
+    /// reaching the ground, relative to E/π (what the ambient-light map integrates; the sky's
+    /// own `rgb_relative(received=True)` where no cloud is).
+    fn sky_rgb<'py>(
+        &self,
+        py: Python<'py>,
+        dirs: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let d = points3(&dirs, "dirs")?;
+        let n = d.len();
+        let mut out = Vec::with_capacity(3 * n);
+        for q in d {
+            let v = q.as_vec3().normalize_or_zero();
+            let (t, s) = self.dome.sample(v);
+            let rgb = if v.y > 0.0 {
+                skyfall_core::cloud::dome::clouded_rgb(&self.sky, v, t, s)
+            } else {
+                glam::Vec3::ZERO
+            };
+            out.extend_from_slice(&rgb.to_array());
+        }
+        crate::alloc::from_slice::<f32, Ix2>(py, &[n, 3], &out)
+    }
+
+    /// The clouds' transmittance (N,) and light (N, 3) along unit directions `dirs` (N, 3).
+    fn sample<'py>(
+        &self,
+        py: Python<'py>,
+        dirs: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Sampled<'py>> {
+        let d = points3(&dirs, "dirs")?;
+        let mut t = Vec::with_capacity(d.len());
+        let mut s = Vec::with_capacity(3 * d.len());
+        for q in d {
+            let (a, b) = self.dome.sample(q.as_vec3().normalize_or_zero());
+            t.push(a);
+            s.extend_from_slice(&b.to_array());
+        }
+        Ok((
+            crate::alloc::from_slice::<f32, Ix1>(py, &[t.len()], &t)?,
+            crate::alloc::from_slice::<f32, Ix2>(py, &[t.len(), 3], &s)?,
+        ))
+    }
+}
+
+const _: () = assert!(skyfall_core::cloud::dome::FACE_PX == 32);

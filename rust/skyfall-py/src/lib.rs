@@ -26,8 +26,8 @@ use pyo3::prelude::*;
 mod _core {
     #[pymodule_export]
     use super::clouds::{
-        CloudField, attenuation_volume, check_sun_direction, cloud_particles, cloud_path_traced,
-        harris_illumination, sample_attenuation,
+        CloudDome, CloudField, attenuation_volume, check_sun_direction, cloud_particles,
+        cloud_path_traced, harris_illumination, sample_attenuation,
     };
     #[pymodule_export]
     use super::color::{apply_lut8, encode_srgb8};
@@ -101,6 +101,7 @@ mod _core {
             skyfall_core::haze::airlight::TOP_FRACTION,
         )?;
         m.add("AMBIENT_EXTENT_M", skyfall_core::sky::ambient::MAP_EXTENT_M)?;
+        m.add("CLOUD_DOME_FACE_PX", skyfall_core::cloud::dome::FACE_PX)?;
         m.add("HORIZON_MAX_PAIRS", skyfall_core::sky::horizon::MAX_PAIRS)?;
         m.add(
             "FRAME_BUDGET_BYTES",

@@ -2,6 +2,7 @@
 
 use crate::alloc::{filled, from_slice};
 use crate::boxes::box_scene;
+use crate::clouds::CloudDome;
 use crate::errors::{CoreError, invalid};
 use crate::interrupt::interruptible_core;
 use glam::Vec3;
@@ -185,7 +186,9 @@ impl SkyModel {
     /// The ambient-light map of boxes (M, 9) over `bounds_min_m`..`bounds_max_m`;
     /// `per_azimuth`: the sky tabulated along every azimuth at 512 elevations even when it is
     /// the same at every azimuth (the reference the fast reading is tested against).
-    #[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples, spacing_name=None, per_azimuth=false))]
+    /// `dome`: clouds in the sky (`CloudDome`), which the map's light then includes (its
+    /// colour too: `AmbientLightMap.light_colour`).
+    #[pyo3(signature = (boxes, *, bounds_min_m, bounds_max_m, spacing_m, samples, spacing_name=None, per_azimuth=false, dome=None))]
     #[allow(clippy::too_many_arguments)]
     fn ambient_map(
         &self,
@@ -197,23 +200,23 @@ impl SkyModel {
         samples: usize,
         spacing_name: Option<String>,
         per_azimuth: bool,
+        dome: Option<&CloudDome>,
     ) -> PyResult<AmbientLightMap> {
         let (scene, lo, hi, nodes) =
             map_grid(&boxes, bounds_min_m, bounds_max_m, spacing_m, spacing_name)?;
         let sky = &self.sky;
         let steps = (if scene.boxes.is_empty() { 0 } else { nodes } + 512) * samples as u128;
+        let dome = dome.map(|d| Arc::clone(&d.dome));
         let map = interruptible_core(py, steps, |cancel| {
-            let s = if per_azimuth {
-                SkyTable::per_azimuth(sky, samples, cancel)?
-            } else {
-                SkyTable::new_cancellable(sky, samples, cancel)?
-            };
-            if scene.boxes.is_empty() {
+            let (s, colour) = table(sky, dome.as_deref(), samples, per_azimuth, cancel)?;
+            let mut map = if scene.boxes.is_empty() {
                 // (the bounds and spacing were checked above)
-                Ok(AmbientMap::uniform(irradiance(&[], &s, Vec3::ZERO)))
+                AmbientMap::uniform(irradiance(&[], &s, Vec3::ZERO))
             } else {
-                AmbientMap::build_cancellable(&scene, &s, lo, hi, spacing_m, cancel)
-            }
+                AmbientMap::build_cancellable(&scene, &s, lo, hi, spacing_m, cancel)?
+            };
+            map.light_colour = colour;
+            Ok(map)
         })?;
         Ok(AmbientLightMap { map: Arc::new(map) })
     }
@@ -222,17 +225,47 @@ impl SkyModel {
     /// `ambient_map` builds over the same boxes, bounds, spacing and samples, bit for bit,
     /// from the sky's tables alone (what the boxes hide was found once, in the horizon; for a
     /// sky the same at every azimuth, each node's weights, made at the first such sky).
-    fn light_map(&self, py: Python<'_>, horizon: &AmbientHorizon) -> PyResult<AmbientLightMap> {
+    /// `dome`: clouds in the sky, as `ambient_map` takes them.
+    #[pyo3(signature = (horizon, *, dome=None))]
+    fn light_map(
+        &self,
+        py: Python<'_>,
+        horizon: &AmbientHorizon,
+        dome: Option<&CloudDome>,
+    ) -> PyResult<AmbientLightMap> {
         let h = Arc::clone(&horizon.inner);
         let sky = &self.sky;
         let [nx, ny, nz] = h.dims();
         let steps = (nx * ny * nz + 512) as u128 * h.azimuths() as u128 / 8;
+        let dome = dome.map(|d| Arc::clone(&d.dome));
         let map = interruptible_core(py, steps, |cancel| {
-            let t = SkyTable::new_cancellable(sky, h.azimuths(), cancel)?;
-            h.light(&t, cancel)
+            let (t, colour) = table(sky, dome.as_deref(), h.azimuths(), false, cancel)?;
+            let mut map = h.light(&t, cancel)?;
+            map.light_colour = colour;
+            Ok(map)
         })?;
         Ok(AmbientLightMap { map: Arc::new(map) })
     }
+}
+
+/// The sky's table on `samples` azimuths (`per_azimuth`: along every one even for a symmetric
+/// sky), with `dome`'s clouds in it and the colour of their light when given (and any cloud
+/// shows in the sky: a clear dome leaves the sky's own table, bit for bit).
+fn table(
+    sky: &Sky,
+    dome: Option<&skyfall_core::cloud::dome::CloudDome>,
+    samples: usize,
+    per_azimuth: bool,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<(SkyTable, Option<Vec3>), Error> {
+    Ok(match dome {
+        Some(d) if !d.is_clear() => {
+            let (t, c) = skyfall_core::cloud::dome::clouded_light(sky, d, samples, cancel)?;
+            (t, Some(c))
+        }
+        _ if per_azimuth => (SkyTable::per_azimuth(sky, samples, cancel)?, None),
+        _ => (SkyTable::new_cancellable(sky, samples, cancel)?, None),
+    })
 }
 
 /// What a scene fixes of its ambient-light map (see skyfall_core::sky::horizon): each open
@@ -351,6 +384,13 @@ impl AmbientLightMap {
             }
             Ok(())
         })
+    }
+
+    /// The colour of the light of the map's sky on a horizontal surface (linear RGB of
+    /// luminance 1) when the map has clouds in its sky; None: its sky's own colour.
+    #[getter]
+    fn light_colour(&self) -> Option<[f32; 3]> {
+        self.map.light_colour.map(|c| c.to_array())
     }
 
     /// Trilinear samples at points (N, 3): (N, 5) relative to E.

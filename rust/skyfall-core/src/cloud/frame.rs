@@ -171,6 +171,17 @@ pub struct CloudLight {
     pub sky: Vec3,
 }
 
+impl CloudLight {
+    /// A rendered scene's clouds under `sky`: its sun's colour at `sun_relative` (the sun's
+    /// normal illuminance over E; 0 without a sun) and its sky light's colour.
+    pub fn under(sky: &crate::sky::Sky, sun_relative: f32) -> Self {
+        CloudLight {
+            sun: sky.sun_colour * sun_relative,
+            sky: sky.light_colour,
+        }
+    }
+}
+
 /// The clouds as one frame draws them: the pass's inputs.
 #[derive(Debug, Clone, Copy)]
 pub struct CloudPass<'a> {

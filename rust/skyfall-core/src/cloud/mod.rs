@@ -24,6 +24,7 @@
 //!   back to front) and the sun's share through the clouds.
 
 pub mod billows;
+pub mod dome;
 pub mod frame;
 pub mod generate;
 pub mod harris;

@@ -167,7 +167,10 @@ impl FrameSetup {
     pub fn new(req: &FrameRequest<'_>) -> Result<Self> {
         req.validate()?;
         let w = &req.weather;
-        let sky = w.sky()?;
+        let mut sky = w.sky()?;
+        // The light of the map's sky (with clouds in it, theirs mixed in) lights the surfaces
+        // and the drops; the clouds themselves are lit by the open sky above them.
+        let map_light = req.ambient.light_colour.unwrap_or(sky.light_colour);
         // Yamamoto & Tadamura: the airlight Is = ks·E_hv, the sky illuminance at the viewpoint.
         let e_view = req.ambient.sample(req.camera.eye())[0];
         let sky_airlight = sky.airlight as f32;
@@ -194,7 +197,7 @@ impl FrameSetup {
         // The drops and flakes are lit by the sky light's colour (a photo's: its own units).
         let drops_colour = match photo_airlight {
             Some(_) => Vec3::ONE,
-            None => sky.light_colour,
+            None => map_light,
         };
         let haze = w.haze(airlight, req.camera.position_m.y)?;
         let rain = match w.rain_region(req.time_s, req.seed)? {
@@ -289,14 +292,12 @@ impl FrameSetup {
                 // clouds takes; the sun's light keeps only their luminance (Rec. 709 weights):
                 // sunlit clouds stay white under a blue sky. A box scene's clouds take the
                 // sky's colours: the sun's (orange at sunset) and the sky light's.
-                let grey = units.dot(LUMINANCE_WEIGHTS);
-                let (sun_colour, sky_colour) = match photo_airlight {
-                    Some(_) => (Vec3::ONE, Vec3::ONE),
-                    None => (sky.sun_colour, sky.light_colour),
-                };
-                let light = CloudLight {
-                    sun: sun_colour * (grey * rel),
-                    sky: units * sky_colour,
+                let light = match photo_airlight {
+                    Some(_) => CloudLight {
+                        sun: Vec3::splat(units.dot(LUMINANCE_WEIGHTS) * rel),
+                        sky: units,
+                    },
+                    None => CloudLight::under(&sky, rel),
                 };
                 Some((Arc::clone(field), light))
             }
@@ -306,6 +307,7 @@ impl FrameSetup {
             SceneData::Boxes(_) => sun.map(|(d, r)| (d, r as f32)),
             _ => None,
         };
+        sky.light_colour = map_light;
         Ok(FrameSetup {
             wet,
             clouds,

@@ -39,6 +39,10 @@ pub struct AmbientMap {
     pub values: Vec<f32>,
     /// 1 for nodes inside a box, 0 for open ones, node (i, j, k) at (i·ny + j)·nz + k.
     pub solid: Vec<u32>,
+    /// The colour of the light this map's sky gives a horizontal surface (linear RGB of
+    /// luminance 1), where it is not the sky's own [`super::Sky::light_colour`]: a sky with
+    /// clouds in it (`crate::cloud::dome`). A frame lit by the map takes it.
+    pub light_colour: Option<Vec3>,
 }
 
 /// Whether a node is inside a box (and so filled from outside).
@@ -62,6 +66,7 @@ impl AmbientMap {
             dims: [1, 1, 1],
             values: values.to_vec(),
             solid: vec![0],
+            light_colour: None,
         }
     }
 
@@ -219,6 +224,7 @@ impl AmbientMap {
             dims,
             values,
             solid,
+            light_colour: None,
         }
     }
 
@@ -445,6 +451,7 @@ mod tests {
             dims: [nx, ny, nz],
             values,
             solid: vec![0; nx * ny * nz],
+            light_colour: None,
         };
         for p in [Vec3::new(-0.3, 0.7, 2.9), Vec3::new(0.5, 1.0, 4.0), origin] {
             for (c, v) in m.sample(p).iter().enumerate() {

@@ -98,22 +98,36 @@ impl SkyTable {
     /// The table along every azimuth, or along one read at a few elevations (`coarse`: a
     /// symmetric sky).
     fn tabulate(sky: &Sky, azimuths: usize, coarse: bool, cancel: &AtomicBool) -> Result<Self> {
+        if !coarse {
+            return Self::from_radiance(|dir| sky.received(dir), azimuths, cancel);
+        }
         AZIMUTHS.check("samples", None, azimuths as f64)?;
         let dphi = TAU / azimuths as f64;
         let dirs = azimuth_dirs(azimuths);
-        if coarse {
-            let mut cum = vec![[0.0; 2]; STEPS + 1];
-            Self::cumulative(sky, dirs[0], dphi, &mut cum);
-            let at = |c: usize| profile::AT_STEP.map(|j| cum[usize::from(j)][c]);
-            let coarse = profile::Coarse {
-                up: at(0),
-                side: at(1),
-            };
-            return Ok(SkyTable {
-                dirs,
-                columns: Columns::Symmetric(Box::new(coarse)),
-            });
-        }
+        let mut cum = vec![[0.0; 2]; STEPS + 1];
+        Self::cumulative(&|dir| sky.received(dir), dirs[0], dphi, &mut cum);
+        let at = |c: usize| profile::AT_STEP.map(|j| cum[usize::from(j)][c]);
+        let coarse = profile::Coarse {
+            up: at(0),
+            side: at(1),
+        };
+        Ok(SkyTable {
+            dirs,
+            columns: Columns::Symmetric(Box::new(coarse)),
+        })
+    }
+
+    /// The table along every azimuth of any sky's radiance: `radiance(dir)` the luminance
+    /// received at the ground from unit direction `dir` (above the horizon), relative to E/π
+    /// ([`Sky::received`] for a sky; a sky with clouds in it, `crate::cloud::dome`).
+    pub fn from_radiance(
+        radiance: impl Fn(Vec3) -> f64 + Sync,
+        azimuths: usize,
+        cancel: &AtomicBool,
+    ) -> Result<Self> {
+        AZIMUTHS.check("samples", None, azimuths as f64)?;
+        let dphi = TAU / azimuths as f64;
+        let dirs = azimuth_dirs(azimuths);
         // 2 x 269 MB at 65536 azimuths: refused as OutOfMemory, not an abort.
         let n = azimuths * (STEPS + 1);
         let mut cum = crate::error::try_filled("the sky table", n, [0.0f64; 2])?;
@@ -121,7 +135,7 @@ impl SkyTable {
             .zip(&dirs)
             .for_each(|(row, &dir)| {
                 if !cancel.load(Ordering::Relaxed) {
-                    Self::cumulative(sky, dir, dphi, row);
+                    Self::cumulative(&radiance, dir, dphi, row);
                 }
             });
         check_cancel(cancel, "the sky table")?;
@@ -146,7 +160,12 @@ impl SkyTable {
 
     /// One azimuth's STEPS + 1 cumulative pairs (up, side) along horizontal direction
     /// (sx, sz), each times Δφ/π, into `cum`.
-    fn cumulative(sky: &Sky, (sx, sz): (f64, f64), dphi: f64, cum: &mut [[f64; 2]]) {
+    fn cumulative(
+        radiance: &impl Fn(Vec3) -> f64,
+        (sx, sz): (f64, f64),
+        dphi: f64,
+        cum: &mut [[f64; 2]],
+    ) {
         let h = FRAC_PI_2 / STEPS as f64;
         let (mut a, mut b) = (0.0, 0.0);
         cum[0] = [0.0, 0.0];
@@ -155,7 +174,7 @@ impl SkyTable {
                 let g = (j as f64 + x) * h;
                 let (sg, cg) = g.sin_cos();
                 let dir = Vec3::new((cg * sx) as f32, sg as f32, (cg * sz) as f32);
-                let l = sky.received(dir) * w * h * dphi / PI;
+                let l = radiance(dir) * w * h * dphi / PI;
                 a += l * sg * cg;
                 b += l * cg * cg;
             }
