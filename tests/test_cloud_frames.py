@@ -360,3 +360,31 @@ def test_clouds_drift_with_the_wind_in_a_sequence() -> None:
     step = fx * 100.0 / z
     assert centres[1] - centres[0] == pytest.approx(step, rel=0.1), (centres, step)
     assert centres[2] - centres[1] == pytest.approx(step, rel=0.1), (centres, step)
+
+
+def test_a_cumulus_has_a_dark_base_and_against_the_sun_a_silver_lining() -> None:
+    # The cumulus preset from the ground, the sun 25 deg up: lit from behind the camera its flat
+    # base is darker than its sunlit turrets (the base sees the light come through the cloud);
+    # with the sun behind it, its thin edges scatter the sun forwards (Henyey-Greenstein, g 0.86)
+    # and outshine both its core and the sky beside it. Measured: base 0.66 of the top; edges
+    # 3.4x the core and 2.0x the sky.
+    cam = Camera((0.0, 2.0, 0.0), pitch_deg=14.0, vertical_fov_deg=24.0)
+    r = Renderer(160, 90, backend="cpu")
+    luma = np.array([0.2126, 0.7152, 0.0722])
+    seen = {}
+    for az in (180.0, 0.0):
+        w = Weather(sky=12, sun_elevation_deg=25.0, sun_azimuth_deg=az, clouds="cumulus", visibility_m=30_000.0)
+        f = r.render(scenes.boxes([], camera=cam), w)
+        seen[az] = (f.layers["cloud_alpha"], f.rgb @ luma)
+    a, lum = seen[180.0]
+    core = a > 0.98
+    rows = np.nonzero(core.any(axis=1))[0]
+    sixth = max(1, len(rows) // 6)
+    top, base = rows[:sixth], rows[-sixth:]
+    assert len(rows) > 20
+    assert np.median(lum[base][core[base]]) < 0.8 * np.median(lum[top][core[top]])
+    a, lum = seen[0.0]
+    edge, core, sky = (a > 0.05) & (a < 0.5), a > 0.98, a < 0.01
+    assert edge.sum() > 50 and core.sum() > 200
+    assert np.median(lum[edge]) > 2.0 * np.median(lum[core])
+    assert np.median(lum[edge]) > 1.3 * np.median(lum[sky])

@@ -159,3 +159,50 @@ def test_falling_rain_takes_the_sky_lights_colour() -> None:
         np.testing.assert_allclose(light / light[1], want / want[1], atol=0.02 if kw else 1e-4)
         if kw:
             assert light[0] / light[1] < 0.9  # bluer than grey, measurably
+
+
+def _air_extinction_per_m(visibility_m: float, nm: float) -> float:
+    """Clear air's extinction at ``nm``: Koschmieder's 3.912/V at 550 nm, of it Rayleigh's
+    1.16e-2 /km at sea level (Bucholtz 1995) as lambda^-4.08, the rest aerosol as lambda^-1.3
+    (Angstrom)."""
+    sigma = 3.912 / visibility_m
+    rayleigh = min(1.16e-5, sigma)
+    x = nm / 550.0
+    return rayleigh * x**-4.08 + (sigma - rayleigh) * x**-1.3
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_clear_air_turns_distance_blue_grey_at_each_channels_wavelength(backend: str) -> None:
+    # A black ground in clear air (V = 2 km) under a sky with a sun: each ground pixel is the
+    # airlight alone, A_c (1 - t_c). The transmittance layer is the green's (550 nm); the red
+    # and blue channels see the air's extinction at the sRGB primaries' dominant wavelengths
+    # (colour-science), so A_c = pixel_c / (1 - t_c) is one colour at every distance with the
+    # right t_c, and not with the green's.
+    cs = colour.RGB_COLOURSPACES["sRGB"]
+    nm = [float(colour.dominant_wavelength(p, cs.whitepoint)[0]) for p in cs.primaries]
+    visibility = 2000.0
+    sigma = np.array([_air_extinction_per_m(visibility, nm[0]), 3.912 / visibility, _air_extinction_per_m(visibility, nm[2])])
+    assert sigma[2] / sigma[1] > 1.2 and sigma[0] / sigma[1] < 0.9
+    cam = Camera((0.0, 1.6, 0.0), pitch_deg=-4.0, vertical_fov_deg=12.0, width=48, height=40)
+    ground = scenes.boxes([], ground_albedo=(0.0, 0.0, 0.0), camera=cam)
+    w = Weather(sky=12, sun_elevation_deg=40.0, sun_azimuth_deg=150.0, visibility_m=visibility)
+    f = Renderer(48, 40, backend=backend).render(ground, w, layers=("transmittance",))
+    t_green = f.layers["transmittance"]
+    seen = np.isfinite(f.depth_m) & (t_green > 0.05) & (t_green < 0.97)
+    assert seen.sum() > 300 and np.ptp(t_green[seen]) > 0.4  # from about 15 m to 400 m
+    path = -np.log(t_green[seen].astype(np.float64)) / sigma[1]
+    t = np.exp(-path[:, None] * sigma[None, :])
+    airlight = f.rgb[seen] / (1.0 - t)
+    spread = np.ptp(airlight, axis=0) / airlight.mean(axis=0)
+    assert spread.max() < 2e-3, spread
+    grey = f.rgb[seen][:, 2] / (1.0 - t_green[seen])
+    assert np.ptp(grey) / grey.mean() > 0.05  # the green's transmittance would not do for blue
+    # The airlight is the horizon's colour (x near 0.30 at midday); distance on the way to it is
+    # bluer: at a few hundred metres the haze's own chromaticity lies below the airlight's in x.
+    near = np.argmin(np.abs(path - 300.0))
+    x_air, x_near = xy(airlight.mean(axis=0))[0], xy(f.rgb[seen][near])[0]
+    assert x_near < x_air - 0.005, (x_near, x_air)
+    # An overcast sky's haze stays grey: one transmittance for every channel.
+    o = Renderer(48, 40, backend=backend).render(ground, Weather(visibility_m=visibility), layers=("transmittance",))
+    ratio = o.rgb[seen] / (1.0 - o.layers["transmittance"][seen])[:, None]
+    assert np.ptp(ratio) / ratio.mean() < 1e-4

@@ -214,7 +214,9 @@ class Frame:
     depth_m : ndarray of float32, shape (H, W)
         Depth along the optical axis, m; ``inf`` for sky.
     layers : dict of str to ndarray of float32, shape (H, W)
-        Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d)); rain adds
+        Ground-truth layers: the haze pass adds ``transmittance`` (e^(-sigma d), sigma at 550 nm:
+        the green channel's; under a sky with a sun a box scene's clear air dims red less and
+        blue more, at their own wavelengths); rain adds
         ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
         nearest visible streak, inf where none); a snow cover (``Weather(snow_cover=...)``) adds
         ``snow_depth_m`` (the depth of snow on each pixel's surface, 0 where none); clouds

@@ -13,7 +13,7 @@ const SOURCE: &str = include_str!("shaders/haze.wgsl");
 pub struct HazePass(ComputePass);
 
 impl FramePass for HazePass {
-    /// The haze: extinction and airlight.
+    /// The haze: extinction (per channel) and airlight.
     type Input<'i> = &'i Haze;
 
     fn new(ctx: &GpuContext) -> Self {
@@ -36,7 +36,12 @@ impl FramePass for HazePass {
         let transmittance = t.layer(Layer::Transmittance)?;
         let a = haze.airlight;
         let block = HazeUniform {
-            params: [haze.extinction_per_m, haze.sky_ceiling_m, 0.0, 0.0],
+            params: [
+                haze.extinction_per_m,
+                haze.sky_ceiling_m,
+                haze.spectral[0],
+                haze.spectral[1],
+            ],
             airlight: [a[0], a[1], a[2], 0.0],
             drawn: [
                 haze.drawn[0].radius_m,

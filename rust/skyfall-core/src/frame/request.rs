@@ -8,7 +8,7 @@ use super::stages::Frame;
 use crate::cloud::frame::{CloudField, CloudLight, CloudPass, VolumeView};
 use crate::error::Result;
 use crate::error::{Error, Param};
-use crate::haze::Haze;
+use crate::haze::{Haze, clear_air_spectral};
 use crate::rain::drops::RainRegion;
 use crate::rain::streaks::{RainFrame, RainShading};
 use crate::ranges;
@@ -200,6 +200,15 @@ impl FrameSetup {
             None => map_light,
         };
         let haze = w.haze(airlight, req.camera.position_m.y)?;
+        // Under a sky in colour a box scene's clear air scatters each channel at its own
+        // wavelength (Rayleigh and aerosol): distance turns blue-grey. A photo's haze and an
+        // overcast sky's stay grey.
+        let haze = match haze {
+            Some(h) if photo_airlight.is_none() && sky.colour.is_some() => {
+                Some(h.with_spectral(clear_air_spectral(w.air_extinction_per_m()))?)
+            }
+            h => h,
+        };
         let rain = match w.rain_region(req.time_s, req.seed)? {
             Some(region) => {
                 let shading = RainShading {

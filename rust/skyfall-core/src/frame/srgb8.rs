@@ -193,6 +193,9 @@ pub fn render_photo8_with(
         .map(|_| std::array::from_fn(|k| chunks[k].as_mut().and_then(Iterator::next)))
         .collect();
     let air = haze.map_or([0.0; 3], |h| h.airlight);
+    // (a photo's haze is grey: only a box scene's clear air has a colour, and box scenes take
+    // the banded path)
+    debug_assert!(haze.is_none_or(|h| h.spectral == [0.0; 2]));
     // Grey light everywhere (the sky's; coloured lamps aside): Q's three channels are equal.
     let grey = streaks.iter().all(|s| {
         let l = s.light();

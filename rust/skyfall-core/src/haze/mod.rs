@@ -54,6 +54,48 @@ pub struct Haze {
     /// The rain's and the snow's drawn shares (zero where a frame draws none): along a ray of
     /// length d the optical depth is σ·d − Σ s·min(d, r).
     pub drawn: [Drawn; 2],
+    /// The red and the blue channels' extinction beyond σ (the green's, at the visibility's
+    /// 550 nm), 1/m: the clear air's Rayleigh and aerosol extinction at each channel's
+    /// wavelength ([`clear_air_spectral`]), so distance turns blue-grey before it turns to the
+    /// airlight; surfaces only (a sky pixel's colour is the sky model's). Zero (a grey haze)
+    /// unless set by [`Haze::with_spectral`].
+    pub spectral: [f32; 2],
+}
+
+/// Rayleigh extinction of air at 550 nm at sea level, 1/m (Bucholtz 1995, *Rayleigh-scattering
+/// calculations for the terrestrial atmosphere*, the US standard atmosphere at 288 K:
+/// 1.16e-2 /km).
+pub const RAYLEIGH_550_PER_M: f64 = 1.16e-5;
+/// Rayleigh extinction's wavelength exponent in the visible (Bucholtz 1995: λ^−4.08).
+pub const RAYLEIGH_EXPONENT: f64 = 4.08;
+/// The aerosol's Ångström exponent (Ångström's continental mean, 1.3).
+pub const ANGSTROM_EXPONENT: f64 = 1.3;
+/// The wavelengths the red and blue channels stand for, nm: the dominant wavelengths of the
+/// Rec. 709 red and blue primaries against D65 (611 and 464 nm, as colour-science's
+/// `dominant_wavelength` gives them on the CIE 1931 table at 1 nm; the green's, 549 nm, is
+/// taken as the visibility's 550 nm).
+pub const CHANNEL_NM: [f64; 2] = [611.0, 464.0];
+
+/// The clear air's extinction at the red and blue channels' wavelengths less its extinction at
+/// 550 nm, 1/m, for an air of extinction `air_per_m` at 550 nm (Koschmieder's 3.912/V): its
+/// Rayleigh share β_R ([`RAYLEIGH_550_PER_M`], at most the whole) scales as λ^−4.08, the rest,
+/// the aerosol's, as λ^−1.3. At V = 20 km the blue channel's extinction is 1.28 times the
+/// green's and the red's 0.87 times.
+pub fn clear_air_spectral(air_per_m: f64) -> [f32; 2] {
+    let rayleigh = RAYLEIGH_550_PER_M.min(air_per_m.max(0.0));
+    let aerosol = air_per_m.max(0.0) - rayleigh;
+    CHANNEL_NM.map(|nm| {
+        let x = nm / 550.0;
+        (rayleigh * x.powf(-RAYLEIGH_EXPONENT) + aerosol * x.powf(-ANGSTROM_EXPONENT) - air_per_m)
+            as f32
+    })
+}
+
+/// A channel's transmittance along a finite path of `path_m` whose green optical depth is
+/// `tau`, the channel's extinction `extra_per_m` beyond the green's: e^(−(τ + Δ·d)).
+#[inline(always)]
+pub fn channel_transmittance(tau: f32, path_m: f32, extra_per_m: f32) -> f32 {
+    exp_neg(-(tau + extra_per_m * path_m).max(0.0))
 }
 
 impl Haze {
@@ -78,7 +120,29 @@ impl Haze {
             airlight,
             sky_ceiling_m,
             drawn: [Drawn::default(); 2],
+            spectral: [0.0; 2],
         })
+    }
+
+    /// The haze with the red and blue channels' extra extinction `spectral` (1/m, each finite
+    /// and at least −σ: no channel's extinction below zero).
+    pub fn with_spectral(mut self, spectral: [f32; 2]) -> Result<Self> {
+        for (i, d) in spectral.iter().enumerate() {
+            Range::closed(-f64::from(self.extinction_per_m), 1e3, "1/m").check(
+                "spectral",
+                Some(i),
+                f64::from(*d),
+            )?;
+        }
+        self.spectral = spectral;
+        Ok(self)
+    }
+
+    /// The path to a surface at depth `depth_m` (m along the axis, finite) along a ray of
+    /// squared column slope `u2` in `rays`' row: depth·|ray|.
+    #[inline(always)]
+    pub fn path_m(rays: &RowRays<'_>, u2: f32, depth_m: f32) -> f32 {
+        depth_m * (u2 + rays.v2 + 1.0).sqrt()
     }
 
     /// The haze with `drawn` left out near the eye: each share within [0, σ] and its radius
@@ -364,9 +428,49 @@ pub fn apply_row(
     t_row: &mut [f32],
 ) {
     haze.transmittance_row(rays, depth_row, t_row);
-    for (px, &t) in rgb_row.chunks_exact_mut(3).zip(t_row.iter()) {
-        for (v, a) in px.iter_mut().zip(haze.airlight) {
-            *v = blend(*v, t, a, 1.0);
+    if haze.spectral == [0.0; 2] {
+        for (px, &t) in rgb_row.chunks_exact_mut(3).zip(t_row.iter()) {
+            for (v, a) in px.iter_mut().zip(haze.airlight) {
+                *v = blend(*v, t, a, 1.0);
+            }
+        }
+        return;
+    }
+    // Red and blue through the air's extinction at their own wavelengths (the green, the
+    // layer's, at 550 nm). A sky pixel keeps one transmittance: the sky model's colour already
+    // holds what the air along its path scatters (Hosek & Wilkie's), and the sky pixels stay
+    // the sky the ambient-light map integrates (`crate::sky::Sky::received_rgb`).
+    let [dr, db] = haze.spectral;
+    // In runs of 64 pixels: the channels' transmittances branch-free (a sky pixel's selected
+    // back to the green's), so the loop vectorises; then the blend.
+    const RUN: usize = 64;
+    let mut red = [0.0f32; RUN];
+    let mut blue = [0.0f32; RUN];
+    for (((px, t), depth), u2) in rgb_row
+        .chunks_mut(3 * RUN)
+        .zip(t_row.chunks(RUN))
+        .zip(depth_row.chunks(RUN))
+        .zip(rays.u2.chunks(RUN))
+    {
+        for ((((r, b), &t), &d), &u2) in red.iter_mut().zip(&mut blue).zip(t).zip(depth).zip(u2) {
+            let path = Haze::path_m(rays, u2, d);
+            let tau = haze.optical_depth(path);
+            let sky = d == f32::INFINITY;
+            *r = if sky {
+                t
+            } else {
+                channel_transmittance(tau, path, dr)
+            };
+            *b = if sky {
+                t
+            } else {
+                channel_transmittance(tau, path, db)
+            };
+        }
+        for (((px, &t), &r), &b) in px.chunks_exact_mut(3).zip(t).zip(&red).zip(&blue) {
+            for ((v, a), t) in px.iter_mut().zip(haze.airlight).zip([r, t, b]) {
+                *v = blend(*v, t, a, 1.0);
+            }
         }
     }
 }
@@ -496,6 +600,67 @@ mod tests {
         assert!((t[0] - (-0.1f32 * 10.0 * 2f32.sqrt()).exp()).abs() < 1e-6);
         assert!((t[1] - (-1.0f32).exp()).abs() < 1e-6);
         assert!((rgb[3] - (1.0 - (-1.0f32).exp())).abs() < 1e-6);
+    }
+
+    #[test]
+    fn clear_air_turns_distance_blue_grey_channel_by_channel() {
+        // σ at 550 nm 0.004 /m (V ≈ 1 km), of it 1.16e-5 Rayleigh: the red's and the blue's σ
+        // are β_R (λ/550)^−4.08 + (σ − β_R)(λ/550)^−1.3, written out here in f64.
+        let sigma = 0.004f64;
+        let at = |nm: f64| {
+            let x = nm / 550.0;
+            1.16e-5 * x.powf(-4.08) + (sigma - 1.16e-5) * x.powf(-1.3)
+        };
+        let spectral = clear_air_spectral(sigma);
+        assert!((f64::from(spectral[0]) - (at(611.0) - sigma)).abs() < 1e-9);
+        assert!((f64::from(spectral[1]) - (at(464.0) - sigma)).abs() < 1e-9);
+        assert!(spectral[0] < 0.0 && spectral[1] > 0.0);
+        // Beyond Rayleigh's own visibility (337 km) the air is Rayleigh's alone.
+        let thin = clear_air_spectral(5e-6);
+        let ratio = (5e-6 + f64::from(thin[1])) / 5e-6;
+        assert!(
+            (ratio - (464.0f64 / 550.0).powf(-4.08)).abs() < 1e-5,
+            "{ratio}"
+        );
+        // A row: pixels 10 m to 2 km deep, a sky pixel without a ceiling (one transmittance:
+        // the sky's colour is the sky model's).
+        let cam = Camera::new(4, 1, [1.0, 1.0, 2.0, 0.5], Vec3::ZERO, Mat3::IDENTITY).unwrap();
+        let air = [0.6f32, 0.7, 0.9];
+        let h = Haze::new(sigma as f32, air, f32::INFINITY)
+            .unwrap()
+            .with_spectral(spectral)
+            .unwrap();
+        let depth = [10.0f32, 300.0, 2000.0, f32::INFINITY];
+        let colour = [0.2f32, 0.3, 0.1];
+        let mut rgb: Vec<f32> = colour.repeat(4);
+        let mut t = vec![0.0; 4];
+        let rays = ViewRays::new(&cam);
+        apply_row(&h, &rays.row(0, 0..4), &mut rgb, &depth, &mut t);
+        // The sky pixel (no ceiling) is the airlight in every channel.
+        for c in 0..3 {
+            assert_eq!(rgb[9 + c], air[c]);
+        }
+        for (i, &d) in depth.iter().enumerate().take(3) {
+            let u = (i as f64 + 0.5 - 2.0) / 1.0;
+            let path = f64::from(d) * (u * u + 1.0).sqrt();
+            for (c, nm) in [(0usize, 611.0), (1, 550.0), (2, 464.0)] {
+                let sig = if c == 1 { sigma } else { at(nm) };
+                let tc = (-sig * path).exp();
+                let want = f64::from(colour[c]) * tc + f64::from(air[c]) * (1.0 - tc);
+                let got = f64::from(rgb[3 * i + c]);
+                assert!(
+                    (got - want).abs() < 2e-6,
+                    "pixel {i} channel {c}: {got} vs {want}"
+                );
+            }
+            assert!((f64::from(t[i]) - (-sigma * path).exp()).abs() < 1e-6);
+        }
+        // Blue fades first: at 10 m the pixel has moved a quarter further towards the airlight
+        // in blue than in green, and less in red.
+        let moved = |c: usize| (rgb[c] - colour[c]) / (air[c] - colour[c]);
+        assert!(moved(2) > 1.2 * moved(1) && moved(0) < moved(1));
+        // A negative extinction beyond the green's own is refused.
+        assert!(h.with_spectral([-0.005, 0.0]).is_err());
     }
 
     #[test]

@@ -1,7 +1,8 @@
 // Rain haze along view rays. CPU reference: skyfall_core::haze. Prepended with common.wgsl.
 
 struct Haze {
-    params: vec4<f32>,   // extinction (1/m), cloud base above the eye (m, may be inf), unused x2
+    params: vec4<f32>,   // extinction (1/m), cloud base above the eye (m, may be inf), the red's
+                         // and the blue's extinction beyond it (1/m; 0: a grey haze)
     airlight: vec4<f32>, // linear RGB
     drawn: vec4<f32>,    // the rain's radius (m) and drawn share (1/m), the snow's
 }
@@ -25,25 +26,33 @@ fn path_to_ceiling(s_in: f32, ceiling: f32) -> f32 {
     return root - r * s;
 }
 
-// Transmittance along the ray of a pixel at depth `depth_m`, whose ray has length `per_depth`
-// and world-y component `rise` per metre of depth. A sky pixel (depth inf) is hazed up to the
-// cloud base, `params.y` above the eye (skyfall_core::haze::Haze::transmittance_row).
-fn haze_transmittance(depth_m: f32, per_depth: f32, rise: f32) -> f32 {
+// Transmittances (red, green, blue) along the ray of a pixel at depth `depth_m`, whose ray has
+// length `per_depth` and world-y component `rise` per metre of depth. A sky pixel (depth inf) is
+// hazed up to the cloud base, `params.y` above the eye (skyfall_core::haze::Haze::
+// transmittance_row), one transmittance for its three channels; a surface's red and blue
+// channels see `params.z` and `params.w` more extinction (skyfall_core::haze::apply_row).
+fn haze_transmittance(depth_m: f32, per_depth: f32, rise: f32) -> vec3<f32> {
     let sigma = haze.params.x;
     if sigma <= 0.0 {
-        return 1.0;
+        return vec3<f32>(1.0);
     }
     var path = depth_m * per_depth;
-    if depth_m > 3.0e38 {
+    let sky = depth_m > 3.0e38;
+    if sky {
         if haze.params.y > 3.0e38 {
-            return 0.0;
+            return vec3<f32>(0.0);
         }
         path = path_to_ceiling(rise / per_depth, haze.params.y);
     }
     // The particles drawn near the eye carry their share of σ there
     // (skyfall_core::haze::Haze::optical_depth).
     let drawn = haze.drawn.y * min(path, haze.drawn.x) + haze.drawn.w * min(path, haze.drawn.z);
-    return exp(-max(sigma * path - drawn, 0.0));
+    let tau = max(sigma * path - drawn, 0.0);
+    if sky {
+        // (the sky model's colour holds what the air along its path scatters)
+        return vec3<f32>(exp(-tau));
+    }
+    return exp(-max(vec3<f32>(tau + haze.params.z * path, tau, tau + haze.params.w * path), vec3<f32>(0.0)));
 }
 
 @compute @workgroup_size(8, 8)
@@ -55,8 +64,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.y * w + gid.x;
     let rise = ray_direction(cam, gid.x, gid.y).y;
     let t = haze_transmittance(depth[i], distance_per_depth(cam, gid.x, gid.y), rise);
-    transmittance[i] = t;
+    transmittance[i] = t.y;
     for (var k = 0u; k < 3u; k++) {
-        rgb[3u * i + k] = rgb[3u * i + k] * t + haze.airlight[k] * (1.0 - t);
+        rgb[3u * i + k] = rgb[3u * i + k] * t[k] + haze.airlight[k] * (1.0 - t[k]);
     }
 }
