@@ -153,3 +153,19 @@ def test_the_sky_light_moves_its_clouds_in_whole_steps_of_drift():
     assert clouds.sky_field(cloud, wind, 1.4, sun) is stepped  # (14, 0, -5.6)
     with pytest.raises(ValueError, match="weather.clouds is None"):
         clouds.sky_dome(Weather())
+
+
+def test_a_photo_keeps_its_own_light_under_clouds():
+    # Clouds over a photo draw in its sky, but the photo's light is its own: the map its frame
+    # is lit by (the drops', the haze's) has no clouds in its sky.
+    from skyfall import PhotoScene
+
+    image = np.full((20, 32, 3), 0.4, np.float32)
+    depth = np.full((20, 32), 15.0, np.float32)
+    depth[:8] = np.inf
+    photo = PhotoScene(image, depth, camera=Camera(width=32, height=20), encoding="linear")
+    r = Renderer(32, 20, backend="cpu")
+    with_clouds = r._request(photo, DECK)
+    without = r._request(photo, Weather(sky=12, sun_elevation_deg=50.0, sun_azimuth_deg=185.0, visibility_m=20_000.0))
+    assert "clouds" in with_clouds and with_clouds["ambient"].light_colour is None
+    np.testing.assert_array_equal(with_clouds["ambient"].values, without["ambient"].values)
