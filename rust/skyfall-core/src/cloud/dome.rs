@@ -29,8 +29,9 @@ use super::frame::{CloudField, CloudLight, CloudPass, CloudSplats};
 use crate::error::{Range, Result, try_filled};
 use crate::scene::camera::Camera;
 use crate::sky::Sky;
-use crate::sky::colour::{LUMA, chroma_of};
+use crate::sky::colour::LUMA;
 use crate::sky::illuminance::SkyTable;
+use crate::sky::light_colour_of;
 
 /// Pixels along a face's side (the zenith's face; the sides' are half as tall): about 2.8° a
 /// pixel. The light the `broken` and `stratocumulus` presets' skies give the open ground's
@@ -181,9 +182,8 @@ pub fn clouded_rgb(sky: &Sky, dir: Vec3, t: f32, s: Vec3) -> Vec3 {
 }
 
 /// The ambient-light map's sky table of `sky` with `dome`'s clouds in it (on `azimuths`
-/// sectors, along every one), and the colour of its light on a horizontal surface (linear RGB
-/// of luminance 1: a midpoint rule, 48 steps in sin(elevation) by 96 azimuths, as
-/// [`Sky::light_colour`] is made). A caller whose dome [`CloudDome::is_clear`] keeps the sky's
+/// sectors, along every one), and the colour of its light on a horizontal surface
+/// ([`light_colour_of`], as [`Sky::light_colour`] is made). A caller whose dome [`CloudDome::is_clear`] keeps the sky's
 /// own table instead, so that clouds nowhere in the sky change no bit of a frame.
 pub fn clouded_light(
     sky: &Sky,
@@ -196,19 +196,11 @@ pub fn clouded_light(
         clouded(sky, dir, t, s)
     };
     let table = SkyTable::from_radiance(radiance, azimuths, cancel)?;
-    let (n_mu, n_az) = (48, 96);
-    let mut sum = Vec3::ZERO;
-    for i in 0..n_mu {
-        let mu = (i as f64 + 0.5) / n_mu as f64;
-        let cos_el = (1.0 - mu * mu).sqrt();
-        for k in 0..n_az {
-            let (sin, cos) = ((k as f64 + 0.5) * std::f64::consts::TAU / n_az as f64).sin_cos();
-            let dir = Vec3::new((cos_el * sin) as f32, mu as f32, (-cos_el * cos) as f32);
-            let (t, s) = dome.sample(dir);
-            sum += clouded_rgb(sky, dir, t, s) * mu as f32;
-        }
-    }
-    Ok((table, chroma_of(sum, 1.0)))
+    let colour = light_colour_of(|dir| {
+        let (t, s) = dome.sample(dir);
+        clouded_rgb(sky, dir, t, s)
+    });
+    Ok((table, colour))
 }
 
 #[cfg(test)]

@@ -92,15 +92,15 @@ impl SkyTable {
     /// in parallel). A sky the same
     /// at every azimuth ([`super::cie::SkyKind::symmetric`]) is tabulated along one.
     pub fn new_cancellable(sky: &Sky, azimuths: usize, cancel: &AtomicBool) -> Result<Self> {
-        Self::tabulate(sky, azimuths, sky.kind.symmetric(), cancel)
+        if sky.kind.symmetric() {
+            Self::symmetric(sky, azimuths)
+        } else {
+            Self::from_radiance(|dir| sky.received(dir), azimuths, cancel)
+        }
     }
 
-    /// The table along every azimuth, or along one read at a few elevations (`coarse`: a
-    /// symmetric sky).
-    fn tabulate(sky: &Sky, azimuths: usize, coarse: bool, cancel: &AtomicBool) -> Result<Self> {
-        if !coarse {
-            return Self::from_radiance(|dir| sky.received(dir), azimuths, cancel);
-        }
+    /// A sky the same at every azimuth, tabulated along one and read at a few elevations.
+    fn symmetric(sky: &Sky, azimuths: usize) -> Result<Self> {
         AZIMUTHS.check("samples", None, azimuths as f64)?;
         let dphi = TAU / azimuths as f64;
         let dirs = azimuth_dirs(azimuths);
@@ -155,7 +155,7 @@ impl SkyTable {
     /// [`SkyTable::new`] along every azimuth at 512 elevation steps even for a symmetric sky:
     /// the reference its reading at a few elevations ([`super::profile`]) is measured against.
     pub fn per_azimuth(sky: &Sky, azimuths: usize, cancel: &AtomicBool) -> Result<Self> {
-        Self::tabulate(sky, azimuths, false, cancel)
+        Self::from_radiance(|dir| sky.received(dir), azimuths, cancel)
     }
 
     /// One azimuth's STEPS + 1 cumulative pairs (up, side) along horizontal direction

@@ -163,33 +163,17 @@ impl Sky {
         sky.airlight = sky.scale * horizon;
         if let Some(c) = colour {
             sky.horizon_colour = horizon_colour(kind, &c);
-            sky.light_colour = sky.sky_light_colour(&c);
+            sky.light_colour = sky.sky_light_colour();
             let elevation_deg = f64::from(c.sun.y.clamp(0.0, 1.0).asin().to_degrees());
             sky.sun_colour = sun_colour(elevation_deg, f64::from(c.turbidity));
         }
         Ok(sky)
     }
 
-    /// The colour of the light the open sky gives a horizontal surface:
-    /// ∫ (ℓτ·chroma + ℓ̄_h(1 − τ)·horizon colour) cos θ dω over its luminance (a midpoint rule,
-    /// 48 steps in sin(elevation), 96 in azimuth: a tint, not a normalisation).
-    fn sky_light_colour(&self, c: &SkyColour) -> Vec3 {
-        let (n_mu, n_az) = (48, 96);
-        let mut sum = Vec3::ZERO;
-        for i in 0..n_mu {
-            let mu = (i as f64 + 0.5) / n_mu as f64;
-            let cos_el = (1.0 - mu * mu).sqrt();
-            let tau = self.transmittance(mu);
-            let mut ring = Vec3::ZERO;
-            for k in 0..n_az {
-                let (sin, cos) = ((k as f64 + 0.5) * TAU / n_az as f64).sin_cos();
-                let dir = Vec3::new((cos_el * sin) as f32, mu as f32, (-cos_el * cos) as f32);
-                ring += c.chroma(dir) * (self.kind.relative_to_zenith(dir) * tau) as f32;
-            }
-            sum += (ring / n_az as f32 + self.horizon_colour * (self.horizon * (1.0 - tau)) as f32)
-                * mu as f32;
-        }
-        chroma_of(sum, 1.0)
+    /// The colour of the light the open sky gives a horizontal surface: [`light_colour_of`] its
+    /// received light ([`Sky::received_rgb`]: ℓτ·chroma + ℓ̄_h(1 − τ) in the horizon's colour).
+    fn sky_light_colour(&self) -> Vec3 {
+        light_colour_of(|dir| self.received_rgb(dir))
     }
 
     /// τ(μ) = e^(−σ d(μ)), the cloud base's transmittance down to the ground along a direction
@@ -249,6 +233,26 @@ impl Sky {
         let tau = self.transmittance(f64::from(dir.y));
         self.scale * (self.kind.relative_to_zenith(dir) * tau + self.horizon * (1.0 - tau))
     }
+}
+
+/// The colour (linear RGB of luminance 1) of the light a horizontal surface receives from a
+/// sky sending `received_rgb(dir)` along each unit direction above the horizon: ∫ L cos θ dω
+/// by a midpoint rule, 48 steps in sin(elevation) by 96 azimuths (a tint, not a
+/// normalisation). A clear sky's ([`Sky::light_colour`]) and one with clouds in it
+/// (`crate::cloud::dome::clouded_light`).
+pub fn light_colour_of(received_rgb: impl Fn(Vec3) -> Vec3) -> Vec3 {
+    let (n_mu, n_az) = (48, 96);
+    let mut sum = Vec3::ZERO;
+    for i in 0..n_mu {
+        let mu = (i as f64 + 0.5) / n_mu as f64;
+        let cos_el = (1.0 - mu * mu).sqrt();
+        for k in 0..n_az {
+            let (sin, cos) = ((k as f64 + 0.5) * TAU / n_az as f64).sin_cos();
+            let dir = Vec3::new((cos_el * sin) as f32, mu as f32, (-cos_el * cos) as f32);
+            sum += received_rgb(dir) * mu as f32;
+        }
+    }
+    chroma_of(sum, 1.0)
 }
 
 /// The horizon's colour: Σ ℓ·chroma / Σ ℓ over [`AZIMUTHS`] azimuths at elevation 0.
