@@ -50,6 +50,9 @@ __all__ = [
     "LAYERS",
     "LAYER_NEUTRAL",
     "SNOW_ALBEDO",
+    "SNOW_COVER_FULL_M",
+    "SNOW_PATCH_M",
+    "SNOW_PATCH_BLEND",
     "MAX_DIAMETER_MM",
     "MAX_RAIN_RATE_MM_H",
     "RANGES",
@@ -122,6 +125,13 @@ LAYER_NEUTRAL: dict[str, float]
 """Each layer's value where its pass drew nothing, name -> value (rain_alpha 0, transmittance 1)."""
 SNOW_ALBEDO: float
 """Albedo of fresh snow (flakes and cover), 0.85 as float32."""
+SNOW_COVER_FULL_M: float
+"""The mean depth of lying snow from which it hides the surface beneath whole, m (0.02)."""
+SNOW_PATCH_M: float
+"""The lattice of thin snow's patches' largest features, m (0.1)."""
+SNOW_PATCH_BLEND: tuple[float, float]
+"""Pixel footprints, as shares of SNOW_PATCH_M, up to which thin snow's patches are drawn sharp
+and from which as their mean share (0.1, 0.5)."""
 
 def render_frame(
     request: _Request,

@@ -24,7 +24,10 @@ by the wind's shadows and what it carried across the catchment's sides.
 Rendering: the cover is part of the weather, ``Weather(snow_cover=cover)`` (or
 ``dataclasses.replace(weather, snow_cover=cover)``), as every effect is: the surfaces
 whiten (albedo 0.85, fresh snow) and lift by the depth lying on them, lit by the sky and the
-lamps as the surfaces are, and the frame carries ``layers["snow_depth_m"]``.
+lamps as the surfaces are, and the frame carries ``layers["snow_depth_m"]`` (the depth between
+the cells' centres, interpolated over each surface, so a drift's shading and the cover's edge
+vary smoothly). Thin snow lies in patches (:func:`coverage`, :data:`PATCH_M`): white where
+they lie, the surface beneath between them.
 """
 
 from __future__ import annotations
@@ -34,19 +37,58 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from skyfall import _core
 from skyfall._validate import float_array, in_range, integer
 from skyfall.scenes import BoxScene, PhotoScene
 from skyfall.weather import Weather
 
-__all__ = ["SNOW_ALBEDO", "SnowCover", "accumulate", "open_depth_m"]
+__all__ = ["COVER_FULL_M", "PATCH_BLEND", "PATCH_M", "SNOW_ALBEDO", "SnowCover", "accumulate", "coverage", "open_depth_m"]
 
 SNOW_ALBEDO: float = _core.SNOW_ALBEDO
 """Albedo of the drawn snow, the cover and the falling flakes alike (the core's one constant,
 0.85 as float32: fresh dry snow reflects 0.80-0.90 of visible light: Cuffey & Paterson, *The
 Physics of Glaciers*, 4th ed., 2010, Table 5.2)."""
+
+COVER_FULL_M: float = _core.SNOW_COVER_FULL_M
+"""The mean depth of lying snow from which it hides the surface beneath whole, m (2 cm). Thin
+snow lies in patches that cover the share :func:`coverage` of a surface; frames draw them
+white and the surface beneath between them."""
+
+PATCH_M: float = _core.SNOW_PATCH_M
+"""The size of thin snow's largest patches, m (10 cm; they come in three octaves, down to
+2.5 cm): a smooth random field over the ground, the same in every frame and process."""
+
+PATCH_BLEND: tuple[float, float] = _core.SNOW_PATCH_BLEND
+"""A pixel whose footprint is at most ``PATCH_BLEND[0] * PATCH_M`` shows the patches sharp
+(snow or ground); from ``PATCH_BLEND[1] * PATCH_M`` on it shows their mean share,
+:func:`coverage`; linear between. The expected share is :func:`coverage` at every distance."""
+
+
+def coverage(depth_m: ArrayLike) -> NDArray[np.float64]:
+    """The share of a surface that a mean depth of lying snow covers:
+    1 - (1 - d / :data:`COVER_FULL_M`)^2 below :data:`COVER_FULL_M`, 1 from there, 0 for no snow.
+
+    Parameters
+    ----------
+    depth_m : array_like
+        Mean depth of snow, m (a frame's ``snow_depth_m`` layer, a cover's ``depth_m``).
+
+    Returns
+    -------
+    numpy.ndarray
+        The share in [0, 1], float64, of the input's shape.
+
+    Examples
+    --------
+    >>> from skyfall import snow
+    >>> snow.coverage([0.0, 0.005, 0.01, 0.05]).round(4).tolist()
+    [0.0, 0.4375, 0.75, 1.0]
+    """
+    d = np.clip(np.asarray(depth_m, dtype=np.float64) / COVER_FULL_M, 0.0, 1.0)
+    return 1.0 - (1.0 - d) ** 2
+
 
 MARGIN_M = 10.0
 """How far a box scene's default grid reaches beyond its boxes and its camera, m."""

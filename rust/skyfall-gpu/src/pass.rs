@@ -70,6 +70,22 @@ pub fn shared_constants() -> String {
             "RELIEF_QUANTILES",
             skyfall_core::wet::puddles::RELIEF_QUANTILES,
         ),
+        f(
+            "SNOW_PATCH_M",
+            skyfall_core::snow::cover::look::SNOW_PATCH_M,
+        ),
+        f(
+            "SNOW_SHARP_BELOW",
+            skyfall_core::snow::cover::look::SHARP_BELOW,
+        ),
+        f(
+            "SNOW_BLEND_FROM",
+            skyfall_core::snow::cover::look::BLEND_FROM,
+        ),
+        f(
+            "SNOW_PATCH_OFFSET",
+            skyfall_core::snow::cover::look::PATCH_OFFSET,
+        ),
     ]
     .concat()
 }

@@ -213,23 +213,31 @@ impl SceneRaycastPass {
         // does not read them).
         let (snow_info, cells) = match light.snow {
             Some(r) => {
-                let (g, dims, base, depth) = r.gpu_grid();
+                let grid = r.gpu_grid();
+                let (g, dims) = (grid.params, grid.dims);
                 f.ctx
-                    .check_buffer("the snow cover", (base.len() * 8) as u64)?;
-                let cells: Vec<[f32; 2]> = base.iter().zip(depth).map(|(&b, &d)| [b, d]).collect();
+                    .check_buffer("the snow cover", (grid.base.len() * 16) as u64)?;
+                let cells: Vec<[f32; 4]> = grid
+                    .base
+                    .iter()
+                    .zip(grid.depth)
+                    .zip(grid.slope)
+                    .map(|((&b, &d), &[gx, gz])| [b, d, gx, gz])
+                    .collect();
                 let info = SnowUniform {
                     grid: [g[0], g[1], g[2], r.open_depth_m()],
                     range: [
                         g[3],
                         g[4],
                         skyfall_core::snow::SNOW_ALBEDO,
-                        skyfall_core::snow::cover::render::COVER_EFOLD_M,
+                        skyfall_core::snow::cover::look::COVER_FULL_M,
                     ],
                     dims: [dims[0], dims[1], 0, 0],
+                    relief: crate::uniforms::relief_quantiles(),
                 };
                 (info, cells)
             }
-            None => (SnowUniform::default(), vec![[0.0f32; 2]]),
+            None => (SnowUniform::default(), vec![[0.0f32; 4]]),
         };
         let snow_dummy = f.target("snow_dummy", 1);
         let snow_out = match light.snow {

@@ -90,10 +90,12 @@ pub struct SceneUniform {
 pub struct SnowUniform {
     /// Origin x, origin z (m), cell side (m), depth on open ground (m).
     pub grid: [f32; 4],
-    /// Lowest base and highest top of the cells with snow (m), albedo, coverage e-fold (m).
+    /// Lowest base and highest top of the cells with snow (m), albedo, depth of whole coverage (m).
     pub range: [f32; 4],
     /// Cells along x and z.
     pub dims: [u32; 4],
+    /// The relief noise's quantiles (the snow's patches, `skyfall_core::snow::cover::look`).
+    pub relief: [[f32; 4]; 9],
 }
 
 /// `SceneBox` in `shaders/common.wgsl` (a storage array's element).

@@ -155,6 +155,22 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
             "RELIEF_QUANTILES",
             skyfall_core::wet::puddles::RELIEF_QUANTILES as f64,
         ),
+        (
+            "SNOW_PATCH_M",
+            bits(skyfall_core::snow::cover::look::SNOW_PATCH_M),
+        ),
+        (
+            "SNOW_SHARP_BELOW",
+            bits(skyfall_core::snow::cover::look::SHARP_BELOW),
+        ),
+        (
+            "SNOW_BLEND_FROM",
+            bits(skyfall_core::snow::cover::look::BLEND_FROM),
+        ),
+        (
+            "SNOW_PATCH_OFFSET",
+            bits(skyfall_core::snow::cover::look::PATCH_OFFSET),
+        ),
     ];
     assert_eq!(seen.len(), want.len(), "{seen:?}");
     for (name, v) in want {

@@ -68,6 +68,12 @@ mod _core {
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         m.add("SNOW_ALBEDO", skyfall_core::snow::SNOW_ALBEDO)?;
+        {
+            use skyfall_core::snow::cover::look;
+            m.add("SNOW_COVER_FULL_M", look::COVER_FULL_M)?;
+            m.add("SNOW_PATCH_M", look::SNOW_PATCH_M)?;
+            m.add("SNOW_PATCH_BLEND", (look::SHARP_BELOW, look::BLEND_FROM))?;
+        }
         m.add("RANGES", super::ranges::table(m.py())?)?;
         // The frame layers, name -> meaning, in the order frames list them.
         let layers = pyo3::types::PyDict::new(m.py());

@@ -14,8 +14,9 @@ pub enum Layer {
     RainDepth,
     /// The flakes' coverage 1 − ∏(1 − aᵢ) (the particle pass, snow).
     SnowAlpha,
-    /// The depth of snow lying on the visible surface, m; 0 where none (the scene stage, with
-    /// a snow cover).
+    /// The mean depth of snow lying on the visible surface, m, interpolated between the
+    /// cover's cells; 0 where none (the scene stage, with a snow cover). Thin snow covers the
+    /// share `snow::cover::look::coverage` of the surface, in patches.
     SnowDepth,
     /// The clouds' coverage 1 − ∏(1 − αᵢ) over the sky (the cloud pass).
     CloudAlpha,
@@ -134,7 +135,9 @@ impl Layer {
             Layer::RainAlpha => "rain streak coverage 1 - prod(1 - a_i)",
             Layer::RainDepth => "depth of the nearest visible rain streak, m (inf: none)",
             Layer::SnowAlpha => "snowflake coverage 1 - prod(1 - a_i)",
-            Layer::SnowDepth => "depth of snow lying on the visible surface, m (0: none)",
+            Layer::SnowDepth => {
+                "mean depth of snow lying on the visible surface, m (0: none; thin snow covers snow.coverage(d) of it, in patches)"
+            }
             Layer::DropMask => "coverage of the windshield's drops, 0-1",
             Layer::DropHeight => {
                 "the windshield's metaball field above its 0.5 threshold (0: no drop)"

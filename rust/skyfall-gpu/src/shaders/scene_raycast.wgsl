@@ -26,7 +26,7 @@ override LIT: bool = true;
 @group(0) @binding(9) var<uniform> lamps: LampInfo;
 @group(0) @binding(10) var<storage, read> lights: array<LightElement>;
 @group(0) @binding(11) var<uniform> snow: SnowInfo;
-@group(0) @binding(12) var<storage, read> snow_cells: array<vec2<f32>>;
+@group(0) @binding(12) var<storage, read> snow_cells: array<vec4<f32>>; // base, depth, slope x, slope z
 @group(0) @binding(13) var<storage, read_write> snow_out: array<f32>;
 @group(0) @binding(14) var<uniform> sun: SunInfo;
 @group(0) @binding(15) var<storage, read> sun_gamma: array<f32>;
@@ -61,8 +61,9 @@ override SNOW: bool = false;
 
 struct SnowInfo {
     grid: vec4<f32>,    // origin x, origin z (m), cell side (m), depth on open ground (m)
-    range: vec4<f32>,   // lowest base, highest top of the cells with snow (m), albedo, coverage e-fold (m)
+    range: vec4<f32>,   // lowest base, highest top of the cells with snow (m), albedo, depth of whole coverage (m)
     dims: vec4<u32>,    // cells along x, along z
+    relief: array<vec4<f32>, 9>, // the relief noise's quantiles (the snow's patches: snow::cover::look)
 }
 
 struct LampInfo {
@@ -302,37 +303,11 @@ fn snow_signum(v: f32) -> f32 {
     return select(1.0, -1.0, v < 0.0);
 }
 
-fn snow_top(j: u32) -> f32 {
-    let c = snow_cells[j];
-    return c.x + c.y;
-}
-
-fn snow_same(j: u32, c: u32) -> bool {
-    return snow_cells[j].y > 0.0 && abs(snow_cells[j].x - snow_cells[c].x) <= snow.grid.z;
-}
-
-// One axis of SnowRender::normal's central differences (lo, hi: neighbours, or c for none).
-fn snow_slope(c: u32, lo: u32, hi: u32, has_lo: bool, has_hi: bool) -> f32 {
-    let l = has_lo && snow_same(lo, c);
-    let h = has_hi && snow_same(hi, c);
-    let s = snow.grid.z;
-    var g = 0.0;
-    if l && h {
-        g = (snow_top(hi) - snow_top(lo)) / (2.0 * s);
-    } else if h {
-        g = (snow_top(hi) - snow_top(c)) / s;
-    } else if l {
-        g = (snow_top(c) - snow_top(lo)) / s;
-    }
-    return clamp(g, -1.0, 1.0);
-}
-
+// SnowRender::normal: (-dtop/dx, 1, -dtop/dz) of the cell's slope, made once per cell
+// (SnowRender::slope_of).
 fn snow_normal(i: u32, k: u32) -> vec3<f32> {
-    let nx = snow.dims.x;
-    let c = k * nx + i;
-    let gx = snow_slope(c, c - select(0u, 1u, i > 0u), c + 1u, i > 0u, i + 1u < nx);
-    let gz = snow_slope(c, c - select(0u, nx, k > 0u), c + nx, k > 0u, k + 1u < snow.dims.y);
-    return normalize(vec3<f32>(-gx, 1.0, -gz));
+    let c = snow_cells[k * snow.dims.x + i];
+    return normalize(vec3<f32>(-c.z, 1.0, -c.w));
 }
 
 struct SnowHit {
@@ -340,11 +315,78 @@ struct SnowHit {
     n: vec3<f32>,
     d: f32,
     hit: bool,
+    // A column's top (its depth and normal then interpolated by the caller), its cell and base.
+    top: bool,
+    cell: vec2<u32>,
+    base: f32,
+}
+
+struct SnowAt {
+    d: f32,
+    n: vec3<f32>,
+    has_n: bool,
+}
+
+// SnowRender::surface_at: the depth at p over cell (i, k) and the normal, bilinear between the
+// centres of the cells around p on the surface of y_ref (bases within a cell's width).
+fn snow_surface_at(p: vec3<f32>, i: u32, k: u32, y_ref: f32) -> SnowAt {
+    let s = snow.grid.z;
+    let nx = i32(snow.dims.x);
+    let nz = i32(snow.dims.y);
+    let u = (p.x - snow.grid.x) / s - 0.5;
+    let v = (p.z - snow.grid.y) / s - 0.5;
+    let i0 = clamp(i32(floor(u)), i32(i) - 1, i32(i));
+    let k0 = clamp(i32(floor(v)), i32(k) - 1, i32(k));
+    let fx = clamp(u - f32(i0), 0.0, 1.0);
+    let fz = clamp(v - f32(k0), 0.0, 1.0);
+    var w_sum = 0.0;
+    var d_sum = 0.0;
+    var n_sum = vec3<f32>(0.0);
+    for (var dk = 0; dk < 2; dk++) {
+        let wz = select(1.0 - fz, fz, dk == 1);
+        for (var di = 0; di < 2; di++) {
+            let wx = select(1.0 - fx, fx, di == 1);
+            let ii = i0 + di;
+            let kk = k0 + dk;
+            if ii < 0 || kk < 0 || ii >= nx || kk >= nz {
+                continue;
+            }
+            let j = u32(kk * nx + ii);
+            let cell = snow_cells[j];
+            // (A NaN base fails the comparison.)
+            if !(abs(cell.x - y_ref) <= s) {
+                continue;
+            }
+            let w = wx * wz;
+            w_sum += w;
+            d_sum += w * cell.y;
+            if cell.y > 0.0 {
+                n_sum += w * snow_normal(u32(ii), u32(kk));
+            }
+        }
+    }
+    var out = SnowAt(0.0, vec3<f32>(0.0), false);
+    if w_sum > 0.0 {
+        out.d = d_sum / w_sum;
+    }
+    if any(n_sum != vec3<f32>(0.0)) {
+        out.n = normalize(n_sum);
+        out.has_n = true;
+    }
+    return out;
+}
+
+// SnowRender::cell_of: the cell over p, clamped to the grid.
+fn snow_cell_of(p: vec3<f32>) -> vec2<u32> {
+    let s = snow.grid.z;
+    let i = min(u32(max(floor((p.x - snow.grid.x) / s), 0.0)), snow.dims.x - 1u);
+    let k = min(u32(max(floor((p.z - snow.grid.y) / s), 0.0)), snow.dims.y - 1u);
+    return vec2<u32>(i, k);
 }
 
 // SnowRender::trace: the nearest snow along o + t d, 0 <= t <= t_max (a 2D DDA over the grid).
 fn snow_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> SnowHit {
-    var none = SnowHit(0.0, vec3<f32>(0.0), 0.0, false);
+    var none = SnowHit(0.0, vec3<f32>(0.0), 0.0, false, false, vec2<u32>(0u), 0.0);
     if snow.range.x > snow.range.y {
         return none;
     }
@@ -409,11 +451,12 @@ fn snow_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> SnowHit {
             let h0 = max(t_in, a0);
             let h1 = min(t_out, a1);
             if h0 <= h1 {
-                var n = side;
                 if h0 > t_in || o.y + d.y * h0 - b < 0.5 * s {
-                    n = snow_normal(i, k);
+                    // The top (the caller interpolates its depth and normal over the surface:
+                    // once, outside this loop, which lavapipe's compiler then keeps small).
+                    return SnowHit(h0, snow_normal(i, k), dep, true, true, vec2<u32>(i, k), b);
                 }
-                return SnowHit(h0, n, dep, true);
+                return SnowHit(h0, side, dep, true, false, vec2<u32>(i, k), b);
             }
         }
         if t_out >= t_exit {
@@ -446,11 +489,46 @@ fn snow_covers(p: vec3<f32>) -> bool {
     return u >= 0.0 && v >= 0.0 && u < f32(snow.dims.x) && v < f32(snow.dims.y);
 }
 
+// look::coverage: 1 - (1 - d/full)^2 below full, 1 from there.
 fn snow_coverage(dep: f32) -> f32 {
-    if dep > 0.0 {
-        return 1.0 - exp(-dep / snow.range.w);
+    if dep <= 0.0 {
+        return 0.0;
     }
-    return 0.0;
+    if dep >= snow.range.w {
+        return 1.0;
+    }
+    let x = 1.0 - dep / snow.range.w;
+    return 1.0 - x * x;
+}
+
+// look::footprint_m
+fn snow_footprint(t: f32, d: vec3<f32>, n: vec3<f32>, f_px: f32) -> f32 {
+    let len = length(d);
+    let across = t * len / f_px;
+    let c = max(abs(dot(n, d) / len), 0.0025);
+    return across / sqrt(c);
+}
+
+// look::drawn_share: the share of a pixel at (x, z) under snow of coverage c, for a footprint.
+fn snow_drawn_share(x: f32, z: f32, c: f32, footprint: f32) -> f32 {
+    if c <= 0.0 || c >= 1.0 {
+        return clamp(c, 0.0, 1.0);
+    }
+    let f = clamp((footprint / SNOW_PATCH_M - SNOW_SHARP_BELOW) / (SNOW_BLEND_FROM - SNOW_SHARP_BELOW), 0.0, 1.0);
+    if f >= 1.0 {
+        return c;
+    }
+    let k = RELIEF_SCALE_M / SNOW_PATCH_M;
+    let u = relief_u(x * k + SNOW_PATCH_OFFSET, z * k - SNOW_PATCH_OFFSET, snow.relief);
+    let sharp = select(0.0, 1.0, u < c);
+    return sharp + (c - sharp) * f;
+}
+
+// SnowRender::shade_pixel's snow of depth dep over a surface of albedo under at t.
+fn snow_albedo(origin: vec3<f32>, dir: vec3<f32>, t: f32, n: vec3<f32>, dep: f32, under: vec3<f32>) -> vec3<f32> {
+    let p = origin + dir * t;
+    let share = snow_drawn_share(p.x, p.z, snow_coverage(dep), snow_footprint(t, dir, n, cam.intr.y));
+    return under + (vec3<f32>(snow.range.z) - under) * share;
 }
 
 // skyfall_core::cloud::frame::VolumeView::sample over the clouds' Γ for the sun.
@@ -662,30 +740,49 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if SNOW {
         // SnowRender::shade_pixel.
         let sh = snow_trace(origin, dir, select(3.4e38, best_t, hit));
-        var found = false;
-        var sc = Shaded(vec3<f32>(0.0), 1.0);
-        var st = 0.0;
-        var sd = 0.0;
-        let albedo = snow.range.z;
+        // What the pixel shows of the cover: a column's top (depth and normal interpolated
+        // over its surface), a column's side, or an upward face beside the cover (the depth
+        // thinning out over a cell) or beyond the grid (the open ground's, not lifted).
+        var t = sh.t;
+        var n = sh.n;
+        var dep = sh.d;
+        var under = vec3<f32>(snow.range.z);
+        var interp = sh.hit && sh.top;
+        var ip = origin + dir * sh.t;
+        var ic = sh.cell;
+        var iy = sh.base;
         if sh.hit {
-            let p = origin + dir * sh.t;
-            var under = vec3<f32>(albedo);
             if hit && best_n.y > 0.5 {
                 under = best_a;
             }
-            let cv = snow_coverage(sh.d);
-            sc = surface_radiance(p, sh.n, under * (1.0 - cv) + vec3<f32>(albedo * cv));
-            st = sh.t;
-            sd = sh.d;
-            found = true;
-        } else if hit && best_n.y > 0.5 && snow.grid.w > 0.0 && !snow_covers(origin + dir * best_t) {
-            let p = origin + dir * best_t;
-            let cv = snow_coverage(snow.grid.w);
-            sc = surface_radiance(p, best_n, best_a * (1.0 - cv) + vec3<f32>(albedo * cv));
-            st = best_t;
-            sd = snow.grid.w;
-            found = true;
+        } else if hit && best_n.y > 0.5 {
+            t = best_t;
+            n = best_n;
+            under = best_a;
+            ip = origin + dir * best_t;
+            dep = snow.grid.w;
+            if snow_covers(ip) {
+                interp = true;
+                ic = snow_cell_of(ip);
+                iy = ip.y;
+            }
+        } else {
+            dep = 0.0;
         }
+        if interp {
+            let at = snow_surface_at(ip, ic.x, ic.y, iy);
+            dep = at.d;
+            if sh.hit && at.has_n {
+                n = at.n;
+            }
+        }
+        let found = sh.hit || dep > 0.0;
+        var sc = Shaded(vec3<f32>(0.0), 1.0);
+        if found {
+            sc = surface_radiance(origin + dir * t, n, snow_albedo(origin, dir, t, n, dep, under));
+        }
+        let st = t;
+        let sd = select(0.0, dep, found);
         snow_out[i] = sd;
         if found {
             rgb[3u * i] = sc.c.x;

@@ -51,6 +51,7 @@
 pub mod accumulate;
 pub mod drift;
 pub mod heightfield;
+pub mod look;
 pub mod render;
 pub mod shadow;
 pub mod wind;

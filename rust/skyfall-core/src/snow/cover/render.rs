@@ -10,16 +10,24 @@
 //!   depth map's neighbours; the snow of its cell lies on it when the point is on the cell's
 //!   top surface and the normal faces up ([`photo_depth_m`]), then the depth map's noise is
 //!   cleaned away (holes in a covered surface filled, lone specks removed, edges kept); the
-//!   pixel whitens towards the snow's radiance by the cover's coverage.
+//!   pixel takes the snow's radiance where the snow's patches cover it.
 //!
 //! - Beyond the grid, upward faces of a box scene carry the open ground's cover
 //!   ([`super::SnowCover::open_depth_m`], not lifted): the far ground of an open scene.
 //!
-//! Coverage: thin snow lets the surface beneath show; its share of the pixel is
-//! 1 − e^(−d/[`COVER_EFOLD_M`]) (our choice: 3 cm hide 95 %). Albedo [`SNOW_ALBEDO`].
+//! **Soft edges.** The columns are the cover's geometry, but what a pixel shows of it, the
+//! snow's depth and the surface's normal, is interpolated bilinearly between the centres of
+//! the cells on the same surface ([`SnowRender::surface_at`]): the shading of a drift varies
+//! smoothly instead of cell by cell, and where the cover ends its depth thins out over a cell,
+//! onto the bare cells beside it too (their ground takes the interpolated depth, unlifted).
+//!
+//! **Thin snow** lies in patches ([`super::look`]): the share c(d) of a surface is under snow
+//! (white, [`SNOW_ALBEDO`]) and the rest shows the surface beneath, sharp near the camera and
+//! as the patches' mean share far away.
 
 use super::SnowCover;
 use super::heightfield::{PHOTO_RANGE_M, photo_points};
+use super::look::{coverage, drawn_share, footprint_m};
 use crate::error::{Result, try_filled, try_with_capacity};
 use crate::scene::boxes::{BoxScene, surface_albedo, trace};
 use crate::scene::camera::Camera;
@@ -32,9 +40,6 @@ use crate::snow::SNOW_ALBEDO;
 /// Most height bands [`SnowRender::trace`] keeps apart (more: one).
 const MAX_BANDS: usize = 64;
 
-/// Depth of snow over which its coverage of the surface beneath rises to 1 − 1/e, m.
-pub const COVER_EFOLD_M: f32 = 0.01;
-
 /// A photo pixel's normal is taken from the depth map's points this share of the image's
 /// width to either side (4 px at 741 px).
 const NORMAL_SPAN_FRACTION: f32 = 1.0 / 185.0;
@@ -44,14 +49,19 @@ const UP_MIN: f32 = 0.5;
 /// … and fully from this (about 37°).
 const UP_FULL: f32 = 0.8;
 
-/// Coverage of a surface by `depth_m` of snow.
-#[inline]
-pub fn coverage(depth_m: f32) -> f32 {
-    if depth_m > 0.0 {
-        1.0 - (-depth_m / COVER_EFOLD_M).exp()
-    } else {
-        0.0
-    }
+/// A cover's grid as the GPU takes it ([`SnowRender::gpu_grid`]).
+#[derive(Debug, Clone, Copy)]
+pub struct GpuGrid<'a> {
+    /// Origin x, origin z (m), cell side (m), lowest base and highest top with snow (m).
+    pub params: [f32; 5],
+    /// Cells along x and z.
+    pub dims: [u32; 2],
+    /// Each cell's base, m (NaN: no surface).
+    pub base: &'a [f32],
+    /// Each cell's depth of snow, m.
+    pub depth: &'a [f32],
+    /// Each cell's snow surface slope (∂top/∂x, ∂top/∂z).
+    pub slope: &'a [[f32; 2]],
 }
 
 /// A cover ready to draw.
@@ -66,6 +76,8 @@ pub struct SnowRender {
     nz: usize,
     base: Vec<f32>,
     depth: Vec<f32>,
+    /// Each cell's snow surface slope (∂top/∂x, ∂top/∂z), [`Self::slope_of`].
+    slope: Vec<[f32; 2]>,
     y_lo: f32,
     y_hi: f32,
     /// The depth on level open ground, m: drawn on upward faces beyond the grid.
@@ -111,7 +123,7 @@ impl SnowRender {
         if bands.len() > MAX_BANDS {
             bands.clear(); // one slab, [y_lo, y_hi]
         }
-        Ok(SnowRender {
+        let mut r = SnowRender {
             bands,
             origin: [g.origin_m[0] as f32, g.origin_m[1] as f32],
             spacing: g.spacing_m as f32,
@@ -119,12 +131,17 @@ impl SnowRender {
             nz: g.nz,
             base,
             depth,
+            slope: Vec::new(),
             y_lo,
             y_hi,
             open_depth: cover.open_depth_m as f32,
             photo_depth_m: None,
             radiance_scale: Vec3::ONE,
-        })
+        };
+        let mut slope: Vec<[f32; 2]> = try_with_capacity(what, r.depth.len())?;
+        slope.extend((0..r.depth.len()).map(|c| r.slope_of(c % r.nx, c / r.nx)));
+        r.slope = slope;
+        Ok(r)
     }
 
     /// The cover of a photo seen by `cam` with `depth_m`, in the photo's units
@@ -154,26 +171,35 @@ impl SnowRender {
         Ok(r)
     }
 
-    /// The grid's flat buffers for the GPU: (origin x, origin z, spacing, nx, nz, y_lo,
-    /// y_hi), base and depth per cell.
-    pub fn gpu_grid(&self) -> ([f32; 5], [u32; 2], &[f32], &[f32]) {
-        (
-            [
+    /// The grid's flat buffers for the GPU.
+    pub fn gpu_grid(&self) -> GpuGrid<'_> {
+        GpuGrid {
+            params: [
                 self.origin[0],
                 self.origin[1],
                 self.spacing,
                 self.y_lo,
                 self.y_hi,
             ],
-            [self.nx as u32, self.nz as u32],
-            &self.base,
-            &self.depth,
-        )
+            dims: [self.nx as u32, self.nz as u32],
+            base: &self.base,
+            depth: &self.depth,
+            slope: &self.slope,
+        }
     }
 
-    /// The snow surface's normal over cell (i, k): from the central differences of its top
-    /// over the neighbours that carry snow on the same surface (bases within a cell's width).
+    /// The snow surface's normal over cell (i, k): (−∂top/∂x, 1, −∂top/∂z) normalised, of its
+    /// [`Self::slope_of`] (made once per cell).
+    #[inline]
     fn normal(&self, i: usize, k: usize) -> Vec3 {
+        let [gx, gz] = self.slope[k * self.nx + i];
+        Vec3::new(-gx, 1.0, -gz).normalize()
+    }
+
+    /// The snow surface's slope over cell (i, k): the central differences of its top over the
+    /// neighbours that carry snow on the same surface (bases within a cell's width), each
+    /// clamped to ±1.
+    fn slope_of(&self, i: usize, k: usize) -> [f32; 2] {
         let s = self.spacing;
         let c = k * self.nx + i;
         let top = |j: usize| self.base[j] + self.depth[j];
@@ -194,7 +220,63 @@ impl SnowRender {
             (k > 0).then(|| c - self.nx),
             (k + 1 < self.nz).then_some(c + self.nx),
         );
-        Vec3::new(-gx, 1.0, -gz).normalize()
+        [gx, gz]
+    }
+
+    /// The snow's depth at `p`, over cell (i, k), and its surface's normal: bilinear between
+    /// the centres of the four cells around `p` that lie on the same surface as `y_ref` (bases
+    /// within a cell's width of it). A cell of that surface without snow counts as depth 0, so
+    /// the cover thins out over a cell where it ends; a cell of another surface (a wall's top,
+    /// the ground under an awning) or off the grid does not count. The normal is the
+    /// snow-carrying cells' [`Self::normal`]s so weighted (`None` where none carries snow).
+    pub fn surface_at(&self, p: Vec3, i: usize, k: usize, y_ref: f32) -> (f32, Option<Vec3>) {
+        let s = self.spacing;
+        let u = (p.x - self.origin[0]) / s - 0.5;
+        let v = (p.z - self.origin[1]) / s - 0.5;
+        // The lower corner of the four: i - 1 or i (k - 1 or k), whatever rounding did.
+        let i0 = (u.floor() as i64).clamp(i as i64 - 1, i as i64);
+        let k0 = (v.floor() as i64).clamp(k as i64 - 1, k as i64);
+        let (fx, fz) = (
+            (u - i0 as f32).clamp(0.0, 1.0),
+            (v - k0 as f32).clamp(0.0, 1.0),
+        );
+        let (mut w_sum, mut d_sum, mut n_sum) = (0.0f32, 0.0f32, Vec3::ZERO);
+        for (dk, wz) in [(0, 1.0 - fz), (1, fz)] {
+            for (di, wx) in [(0, 1.0 - fx), (1, fx)] {
+                let (ii, kk) = (i0 + di, k0 + dk);
+                if ii < 0 || kk < 0 || ii >= self.nx as i64 || kk >= self.nz as i64 {
+                    continue;
+                }
+                let (ii, kk) = (ii as usize, kk as usize);
+                let j = kk * self.nx + ii;
+                // (A NaN base is no surface.)
+                let off = (self.base[j] - y_ref).abs();
+                if off.is_nan() || off > s {
+                    continue;
+                }
+                let w = wx * wz;
+                w_sum += w;
+                d_sum += w * self.depth[j];
+                if self.depth[j] > 0.0 {
+                    n_sum += w * self.normal(ii, kk);
+                }
+            }
+        }
+        let depth = if w_sum > 0.0 { d_sum / w_sum } else { 0.0 };
+        let n = (n_sum != Vec3::ZERO).then(|| n_sum.normalize());
+        (depth, n)
+    }
+
+    /// The cell over `p` (clamped to the grid).
+    #[inline]
+    fn cell_of(&self, p: Vec3) -> (usize, usize) {
+        let cell = |v: f32, o: f32, n: usize| {
+            (((v - o) / self.spacing).floor().max(0.0) as usize).min(n - 1)
+        };
+        (
+            cell(p.x, self.origin[0], self.nx),
+            cell(p.z, self.origin[1], self.nz),
+        )
     }
 
     /// Whether world point `p` lies over the grid.
@@ -319,12 +401,12 @@ impl SnowRender {
                 if h0 <= h1 {
                     // A step lower than half a cell is the snow's own relief: it shows the
                     // surface's slope, not a wall.
-                    let n = if h0 > t_in || o.y + d.y * h0 - b < 0.5 * s {
-                        self.normal(i, k)
-                    } else {
-                        side
-                    };
-                    return Some((h0, n, dep));
+                    if h0 > t_in || o.y + d.y * h0 - b < 0.5 * s {
+                        // The top: depth and normal interpolated over the surface.
+                        let (dep_at, n) = self.surface_at(o + d * h0, i, k, b);
+                        return Some((h0, n.unwrap_or_else(|| self.normal(i, k)), dep_at));
+                    }
+                    return Some((h0, side, dep));
                 }
             }
             if t_out >= t_exit {
@@ -366,29 +448,41 @@ impl SnowRender {
         let dir = cam.ray_direction(x, y);
         let hit = trace(scene, cam.eye(), dir);
         let t_max = hit.map_or(f32::INFINITY, |h| h.0);
+        // Snow of `dep` over a surface of albedo `under` at t: white where its patches lie.
+        let snowy = |t: f32, n: Vec3, dep: f32, under: Vec3| {
+            let p = cam.eye() + dir * t;
+            let share = drawn_share(p.x, p.z, coverage(dep), footprint_m(t, dir, n, cam.fy));
+            let a = under + (Vec3::splat(SNOW_ALBEDO) - under) * share;
+            let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
+            (rad, t, dep, sun)
+        };
         match self.trace(cam.eye(), dir, t_max) {
             Some((t, n, dep)) => {
-                let p = cam.eye() + dir * t;
                 // Thin snow shows the surface it lies on.
                 let under = match hit {
                     Some((_, hn, ha)) if hn.y > 0.5 => ha,
                     _ => Vec3::splat(SNOW_ALBEDO),
                 };
-                let c = coverage(dep);
-                let a = under * (1.0 - c) + Vec3::splat(SNOW_ALBEDO * c);
-                let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
-                (rad, t, dep, sun)
+                snowy(t, n, dep, under)
             }
             None => match hit {
-                // Beyond the grid, upward faces carry the open ground's snow (not lifted).
-                Some((t, n, ha))
-                    if n.y > 0.5 && self.open_depth > 0.0 && !self.covers(cam.eye() + dir * t) =>
-                {
+                Some((t, n, ha)) if n.y > 0.5 => {
                     let p = cam.eye() + dir * t;
-                    let c = coverage(self.open_depth);
-                    let a = ha * (1.0 - c) + Vec3::splat(SNOW_ALBEDO * c);
-                    let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
-                    (rad, t, self.open_depth, sun)
+                    // Beyond the grid, upward faces carry the open ground's snow (not lifted);
+                    // on it, bare cells beside snow take its depth thinning out over a cell.
+                    let dep = if self.covers(p) {
+                        let (i, k) = self.cell_of(p);
+                        self.surface_at(p, i, k, p.y).0
+                    } else {
+                        self.open_depth
+                    };
+                    if dep > 0.0 {
+                        snowy(t, n, dep, ha)
+                    } else {
+                        let a = surface_albedo(ha, n, p);
+                        let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
+                        (rad, t, 0.0, sun)
+                    }
                 }
                 // No snow: the surface as the scene stage shades it (`shade_pixel`, from the
                 // same hit).
@@ -423,10 +517,17 @@ impl SnowRender {
             if dep <= 0.0 {
                 continue;
             }
-            let p = cam.eye() + cam.ray_direction(x as u32, y as u32) * depth_row[x];
+            let d = cam.ray_direction(x as u32, y as u32);
+            let p = cam.eye() + d * depth_row[x];
             let e = ambient.sample(p)[0];
             let snow = self.radiance_scale * (SNOW_ALBEDO * e);
-            let c = coverage(dep);
+            // The snow lies on surfaces facing up: their footprint as a level one's.
+            let c = drawn_share(
+                p.x,
+                p.z,
+                coverage(dep),
+                footprint_m(depth_row[x], d, Vec3::Y, cam.fy),
+            );
             for k in 0..3 {
                 let v = &mut rgb_row[3 * x + k];
                 *v = *v * (1.0 - c) + snow[k] * c;

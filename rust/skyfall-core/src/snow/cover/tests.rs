@@ -309,20 +309,7 @@ fn the_cover_is_drawn_lifted_above_its_surface() {
     let field =
         HeightField::from_boxes(&scene, Grid::covering([0.0; 2], [4.0; 2], 0.5).unwrap()).unwrap();
     let n = field.grid.cells();
-    let cover = SnowCover {
-        field,
-        depth_m: vec![0.5; n],
-        fallen_kg: 1.0,
-        lying_kg: 1.0,
-        blown_in_kg: 0.0,
-        blown_out_kg: 0.0,
-        canopy: wind::Canopy::none(0.0),
-        open_sky_kg: 1.0,
-        open_depth_m: 0.5,
-        steps: 1,
-        dt_s: 1.0,
-        fall_velocity_m_s: [0.0, -1.0, 0.0],
-    };
+    let cover = drawn_cover(field, vec![0.5; n], 0.5);
     let r = SnowRender::boxes(&cover).unwrap();
     let (t, nrm, d) = r
         .trace(
@@ -608,4 +595,82 @@ fn a_noisy_photo_of_level_ground_is_covered_whole() {
     sorted.sort_by(f32::total_cmp);
     let median = sorted[sorted.len() / 2];
     assert!((median / 0.01 - 1.0).abs() < 1e-3, "{median}");
+}
+
+#[test]
+fn what_a_pixel_shows_is_interpolated_over_its_own_surface() {
+    // Ground (x < 2 m) and a 1 m box (x in [2, 4]) under 0.5 m cells: the ground's cells
+    // carry a depth linear in x, 1 cm + 1 cm per m at their centres, but the first one none;
+    // the box's 30 cm.
+    let b = SceneBox {
+        min_m: Vec3::new(2.0, 0.0, -1.0),
+        max_m: Vec3::new(4.0, 1.0, 3.0),
+        albedo: Vec3::splat(0.5),
+    };
+    let scene = BoxScene::new(vec![b], true, Vec3::splat(0.2)).unwrap();
+    let field = HeightField::from_boxes(&scene, Grid::covering([0.0; 2], [4.0, 2.0], 0.5).unwrap())
+        .unwrap();
+    let g = field.grid;
+    let depth_m: Vec<f64> = (0..g.cells())
+        .map(|c| {
+            let x = g.origin_m[0] + g.spacing_m * ((c % g.nx) as f64 + 0.5);
+            match x {
+                x if x > 2.0 => 0.3,
+                x if x < 0.5 => 0.0,
+                x => 0.01 + 0.01 * x,
+            }
+        })
+        .collect();
+    let cover = drawn_cover(field, depth_m, 0.0);
+    let r = SnowRender::boxes(&cover).unwrap();
+    let at = |x: f32, z: f32, y: f32| {
+        let i = ((x - g.origin_m[0] as f32) / g.spacing_m as f32).floor() as usize;
+        let k = ((z - g.origin_m[1] as f32) / g.spacing_m as f32).floor() as usize;
+        r.surface_at(Vec3::new(x, y, z), i, k, y)
+    };
+    // Between the ground's snowy centres (x 0.75 .. 1.75): the linear depth, exactly.
+    for x in [0.75f32, 0.9, 1.2, 1.5, 1.74] {
+        for z in [0.3f32, 0.8, 1.6] {
+            let (d, n) = at(x, z, 0.0);
+            assert!((d - (0.01 + 0.01 * x)).abs() < 1e-6, "{x} {z} {d}");
+            // The snow's top rises 1 cm per m: its normal leans back by that slope.
+            let want = Vec3::new(-0.01, 1.0, 0.0).normalize();
+            assert!(n.unwrap().abs_diff_eq(want, 1e-6), "{n:?}");
+        }
+    }
+    // Towards the box (x 1.75 .. 2): the box's top is another surface, left out.
+    let (d, _) = at(1.9, 1.0, 0.0);
+    assert!((d - 0.0275).abs() < 1e-6, "{d}");
+    // Towards the bare cell (x 0.25 .. 0.75): the depth thins out to none at its centre;
+    // on the bare cell itself the ground takes it too.
+    let (d, _) = at(0.5, 1.0, 0.0);
+    assert!((d - 0.5 * 0.0175).abs() < 1e-6, "{d}");
+    let (d, _) = at(0.25, 1.0, 0.0);
+    assert!(d.abs() < 1e-7, "{d}");
+    // The box's top: its own 30 cm up to its edge, the ground's cells left out.
+    let (d, _) = at(2.1, 1.0, 1.0);
+    assert!((d - 0.3).abs() < 1e-6, "{d}");
+    // A ray from above onto the ground at x = 1.2 sees the interpolated depth.
+    let (_, _, d) = r
+        .trace(Vec3::new(1.2, 5.0, 0.8), Vec3::new(0.0, -1.0, 0.0), 5.0)
+        .unwrap();
+    assert!((d - 0.022).abs() < 1e-6, "{d}");
+}
+
+/// A cover of given depths over `field` for drawing (its bookkeeping placeholders: not a run's).
+fn drawn_cover(field: HeightField, depth_m: Vec<f64>, open_depth_m: f64) -> SnowCover {
+    SnowCover {
+        field,
+        depth_m,
+        fallen_kg: 1.0,
+        lying_kg: 1.0,
+        blown_in_kg: 0.0,
+        blown_out_kg: 0.0,
+        canopy: wind::Canopy::none(0.0),
+        open_sky_kg: 1.0,
+        open_depth_m,
+        steps: 1,
+        dt_s: 1.0,
+        fall_velocity_m_s: [0.0, -1.0, 0.0],
+    }
 }
