@@ -439,3 +439,73 @@ def test_the_cover_is_a_weather_field_and_the_old_keyword_warns() -> None:
     other = snow.accumulate(street, w, duration_s=HOUR, resolution_m=2.0)
     with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="two covers"):
         r.render(street, covered, snow_cover=other)
+
+
+# The snow's sparkle (skyfall_core::snow::cover::sparkle), its constants written again from
+# their sources: ice facets 0.2 mm across tiling the surface, their normals uniform over the
+# hemisphere; ice's index 1.311 at 550 nm (Warren & Brandt 2008); the sun's radius 0.2666 deg.
+FACET_M, ICE_N, SUN_R = 2.0e-4, 1.311, math.radians(0.2666)
+
+
+def _fresnel(c: np.ndarray) -> np.ndarray:
+    """Unpolarised Fresnel reflectance on ice at incidence cosine ``c``."""
+    t = np.sqrt(1.0 - (1.0 - c**2) / ICE_N**2)
+    rs = (c - ICE_N * t) / (c + ICE_N * t)
+    rp = (t - ICE_N * c) / (t + ICE_N * c)
+    return 0.5 * (rs**2 + rp**2)
+
+
+@pytest.mark.parametrize("backend", ["cpu", "gpu"])
+def test_sunlit_snow_sparkles_as_many_facets_as_mirror_the_sun(backend: str) -> None:
+    # Level snow 3 cm deep under a sun 35 deg up, seen from 1.6 m at 40 deg down. Two frames
+    # whose suns differ in illuminance alone: their difference is the sun's part of the
+    # light, 0.85 (n.l) dE per pixel, plus the glints' (the sky's part cancels). A 5 x 5
+    # median of it is the Lambertian part (the glints are sparse); what lies above is the
+    # glints. A pixel of footprint A holds N = (A / FACET^2) r^2 / 8 glinting facets on
+    # average: the number of pixels with a glint is sum(1 - e^(-N)) (4 standard deviations),
+    # and their light is sum over pixels of R(h.v)(h.v) / (8 n.v) per unit of the sun's
+    # illuminance, within 4 standard deviations of its sampling (a few per cent).
+    from scipy import ndimage  # type: ignore[import-untyped]
+
+    r = Renderer(320, 180, backend=backend)
+    cam = scenes.Camera((0.0, 1.6, 0.0), pitch_deg=-40.0, vertical_fov_deg=50.0)
+    scene = scenes.empty(camera=cam)
+    cover = _dusted(0.03)
+    sunny = dict(sky=12, sun_elevation_deg=35.0, sun_azimuth_deg=180.0, snow_cover=cover)
+    lo = r.render(scene, Weather(sun_illuminance_lux=40000.0, **sunny))
+    hi = r.render(scene, Weather(sun_illuminance_lux=80000.0, **sunny))
+    d = (hi.rgb - lo.rgb)[..., 1].astype(np.float64)
+    base = ndimage.median_filter(d, size=5, mode="nearest")
+    ground = np.isfinite(lo.depth_m)
+    inner = ground & ndimage.binary_erosion(ground, iterations=3)
+    ratio = (d - base) / base
+    glints = inner & (ratio > 1e-3)
+    # The expectation per pixel, from the geometry written again.
+    fx, fy, cx, cy = cam.with_resolution(r.width, r.height).intrinsics()
+    yy, xx = np.mgrid[0 : r.height, 0 : r.width] + 0.5
+    rays = np.stack([(xx - cx) / fx, -(yy - cy) / fy, -np.ones_like(xx)], axis=-1) @ np.asarray(cam.rotation).T
+    v = -rays / np.linalg.norm(rays, axis=-1, keepdims=True)
+    el = math.radians(35.0)
+    l = np.asarray(Weather(**sunny).sun_direction)  # towards the sun (the core's convention)
+    assert l[1] == pytest.approx(math.sin(el), rel=1e-6)
+    fp = _footprint_m(np.where(ground, lo.depth_m, 1.0), cam, r)
+    count = (fp**2 / FACET_M**2) * SUN_R**2 / 8.0
+    p_glint = 1.0 - np.exp(-count)
+    want_n = p_glint[inner].sum()
+    sd_n = math.sqrt((p_glint * (1.0 - p_glint))[inner].sum())
+    assert want_n > 100
+    assert abs(glints.sum() - want_n) < 4.0 * sd_n, (glints.sum(), want_n, sd_n)
+    # Their light, over the sun's Lambertian light 0.85 sin(el), per pixel: its expectation
+    # R(h.v)(h.v) / (8 n.v) / (0.85 sin(el)); each pixel's draw carries N / (1 - e^-N) glints
+    # with probability 1 - e^-N, so the sum's variance is sum m^2 (1 - p) / p.
+    h = v + l
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    hv = np.clip(np.sum(h * v, axis=-1), 0.0, 1.0)
+    m = (_fresnel(hv) * hv / (8.0 * v[..., 1]) / (0.85 * math.sin(el)))[inner]
+    want = m.sum()
+    sd = math.sqrt((m**2 * (1.0 - p_glint[inner]) / p_glint[inner]).sum())
+    got = np.where(glints, ratio, 0.0)[inner].sum()
+    assert abs(got - want) < 4.0 * sd, (got, want, sd)
+    # Without a sun nothing sparkles: overcast snow is flat, the same bits as before.
+    flat = r.render(scene, Weather(snow_cover=cover)).rgb[..., 1]
+    assert np.all(np.abs(flat - ndimage.median_filter(flat, size=5, mode="nearest"))[inner] < 1e-3 * flat[inner])

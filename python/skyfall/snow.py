@@ -27,7 +27,8 @@ whiten (albedo 0.85, fresh snow) and lift by the depth lying on them, lit by the
 lamps as the surfaces are, and the frame carries ``layers["snow_depth_m"]`` (the depth between
 the cells' centres, interpolated over each surface, so a drift's shading and the cover's edge
 vary smoothly). Thin snow lies in patches (:func:`coverage`, :data:`PATCH_M`): white where
-they lie, the surface beneath between them.
+they lie, the surface beneath between them. Under a sun the snow sparkles: single ice facets
+mirror the sun's disc into the camera (``rust/skyfall-core/src/snow/cover/sparkle.rs``).
 """
 
 from __future__ import annotations

@@ -86,6 +86,16 @@ pub fn shared_constants() -> String {
             "SNOW_PATCH_OFFSET",
             skyfall_core::snow::cover::look::PATCH_OFFSET,
         ),
+        f("FACET_M", skyfall_core::snow::cover::sparkle::FACET_M),
+        f("ICE_INDEX", skyfall_core::snow::cover::sparkle::ICE_INDEX),
+        f(
+            "SUN_RADIUS_RAD",
+            skyfall_core::snow::cover::sparkle::SUN_RADIUS_RAD,
+        ),
+        f(
+            "GLINT_CELL_M",
+            skyfall_core::snow::cover::sparkle::GLINT_CELL_M,
+        ),
     ]
     .concat()
 }

@@ -171,6 +171,19 @@ fn the_shared_constants_are_the_cores_values_to_the_bit() {
             "SNOW_PATCH_OFFSET",
             bits(skyfall_core::snow::cover::look::PATCH_OFFSET),
         ),
+        ("FACET_M", bits(skyfall_core::snow::cover::sparkle::FACET_M)),
+        (
+            "ICE_INDEX",
+            bits(skyfall_core::snow::cover::sparkle::ICE_INDEX),
+        ),
+        (
+            "SUN_RADIUS_RAD",
+            bits(skyfall_core::snow::cover::sparkle::SUN_RADIUS_RAD),
+        ),
+        (
+            "GLINT_CELL_M",
+            bits(skyfall_core::snow::cover::sparkle::GLINT_CELL_M),
+        ),
     ];
     assert_eq!(seen.len(), want.len(), "{seen:?}");
     for (name, v) in want {

@@ -294,6 +294,13 @@ impl crate::scene::SurfaceLight for SceneLight<'_> {
     fn sky_pixel(&self, dir: Vec3) -> Vec3 {
         self.sky.sky_pixel_rgb(dir)
     }
+
+    #[inline]
+    fn sun_glint(&self) -> Option<(Vec3, Vec3)> {
+        self.sun
+            .as_ref()
+            .map(|s| (s.direction, s.colour * s.relative))
+    }
 }
 
 /// The scene as the first stage of a frame: each row's box scene ray cast (with its snow cover,

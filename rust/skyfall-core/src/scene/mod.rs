@@ -25,4 +25,8 @@ pub trait SurfaceLight {
 
     /// The sky's radiance seen along the unit direction `dir` (relative, linear RGB).
     fn sky_pixel(&self, dir: Vec3) -> Vec3;
+
+    /// The sun as a mirror sees it (the snow's glints): the unit direction towards it and
+    /// its colour times its normal illuminance over E; None without a sun.
+    fn sun_glint(&self) -> Option<(Vec3, Vec3)>;
 }

@@ -59,7 +59,7 @@ pub const fn hash(mut x: u32) -> u32 {
 }
 
 /// A number in [0, 1) from the top 24 bits of a hash.
-fn unit(h: u32) -> f32 {
+pub(crate) fn unit(h: u32) -> f32 {
     (h >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 

@@ -524,11 +524,43 @@ fn snow_drawn_share(x: f32, z: f32, c: f32, footprint: f32) -> f32 {
     return sharp + (c - sharp) * f;
 }
 
-// SnowRender::shade_pixel's snow of depth dep over a surface of albedo under at t.
-fn snow_albedo(origin: vec3<f32>, dir: vec3<f32>, t: f32, n: vec3<f32>, dep: f32, under: vec3<f32>) -> vec3<f32> {
-    let p = origin + dir * t;
-    let share = snow_drawn_share(p.x, p.z, snow_coverage(dep), snow_footprint(t, dir, n, cam.intr.y));
-    return under + (vec3<f32>(snow.range.z) - under) * share;
+// sparkle::ice_fresnel: unpolarised Fresnel reflectance on ice at incidence cosine c.
+fn ice_fresnel(c0: f32) -> f32 {
+    let c = clamp(c0, 0.0, 1.0);
+    let s2 = (1.0 - c * c) / (ICE_INDEX * ICE_INDEX);
+    let t = sqrt(max(1.0 - s2, 0.0));
+    let rs = (c - ICE_INDEX * t) / (c + ICE_INDEX * t);
+    let rp = (t - ICE_INDEX * c) / (t + ICE_INDEX * c);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// sparkle::sparkle: the glints a pixel adds at p on a face n seen along to_camera (any length)
+// under the sun along l, footprint of side fp (radiance over E/pi per unit of the sun's normal
+// illuminance over E); most pixels draw none and cost a hash (1 - e^-N <= N).
+fn snow_sparkle(p: vec3<f32>, n: vec3<f32>, to_camera: vec3<f32>, l: vec3<f32>, fp: f32) -> f32 {
+    let area = fp * fp;
+    let count = area / (FACET_M * FACET_M) * (SUN_RADIUS_RAD * SUN_RADIUS_RAD / 8.0);
+    if count <= 0.0 {
+        return 0.0;
+    }
+    let c = floor(p / GLINT_CELL_M);
+    let u = unit24(lowbias(bitcast<u32>(i32(c.x)) ^ lowbias(bitcast<u32>(i32(c.y)) ^ lowbias(bitcast<u32>(i32(c.z)) ^ 0x51a7u))));
+    if u >= count {
+        return 0.0;
+    }
+    let hit = 1.0 - exp(-count);
+    if u >= hit {
+        return 0.0;
+    }
+    let v = normalize(to_camera);
+    let nv = dot(n, v);
+    let nl = dot(n, l);
+    if nv <= 0.0 || nl <= 0.0 {
+        return 0.0;
+    }
+    let hv = clamp(dot(normalize(v + l), v), 0.0, 1.0);
+    let one = ice_fresnel(hv) * FACET_M * FACET_M * hv / (SUN_RADIUS_RAD * SUN_RADIUS_RAD * area * nv);
+    return one * count / hit;
 }
 
 // skyfall_core::cloud::frame::VolumeView::sample over the clouds' Γ for the sun.
@@ -779,7 +811,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let found = sh.hit || dep > 0.0;
         var sc = Shaded(vec3<f32>(0.0), 1.0);
         if found {
-            sc = surface_radiance(origin + dir * t, n, snow_albedo(origin, dir, t, n, dep, under));
+            // White where its patches lie, sparkling where the sun reaches it.
+            let p = origin + dir * t;
+            let fp = snow_footprint(t, dir, n, cam.intr.y);
+            let share = snow_drawn_share(p.x, p.z, snow_coverage(dep), fp);
+            sc = surface_radiance(p, n, under + (vec3<f32>(snow.range.z) - under) * share);
+            if LIT && sun.flags.x != 0u && sc.share * share > 0.0 {
+                let g = snow_sparkle(p, n, -dir, sun.dir.xyz, fp);
+                sc.c += sun.colour.xyz * (sun.dir.w * sc.share * share * g);
+            }
         }
         let st = t;
         let sd = select(0.0, dep, found);

@@ -54,6 +54,7 @@ pub mod heightfield;
 pub mod look;
 pub mod render;
 pub mod shadow;
+pub mod sparkle;
 pub mod wind;
 
 pub use accumulate::{CoverParams, CoverWeather, accumulate, fall_velocity_m_s};

@@ -28,6 +28,7 @@
 use super::SnowCover;
 use super::heightfield::{PHOTO_RANGE_M, photo_points};
 use super::look::{coverage, drawn_share, footprint_m};
+use super::sparkle::sparkle;
 use crate::error::{Result, try_filled, try_with_capacity};
 use crate::scene::boxes::{BoxScene, surface_albedo, trace};
 use crate::scene::camera::Camera;
@@ -448,12 +449,19 @@ impl SnowRender {
         let dir = cam.ray_direction(x, y);
         let hit = trace(scene, cam.eye(), dir);
         let t_max = hit.map_or(f32::INFINITY, |h| h.0);
-        // Snow of `dep` over a surface of albedo `under` at t: white where its patches lie.
+        // Snow of `dep` over a surface of albedo `under` at t: white where its patches lie,
+        // sparkling where the sun reaches it.
         let snowy = |t: f32, n: Vec3, dep: f32, under: Vec3| {
             let p = cam.eye() + dir * t;
-            let share = drawn_share(p.x, p.z, coverage(dep), footprint_m(t, dir, n, cam.fy));
+            let fp = footprint_m(t, dir, n, cam.fy);
+            let share = drawn_share(p.x, p.z, coverage(dep), fp);
             let a = under + (Vec3::splat(SNOW_ALBEDO) - under) * share;
-            let (rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
+            let (mut rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
+            if let Some((l, e)) = light.sun_glint()
+                && sun * share > 0.0
+            {
+                rad += e * (sun * share * sparkle(p, n, -dir, l, fp));
+            }
             (rad, t, dep, sun)
         };
         match self.trace(cam.eye(), dir, t_max) {
