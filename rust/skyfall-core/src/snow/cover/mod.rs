@@ -52,6 +52,7 @@ pub mod accumulate;
 pub mod drift;
 pub mod heightfield;
 pub mod look;
+pub mod photo;
 pub mod render;
 pub mod shadow;
 pub mod sparkle;

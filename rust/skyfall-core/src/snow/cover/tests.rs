@@ -528,7 +528,7 @@ fn a_photos_specks_and_holes_are_cleaned_and_its_edges_kept() {
     snow[45 * w + 100] = 0.0; // a hole
     snow[10 * w + 50] = 0.01; // a speck
     snow[12 * w + 51] = 0.008; // another
-    let out = super::render::clean_speckles(&snow, &depth, w, h).unwrap();
+    let out = super::photo::clean_speckles(&snow, &depth, w, h).unwrap();
     assert!((out[45 * w + 100] - 0.01).abs() < 1e-8);
     assert_eq!(out[10 * w + 50], 0.0);
     assert_eq!(out[12 * w + 51], 0.0);
@@ -577,7 +577,7 @@ fn a_noisy_photo_of_level_ground_is_covered_whole() {
         None,
     )
     .unwrap();
-    let per_pixel = super::render::photo_depth_m(&c, &cam, &depth).unwrap();
+    let per_pixel = super::photo::photo_depth_m(&c, &cam, &depth).unwrap();
     let ground: Vec<f32> = per_pixel
         .iter()
         .zip(&depth)
