@@ -221,9 +221,19 @@ def test_a_frame_shows_the_cover_white_and_its_depth_layer() -> None:
     ground = np.isfinite(want)
     assert ground.sum() > 500
     # Each ground pixel shows the depth interpolated between the cells' centres (but where a
-    # grazing ray meets a column's side, which shows that column's own depth).
-    agree = np.isclose(layer[ground], want[ground], rtol=1e-4, atol=1e-6)
+    # grazing ray meets a column's side, which shows that column's own depth): where the snow
+    # is whole (2 cm and more) or a pixel spans many of thin snow's patches, that depth; nearer,
+    # on thin snow, the patches' depth d / c(d) where it shows one (the mass kept), 0 between.
+    lo, hi = snow.PATCH_BLEND
+    fp = _footprint_m(white.depth_m, street.camera, r)
+    cov = 1.0 - (1.0 - np.minimum(np.nan_to_num(want) / 0.02, 1.0)) ** 2
+    exact = ground & ((cov >= 1.0) | (fp > 1.05 * hi * snow.PATCH_M) | (want == 0.0))
+    assert exact.sum() > 400
+    agree = np.isclose(layer[exact], want[exact], rtol=1e-4, atol=1e-6)
     assert agree.mean() > 0.97, agree.mean()
+    patchy = ground & ~exact
+    top = np.where(patchy, want / np.where(cov > 0, cov, 1.0), 0.0)
+    assert np.all(layer[patchy] <= top[patchy] * (1 + 1e-4) + 1e-6)
     # Not the cells' own depths: the interpolation is there (most pixels lie off the centres).
     nz, nx = cover.shape
     p = _points(np.where(np.isfinite(white.depth_m), white.depth_m, 0.0), street.camera, r)
@@ -235,8 +245,7 @@ def test_a_frame_shows_the_cover_white_and_its_depth_layer() -> None:
     assert covered.sum() > 300
     # Far enough that a pixel spans many of thin snow's patches, it shows their mean share:
     # albedo 0.12 + (0.85 - 0.12) * c(d), c(d) = 1 - (1 - d / 2 cm)^2, lit as the bare ground is.
-    lo, hi = snow.PATCH_BLEND
-    blended = covered & (_footprint_m(white.depth_m, street.camera, r) > 1.05 * hi * snow.PATCH_M)
+    blended = covered & (fp > 1.05 * hi * snow.PATCH_M)
     assert blended.sum() > 200
     frac = 1.0 - (1.0 - np.minimum(layer[blended] / 0.02, 1.0)) ** 2
     ratio = white.rgb[blended][:, 1] / bare.rgb[blended][:, 1]
@@ -285,7 +294,11 @@ def test_thin_snow_lies_in_patches_covering_the_share_its_depth_gives(backend: s
             share = (thin.rgb[..., 1] - bare.rgb[..., 1]) / (full.rgb[..., 1] - bare.rgb[..., 1])
             # Sharp: each pixel is snow or ground (the lifted surface's light differs by < 1 %).
             assert np.mean((share < 0.01) | (share > 0.99)) > 0.99, backend
-            np.testing.assert_allclose(thin.layers["snow_depth_m"], d, rtol=1e-5)
+            # The layer is the depth the pixel shows: the patches' d / c (the mass kept) on
+            # snow, 0 between them; its expectation is d.
+            layer = thin.layers["snow_depth_m"]
+            np.testing.assert_allclose(layer[share > 0.99], d / c, rtol=1e-4)
+            assert np.all(layer[share < 0.01] == 0.0)
             shares.append(share > 0.5)
         snowy = np.stack(shares)
         assert abs(snowy.mean() - c) < 0.03, (c, snowy.mean())
@@ -316,6 +329,8 @@ def test_far_away_a_pixel_shows_the_patches_mean_share_exactly() -> None:
     assert _footprint_m(np.full((54, 96), 30.0), scene.camera, r).min() > 0.5 * snow.PATCH_M
     # (The lifted surfaces are met 6 mm and 3 cm nearer: the sky light there differs by ~1e-4.)
     np.testing.assert_allclose(thin, bare + (full - bare) * c, rtol=2e-4)
+    # The depth layer there is the mean depth, d.
+    np.testing.assert_allclose(r.render(scene, Weather(snow_cover=_dusted(d))).layers["snow_depth_m"], d, rtol=1e-5)
 
 
 def test_snow_lies_on_a_photos_upward_surfaces_and_not_in_its_wind_shadow() -> None:

@@ -219,7 +219,8 @@ class Frame:
         blue more, at their own wavelengths); rain adds
         ``rain_alpha`` (streak coverage 1 - prod(1 - a_i)) and ``rain_depth_m`` (depth of the
         nearest visible streak, inf where none); a snow cover (``Weather(snow_cover=...)``) adds
-        ``snow_depth_m`` (the depth of snow on each pixel's surface, 0 where none); clouds
+        ``snow_depth_m`` (the depth of snow each pixel shows, 0 where none: thin snow's
+        patches d / c(d) deep and the ground between them 0, their mean d far away); clouds
         (``Weather(clouds=...)``) add ``cloud_alpha`` (their coverage 1 - prod(1 - alpha_i)); a
         sky with a sun adds ``sun_transmittance`` on box scenes (the share of the sun's direct
         light reaching each pixel's surface: 0 behind a box, the clouds' Gamma elsewhere, 1 for

@@ -24,10 +24,11 @@ by the wind's shadows and what it carried across the catchment's sides.
 Rendering: the cover is part of the weather, ``Weather(snow_cover=cover)`` (or
 ``dataclasses.replace(weather, snow_cover=cover)``), as every effect is: the surfaces
 whiten (albedo 0.85, fresh snow) and lift by the depth lying on them, lit by the sky and the
-lamps as the surfaces are, and the frame carries ``layers["snow_depth_m"]`` (the depth between
-the cells' centres, interpolated over each surface, so a drift's shading and the cover's edge
-vary smoothly). Thin snow lies in patches (:func:`coverage`, :data:`PATCH_M`): white where
-they lie, the surface beneath between them. Under a sun the snow sparkles: single ice facets
+lamps as the surfaces are, and the frame carries ``layers["snow_depth_m"]`` (the depth
+between the cells' centres, interpolated over each surface, so a drift's shading and the
+cover's edge vary smoothly). Thin snow lies in patches (:func:`coverage`, :data:`PATCH_M`):
+white where they lie, the surface beneath between them; the layer is the patches' depth
+d / c(d) where a pixel shows one and 0 between them (its mean over many patches is d). Under a sun the snow sparkles: single ice facets
 mirror the sun's disc into the camera (``rust/skyfall-core/src/snow/cover/sparkle.rs``).
 """
 
@@ -74,7 +75,7 @@ def coverage(depth_m: ArrayLike) -> NDArray[np.float64]:
     Parameters
     ----------
     depth_m : array_like
-        Mean depth of snow, m (a frame's ``snow_depth_m`` layer, a cover's ``depth_m``).
+        Mean depth of snow, m (a cover's ``depth_m`` or ``open_depth_m``).
 
     Returns
     -------

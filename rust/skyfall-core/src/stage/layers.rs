@@ -14,9 +14,10 @@ pub enum Layer {
     RainDepth,
     /// The flakes' coverage 1 − ∏(1 − aᵢ) (the particle pass, snow).
     SnowAlpha,
-    /// The mean depth of snow lying on the visible surface, m, interpolated between the
-    /// cover's cells; 0 where none (the scene stage, with a snow cover). Thin snow covers the
-    /// share `snow::cover::look::coverage` of the surface, in patches.
+    /// The depth of snow the pixel shows, m; 0 where none (the scene stage, with a snow
+    /// cover): interpolated between the cover's cells; thin snow lies in patches
+    /// d / `snow::cover::look::coverage`(d) deep with 0 between them, their mean d where a pixel
+    /// spans many (`snow::cover::render::drawn_depth`).
     SnowDepth,
     /// The clouds' coverage 1 − ∏(1 − αᵢ) over the sky (the cloud pass).
     CloudAlpha,
@@ -136,7 +137,7 @@ impl Layer {
             Layer::RainDepth => "depth of the nearest visible rain streak, m (inf: none)",
             Layer::SnowAlpha => "snowflake coverage 1 - prod(1 - a_i)",
             Layer::SnowDepth => {
-                "mean depth of snow lying on the visible surface, m (0: none; thin snow covers snow.coverage(d) of it, in patches)"
+                "depth of snow the pixel shows, m (0: none; thin snow lies in patches d / snow.coverage(d) deep, 0 between them)"
             }
             Layer::DropMask => "coverage of the windshield's drops, 0-1",
             Layer::DropHeight => {

@@ -810,11 +810,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let found = sh.hit || dep > 0.0;
         var sc = Shaded(vec3<f32>(0.0), 1.0);
+        var sd = 0.0;
         if found {
             // White where its patches lie, sparkling where the sun reaches it.
             let p = origin + dir * t;
             let fp = snow_footprint(t, dir, n, cam.intr.y);
-            let share = snow_drawn_share(p.x, p.z, snow_coverage(dep), fp);
+            let cov = snow_coverage(dep);
+            let share = snow_drawn_share(p.x, p.z, cov, fp);
+            // render::drawn_depth: patches dep / cov deep, the share of them the pixel shows.
+            if share > 0.0 && cov > 0.0 {
+                sd = dep / cov * share;
+            }
             sc = surface_radiance(p, n, under + (vec3<f32>(snow.range.z) - under) * share);
             if LIT && sun.flags.x != 0u && sc.share * share > 0.0 {
                 let g = snow_sparkle(p, n, -dir, sun.dir.xyz, fp);
@@ -822,7 +828,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
         let st = t;
-        let sd = select(0.0, dep, found);
         snow_out[i] = sd;
         if found {
             rgb[3u * i] = sc.c.x;

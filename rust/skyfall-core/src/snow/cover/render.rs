@@ -426,7 +426,7 @@ impl SnowRender {
     }
 
     /// One pixel of a box scene with the cover: (radiance, depth along the axis, depth of snow
-    /// seen there, the sun's share on the surface seen), lit as
+    /// the pixel shows ([`drawn_depth`]), the sun's share on the surface seen), lit as
     /// the frame's scene stage lights the surfaces (`light`: the frame's `SceneLight`).
     #[inline]
     pub fn shade_pixel(
@@ -445,7 +445,8 @@ impl SnowRender {
         let snowy = |t: f32, n: Vec3, dep: f32, under: Vec3| {
             let p = cam.eye() + dir * t;
             let fp = footprint_m(t, dir, n, cam.fy);
-            let share = drawn_share(p.x, p.z, coverage(dep), fp);
+            let cov = coverage(dep);
+            let share = drawn_share(p.x, p.z, cov, fp);
             let a = under + (Vec3::splat(SNOW_ALBEDO) - under) * share;
             let (mut rad, sun) = light.surface_radiance_sun(&scene.boxes, p, n, a);
             if let Some((l, e)) = light.sun_glint()
@@ -453,7 +454,7 @@ impl SnowRender {
             {
                 rad += e * (sun * share * sparkle(p, n, -dir, l, fp));
             }
-            (rad, t, dep, sun)
+            (rad, t, drawn_depth(dep, cov, share), sun)
         };
         match self.trace(cam.eye(), dir, t_max) {
             Some((t, n, dep)) => {
@@ -512,6 +513,10 @@ impl SnowRender {
             return;
         };
         let row = &per_pixel[y * w..(y + 1) * w];
+        let mut snow_row = snow_row;
+        if let Some(out) = snow_row.as_deref_mut() {
+            out.fill(0.0);
+        }
         for (x, &dep) in row.iter().enumerate() {
             if dep <= 0.0 {
                 continue;
@@ -521,19 +526,28 @@ impl SnowRender {
             let e = ambient.sample(p)[0];
             let snow = self.radiance_scale * (SNOW_ALBEDO * e);
             // The snow lies on surfaces facing up: their footprint as a level one's.
-            let c = drawn_share(
-                p.x,
-                p.z,
-                coverage(dep),
-                footprint_m(depth_row[x], d, Vec3::Y, cam.fy),
-            );
+            let cov = coverage(dep);
+            let c = drawn_share(p.x, p.z, cov, footprint_m(depth_row[x], d, Vec3::Y, cam.fy));
             for k in 0..3 {
                 let v = &mut rgb_row[3 * x + k];
                 *v = *v * (1.0 - c) + snow[k] * c;
             }
+            if let Some(out) = snow_row.as_deref_mut() {
+                out[x] = drawn_depth(dep, cov, c);
+            }
         }
-        if let Some(out) = snow_row {
-            out.copy_from_slice(row);
-        }
+    }
+}
+
+/// The depth of snow a pixel shows, m: a surface under a mean depth `dep` of snow covering
+/// the share `cov` of it lies in patches `dep / cov` deep (the mass kept), of which the pixel
+/// shows the share `share`; so `dep / cov` on a patch, 0 between, and `dep` where the pixel
+/// spans many patches (share = cov). Its expectation is `dep` at every distance.
+#[inline]
+pub fn drawn_depth(dep: f32, cov: f32, share: f32) -> f32 {
+    if share > 0.0 && cov > 0.0 {
+        dep / cov * share
+    } else {
+        0.0
     }
 }
