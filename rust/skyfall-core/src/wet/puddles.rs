@@ -63,6 +63,13 @@ pub(crate) fn unit(h: u32) -> f32 {
     (h >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
+/// The hash of the cell of side `cell_m` holding the point `p`, salted (the film's grain, the
+/// snow's glints: also `cell_hash` in `shaders/common.wgsl`).
+pub(crate) fn cell_hash(p: Vec3, cell_m: f32, salt: u32) -> u32 {
+    let c = (p / cell_m).floor();
+    hash(c.x as i32 as u32 ^ hash(c.y as i32 as u32 ^ hash(c.z as i32 as u32 ^ salt)))
+}
+
 /// The hash of a lattice point (i, j) of octave (salt) `salt`.
 fn lattice(i: i32, j: i32, salt: u32) -> u32 {
     hash(i as u32 ^ hash(j as u32 ^ hash(salt)))
@@ -150,8 +157,7 @@ pub fn in_puddle(p: Vec3, n: Vec3, water_mm: f64) -> bool {
 /// of roughness `alpha`, sampled by the two numbers the point's [`GRAIN_CELL_M`] cell hashes
 /// to (tan²θ = α²·u₁/(1 − u₁), φ = 2π·u₂ about `n`).
 pub fn film_normal(p: Vec3, n: Vec3, alpha: f32) -> Vec3 {
-    let c = (p / GRAIN_CELL_M).floor();
-    let h = hash(c.x as i32 as u32 ^ hash(c.y as i32 as u32 ^ hash(c.z as i32 as u32 ^ 0x9e37)));
+    let h = cell_hash(p, GRAIN_CELL_M, 0x9e37);
     let (u1, u2) = (unit(h), unit(hash(h)));
     let tan = alpha * (u1 / (1.0 - u1)).sqrt();
     let cos_t = 1.0 / (1.0 + tan * tan).sqrt();

@@ -172,6 +172,12 @@ fn lowbias(x0: u32) -> u32 {
     return x;
 }
 
+// puddles::cell_hash: the hash of the cell of side cell_m holding p, salted.
+fn cell_hash(p: vec3<f32>, cell_m: f32, salt: u32) -> u32 {
+    let c = floor(p / cell_m);
+    return lowbias(bitcast<u32>(i32(c.x)) ^ lowbias(bitcast<u32>(i32(c.y)) ^ lowbias(bitcast<u32>(i32(c.z)) ^ salt)));
+}
+
 fn unit24(h: u32) -> f32 {
     return f32(h >> 8u) * (1.0 / 16777216.0);
 }
@@ -232,8 +238,7 @@ fn reflected(d: vec3<f32>, n: vec3<f32>, p: vec3<f32>, still: bool) -> vec3<f32>
     if still {
         return mirror;
     }
-    let c = floor(p / GRAIN_CELL_M);
-    let h = lowbias(bitcast<u32>(i32(c.x)) ^ lowbias(bitcast<u32>(i32(c.y)) ^ lowbias(bitcast<u32>(i32(c.z)) ^ 0x9e37u)));
+    let h = cell_hash(p, GRAIN_CELL_M, 0x9e37u);
     let u1 = unit24(h);
     let u2 = unit24(lowbias(h));
     let tn = FILM_ROUGHNESS * sqrt(u1 / (1.0 - u1));

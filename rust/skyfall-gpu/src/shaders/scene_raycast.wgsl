@@ -453,8 +453,9 @@ fn snow_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> SnowHit {
             if h0 <= h1 {
                 if h0 > t_in || o.y + d.y * h0 - b < 0.5 * s {
                     // The top (the caller interpolates its depth and normal over the surface:
-                    // once, outside this loop, which lavapipe's compiler then keeps small).
-                    return SnowHit(h0, snow_normal(i, k), dep, true, true, vec2<u32>(i, k), b);
+                    // once, outside this loop, which lavapipe's compiler then keeps small; its
+                    // normal is the caller's).
+                    return SnowHit(h0, side, dep, true, true, vec2<u32>(i, k), b);
                 }
                 return SnowHit(h0, side, dep, true, false, vec2<u32>(i, k), b);
             }
@@ -524,16 +525,6 @@ fn snow_drawn_share(x: f32, z: f32, c: f32, footprint: f32) -> f32 {
     return sharp + (c - sharp) * f;
 }
 
-// sparkle::ice_fresnel: unpolarised Fresnel reflectance on ice at incidence cosine c.
-fn ice_fresnel(c0: f32) -> f32 {
-    let c = clamp(c0, 0.0, 1.0);
-    let s2 = (1.0 - c * c) / (ICE_INDEX * ICE_INDEX);
-    let t = sqrt(max(1.0 - s2, 0.0));
-    let rs = (c - ICE_INDEX * t) / (c + ICE_INDEX * t);
-    let rp = (t - ICE_INDEX * c) / (t + ICE_INDEX * c);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
 // sparkle::sparkle: the glints a pixel adds at p on a face n seen along to_camera (any length)
 // under the sun along l, footprint of side fp (radiance over E/pi per unit of the sun's normal
 // illuminance over E); most pixels draw none and cost a hash (1 - e^-N <= N).
@@ -543,8 +534,7 @@ fn snow_sparkle(p: vec3<f32>, n: vec3<f32>, to_camera: vec3<f32>, l: vec3<f32>, 
     if count <= 0.0 {
         return 0.0;
     }
-    let c = floor(p / GLINT_CELL_M);
-    let u = unit24(lowbias(bitcast<u32>(i32(c.x)) ^ lowbias(bitcast<u32>(i32(c.y)) ^ lowbias(bitcast<u32>(i32(c.z)) ^ 0x51a7u))));
+    let u = unit24(cell_hash(p, GLINT_CELL_M, 0x51a7u));
     if u >= count {
         return 0.0;
     }
@@ -559,7 +549,7 @@ fn snow_sparkle(p: vec3<f32>, n: vec3<f32>, to_camera: vec3<f32>, l: vec3<f32>, 
         return 0.0;
     }
     let hv = clamp(dot(normalize(v + l), v), 0.0, 1.0);
-    let one = ice_fresnel(hv) * FACET_M * FACET_M * hv / (SUN_RADIUS_RAD * SUN_RADIUS_RAD * area * nv);
+    let one = fresnel(hv, ICE_INDEX) * FACET_M * FACET_M * hv / (SUN_RADIUS_RAD * SUN_RADIUS_RAD * area * nv);
     return one * count / hit;
 }
 
@@ -804,8 +794,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if interp {
             let at = snow_surface_at(ip, ic.x, ic.y, iy);
             dep = at.d;
-            if sh.hit && at.has_n {
+            if sh.hit {
                 n = at.n;
+                if !at.has_n {
+                    n = snow_normal(ic.x, ic.y);
+                }
             }
         }
         let found = sh.hit || dep > 0.0;

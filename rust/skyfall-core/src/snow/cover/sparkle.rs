@@ -24,7 +24,8 @@
 //! footprints, each brighter than the snow by about half under a sun 30° up) and hardly its
 //! brightness; far away a pixel holds many dim glints, their mean.
 
-use crate::wet::puddles::{hash, unit};
+use crate::wet::optics::fresnel;
+use crate::wet::puddles::{cell_hash, unit};
 use glam::Vec3;
 
 /// The side of the ice facets that glint, m.
@@ -39,15 +40,11 @@ pub const SUN_RADIUS_RAD: f32 = 4.653e-3;
 /// The lattice a pixel's glint is drawn on, m.
 pub const GLINT_CELL_M: f32 = 5.0e-4;
 
-/// Fresnel's reflectance of unpolarised light on ice at an angle of incidence of cosine `c`.
+/// Fresnel's reflectance of unpolarised light on ice at an angle of incidence of cosine `c`
+/// ([`fresnel`], the wet surfaces' own, at [`ICE_INDEX`]).
 #[inline]
 pub fn ice_fresnel(c: f32) -> f32 {
-    let c = c.clamp(0.0, 1.0);
-    let s2 = (1.0 - c * c) / (ICE_INDEX * ICE_INDEX);
-    let t = (1.0 - s2).max(0.0).sqrt();
-    let rs = (c - ICE_INDEX * t) / (c + ICE_INDEX * t);
-    let rp = (t - ICE_INDEX * c) / (t + ICE_INDEX * c);
-    0.5 * (rs * rs + rp * rp)
+    fresnel(f64::from(c), f64::from(ICE_INDEX)) as f32
 }
 
 /// The mean number of facets glinting on a footprint of `area_m2`.
@@ -86,10 +83,7 @@ pub fn sparkle(p: Vec3, n: Vec3, to_camera: Vec3, l: Vec3, footprint_m: f32) -> 
     if count <= 0.0 || !count.is_finite() {
         return 0.0;
     }
-    let c = (p / GLINT_CELL_M).floor();
-    let u = unit(hash(
-        c.x as i32 as u32 ^ hash(c.y as i32 as u32 ^ hash(c.z as i32 as u32 ^ 0x51a7)),
-    ));
+    let u = unit(cell_hash(p, GLINT_CELL_M, 0x51a7));
     if u >= count {
         return 0.0;
     }
