@@ -432,6 +432,17 @@ class Windshield:
     def t_s(self) -> float: ...
     def arrival_kg_per_s(self) -> float: ...
     def state(self) -> dict[str, object]: ...
+    def drawn_steady(
+        self,
+        *,
+        cell_mm: float,
+        block: int,
+        mass_edges_kg: NDArray[np.float64],
+        counts: NDArray[np.float64],
+        mass_weights: NDArray[np.float64],
+        t_s: float,
+        steps: int,
+    ) -> tuple[Windshield, tuple[int, float, int]]: ...
 
 @final
 class GlassClock:

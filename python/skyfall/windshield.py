@@ -16,8 +16,8 @@ its top edge.
 The renderer draws the glass in the core, as the last stage of the frame
 (``Weather(windshield=...)``): the drops refract everything behind them and the blades are drawn
 over them, on every output, in the one core call of the frame. A preset's glass is drawn at the
-frame's ``time_s`` from its warm state (:func:`clock`): :data:`WARM_UP_PERIODS` wiper periods
-stepped once per (preset, seed), then advanced by ``time_s`` modulo :data:`EPOCH_PERIODS`
+frame's ``time_s`` from its warm state (:func:`clock`): the preset's steady glass drawn once per
+(preset, seed) (:func:`steady`), then advanced by ``time_s`` modulo :data:`EPOCH_PERIODS`
 periods, so the frames of a clip show the drops arriving, sliding and being swept, and any frame
 costs at most a period of stepping once the epoch's checkpoints are made.
 """
@@ -39,6 +39,7 @@ __all__ = [
     "EPOCH_PERIODS",
     "PRESETS",
     "SETTLED_PERIODS",
+    "STEADY_PRESETS",
     "WARM_UP_PERIODS",
     "Windshield",
     "clock",
@@ -49,6 +50,8 @@ __all__ = [
     "normals",
     "preset",
     "refract",
+    "steady",
+    "steady_table",
     "warm",
 ]
 
@@ -296,13 +299,14 @@ def preset(name: str, *, seed: int = 0) -> Windshield:
 
 
 WARM_UP_PERIODS: Final = 4
-"""The wiper periods :func:`warm` steps by default before its cached state: a glass still filling
-(about 12 s of stepping for the ``rain`` preset on 2 cores)."""
+"""The wiper periods :func:`clock` steps when asked to step (``warm_up_periods=...``), and for a
+preset without a steady table (:data:`STEADY_PRESETS`): a glass still filling (about 4 s of
+stepping for the ``rain`` preset on 2 cores)."""
 
 SETTLED_PERIODS: Final = 40
 """The wiper periods after which the ``rain`` preset's glass has settled: its held water stays in
-a steady band from there (``benches/results/windshield_27.md``); ``warm(...,
-warm_up_periods=SETTLED_PERIODS)`` draws from that steady state, at minutes of stepping."""
+a steady band from there (``benches/results/windshield_27.md``). A drawn steady glass
+(:func:`steady`) stands this many periods into the rain."""
 
 
 EPOCH_PERIODS: Final = 4
@@ -310,30 +314,182 @@ EPOCH_PERIODS: Final = 4
 it a clip's frames show the same glass moving on; each frame costs at most one period of
 stepping once the epoch's checkpoints are made (``skyfall_core::windshield::clock``)."""
 
+_DATA = Path(__file__).parent / "data"
+
 
 def _period_s(w: Windshield) -> float:
     return float(w.params.get("wiper_period_s", 1.5)) if w.params["wipers"] else 2.0
 
 
-@lru_cache(maxsize=4)
-def _clock(name: str, seed: int, warm_up_periods: int) -> _core.GlassClock:
-    w = preset(name, seed=seed)
+@lru_cache(maxsize=None)
+def _steady_table(name: str) -> dict[str, Any] | None:
+    """A preset's steady table (``benches/windshield_steady.py``), or None where it has none or
+    it was measured for other parameters than the preset's now."""
+    path = _DATA / f"windshield_steady_{name}.npz"
+    if name not in PRESETS or not path.is_file():
+        return None
+    import ast
+
+    with np.load(path, allow_pickle=False) as z:
+        t = {k: z[k] for k in z.files}
+    measured = ast.literal_eval(str(t["params"]))
+    if measured != {k: v for k, v in preset(name).params.items() if k != "seed"}:
+        return None
+    return t
+
+
+STEADY_PRESETS: Final = tuple(n for n in PRESETS if (_DATA / f"windshield_steady_{n}.npz").is_file())
+"""The presets whose steady state is tabulated (:func:`steady` draws it; :func:`clock` starts
+from it)."""
+
+
+STEADY_CELL_MM: Final = 10.0
+"""The squares of a steady table, mm: each kind's mean number of drops per square."""
+
+STEADY_BLOCK: Final = 4
+"""Squares per side of the blocks that share a mass histogram in a steady table."""
+
+STEADY_MASS_EDGES_KG: Final = np.logspace(-10.0, -3.0, 29)
+"""A steady table's mass bins, kg: four a decade from 1e-10 to 1e-3 kg."""
+
+
+def steady_table(states: list[Windshield]) -> dict[str, Any]:
+    """The statistics a steady glass is drawn from (:func:`steady`), pooled from states of one
+    glass, each at the start of a wiper period after it has settled.
+
+    Parameters
+    ----------
+    states : list of Windshield
+        At least one, all with the same parameters but the seed.
+
+    Returns
+    -------
+    dict
+        ``counts`` (3, ny, nx): the mean number of mesh drops, trail drops and particles per
+        :data:`STEADY_CELL_MM` square; ``mass_hist`` (3, by, bx, bins): their masses over
+        blocks of :data:`STEADY_BLOCK` squares in :data:`STEADY_MASS_EDGES_KG`; ``cell_mm``,
+        ``block``, ``mass_edges_kg``, ``snapshots``; ``params`` (the glass's, seed left out).
+    """
+    if not states or not all(isinstance(w, Windshield) for w in states):
+        raise TypeError("states must be a non-empty list of Windshield")
+    params = {k: v for k, v in states[0].params.items() if k != "seed"}
+    if any({k: v for k, v in w.params.items() if k != "seed"} != params for w in states):
+        raise ValueError("states must all have the same parameters but the seed")
+    width, height = params["glass_width_mm"], params["glass_height_mm"]
+    nx, ny = int(np.ceil(width / STEADY_CELL_MM)), int(np.ceil(height / STEADY_CELL_MM))
+    bx, by = -(-nx // STEADY_BLOCK), -(-ny // STEADY_BLOCK)
+    nb = len(STEADY_MASS_EDGES_KG) - 1
+    counts = np.zeros((3, ny, nx))
+    hist = np.zeros((3, by, bx, nb))
+    for w in states:
+        st = w.state()
+        d, p = st["drops"], st["particles"]
+        xy = np.concatenate([d[:, :2], p[:, :2]])
+        kind = np.concatenate([np.where(d[:, 4] != 0, 1, 0), np.full(len(p), 2)])
+        mass = np.concatenate([d[:, 2], p[:, 2]])
+        cx = np.clip((xy[:, 0] // STEADY_CELL_MM).astype(int), 0, nx - 1)
+        cy = np.clip((xy[:, 1] // STEADY_CELL_MM).astype(int), 0, ny - 1)
+        b = np.clip(np.searchsorted(STEADY_MASS_EDGES_KG, mass, side="right") - 1, 0, nb - 1)
+        np.add.at(counts, (kind, cy, cx), 1.0)
+        np.add.at(hist, (kind, cy // STEADY_BLOCK, cx // STEADY_BLOCK, b), 1.0)
+    return {
+        "cell_mm": np.array(STEADY_CELL_MM),
+        "block": np.array(STEADY_BLOCK),
+        "mass_edges_kg": STEADY_MASS_EDGES_KG.copy(),
+        "counts": (counts / len(states)).astype(np.float32),
+        "mass_hist": hist.astype(np.uint32),
+        "snapshots": np.array(len(states)),
+        "params": np.array(repr(params)),
+    }
+
+
+def steady(glass: str | Windshield, *, seed: int = 0, table: dict[str, Any] | None = None) -> Windshield:
+    """A glass in its steady state at the start of a wiper period, drawn statistically
+    (tens of milliseconds) instead of stepped there (minutes).
+
+    A preset's table (``python/skyfall/data/windshield_steady_<name>.npz``, made by
+    ``benches/windshield_steady.py`` with :func:`steady_table`) pools the states of long
+    simulations of the preset from :data:`SETTLED_PERIODS` periods on: for mesh drops, trail
+    drops and the wipers' particles, the mean number in each 10 mm square of the glass and the
+    histogram of their masses over 40 mm blocks (log bins, 4 a decade). A draw takes a Poisson
+    number of each in each square at uniform points, masses from its block's histogram
+    (log-uniform within a bin), places mesh and trail drops largest first where they touch no
+    other mesh drop and find their 2 mm cell empty, as the simulation keeps them, and spaces the
+    particles by the wipers' push-apart (``skyfall_core::windshield::steady``). Against long
+    simulations of seeds the table did not pool, its held water and drop-size histogram agree
+    within their spread between periods (``tests/test_windshield_steady.py``,
+    ``benches/results/sweeps.md``). What a draw does not have: the trails' lines (trail drops
+    lie scattered until sliding drops lay new ones) and the sub-metaballs of the last 0.4 s of
+    impacts.
+
+    Parameters
+    ----------
+    glass : str or Windshield
+        A preset in :data:`STEADY_PRESETS`, or a windshield whose parameters ``table`` was
+        measured for (its state is not used).
+    seed : int
+        The new glass's seed, in [0, 2^64): the draw's and the simulation's after it.
+    table : dict, optional
+        A :func:`steady_table` (a preset's own by default).
+
+    Returns
+    -------
+    Windshield
+        At :data:`SETTLED_PERIODS` wiper periods into the rain, the wipers at the start of a
+        sweep.
+    """
+    integer("seed", seed, 0, 2**64 - 1)
+    if isinstance(glass, Windshield):
+        if table is None:
+            raise ValueError("steady(glass) of a Windshield needs its table=steady_table(...)")
+        w = Windshield(**{**glass.params, "seed": int(seed)})
+    elif isinstance(glass, str) and glass in PRESETS:
+        table = table if table is not None else _steady_table(glass)
+        if table is None:
+            raise ValueError(f"windshield = {glass!r} has no steady table: use one of {', '.join(map(repr, STEADY_PRESETS))}")
+        w = preset(glass, seed=seed)
+    else:
+        raise ValueError(f"windshield = {glass!r} is not a preset: use one of {', '.join(map(repr, STEADY_PRESETS))}")
     period = _period_s(w)
-    for _ in range(warm_up_periods):
-        w.step(period)
-    return _core.GlassClock(w._core, period, EPOCH_PERIODS)
+    steps = SETTLED_PERIODS * int(np.ceil(period * 60.0 - 1e-9))
+    core, _report = w._core.drawn_steady(
+        cell_mm=float(table["cell_mm"]),
+        block=int(table["block"]),
+        mass_edges_kg=np.ascontiguousarray(table["mass_edges_kg"], np.float64),
+        counts=np.ascontiguousarray(table["counts"], np.float64),
+        mass_weights=np.ascontiguousarray(np.asarray(table["mass_hist"], np.float64).ravel()),
+        t_s=SETTLED_PERIODS * period,
+        steps=steps,
+    )
+    out = Windshield.__new__(Windshield)
+    out.params = dict(w.params)
+    out._core = core
+    return out
 
 
-def clock(name: str, *, seed: int = 0, warm_up_periods: int = WARM_UP_PERIODS) -> _core.GlassClock:
+@lru_cache(maxsize=4)
+def _clock(name: str, seed: int, warm_up_periods: int | None) -> _core.GlassClock:
+    if warm_up_periods is None:
+        w = steady(name, seed=seed)
+    else:
+        w = preset(name, seed=seed)
+        for _ in range(warm_up_periods):
+            w.step(_period_s(w))
+    return _core.GlassClock(w._core, _period_s(w), EPOCH_PERIODS)
+
+
+def clock(name: str, *, seed: int = 0, warm_up_periods: int | None = None) -> _core.GlassClock:
     """A preset's glass on the frames' clock: ``clock(...).at(t_s)`` is the glass at frame time
     ``t_s``, the same bits whatever frames were drawn before.
 
-    The state after ``warm_up_periods`` wiper periods (2 s each without wipers) is computed
-    once per (name, seed, warm_up_periods) and cached (4 clocks); the glass at ``t_s`` is that
-    state advanced by ``t_s`` modulo :data:`EPOCH_PERIODS` periods, on a fixed grid of steps
-    (at most 1/60 s) from each period's start: the state at each period's start is made once and
-    kept, and the last state a frame reached, so the next frame of a clip steps only the time
-    between them.
+    The warm state is the preset's steady glass drawn statistically (:func:`steady`) where the
+    preset has a table (:data:`STEADY_PRESETS`), else the glass after :data:`WARM_UP_PERIODS`
+    wiper periods (2 s each without wipers) stepped from dry; ``warm_up_periods`` asks for that
+    many stepped periods instead. It is made once per (name, seed, warm_up_periods) and cached
+    (4 clocks); the glass at ``t_s`` is that state advanced by ``t_s`` modulo
+    :data:`EPOCH_PERIODS` periods, on a fixed grid of steps (at most 1/60 s) from each period's
+    start: the state at each period's start is made once and kept, and the last state a frame
+    reached, so the next frame of a clip steps only the time between them.
 
     Parameters
     ----------
@@ -341,34 +497,34 @@ def clock(name: str, *, seed: int = 0, warm_up_periods: int = WARM_UP_PERIODS) -
         A preset, :data:`PRESETS`.
     seed : int
         The windshield's seed, in [0, 2^64).
-    warm_up_periods : int
-        Periods stepped once before the clock, in [1, 100] (default :data:`WARM_UP_PERIODS`).
+    warm_up_periods : int or None
+        None (default) for the drawn steady glass where there is one, else periods stepped
+        from dry glass once before the clock, in [1, 100].
     """
     if name not in PRESETS:
         raise ValueError(f"windshield = {name!r} is not a preset: use one of {', '.join(map(repr, PRESETS))}")
-    integer("warm_up_periods", warm_up_periods, 1, 100)
     integer("seed", seed, 0, 2**64 - 1)
-    return _clock(name, int(seed), int(warm_up_periods))
+    if warm_up_periods is not None:
+        integer("warm_up_periods", warm_up_periods, 1, 100)
+        periods: int | None = int(warm_up_periods)
+    else:
+        periods = None if name in STEADY_PRESETS else WARM_UP_PERIODS
+    return _clock(name, int(seed), periods)
 
 
-def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int = WARM_UP_PERIODS) -> Windshield:
+def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int | None = None) -> Windshield:
     """A preset's windshield as a frame at ``t_s`` draws it: ``clock(name, ...).at(t_s)``.
 
-    The glass is the warm state (``warm_up_periods`` wiper periods, 2 s each without wipers,
-    stepped once per (name, seed) and cached) advanced by ``t_s`` modulo :data:`EPOCH_PERIODS`
-    periods (see :func:`clock`): the wipers stand where they would at ``t_s``, and the drops
-    are the glass after those periods (not the one exact history of ``t_s`` seconds of rain).
-    The swept glass is clear after a sweep, but the glass the blades do not reach (half of the
-    presets' glass) fills with drops until they grow past the size at which they slide
-    (Furmidge's criterion with the airflow), which at the ``rain`` preset's 14 m/s takes some
-    30 periods, overshoots once and then settles: from :data:`SETTLED_PERIODS` (40) on, the
-    held water stays within its steady band (``benches/results/windshield_27.md``). The
-    default, :data:`WARM_UP_PERIODS` (4), is a glass still filling, at about 12 s of stepping
-    once per process for the ``rain`` preset on 2 cores, while 10 periods take about 77 s and
-    40 several minutes (the step's cost grows with the drops held). Pass
-    ``warm_up_periods=SETTLED_PERIODS`` for a draw from the steady state. The ``drizzle``
-    glass (a fifth of the rain) and the ``parked`` one (no wipers, 2 s "periods") fill more
-    slowly and are not settled after 40 either (not measured).
+    The glass is the warm state advanced by ``t_s`` modulo :data:`EPOCH_PERIODS` periods (see
+    :func:`clock`): the wipers stand where they would at ``t_s``, and the drops are the glass
+    after those periods (not the one exact history of ``t_s`` seconds of rain). The warm state
+    of a preset in :data:`STEADY_PRESETS` is its steady glass drawn statistically
+    (:func:`steady`): the glass the blades do not reach (half of the presets' glass) full of
+    drops up to the size at which they slide (Furmidge's criterion with the airflow), as the
+    ``rain`` preset's glass holds it from some 40 periods of rain on
+    (``benches/results/windshield_27.md``). Other presets, or ``warm_up_periods=n``, step ``n``
+    periods from dry glass (:data:`WARM_UP_PERIODS` by default: a glass still filling; 40
+    periods of the ``rain`` preset take minutes).
 
     Parameters
     ----------
@@ -378,9 +534,9 @@ def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int = WARM_UP
         Time into the rain, s, in [-1e7, 1e7].
     seed : int
         The windshield's seed.
-    warm_up_periods : int
-        Periods stepped once before the cache, in [1, 100] (default :data:`WARM_UP_PERIODS`);
-        fewer than :data:`SETTLED_PERIODS` give a glass still filling.
+    warm_up_periods : int or None
+        None (default) for the drawn steady glass where there is one; else periods stepped
+        from dry glass once before the cache, in [1, 100].
     """
     t = in_range("time_s", t_s)
     c = clock(name, seed=seed, warm_up_periods=warm_up_periods)

@@ -16,6 +16,7 @@ use skyfall_core::windshield::furmidge::Wetting;
 use skyfall_core::windshield::render::{self, RefractMode, Refraction};
 use skyfall_core::windshield::sim::{MeshDrop, ParticleDrop};
 use skyfall_core::windshield::stage::Glass;
+use skyfall_core::windshield::steady;
 use skyfall_core::windshield::{Windshield as Sim, WindshieldConfig, WindshieldState};
 use std::sync::Mutex;
 
@@ -162,6 +163,46 @@ impl Windshield {
         let sim: &mut Sim = &mut g;
         py.detach(|| sim.step(dt_s)).map_err(CoreError)?;
         Ok(())
+    }
+
+    /// A new windshield of this one's configuration in the steady state the table describes
+    /// (`skyfall_core::windshield::steady`), at `t_s` after `steps` internal steps, GIL
+    /// released; with (drops left out, their water kg, drops placed).
+    #[pyo3(signature = (*, cell_mm, block, mass_edges_kg, counts, mass_weights, t_s, steps))]
+    #[allow(clippy::too_many_arguments)]
+    fn drawn_steady(
+        &self,
+        py: Python<'_>,
+        cell_mm: f64,
+        block: usize,
+        mass_edges_kg: PyReadonlyArray1<'_, f64>,
+        counts: PyReadonlyArray3<'_, f64>,
+        mass_weights: PyReadonlyArray1<'_, f64>,
+        t_s: f64,
+        steps: u64,
+    ) -> PyResult<(Self, (usize, f64, usize))> {
+        let shape = counts.shape();
+        if shape[0] != steady::KINDS {
+            return Err(invalid(
+                "counts",
+                None,
+                format!("must be ({}, ny, nx), got {shape:?}", steady::KINDS),
+            ));
+        }
+        let table = steady::SteadyTable {
+            cell_mm,
+            nx: shape[2],
+            ny: shape[1],
+            block,
+            mass_edges_kg: mass_edges_kg.as_array().iter().copied().collect(),
+            counts: counts.as_array().iter().copied().collect(),
+            mass_weights: mass_weights.as_array().iter().copied().collect(),
+        };
+        let config = self.with(|s| s.config().clone())?;
+        let (sim, r) = py
+            .detach(|| Sim::drawn_steady(config, &table, t_s, steps))
+            .map_err(CoreError)?;
+        Ok((Windshield::wrap(sim), (r.left_out, r.left_out_kg, r.placed)))
     }
 
     /// (positions (N, 2) mm, base radii (N,) mm, kinds (N,) uint8: 0 mesh, 1 trail, 2 particle).

@@ -41,7 +41,7 @@ impl Windshield {
     /// The live, non-trail mesh drops other than `i` whose base disc touches the disc of
     /// radius `a_mm` at (x, y), in increasing index (the same order whichever way they were
     /// found, so the merged sums round alike).
-    fn touching(&self, i: usize, x: f64, y: f64, a_mm: f64) -> Vec<usize> {
+    pub(super) fn touching(&self, i: usize, x: f64, y: f64, a_mm: f64) -> Vec<usize> {
         let reach = a_mm + self.a_max_mm;
         let s = self.config.cell_mm;
         let k = (reach / s).ceil() as i64;

@@ -9,5 +9,6 @@ mod merge;
 pub mod render;
 pub mod sim;
 pub mod stage;
+pub mod steady;
 
 pub use sim::{DropKind, Metaball, Windshield, WindshieldConfig, WindshieldState, Wiper};

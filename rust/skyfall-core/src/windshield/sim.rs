@@ -624,7 +624,7 @@ impl Windshield {
     }
 
     /// The largest mesh drop's base radius, mm (0 on dry glass).
-    fn largest_base_radius_mm(&self) -> f64 {
+    pub(super) fn largest_base_radius_mm(&self) -> f64 {
         let m = self
             .state
             .drops
@@ -1208,7 +1208,7 @@ impl Windshield {
 
     /// One Jacobi pass of the push-apart: every overlapping pair moves apart along its centre
     /// line by half the overlap each, times (1 + penalty); displacements from the old positions.
-    fn push_apart(&mut self) {
+    pub(super) fn push_apart(&mut self) {
         let r = self.config.particle_radius_mm;
         let d0 = 2.0 * r;
         let ps = &self.state.particles;
