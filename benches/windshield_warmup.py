@@ -53,7 +53,7 @@ def main() -> None:
     a = ap.parse_args()
     rows: dict[tuple[str, float], list[dict[str, float]]] = {}
     for k in range(a.rounds):
-        for t_s in (0.0, 0.9):
+        for t_s in (0.0, 0.9, 1.45):
             for label, py in (("base", a.base_python), ("head", sys.executable)):
                 rows.setdefault((label, t_s), []).append(run(py, t_s, 1000 + k))
                 print(label, t_s, rows[(label, t_s)][-1], flush=True)
@@ -68,7 +68,7 @@ def main() -> None:
         "| frame time | version | first frame, s | seen frame, s | warm-up, s | one step, ms | warm-up / one step | drops on the glass | held water, g |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    for t_s in (0.0, 0.9):
+    for t_s in (0.0, 0.9, 1.45):
         for label in ("base", "head"):
             m = med[(label, t_s)]
             wu = m["first"] - m["seen"]

@@ -506,6 +506,8 @@ pub struct Windshield {
     pub(super) state: WindshieldState,
     /// An upper bound on every mesh drop's base radius, mm (the merge's search reach).
     pub(super) a_max_mm: f64,
+    /// No drop lighter than this slides, kg ([`Self::least_sliding_mass_kg`]).
+    slide_min_kg: f64,
 }
 
 /// Drops of one diameter that carry the water of those outside the arrival's bins.
@@ -554,7 +556,9 @@ impl Windshield {
             config,
             state,
             a_max_mm: 0.0,
+            slide_min_kg: 0.0,
         };
+        w.slide_min_kg = w.least_sliding_mass_kg();
         for (i, d) in w.state.drops.iter().enumerate() {
             let fine = d.mass_kg.is_finite() && d.mass_kg > 0.0;
             let c = w.cell_of(d.x_mm, d.y_mm);
@@ -832,6 +836,23 @@ impl Windshield {
         gravity - air
     }
 
+    /// A mass below which no drop slides, kg: the excess of the driving force over the
+    /// retention, per base radius, |g a² − c a| − k (gravity ∝ a³, the airflow ∝ a², the
+    /// retention ∝ a), is below 0 from a = 0 up to its first root, so the largest mass of a
+    /// log scan (steps of 0.1 %) below the first one that slides, less 1 %, is such a mass.
+    fn least_sliding_mass_kg(&self) -> f64 {
+        let mut m = 1e-15;
+        let mut last = 0.0;
+        while m < 1.0 {
+            if self.slide_speed_m_s(m) != 0.0 {
+                return last * 0.99;
+            }
+            last = m;
+            m *= 1.001;
+        }
+        last * 0.99
+    }
+
     /// The quasi-steady sliding speed, m/s (signed along y), of a drop of `mass`.
     pub fn slide_speed_m_s(&self, mass: f64) -> f64 {
         let a = self.base_radius_m(mass / WATER_DENSITY_KG_M3);
@@ -856,7 +877,7 @@ impl Windshield {
             .drops
             .par_iter()
             .map(|d| {
-                if d.trail {
+                if d.trail || d.mass_kg < self.slide_min_kg {
                     0.0
                 } else {
                     self.slide_speed_m_s(d.mass_kg)
@@ -1144,7 +1165,7 @@ impl Windshield {
             });
         }
         // off the glass: swept off; outside every region: back to the mesh, unless held
-        let hold_a = self.config.hold_radius_mm;
+        let hold_m = self.least_mass_of_radius(self.config.hold_radius_mm);
         let half = (self.config.hold_cells / 2) as i64;
         // each particle's fate against the mesh as it stands, found in parallel: 0 off the
         // glass, 1 kept (in a region, or held), 2 back to the mesh
@@ -1158,7 +1179,7 @@ impl Windshield {
                     if wipers
                         .iter()
                         .any(|w| self.in_region(w, p.x_mm, p.y_mm, theta1))
-                        || self.big_drop_near(c, half, hold_a)
+                        || self.big_drop_near(c, half, hold_m)
                     {
                         1
                     } else {
@@ -1177,7 +1198,7 @@ impl Windshield {
                     // a drop made by an earlier particle of this step holds this one too
                     let held = self
                         .cell_of(p.x_mm, p.y_mm)
-                        .is_some_and(|c| self.big_drop_near(c, half, hold_a));
+                        .is_some_and(|c| self.big_drop_near(c, half, hold_m));
                     if held {
                         kept.push(p);
                     } else {
@@ -1189,21 +1210,41 @@ impl Windshield {
         self.state.particles = kept;
     }
 
-    /// Whether a mesh drop of base radius ≥ `a_mm` lies in the (2·half + 1)² cells around `c`.
-    pub fn big_drop_near(&self, c: usize, half: i64, a_mm: f64) -> bool {
+    /// Whether a mesh drop of mass ≥ `m_min` (a base radius ≥ `a_mm` when `m_min` is
+    /// [`Self::least_mass_of_radius`]`(a_mm)`) lies in the (2·half + 1)² cells around `c`.
+    pub fn big_drop_near(&self, c: usize, half: i64, m_min: f64) -> bool {
         let (cx, cy) = ((c % self.nx) as i64, (c / self.nx) as i64);
         for ty in (cy - half).max(0)..=(cy + half).min(self.ny as i64 - 1) {
             for tx in (cx - half).max(0)..=(cx + half).min(self.nx as i64 - 1) {
                 let at = self.grid[ty as usize * self.nx + tx as usize];
                 if at != EMPTY {
                     let d = &self.state.drops[at as usize];
-                    if d.mass_kg > 0.0 && self.base_radius_mm(d.mass_kg) >= a_mm {
+                    if d.mass_kg > 0.0 && d.mass_kg >= m_min {
                         return true;
                     }
                 }
             }
         }
         false
+    }
+
+    /// The least mass whose base radius is at least `a_mm`: as the base radius grows with the
+    /// mass, `base_radius_mm(m) >= a_mm` exactly where `m >=` this (a bisection over the
+    /// positive f64s, which order as their bits), without a cube root per drop.
+    pub fn least_mass_of_radius(&self, a_mm: f64) -> f64 {
+        if self.base_radius_mm(f64::MAX) < a_mm {
+            return f64::INFINITY;
+        }
+        let (mut lo, mut hi) = (0u64, f64::MAX.to_bits());
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            if self.base_radius_mm(f64::from_bits(mid)) >= a_mm {
+                hi = mid;
+            } else {
+                lo = mid + 1;
+            }
+        }
+        f64::from_bits(lo)
     }
 
     /// One Jacobi pass of the push-apart: every overlapping pair moves apart along its centre
@@ -1217,15 +1258,7 @@ impl Windshield {
         }
         // bucket by cells of one diameter
         let key = |p: &ParticleDrop| ((p.x_mm / d0).floor() as i64, (p.y_mm / d0).floor() as i64);
-        let mut order: Vec<(i64, i64, u32)> = ps
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let (a, b) = key(p);
-                (b, a, i as u32)
-            })
-            .collect();
-        order.sort_unstable();
+        let order = sorted_by_cell(ps.iter().map(key).collect());
         // Each row of cells' run of `order` (its first entry), so that a particle finds its
         // three rows with one search among the rows, then its three cells within each row:
         // the same entries, in the same order, as a search of the whole list per cell.
@@ -1235,63 +1268,93 @@ impl Windshield {
                 rows.push((y, n));
             }
         }
+        // The particles' positions in `order`'s order: a particle's candidates are read from
+        // contiguous memory, the same values in the same order as from the particle list.
+        let at: Vec<(f64, f64, u32)> = order
+            .iter()
+            .map(|&(_, _, j)| {
+                let q = &ps[j as usize];
+                (q.x_mm, q.y_mm, j)
+            })
+            .collect();
         // Per row by − 1 ..= by + 1, cells bx − 1 ..= bx + 1: contiguous in `order`, sorted by
         // (y, x, index).
-        let near = |bx: i64, by: i64| -> [&[(i64, i64, u32)]; 3] {
-            let mut out: [&[(i64, i64, u32)]; 3] = [&[]; 3];
+        let near = |bx: i64, by: i64| -> [&[(f64, f64, u32)]; 3] {
+            let mut out: [&[(f64, f64, u32)]; 3] = [&[]; 3];
             let mut k = rows.partition_point(|r| r.0 < by - 1);
             for (o, y) in (by - 1..=by + 1).enumerate() {
                 if k < rows.len() && rows[k].0 == y {
-                    let end = rows.get(k + 1).map_or(order.len(), |r| r.1);
-                    let run = &order[rows[k].1..end];
+                    let (start, end) = (rows[k].1, rows.get(k + 1).map_or(order.len(), |r| r.1));
+                    let run = &order[start..end];
                     let lo = run.partition_point(|&(_, x, _)| x < bx - 1);
                     let hi = lo + run[lo..].partition_point(|&(_, x, _)| x <= bx + 1);
-                    out[o] = &run[lo..hi];
+                    out[o] = &at[start + lo..start + hi];
                     k += 1;
                 }
             }
             out
         };
         let gain = 0.5 * (1.0 + self.config.penalty);
-        let moves: Vec<(f64, f64)> = ps
-            .par_iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let (bx, by) = key(p);
-                let (mut mx, mut my) = (0.0, 0.0);
-                let mut met = 0usize;
-                'cells: for run in near(bx, by) {
-                    for &(_, _, j) in run {
-                        let j = j as usize;
-                        if j == i {
-                            continue;
-                        }
-                        let q = &ps[j];
-                        let (dx, dy) = (p.x_mm - q.x_mm, p.y_mm - q.y_mm);
-                        let d2 = dx * dx + dy * dy;
-                        if d2 >= d0 * d0 {
-                            continue;
-                        }
-                        met += 1;
-                        if met > MAX_NEIGHBOURS {
-                            break 'cells;
-                        }
-                        let dist = d2.sqrt();
-                        let overlap = d0 - dist;
-                        let (ux, uy) = if dist > 1e-9 {
-                            (dx / dist, dy / dist)
-                        } else {
-                            // coincident: apart along a direction fixed by the pair
-                            let a = if i < j { 0.0 } else { std::f64::consts::PI };
-                            (a.cos(), a.sin())
-                        };
-                        mx += gain * overlap * ux;
-                        my += gain * overlap * uy;
+        // One particle's move from its cell's neighbourhood.
+        let one = |nb: &[&[(f64, f64, u32)]; 3], (px, py, i): (f64, f64, u32)| {
+            let i = i as usize;
+            let (mut mx, mut my) = (0.0, 0.0);
+            let mut met = 0usize;
+            'cells: for run in nb {
+                for &(qx, qy, j) in *run {
+                    let j = j as usize;
+                    if j == i {
+                        continue;
                     }
+                    let (dx, dy) = (px - qx, py - qy);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 >= d0 * d0 {
+                        continue;
+                    }
+                    met += 1;
+                    if met > MAX_NEIGHBOURS {
+                        break 'cells;
+                    }
+                    let dist = d2.sqrt();
+                    let overlap = d0 - dist;
+                    let (ux, uy) = if dist > 1e-9 {
+                        (dx / dist, dy / dist)
+                    } else {
+                        // coincident: apart along a direction fixed by the pair
+                        let a = if i < j { 0.0 } else { std::f64::consts::PI };
+                        (a.cos(), a.sin())
+                    };
+                    mx += gain * overlap * ux;
+                    my += gain * overlap * uy;
                 }
-                (mx, my)
-            })
+            }
+            (mx, my)
+        };
+        // each particle's move, computed in `order`'s order (a cell's particles in turn find
+        // its neighbourhood once), then put back in the particles' order
+        type Near<'a> = [&'a [(f64, f64, u32)]; 3];
+        let sorted: Vec<(f64, f64)> = order
+            .par_iter()
+            .zip(at.par_iter())
+            .map_init(
+                || None::<((i64, i64), Near<'_>)>,
+                |cache, (&(by, bx, _), &p)| {
+                    let nb = match cache {
+                        Some((cell, nb)) if *cell == (bx, by) => *nb,
+                        _ => {
+                            let nb = near(bx, by);
+                            *cache = Some(((bx, by), nb));
+                            nb
+                        }
+                    };
+                    one(&nb, p)
+                },
+            )
             .collect();
+        let mut moves = vec![(0.0, 0.0); ps.len()];
+        for (&(_, _, i), m) in at.iter().zip(sorted) {
+            moves[i as usize] = m;
+        }
         for (p, (mx, my)) in self.state.particles.iter_mut().zip(moves) {
             p.x_mm += mx;
             p.y_mm += my;
@@ -1331,6 +1394,49 @@ impl Windshield {
         });
         Ok(())
     }
+}
+
+/// The particles' (cell y, cell x, index) for their cells `keys` (x, y), sorted: by counting
+/// into the cells' buckets in index order where the cells span few enough buckets (the same
+/// order as sorting the triples), else by sorting.
+fn sorted_by_cell(keys: Vec<(i64, i64)>) -> Vec<(i64, i64, u32)> {
+    let triples = |keys: &[(i64, i64)]| -> Vec<(i64, i64, u32)> {
+        keys.iter()
+            .enumerate()
+            .map(|(i, &(x, y))| (y, x, i as u32))
+            .collect()
+    };
+    let (Some(x0), Some(x1)) = (
+        keys.iter().map(|k| k.0).min(),
+        keys.iter().map(|k| k.0).max(),
+    ) else {
+        return Vec::new();
+    };
+    let (y0, y1) = (
+        keys.iter().map(|k| k.1).min().unwrap_or(0),
+        keys.iter().map(|k| k.1).max().unwrap_or(0),
+    );
+    let (w, h) = ((x1 - x0 + 1) as u128, (y1 - y0 + 1) as u128);
+    if w * h > (8 * keys.len() as u128).max(1 << 19) {
+        let mut t = triples(&keys);
+        t.sort_unstable();
+        return t;
+    }
+    let bucket = |&(x, y): &(i64, i64)| ((y - y0) as usize) * w as usize + (x - x0) as usize;
+    let mut start = vec![0u32; (w * h) as usize + 1];
+    for k in &keys {
+        start[bucket(k) + 1] += 1;
+    }
+    for b in 1..start.len() {
+        start[b] += start[b - 1];
+    }
+    let mut out = vec![(0i64, 0i64, 0u32); keys.len()];
+    for (i, k) in keys.iter().enumerate() {
+        let b = bucket(k);
+        out[start[b] as usize] = (k.1, k.0, i as u32);
+        start[b] += 1;
+    }
+    out
 }
 
 #[cfg(test)]
@@ -1442,6 +1548,62 @@ mod tests {
         let w = Windshield::new(c).unwrap();
         assert_eq!(w.slide_speed_m_s(0.98 * m_c), 0.0);
         assert!(w.slide_speed_m_s(1.05 * m_c) > 0.0);
+    }
+
+    #[test]
+    fn counting_particles_into_their_cells_sorts_them_as_sorting_does() {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        // dense and repeated cells, negative ones, and a spread too wide to count
+        for (n, spread) in [(5000, 40i64), (3000, 700), (50, 1_000_000), (1, 3), (0, 3)] {
+            let keys: Vec<(i64, i64)> = (0..n)
+                .map(|_| {
+                    (
+                        rng.random_range(-spread / 4..spread),
+                        rng.random_range(-3..spread / 2 + 1),
+                    )
+                })
+                .collect();
+            let mut want: Vec<(i64, i64, u32)> = keys
+                .iter()
+                .enumerate()
+                .map(|(i, &(x, y))| (y, x, i as u32))
+                .collect();
+            want.sort_unstable();
+            assert_eq!(sorted_by_cell(keys), want, "{n}, {spread}");
+        }
+    }
+
+    #[test]
+    fn no_drop_below_the_least_sliding_mass_slides_and_the_hold_mass_is_the_radius() {
+        // still and at 14 m/s (the airflow nearly cancels gravity for mid-sized drops), on
+        // 30 and 60 degree glass and level glass: 20 000 masses up to the least sliding mass,
+        // each computed in full, stay; just above it, or above Furmidge's size without wind,
+        // drops slide
+        for (speed, tilt) in [(0.0, 30.0), (14.0, 30.0), (30.0, 60.0), (0.0, 0.0)] {
+            let mut c = dry(0);
+            c.car_speed_m_s = speed;
+            c.tilt_deg = tilt;
+            let w = Windshield::new(c).unwrap();
+            let m0 = w.slide_min_kg;
+            assert!(m0 > 0.0);
+            for k in 0..20_000 {
+                let m = m0 * (k as f64 / 20_000.0).powi(3);
+                assert_eq!(w.slide_speed_m_s(m), 0.0, "{speed} m/s, {tilt} deg, {m} kg");
+            }
+            if tilt > 0.0 {
+                assert!(
+                    w.slide_speed_m_s(m0 * 1.03) != 0.0,
+                    "{speed} m/s, {tilt} deg"
+                );
+            }
+        }
+        // the hold's mass: the least mass whose base radius reaches the hold radius
+        let w = Windshield::new(dry(0)).unwrap();
+        for a in [0.3, 2.2, 7.5] {
+            let m = w.least_mass_of_radius(a);
+            assert!(w.base_radius_mm(m) >= a);
+            assert!(w.base_radius_mm(f64::from_bits(m.to_bits() - 1)) < a);
+        }
     }
 
     #[test]
