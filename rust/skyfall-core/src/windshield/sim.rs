@@ -1396,47 +1396,43 @@ impl Windshield {
     }
 }
 
-/// The particles' (cell y, cell x, index) for their cells `keys` (x, y), sorted: by counting
-/// into the cells' buckets in index order where the cells span few enough buckets (the same
-/// order as sorting the triples), else by sorting.
+/// The particles' (cell y, cell x, index) for their cells `keys` (x, y), sorted: counted into
+/// their rows of cells in index order, then each row sorted (the same order as sorting the
+/// triples, in about n + rows + n log(n / rows)); sorted whole where the rows are far more
+/// than the particles.
 fn sorted_by_cell(keys: Vec<(i64, i64)>) -> Vec<(i64, i64, u32)> {
-    let triples = |keys: &[(i64, i64)]| -> Vec<(i64, i64, u32)> {
-        keys.iter()
-            .enumerate()
-            .map(|(i, &(x, y))| (y, x, i as u32))
-            .collect()
+    let mut out: Vec<(i64, i64, u32)> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, &(x, y))| (y, x, i as u32))
+        .collect();
+    let (Some(y0), Some(y1)) = (out.iter().map(|t| t.0).min(), out.iter().map(|t| t.0).max())
+    else {
+        return out;
     };
-    let (Some(x0), Some(x1)) = (
-        keys.iter().map(|k| k.0).min(),
-        keys.iter().map(|k| k.0).max(),
-    ) else {
-        return Vec::new();
-    };
-    let (y0, y1) = (
-        keys.iter().map(|k| k.1).min().unwrap_or(0),
-        keys.iter().map(|k| k.1).max().unwrap_or(0),
-    );
-    let (w, h) = ((x1 - x0 + 1) as u128, (y1 - y0 + 1) as u128);
-    if w * h > (8 * keys.len() as u128).max(1 << 19) {
-        let mut t = triples(&keys);
-        t.sort_unstable();
-        return t;
+    let rows = (y1 - y0) as u128 + 1;
+    if rows > 4 * out.len() as u128 + 1024 {
+        out.sort_unstable();
+        return out;
     }
-    let bucket = |&(x, y): &(i64, i64)| ((y - y0) as usize) * w as usize + (x - x0) as usize;
-    let mut start = vec![0u32; (w * h) as usize + 1];
-    for k in &keys {
-        start[bucket(k) + 1] += 1;
+    let mut start = vec![0usize; rows as usize + 1];
+    for t in &out {
+        start[(t.0 - y0) as usize + 1] += 1;
     }
-    for b in 1..start.len() {
-        start[b] += start[b - 1];
+    for r in 1..start.len() {
+        start[r] += start[r - 1];
     }
-    let mut out = vec![(0i64, 0i64, 0u32); keys.len()];
-    for (i, k) in keys.iter().enumerate() {
-        let b = bucket(k);
-        out[start[b] as usize] = (k.1, k.0, i as u32);
-        start[b] += 1;
+    let bounds = start.clone();
+    let mut by_row = vec![(0i64, 0i64, 0u32); out.len()];
+    for t in &out {
+        let r = (t.0 - y0) as usize;
+        by_row[start[r]] = *t;
+        start[r] += 1;
     }
-    out
+    for r in 0..rows as usize {
+        by_row[bounds[r]..bounds[r + 1]].sort_unstable();
+    }
+    by_row
 }
 
 #[cfg(test)]
