@@ -8,8 +8,12 @@ each period from ``--keep-from`` on; ``table`` pools those states into the stati
     python benches/windshield_steady.py simulate --preset rain --seeds 1 3 4 --dir /tmp/steady
     python benches/windshield_steady.py table --preset rain --seeds 1 3 4 --dir /tmp/steady
 
-The seeds pooled into a table are listed in it; ``tests/test_windshield_steady.py`` checks a
-draw against a long simulation of a seed not among them.
+    python benches/windshield_steady.py check --preset rain --seeds 2 --dir /tmp/steady \
+        --out tests/data/windshield_steady_rain_s2.json
+
+The seeds pooled into a table are listed in it; ``check`` compares 8 draws with the saved states
+of a seed not among them, and writes the states' summary that ``tests/test_windshield_steady.py``
+checks draws against.
 """
 
 from __future__ import annotations
@@ -96,7 +100,17 @@ def main() -> None:
         return
     if a.what == "check":
         states = sorted(f for s in a.seeds for f in a.dir.glob(f"{a.preset}_s{s}_p*.npz") if int(f.stem.split("_p")[-1]) >= a.keep_from)
-        print(json.dumps(check(a.preset, states, list(range(100, 108))), indent=1))
+        c = check(a.preset, states, list(range(100, 108)))
+        print(json.dumps(c, indent=1))
+        if a.out:
+            ref: dict[str, Any] = {
+                "source": f"python benches/windshield_steady.py check --preset {a.preset} --seeds {' '.join(map(str, a.seeds))}: "
+                f"the {a.preset} preset's 1400 x 800 mm glass stepped from dry, its states at the start of periods {a.keep_from}-{a.periods} "
+                f"({len(states)} states); sim_mean, sim_min, sim_max over them",
+                "radius_edges_mm": RADIUS_EDGES_MM.tolist(),
+            }
+            ref.update({k: {q: v[q] for q in ("sim_mean", "sim_min", "sim_max")} for k, v in c.items() if isinstance(v, dict)})
+            a.out.write_text(json.dumps(ref, indent=1))
         return
     states = sorted(f for s in a.seeds for f in a.dir.glob(f"{a.preset}_s{s}_p*.npz") if int(f.stem.split("_p")[-1]) >= a.keep_from)
     t = ws.steady_table([ws.Windshield.load(f) for f in states])

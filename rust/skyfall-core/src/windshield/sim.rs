@@ -1396,43 +1396,59 @@ impl Windshield {
     }
 }
 
-/// The particles' (cell y, cell x, index) for their cells `keys` (x, y), sorted: counted into
-/// their rows of cells in index order, then each row sorted (the same order as sorting the
-/// triples, in about n + rows + n log(n / rows)); sorted whole where the rows are far more
-/// than the particles.
+/// The particles' (cell y, cell x, index) for their cells `keys` (x, y), sorted as sorting the
+/// triples would: where their cells' bounding box holds at most 16 cells a particle, counted
+/// into those cells in index order; else, where its rows are few, counted into their rows and
+/// each row sorted; else sorted whole.
 fn sorted_by_cell(keys: Vec<(i64, i64)>) -> Vec<(i64, i64, u32)> {
     let mut out: Vec<(i64, i64, u32)> = keys
         .iter()
         .enumerate()
         .map(|(i, &(x, y))| (y, x, i as u32))
         .collect();
+    let n = out.len() as u128;
     let (Some(y0), Some(y1)) = (out.iter().map(|t| t.0).min(), out.iter().map(|t| t.0).max())
     else {
         return out;
     };
-    let rows = (y1 - y0) as u128 + 1;
-    if rows > 4 * out.len() as u128 + 1024 {
+    let x0 = out.iter().map(|t| t.1).min().unwrap_or(0);
+    let x1 = out.iter().map(|t| t.1).max().unwrap_or(0);
+    let (w, rows) = ((x1 - x0) as u128 + 1, (y1 - y0) as u128 + 1);
+    // (bucket of a triple, buckets, whether a bucket is one cell)
+    let (buckets, cells) = if w * rows <= 16 * n {
+        (w * rows, true)
+    } else if rows <= 4 * n + 1024 {
+        (rows, false)
+    } else {
         out.sort_unstable();
         return out;
-    }
-    let mut start = vec![0usize; rows as usize + 1];
-    for t in &out {
-        start[(t.0 - y0) as usize + 1] += 1;
-    }
-    for r in 1..start.len() {
-        start[r] += start[r - 1];
-    }
-    let bounds = start.clone();
-    let mut by_row = vec![(0i64, 0i64, 0u32); out.len()];
-    for t in &out {
+    };
+    let bucket = |t: &(i64, i64, u32)| {
         let r = (t.0 - y0) as usize;
-        by_row[start[r]] = *t;
-        start[r] += 1;
+        if cells {
+            r * w as usize + (t.1 - x0) as usize
+        } else {
+            r
+        }
+    };
+    let mut start = vec![0usize; buckets as usize + 1];
+    for t in &out {
+        start[bucket(t) + 1] += 1;
     }
-    for r in 0..rows as usize {
-        by_row[bounds[r]..bounds[r + 1]].sort_unstable();
+    for b in 1..start.len() {
+        start[b] += start[b - 1];
     }
-    by_row
+    let bounds = if cells { Vec::new() } else { start.clone() };
+    let mut sorted = vec![(0i64, 0i64, 0u32); out.len()];
+    for t in &out {
+        let b = bucket(t);
+        sorted[start[b]] = *t;
+        start[b] += 1;
+    }
+    for r in bounds.windows(2) {
+        sorted[r[0]..r[1]].sort_unstable();
+    }
+    sorted
 }
 
 #[cfg(test)]
