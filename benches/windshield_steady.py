@@ -99,7 +99,7 @@ def main() -> None:
             simulate(a.preset, s, a.periods, a.keep_from, a.dir)
         return
     if a.what == "check":
-        states = sorted(f for s in a.seeds for f in a.dir.glob(f"{a.preset}_s{s}_p*.npz") if int(f.stem.split("_p")[-1]) >= a.keep_from)
+        states = sorted(f for s in a.seeds for f in a.dir.glob(f"{a.preset}_s{s}_p*.npz") if a.keep_from <= int(f.stem.split("_p")[-1]) <= a.periods)
         c = check(a.preset, states, list(range(100, 108)))
         print(json.dumps(c, indent=1))
         if a.out:
@@ -112,7 +112,7 @@ def main() -> None:
             ref.update({k: {q: v[q] for q in ("sim_mean", "sim_min", "sim_max")} for k, v in c.items() if isinstance(v, dict)})
             a.out.write_text(json.dumps(ref, indent=1))
         return
-    states = sorted(f for s in a.seeds for f in a.dir.glob(f"{a.preset}_s{s}_p*.npz") if int(f.stem.split("_p")[-1]) >= a.keep_from)
+    states = sorted(f for s in a.seeds for f in a.dir.glob(f"{a.preset}_s{s}_p*.npz") if a.keep_from <= int(f.stem.split("_p")[-1]) <= a.periods)
     t = ws.steady_table([ws.Windshield.load(f) for f in states])
     t["sources"] = np.array(" ".join(sorted(p.name for p in states)))
     out = a.out or Path(ws.__file__).parent / "data" / f"windshield_steady_{a.preset}.npz"

@@ -299,14 +299,14 @@ def preset(name: str, *, seed: int = 0) -> Windshield:
 
 
 WARM_UP_PERIODS: Final = 4
-"""The wiper periods :func:`clock` steps when asked to step (``warm_up_periods=...``), and for a
-preset without a steady table (:data:`STEADY_PRESETS`): a glass still filling (about 4 s of
-stepping for the ``rain`` preset on 2 cores)."""
+"""The wiper periods :func:`clock` steps from dry glass for a preset whose steady table was
+measured for other parameters than its own (none is: :data:`STEADY_PRESETS`): a glass still
+filling (about 2 s of stepping for the ``rain`` preset on 2 cores)."""
 
 SETTLED_PERIODS: Final = 40
 """The wiper periods after which the ``rain`` preset's glass has settled: its held water stays in
-a steady band from there (``benches/results/windshield_27.md``). A drawn steady glass
-(:func:`steady`) stands this many periods into the rain."""
+a steady band from there (``benches/results/windshield_27.md``; ``downpour`` settles from about
+20 periods, ``drizzle`` from about 120)."""
 
 
 EPOCH_PERIODS: Final = 4
@@ -338,9 +338,10 @@ def _steady_table(name: str) -> dict[str, Any] | None:
     return t
 
 
-STEADY_PRESETS: Final = tuple(n for n in PRESETS if (_DATA / f"windshield_steady_{n}.npz").is_file())
-"""The presets whose steady state is tabulated (:func:`steady` draws it; :func:`clock` starts
-from it)."""
+STEADY_PRESETS: Final = tuple(n for n in PRESETS if _steady_table(n) is not None)
+"""The presets whose steady state is tabulated for their parameters now (all of them; a table
+measured for other parameters is left out, and :func:`clock` steps that preset from dry glass):
+:func:`steady` draws it; :func:`clock` starts from it."""
 
 
 STEADY_CELL_MM: Final = 10.0
@@ -368,7 +369,8 @@ def steady_table(states: list[Windshield]) -> dict[str, Any]:
         ``counts`` (3, ny, nx): the mean number of mesh drops, trail drops and particles per
         :data:`STEADY_CELL_MM` square; ``mass_hist`` (3, by, bx, bins): their masses over
         blocks of :data:`STEADY_BLOCK` squares in :data:`STEADY_MASS_EDGES_KG`; ``cell_mm``,
-        ``block``, ``mass_edges_kg``, ``snapshots``; ``params`` (the glass's, seed left out).
+        ``block``, ``mass_edges_kg``, ``snapshots``, ``from_period`` (the first state's wiper
+        periods into the rain); ``params`` (the glass's, seed left out).
     """
     if not states or not all(isinstance(w, Windshield) for w in states):
         raise TypeError("states must be a non-empty list of Windshield")
@@ -399,6 +401,7 @@ def steady_table(states: list[Windshield]) -> dict[str, Any]:
         "counts": (counts / len(states)).astype(np.float32),
         "mass_hist": hist.astype(np.uint32),
         "snapshots": np.array(len(states)),
+        "from_period": np.array(min(int(round(w.t_s / _period_s(w))) for w in states)),
         "params": np.array(repr(params)),
     }
 
@@ -409,8 +412,9 @@ def steady(glass: str | Windshield, *, seed: int = 0, table: dict[str, Any] | No
 
     A preset's table (``python/skyfall/data/windshield_steady_<name>.npz``, made by
     ``benches/windshield_steady.py`` with :func:`steady_table`) pools the states of long
-    simulations of the preset from :data:`SETTLED_PERIODS` periods on: for mesh drops, trail
-    drops and the wipers' particles, the mean number in each 10 mm square of the glass and the
+    simulations of the preset once settled (seeds 1, 3 and 4; periods 36-56 of ``rain`` and
+    ``downpour``, 120-160 of ``drizzle``, 300-350 of ``parked``): for mesh drops, trail drops
+    and the wipers' particles, the mean number in each 10 mm square of the glass and the
     histogram of their masses over 40 mm blocks (log bins, 4 a decade). A draw takes a Poisson
     number of each in each square at uniform points, masses from its block's histogram
     (log-uniform within a bin), places mesh and trail drops largest first where they touch no
@@ -418,7 +422,7 @@ def steady(glass: str | Windshield, *, seed: int = 0, table: dict[str, Any] | No
     particles by the wipers' push-apart (``skyfall_core::windshield::steady``). Against long
     simulations of seeds the table did not pool, its held water and drop-size histogram agree
     within their spread between periods (``tests/test_windshield_steady.py``,
-    ``benches/results/sweeps.md``). What a draw does not have: the trails' lines (trail drops
+    ``benches/results/windshield_steady_check_<name>.json``). What a draw does not have: the trails' lines (trail drops
     lie scattered until sliding drops lay new ones) and the sub-metaballs of the last 0.4 s of
     impacts.
 
@@ -435,8 +439,9 @@ def steady(glass: str | Windshield, *, seed: int = 0, table: dict[str, Any] | No
     Returns
     -------
     Windshield
-        At :data:`SETTLED_PERIODS` wiper periods into the rain, the wipers at the start of a
-        sweep.
+        As many wiper periods into the rain as the first state the table pooled
+        (``table["from_period"]``: 36 for ``rain`` and ``downpour``, 120 for ``drizzle``, 300
+        for ``parked``), the wipers at the start of a sweep.
     """
     integer("seed", seed, 0, 2**64 - 1)
     if isinstance(glass, Windshield):
@@ -451,14 +456,15 @@ def steady(glass: str | Windshield, *, seed: int = 0, table: dict[str, Any] | No
     else:
         raise ValueError(f"windshield = {glass!r} is not a preset: use one of {', '.join(map(repr, STEADY_PRESETS))}")
     period = _period_s(w)
-    steps = SETTLED_PERIODS * int(np.ceil(period * 60.0 - 1e-9))
+    periods = int(table["from_period"])
+    steps = periods * int(np.ceil(period * 60.0 - 1e-9))
     core, _report = w._core.drawn_steady(
         cell_mm=float(table["cell_mm"]),
         block=int(table["block"]),
         mass_edges_kg=np.ascontiguousarray(table["mass_edges_kg"], np.float64),
         counts=np.ascontiguousarray(table["counts"], np.float64),
         mass_weights=np.ascontiguousarray(np.asarray(table["mass_hist"], np.float64).ravel()),
-        t_s=SETTLED_PERIODS * period,
+        t_s=periods * period,
         steps=steps,
     )
     out = Windshield.__new__(Windshield)
@@ -522,9 +528,8 @@ def warm(name: str, t_s: float, *, seed: int = 0, warm_up_periods: int | None = 
     (:func:`steady`): the glass the blades do not reach (half of the presets' glass) full of
     drops up to the size at which they slide (Furmidge's criterion with the airflow), as the
     ``rain`` preset's glass holds it from some 40 periods of rain on
-    (``benches/results/windshield_27.md``). Other presets, or ``warm_up_periods=n``, step ``n``
-    periods from dry glass (:data:`WARM_UP_PERIODS` by default: a glass still filling; 40
-    periods of the ``rain`` preset take minutes).
+    (``benches/results/windshield_27.md``). ``warm_up_periods=n`` steps ``n`` periods from dry
+    glass instead (40 periods of the ``rain`` preset take about a minute).
 
     Parameters
     ----------
