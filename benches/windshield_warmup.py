@@ -73,7 +73,7 @@ def main() -> None:
             m = med[(label, t_s)]
             wu = m["first"] - m["seen"]
             lines.append(
-                f"| {t_s:.1f} s | {label} | {m['first']:.2f} | {m['seen']:.2f} | {wu:.2f} | {m['step'] * 1e3:.1f} | {wu / m['step']:.0f} | {m['drops']:.0f} | {m['held_g']:.1f} |"
+                f"| {t_s:g} s | {label} | {m['first']:.2f} | {m['seen']:.2f} | {wu:.2f} | {m['step'] * 1e3:.1f} | {wu / m['step']:.0f} | {m['drops']:.0f} | {m['held_g']:.1f} |"
             )
     text = "\n".join(lines) + "\n"
     (RESULTS / "windshield_warmup.md").write_text(text)

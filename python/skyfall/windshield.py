@@ -350,8 +350,8 @@ STEADY_CELL_MM: Final = 10.0
 STEADY_BLOCK: Final = 4
 """Squares per side of the blocks that share a mass histogram in a steady table."""
 
-STEADY_MASS_EDGES_KG: Final = np.logspace(-10.0, -3.0, 29)
-"""A steady table's mass bins, kg: four a decade from 1e-10 to 1e-3 kg."""
+STEADY_MASS_EDGES_KG: Final = np.logspace(-10.0, -3.0, 57)
+"""A steady table's mass bins, kg: eight a decade from 1e-10 to 1e-3 kg."""
 
 
 def steady_table(states: list[Windshield]) -> dict[str, Any]:
@@ -408,14 +408,14 @@ def steady_table(states: list[Windshield]) -> dict[str, Any]:
 
 def steady(glass: str | Windshield, *, seed: int = 0, table: dict[str, Any] | None = None) -> Windshield:
     """A glass in its steady state at the start of a wiper period, drawn statistically
-    (tens of milliseconds) instead of stepped there (minutes).
+    (0.04-0.2 s) instead of stepped there (a minute or more).
 
     A preset's table (``python/skyfall/data/windshield_steady_<name>.npz``, made by
     ``benches/windshield_steady.py`` with :func:`steady_table`) pools the states of long
     simulations of the preset once settled (seeds 1, 3 and 4; periods 36-56 of ``rain`` and
     ``downpour``, 120-160 of ``drizzle``, 300-350 of ``parked``): for mesh drops, trail drops
     and the wipers' particles, the mean number in each 10 mm square of the glass and the
-    histogram of their masses over 40 mm blocks (log bins, 4 a decade). A draw takes a Poisson
+    histogram of their masses over 40 mm blocks (log bins, 8 a decade). A draw takes a Poisson
     number of each in each square at uniform points, masses from its block's histogram
     (log-uniform within a bin), places mesh and trail drops largest first where they touch no
     other mesh drop and find their 2 mm cell empty, as the simulation keeps them, and spaces the

@@ -1,6 +1,6 @@
 //! A glass in its steady state, drawn statistically instead of stepped there.
 //!
-//! A preset's glass settles only after some 40 wiper periods of rain (the unswept glass fills
+//! A preset's glass settles only after tens of wiper periods of rain (the unswept glass fills
 //! until its drops grow large enough to slide), minutes of stepping. Its state at the start of
 //! a period is, statistically, the same from then on: a [`SteadyTable`] holds it, measured
 //! from long simulations (`benches/windshield_steady.py`): for each kind of drop (mesh, trail,
@@ -35,7 +35,7 @@ const KEY_STEADY: u64 = 0x5749_4e44_0003;
 pub struct SteadyTable {
     /// The squares' side, mm.
     pub cell_mm: f64,
-    /// Squares across the glass and down it (the last ones may overhang its edges).
+    /// Squares across the glass (the last column and row of squares may overhang its edges).
     pub nx: usize,
     /// Squares down the glass.
     pub ny: usize,
