@@ -173,8 +173,10 @@ class DatasetConfig:
     windshield : str, optional
         A :data:`skyfall.windshield.PRESETS` name: each item seen through a windshield in that
         rain (its own glass rate, wipers and car speed), at a time drawn per item in
-        [0, 60) s from one warmed-up state per worker (:func:`skyfall.windshield.warm`, the
-        run's seed; the first item of a worker pays the warm-up, several seconds), with the
+        [0, 60) s from one warm state per worker (:func:`skyfall.windshield.warm`, the run's
+        seed: the preset's steady glass drawn in about 0.1 s; a worker's first items step it
+        to the starts of the later periods of its 4-period epoch once, about a second a period
+        for ``rain`` on 2 cores, and each item at most a period from there), with the
         ``drop_mask`` and ``drop_height`` layers.
     clouds : str, optional
         A :data:`skyfall.clouds.PRESETS` name: clouds in every item's sky (over a photo's sky
