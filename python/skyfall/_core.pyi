@@ -441,7 +441,6 @@ class Windshield:
         counts: NDArray[np.float64],
         mass_weights: NDArray[np.float64],
         t_s: float,
-        steps: int,
     ) -> tuple[Windshield, tuple[int, float, int]]: ...
 
 @final

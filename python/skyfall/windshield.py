@@ -321,24 +321,36 @@ def _period_s(w: Windshield) -> float:
     return float(w.params.get("wiper_period_s", 1.5)) if w.params["wipers"] else 2.0
 
 
-@lru_cache(maxsize=None)
-def _steady_table(name: str) -> dict[str, Any] | None:
-    """A preset's steady table (``benches/windshield_steady.py``), or None where it has none or
-    it was measured for other parameters than the preset's now."""
+def _measured_for_now(name: str) -> bool:
+    """Whether preset ``name`` has a steady table measured for its parameters now (reading the
+    table's parameters alone; a preset's are :class:`Windshield`'s defaults and its own)."""
+    import ast
+    import inspect
+
     path = _DATA / f"windshield_steady_{name}.npz"
     if name not in PRESETS or not path.is_file():
-        return None
-    import ast
-
+        return False
+    defaults = {
+        k: p.default
+        for k, p in inspect.signature(Windshield.__init__).parameters.items()
+        if p.default is not inspect.Parameter.empty and k not in ("seed", "state")
+    }
     with np.load(path, allow_pickle=False) as z:
-        t = {k: z[k] for k in z.files}
-    measured = ast.literal_eval(str(t["params"]))
-    if measured != {k: v for k, v in preset(name).params.items() if k != "seed"}:
+        measured = ast.literal_eval(str(z["params"]))
+    return bool(measured == {**defaults, **PRESETS[name]})
+
+
+@lru_cache(maxsize=None)
+def _steady_table(name: str) -> dict[str, Any] | None:
+    """A preset's steady table (``benches/windshield_steady.py``), read at its first draw, or
+    None where it has none or it was measured for other parameters than the preset's now."""
+    if not _measured_for_now(name):
         return None
-    return t
+    with np.load(_DATA / f"windshield_steady_{name}.npz", allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
 
 
-STEADY_PRESETS: Final = tuple(n for n in PRESETS if _steady_table(n) is not None)
+STEADY_PRESETS: Final = tuple(n for n in PRESETS if _measured_for_now(n))
 """The presets whose steady state is tabulated for their parameters now (all of them; a table
 measured for other parameters is left out, and :func:`clock` steps that preset from dry glass):
 :func:`steady` draws it; :func:`clock` starts from it."""
@@ -457,7 +469,6 @@ def steady(glass: str | Windshield, *, seed: int = 0, table: dict[str, Any] | No
         raise ValueError(f"windshield = {glass!r} is not a preset: use one of {', '.join(map(repr, STEADY_PRESETS))}")
     period = _period_s(w)
     periods = int(table["from_period"])
-    steps = periods * int(np.ceil(period * 60.0 - 1e-9))
     core, _report = w._core.drawn_steady(
         cell_mm=float(table["cell_mm"]),
         block=int(table["block"]),
@@ -465,7 +476,6 @@ def steady(glass: str | Windshield, *, seed: int = 0, table: dict[str, Any] | No
         counts=np.ascontiguousarray(table["counts"], np.float64),
         mass_weights=np.ascontiguousarray(np.asarray(table["mass_hist"], np.float64).ravel()),
         t_s=periods * period,
-        steps=steps,
     )
     out = Windshield.__new__(Windshield)
     out.params = dict(w.params)

@@ -166,9 +166,9 @@ impl Windshield {
     }
 
     /// A new windshield of this one's configuration in the steady state the table describes
-    /// (`skyfall_core::windshield::steady`), at `t_s` after `steps` internal steps, GIL
-    /// released; with (drops left out, their water kg, drops placed).
-    #[pyo3(signature = (*, cell_mm, block, mass_edges_kg, counts, mass_weights, t_s, steps))]
+    /// (`skyfall_core::windshield::steady`), at `t_s`, GIL released; with (drops left out, their
+    /// water kg, drops placed).
+    #[pyo3(signature = (*, cell_mm, block, mass_edges_kg, counts, mass_weights, t_s))]
     #[allow(clippy::too_many_arguments)]
     fn drawn_steady(
         &self,
@@ -179,7 +179,6 @@ impl Windshield {
         counts: PyReadonlyArray3<'_, f64>,
         mass_weights: PyReadonlyArray1<'_, f64>,
         t_s: f64,
-        steps: u64,
     ) -> PyResult<(Self, (usize, f64, usize))> {
         let shape = counts.shape();
         if shape[0] != steady::KINDS {
@@ -200,7 +199,7 @@ impl Windshield {
         };
         let config = self.with(|s| s.config().clone())?;
         let (sim, r) = py
-            .detach(|| Sim::drawn_steady(config, &table, t_s, steps))
+            .detach(|| Sim::drawn_steady(config, &table, t_s))
             .map_err(CoreError)?;
         Ok((Windshield::wrap(sim), (r.left_out, r.left_out_kg, r.placed)))
     }

@@ -839,16 +839,17 @@ impl Windshield {
     /// A mass below which no drop slides, kg: the excess of the driving force over the
     /// retention, per base radius, |g a² − c a| − k (gravity ∝ a³, the airflow ∝ a², the
     /// retention ∝ a), is below 0 from a = 0 up to its first root, so the largest mass of a
-    /// log scan (steps of 0.1 %) below the first one that slides, less 1 %, is such a mass.
+    /// log scan from 1 ng (steps of 1 %, about 2 000 of them) below the first one that slides,
+    /// less 1 %, is such a mass.
     fn least_sliding_mass_kg(&self) -> f64 {
-        let mut m = 1e-15;
+        let mut m = 1e-12;
         let mut last = 0.0;
         while m < 1.0 {
             if self.slide_speed_m_s(m) != 0.0 {
                 return last * 0.99;
             }
             last = m;
-            m *= 1.001;
+            m *= 1.01;
         }
         last * 0.99
     }

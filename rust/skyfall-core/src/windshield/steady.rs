@@ -17,7 +17,8 @@
 //! makes two).
 
 use super::sim::{
-    EMPTY, MeshDrop, ParticleDrop, SUB_METABALL_S, Windshield, WindshieldConfig, WindshieldState,
+    EMPTY, MAX_SUBSTEP_S, MeshDrop, ParticleDrop, SUB_METABALL_S, Windshield, WindshieldConfig,
+    WindshieldState,
 };
 use crate::error::{Error, Param, Result};
 use rand::{Rng, SeedableRng};
@@ -214,18 +215,18 @@ struct Drawn {
 
 impl Windshield {
     /// A glass of `config` in the steady state `table` describes, at `t_s` (a whole number of
-    /// wiper periods into the rain: the table's phase) after `steps` internal steps, drawn from
-    /// `config.seed`; with what the draw left out.
+    /// wiper periods into the rain: the table's phase), drawn from `config.seed`; with what the
+    /// draw left out. Its step count (each step's draws are seeded by it) is that of a glass
+    /// stepped to `t_s` at [`MAX_SUBSTEP_S`].
     pub fn drawn_steady(
         config: WindshieldConfig,
         table: &SteadyTable,
         t_s: f64,
-        steps: u64,
     ) -> Result<(Self, DrawReport)> {
         table.validate(&config)?;
         let state = WindshieldState {
             t_s,
-            steps,
+            steps: (t_s / MAX_SUBSTEP_S).round().max(0.0) as u64,
             ..WindshieldState::default()
         };
         let mut w = Windshield::from_state(config, state)?;
@@ -233,7 +234,7 @@ impl Windshield {
             rand_pcg::Pcg64Mcg::seed_from_u64(crate::seed::derive(w.config.seed, &[KEY_STEADY]));
         let (blocks, whole) = table.cdfs();
         let (bx, by) = table.blocks();
-        let (nx, ny, nb) = (table.nx, table.ny, table.bins());
+        let (nx, ny) = (table.nx, table.ny);
         let mut drawn: Vec<Drawn> = Vec::new();
         for kind in 0..KINDS {
             for square in 0..nx * ny {
@@ -253,7 +254,6 @@ impl Windshield {
                 }
             }
         }
-        debug_assert!(nb > 0);
         // the largest first: they find room, the small fill in around them
         drawn.sort_by(|a, b| {
             b.mass_kg
@@ -388,7 +388,7 @@ mod tests {
         let c = glass();
         // 1 mg drops (base radius ~0.9 mm on 40/20 glass): 3 a square, 180 expected
         let t = table(&c, 3.0, 1e-6);
-        let (w, report) = Windshield::drawn_steady(c.clone(), &t, 60.0, 3600).unwrap();
+        let (w, report) = Windshield::drawn_steady(c.clone(), &t, 60.0).unwrap();
         let n = w.state().drops.len();
         assert_eq!(report.left_out, 0);
         assert_eq!(report.placed, n);
@@ -406,7 +406,7 @@ mod tests {
         assert_eq!((s.t_s, s.steps), (60.0, 3600));
         assert!((s.arrived_kg - w.on_glass_kg()).abs() <= 1e-15);
         // the same seed, the same bits
-        let again = Windshield::drawn_steady(c, &t, 60.0, 3600).unwrap().0;
+        let again = Windshield::drawn_steady(c, &t, 60.0).unwrap().0;
         assert_eq!(again.state(), w.state());
     }
 
@@ -415,7 +415,7 @@ mod tests {
         let c = glass();
         // 20 drops of 10 mg (base radius ~2 mm) a 10 mm square cannot all lie apart
         let t = table(&c, 20.0, 1e-5);
-        let (w, report) = Windshield::drawn_steady(c, &t, 0.0, 0).unwrap();
+        let (w, report) = Windshield::drawn_steady(c, &t, 0.0).unwrap();
         assert!(report.left_out > 0);
         let placed: f64 = w.state().drops.iter().map(|d| d.mass_kg).sum();
         assert!(report.left_out_kg > 0.0 && placed > 0.0);
@@ -427,16 +427,16 @@ mod tests {
         let c = glass();
         let mut t = table(&c, 1.0, 1e-6);
         t.nx += 1;
-        let e = Windshield::drawn_steady(c.clone(), &t, 0.0, 0).unwrap_err();
+        let e = Windshield::drawn_steady(c.clone(), &t, 0.0).unwrap_err();
         assert!(e.to_string().contains("squares"), "{e}");
         let mut t = table(&c, 1.0, 1e-6);
         t.mass_edges_kg = vec![1e-6, 1e-7];
-        assert!(Windshield::drawn_steady(c.clone(), &t, 0.0, 0).is_err());
+        assert!(Windshield::drawn_steady(c.clone(), &t, 0.0).is_err());
         let mut t = table(&c, 1.0, 1e-6);
         t.counts[0] = f64::NAN;
-        assert!(Windshield::drawn_steady(c.clone(), &t, 0.0, 0).is_err());
+        assert!(Windshield::drawn_steady(c.clone(), &t, 0.0).is_err());
         let mut t = table(&c, 1.0, 1e-6);
         t.mass_weights.pop();
-        assert!(Windshield::drawn_steady(c, &t, 0.0, 0).is_err());
+        assert!(Windshield::drawn_steady(c, &t, 0.0).is_err());
     }
 }
