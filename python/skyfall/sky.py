@@ -397,8 +397,8 @@ _CACHE_SIZE = 8
 # after the first overcast sky each node's weights for such skies), per (geometry, bounds,
 # spacing, samples): a map under a new sky (another rain rate, visibility, sky type or sun) is
 # then lit from it, bit for bit the map built from scratch, at a fraction of the cost (an
-# overcast sky 4 ms on the bundled street, a sky with a sun 35 ms). Two kept (the bundled
-# street's is 74 MB at 1 m and 64 azimuths, 131 MB with its weights).
+# overcast sky 4 ms on the bundled street, a sky with a sun 14 ms). Two kept (the bundled
+# street's is 32 MB at 1 m and 64 azimuths, 88 MB with its weights).
 _horizons: OrderedDict[tuple[Any, ...], _core.AmbientHorizon | None] = OrderedDict()
 _geometries: OrderedDict[tuple[Any, ...], None] = OrderedDict()  # geometries with a map built
 _HORIZONS = 2
@@ -412,11 +412,11 @@ def expect_sweeps(on: bool = True) -> None:
 
     A box scene's ambient map under its first sky is built directly (324 ms on the bundled
     street); a second sky over the same scene finds the scene's horizon (what its boxes hide,
-    about 260 ms) and lights every later sky from it (about 5 ms overcast, 35 ms with a sun). A
+    about 260 ms) and lights every later sky from it (about 5 ms overcast, 14 ms with a sun). A
     process that will render many weathers over a scene (a parameter sweep, a dataset worker:
     ``skyfall dataset --scene`` turns this on in each worker) saves the first direct build by
     finding the horizon at once. The maps are the same bits either way; the horizon costs memory
-    (131 MB for the street with its overcast weights).
+    (88 MB for the street with its overcast weights).
 
     Parameters
     ----------

@@ -125,29 +125,109 @@ impl SkyKind {
         }
     }
 
-    /// L/Lz along unit direction `dir` (0 below the horizon).
+    /// L/Lz along unit direction `dir` (0 below the horizon). For many directions of one sky,
+    /// [`SkyKind::shape`] once and [`Shape::relative_to_zenith`] for each (the same values).
     pub fn relative_to_zenith(&self, dir: Vec3) -> f64 {
-        let cz = f64::from(dir.y);
+        self.shape().relative_to_zenith(dir)
+    }
+
+    /// The sky's luminance distribution with what does not depend on the direction worked
+    /// out once: the normalisation φ(0)·f(Z_s) and the indicatrix's constant part.
+    pub fn shape(&self) -> Shape {
+        match *self {
+            SkyKind::Overcast => Shape::Overcast,
+            SkyKind::General { sky_type, sun } => {
+                let [a, b, c, d, e] = CIE_TYPES[usize::from(sky_type) - 1];
+                // f(χ) = 1 − c·exp(dπ/2) + c·exp(dχ) + e·cos²χ, cos χ = ω·sun
+                let base = 1.0 - c * (d * FRAC_PI_2).exp();
+                let cos_zs = f64::from(sun.y).clamp(-1.0, 1.0);
+                let f_zs = base + c * (d * cos_zs.acos()).exp() + e * cos_zs * cos_zs;
+                let phi_0 = 1.0 + a * b.exp();
+                Shape::General {
+                    a,
+                    b,
+                    c,
+                    d,
+                    e,
+                    base,
+                    sun,
+                    inv_norm: 1.0 / (phi_0 * f_zs),
+                }
+            }
+        }
+    }
+}
+
+/// A [`SkyKind`]'s luminance distribution ready to evaluate along many directions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    /// (1 + 2 sin γ)/3.
+    Overcast,
+    /// φ(Z)·f(χ)/(φ(0)·f(Z_s)).
+    General {
+        /// The gradation's a and b, the indicatrix's c, d and e.
+        a: f64,
+        /// b.
+        b: f64,
+        /// c.
+        c: f64,
+        /// d.
+        d: f64,
+        /// e.
+        e: f64,
+        /// 1 − c·exp(dπ/2).
+        base: f64,
+        /// Unit vector towards the sun.
+        sun: Vec3,
+        /// 1 / (φ(0)·f(Z_s)).
+        inv_norm: f64,
+    },
+}
+
+impl Shape {
+    /// L/Lz along unit direction `dir` (0 below the horizon): [`Shape::gradation`] times
+    /// [`Shape::indicatrix`].
+    #[inline]
+    pub fn relative_to_zenith(&self, dir: Vec3) -> f64 {
+        self.gradation(f64::from(dir.y)) * self.indicatrix(dir)
+    }
+
+    /// The part of L/Lz that depends on the elevation alone, at sin(elevation) `cz`: φ(Z)
+    /// over the normalisation φ(0)·f(Z_s), (1 + 2 sin γ)/3 overcast; 0 below the horizon.
+    #[inline]
+    pub fn gradation(&self, cz: f64) -> f64 {
         if cz < 0.0 {
             return 0.0;
         }
         match *self {
-            SkyKind::Overcast => (1.0 + 2.0 * cz) / 3.0,
-            SkyKind::General { sky_type, sun } => {
-                let [a, b, c, d, e] = CIE_TYPES[usize::from(sky_type) - 1];
-                let phi = |cos_z: f64| {
-                    if cos_z <= 0.0 {
-                        1.0
-                    } else {
-                        1.0 + a * (b / cos_z).exp()
-                    }
+            Shape::Overcast => (1.0 + 2.0 * cz) / 3.0,
+            Shape::General { a, b, inv_norm, .. } => {
+                let phi = if cz <= 0.0 {
+                    1.0
+                } else {
+                    1.0 + a * (b / cz).exp()
                 };
-                let f = |chi: f64| {
-                    1.0 + c * ((d * chi).exp() - (d * FRAC_PI_2).exp()) + e * chi.cos().powi(2)
+                phi * inv_norm
+            }
+        }
+    }
+
+    /// The part of L/Lz that depends on the angle χ to the sun along unit `dir`: the
+    /// indicatrix f(χ) (1 overcast).
+    #[inline]
+    pub fn indicatrix(&self, dir: Vec3) -> f64 {
+        match *self {
+            Shape::Overcast => 1.0,
+            Shape::General {
+                c, d, e, base, sun, ..
+            } => {
+                let cos_chi = f64::from(dir.dot(sun)).clamp(-1.0, 1.0);
+                let peak = if c == 0.0 {
+                    0.0
+                } else {
+                    c * (d * cos_chi.acos()).exp()
                 };
-                let chi = f64::from(dir.dot(sun)).clamp(-1.0, 1.0).acos();
-                let zs = f64::from(sun.y).clamp(-1.0, 1.0).acos();
-                phi(cz) * f(chi) / (phi(1.0) * f(zs))
+                base + peak + e * cos_chi * cos_chi
             }
         }
     }

@@ -29,4 +29,4 @@ mod model;
 pub mod profile;
 pub mod sun;
 
-pub use model::{Sky, cloud_base_m, light_colour_of, sun_direction};
+pub use model::{AtElevation, Sky, cloud_base_m, light_colour_of, sun_direction};

@@ -1,7 +1,7 @@
 //! A sky as the renderer uses it: a luminance distribution, the rain's attenuation along each
 //! direction, and the normalisation to the user's horizontal illuminance.
 
-use super::cie::SkyKind;
+use super::cie::{Shape, SkyKind};
 use super::colour::{SkyColour, chroma_of, sun_colour};
 use crate::error::{Range, Result};
 use crate::haze::path_to_ceiling_m;
@@ -84,6 +84,8 @@ pub struct Sky {
     pub airlight: f64,
     /// ℓ̄_h, the horizon's mean of ℓ.
     horizon: f64,
+    /// ℓ, ready to evaluate ([`SkyKind::shape`]).
+    shape: Shape,
     /// The sky's colour (Hosek & Wilkie's), None for a neutral (overcast) sky.
     pub colour: Option<SkyColour>,
     /// The horizon's colour: ℓ-weighted mean chroma over its azimuths, the airlight's colour
@@ -126,9 +128,10 @@ impl Sky {
         Range::closed(0.0, 1e3, "1/m").check("extinction_per_m", None, extinction_per_m)?;
         crate::ranges::CLOUD_BASE_M.check(cloud_base_m)?;
         let azimuths = azimuth_sin_cos();
+        let shape = kind.shape();
         let horizon = azimuths
             .iter()
-            .map(|&(sin, cos)| kind.relative_to_zenith(Vec3::new(sin as f32, 0.0, -cos as f32)))
+            .map(|&(sin, cos)| shape.relative_to_zenith(Vec3::new(sin as f32, 0.0, -cos as f32)))
             .sum::<f64>()
             / AZIMUTHS as f64;
         let colour = SkyColour::new(kind);
@@ -139,6 +142,7 @@ impl Sky {
             scale: 1.0,
             airlight: horizon,
             horizon,
+            shape,
             colour,
             horizon_colour: Vec3::ONE,
             light_colour: Vec3::ONE,
@@ -146,13 +150,15 @@ impl Sky {
         };
         let ring = |mu: f64| {
             let (s, c) = (mu, (1.0 - mu * mu).max(0.0).sqrt());
+            // ℓ = gradation(μ)·indicatrix(ω): the gradation once per ring
             let mut sum = 0.0;
             for &(sin, cos) in azimuths {
                 let dir = Vec3::new((c * sin) as f32, s as f32, (-c * cos) as f32);
-                sum += kind.relative_to_zenith(dir);
+                sum += shape.indicatrix(dir);
             }
+            let mean = shape.gradation(f64::from(s as f32)) * sum / AZIMUTHS as f64;
             let tau = sky.transmittance(mu);
-            (sum / AZIMUTHS as f64 * tau + horizon * (1.0 - tau)) * TAU * mu
+            (mean * tau + horizon * (1.0 - tau)) * TAU * mu
         };
         let mut breaks: Vec<f64> = MU_BREAKS.to_vec();
         if let SkyKind::General { sun, .. } = kind {
@@ -162,7 +168,7 @@ impl Sky {
         sky.scale = PI / total;
         sky.airlight = sky.scale * horizon;
         if let Some(c) = colour {
-            sky.horizon_colour = horizon_colour(kind, &c);
+            sky.horizon_colour = horizon_colour(&shape, &c);
             sky.light_colour = sky.sky_light_colour();
             let elevation_deg = f64::from(c.sun.y.clamp(0.0, 1.0).asin().to_degrees());
             sky.sun_colour = sun_colour(elevation_deg, f64::from(c.turbidity));
@@ -194,7 +200,7 @@ impl Sky {
     /// to the cloud base and adds the in-scattered light (giving [`Sky::received`]).
     #[inline]
     pub fn emitted(&self, dir: Vec3) -> f64 {
-        self.scale * self.kind.relative_to_zenith(dir)
+        self.scale * self.shape.relative_to_zenith(dir)
     }
 
     /// [`Sky::emitted`] in f32, as a frame's sky pixel holds it.
@@ -222,7 +228,7 @@ impl Sky {
     /// luminance is [`Sky::received`]).
     pub fn received_rgb(&self, dir: Vec3) -> Vec3 {
         let tau = self.transmittance(f64::from(dir.y));
-        let lc = self.scale * self.kind.relative_to_zenith(dir) * tau;
+        let lc = self.scale * self.shape.relative_to_zenith(dir) * tau;
         let a = self.scale * self.horizon * (1.0 - tau);
         self.chroma(dir) * lc as f32 + self.horizon_colour * a as f32
     }
@@ -230,9 +236,35 @@ impl Sky {
     /// Luminance reaching the ground along `dir`, relative to E/π: L_c·τ + A·(1 − τ).
     #[inline]
     pub fn received(&self, dir: Vec3) -> f64 {
-        let tau = self.transmittance(f64::from(dir.y));
-        self.scale * (self.kind.relative_to_zenith(dir) * tau + self.horizon * (1.0 - tau))
+        self.received_at(dir, &self.at_elevation(f64::from(dir.y)))
     }
+
+    /// What [`Sky::received`] owes the elevation alone, at sin(elevation) `mu`: for many
+    /// directions at one elevation (a sky table's azimuths), worked out once.
+    #[inline]
+    pub fn at_elevation(&self, mu: f64) -> AtElevation {
+        AtElevation {
+            tau: self.transmittance(mu),
+            gradation: self.shape.gradation(mu),
+        }
+    }
+
+    /// [`Sky::received`] along `dir` whose elevation's part is `at` (its
+    /// [`Sky::at_elevation`]): the same value.
+    #[inline]
+    pub fn received_at(&self, dir: Vec3, at: &AtElevation) -> f64 {
+        let l = at.gradation * self.shape.indicatrix(dir);
+        self.scale * (l * at.tau + self.horizon * (1.0 - at.tau))
+    }
+}
+
+/// What a sky's received luminance owes the elevation alone ([`Sky::at_elevation`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AtElevation {
+    /// τ, the cloud base's transmittance down to the ground.
+    tau: f64,
+    /// ℓ's gradation ([`Shape::gradation`]).
+    gradation: f64,
 }
 
 /// The colour (linear RGB of luminance 1) of the light a horizontal surface receives from a
@@ -256,11 +288,11 @@ pub fn light_colour_of(received_rgb: impl Fn(Vec3) -> Vec3) -> Vec3 {
 }
 
 /// The horizon's colour: Σ ℓ·chroma / Σ ℓ over [`AZIMUTHS`] azimuths at elevation 0.
-fn horizon_colour(kind: SkyKind, c: &SkyColour) -> Vec3 {
+fn horizon_colour(shape: &Shape, c: &SkyColour) -> Vec3 {
     let mut sum = Vec3::ZERO;
     for &(sin, cos) in azimuth_sin_cos() {
         let dir = Vec3::new(sin as f32, 0.0, -cos as f32);
-        sum += c.chroma(dir) * kind.relative_to_zenith(dir) as f32;
+        sum += c.chroma(dir) * shape.relative_to_zenith(dir) as f32;
     }
     chroma_of(sum, 1.0)
 }

@@ -16,8 +16,7 @@
 //! node's light, tested on a canyon (`horizon::tests`, worst 1.0e-4 from clear air to fog) and
 //! on the bundled street (`tests/test_sky.py`, worst 3.0e-4, in a 0.1 mm/h drizzle).
 
-use super::illuminance::CHANNELS;
-use std::f64::consts::FRAC_PI_2;
+use super::illuminance::{CHANNELS, CODES_PER_STEP};
 
 /// Elevations at which a symmetric sky's cumulative integrals are kept.
 pub const NODES: usize = 24;
@@ -45,11 +44,11 @@ pub struct Coarse {
 /// channel 0 and the side column for the others.
 pub type Weights = [[f32; NODES]; CHANNELS];
 
-/// The Lagrange weights of the four nodes around elevation `g` (radians): the first node's
-/// index and the weights.
+/// The Lagrange weights of the four nodes around the elevation `x` steps of the fine table up
+/// (in [0, 512]): the first node's index and the weights.
 #[inline]
-fn lagrange(g: f64) -> (usize, [f64; 4]) {
-    let x = (g / FRAC_PI_2 * STEPS).clamp(0.0, STEPS);
+fn lagrange(x: f64) -> (usize, [f64; 4]) {
+    let x = x.clamp(0.0, STEPS);
     // The interval [AT_STEP[i], AT_STEP[i + 1]) holding x (i ≤ NODES − 2), from the even
     // spacing's guess moved by the rounding, then the stencil i-1..i+2 kept inside.
     let mut i = ((x * (NODES - 1) as f64 / STEPS) as usize).min(NODES - 2);
@@ -87,40 +86,56 @@ fn inverse_denominators() -> &'static [[f64; 4]; NODES - 3] {
     })
 }
 
+/// A point's weights as they are summed, azimuth after azimuth ([`add_azimuth`]).
+pub type Sums = [[f64; NODES]; CHANNELS];
+
 /// The weights of a point whose visible elevations along `dirs` (unit horizontal directions)
-/// are `counts` and `edges` (as [`super::illuminance::VisibleSky`] holds them).
-pub fn weights(dirs: &[(f64, f64)], counts: &[u16], edges: &[f64]) -> Weights {
+/// are `counts` and `edges` (as [`super::illuminance::VisibleSky`] holds them: codes of
+/// [`CODES_PER_STEP`] per fine step).
+pub fn weights(dirs: &[(f64, f64)], counts: &[u16], edges: &[u16]) -> Weights {
     let mut acc = [[0.0f64; NODES]; CHANNELS];
     let mut at_edge = 0;
-    for (&(dx, dz), &n) in dirs.iter().zip(counts) {
-        let e = &edges[at_edge..at_edge + usize::from(n)];
-        at_edge += usize::from(n);
-        if e.is_empty() {
-            continue;
-        }
-        // This azimuth's share of each channel: all of up, and n·ω / cos γ of the one vertical
-        // normal of ±X and of ±Z it faces (+X, −X, +Z, −Z are channels 1 to 4).
-        let (cx, fx) = if dx >= 0.0 { (1, dx) } else { (2, -dx) };
-        let (cz, fz) = if dz >= 0.0 { (3, dz) } else { (4, -dz) };
-        let mut add = |b: usize, v: f64| {
-            acc[0][b] += v;
-            acc[cx][b] += v * fx;
-            acc[cz][b] += v * fz;
-        };
-        // Visible from a to b: +C(b) − C(a); an odd last edge's interval ends at the zenith,
-        // the last node exactly.
-        for (j, &g) in e.iter().enumerate() {
-            let sign = if j % 2 == 0 { -1.0 } else { 1.0 };
-            let (s, w) = lagrange(g);
-            for (a, wa) in w.into_iter().enumerate() {
-                add(s + a, sign * wa);
-            }
-        }
-        if e.len() % 2 == 1 {
-            add(NODES - 1, 1.0);
+    for (&dir, &n) in dirs.iter().zip(counts) {
+        let n = usize::from(n);
+        add_azimuth(&mut acc, dir, &edges[at_edge..at_edge + n]);
+        at_edge += n;
+    }
+    finish(&acc)
+}
+
+/// The weights of summed `acc`.
+pub fn finish(acc: &Sums) -> Weights {
+    acc.map(|row| row.map(|v| v as f32))
+}
+
+/// Adds to `acc` the weights of the visible elevations `e` (codes) along horizontal direction
+/// (dx, dz).
+#[inline]
+pub fn add_azimuth(acc: &mut Sums, (dx, dz): (f64, f64), e: &[u16]) {
+    if e.is_empty() {
+        return;
+    }
+    // This azimuth's share of each channel: all of up, and n·ω / cos γ of the one vertical
+    // normal of ±X and of ±Z it faces (+X, −X, +Z, −Z are channels 1 to 4).
+    let (cx, fx) = if dx >= 0.0 { (1, dx) } else { (2, -dx) };
+    let (cz, fz) = if dz >= 0.0 { (3, dz) } else { (4, -dz) };
+    let mut add = |b: usize, v: f64| {
+        acc[0][b] += v;
+        acc[cx][b] += v * fx;
+        acc[cz][b] += v * fz;
+    };
+    // Visible from a to b: +C(b) − C(a); an odd last edge's interval ends at the zenith,
+    // the last node exactly.
+    for (j, &g) in e.iter().enumerate() {
+        let sign = if j % 2 == 0 { -1.0 } else { 1.0 };
+        let (s, w) = lagrange(f64::from(g) / f64::from(CODES_PER_STEP));
+        for (a, wa) in w.into_iter().enumerate() {
+            add(s + a, sign * wa);
         }
     }
-    acc.map(|row| row.map(|v| v as f32))
+    if e.len() % 2 == 1 {
+        add(NODES - 1, 1.0);
+    }
 }
 
 /// The illuminance on the five normals relative to E of a point with weights `w` under the
@@ -144,6 +159,7 @@ pub fn light(w: &Weights, c: &Coarse) -> [f32; CHANNELS] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::FRAC_PI_2;
 
     #[test]
     fn the_nodes_are_evenly_spaced_steps() {
@@ -157,7 +173,7 @@ mod tests {
     fn the_interval_is_the_one_holding_the_elevation() {
         for i in 0..=4096 {
             let x = STEPS * f64::from(i) / 4096.0;
-            let (s, _) = lagrange(x / STEPS * FRAC_PI_2);
+            let (s, _) = lagrange(x);
             let want = AT_STEP[1..NODES - 1]
                 .iter()
                 .take_while(|&&a| f64::from(a) <= x)
@@ -174,13 +190,13 @@ mod tests {
         let node_g = |b: usize| f64::from(AT_STEP[b]) / STEPS * FRAC_PI_2;
         for i in 0..=1000 {
             let g = FRAC_PI_2 * f64::from(i) / 1000.0;
-            let (s, w) = lagrange(g);
+            let (s, w) = lagrange(g / FRAC_PI_2 * STEPS);
             let got: f64 = (0..4).map(|a| w[a] * p(node_g(s + a))).sum();
             assert!((got - p(g)).abs() < 1e-12, "{g}: {got} vs {}", p(g));
             assert!(w.iter().sum::<f64>() - 1.0 < 1e-12);
         }
         // at a node, its weight is 1
-        let (s, w) = lagrange(node_g(7));
+        let (s, w) = lagrange(f64::from(AT_STEP[7]));
         assert!((w[7 - s] - 1.0).abs() < 1e-12, "{s} {w:?}");
     }
 }
