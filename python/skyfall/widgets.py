@@ -111,7 +111,7 @@ def explore(
     """Sliders for rain rate, wind, visibility, exposure and time over a scene, re-rendering a
     small frame as they move (a 320 x 180 street frame in about 30 ms on 2 cores; a move of the
     rain rate or the visibility, which change the sky, adds its ambient-light map lit from the
-    scene's horizon: about 5 ms under an overcast sky, 35 ms under a sky with a sun, after a
+    scene's horizon: about 5 ms under an overcast sky, 14 ms under a sky with a sun, after a
     first move that finds the horizon, about 0.4 s).
 
     Parameters
@@ -159,7 +159,7 @@ def explore(
     # Every slider renders as it moves (about 30 ms a 320 x 180 frame of the street on 2 cores).
     # The rain rate and the visibility change the sky: its ambient-light map is lit from the
     # scene's horizon, found at the first such move (about 0.4 s, once), then about 5 ms a move
-    # under an overcast sky and 35 ms under a sky with a sun (benches/results/sweeps.md).
+    # under an overcast sky and 14 ms under a sky with a sun (benches/results/sweeps.md).
     def linear(name: str, description: str, value: float, step: float) -> Any:
         lo, hi = SLIDER_SPANS[name]
         return ipywidgets.FloatSlider(
