@@ -8,6 +8,11 @@ the CPU backend in 10 mm/h rain is rendered once without a windshield (the scene
 then with ``windshield="rain"`` at a seed never drawn before (``first``), then again at the same
 seed and time (``seen``: the preset's clock cached), and one step of 1/30 s of that glass is
 timed alone. The warm-up is first - seen.
+
+``--later`` times this build alone at frame times in the epoch's later periods (the clock steps
+each earlier period once, from the drawn glass) and writes
+``benches/results/windshield_warmup_later.md``; the windshield section of ``sweeps.md`` is both
+tables.
 """
 
 from __future__ import annotations
@@ -47,10 +52,16 @@ def run(python: str, t_s: float, seed: int) -> dict[str, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--base-python", required=True)
+    ap.add_argument("--base-python")
+    ap.add_argument("--later", action="store_true", help="this build alone, frames in the epoch's later periods")
     ap.add_argument("--base-label", default="base")
     ap.add_argument("--rounds", type=int, default=3)
     a = ap.parse_args()
+    if a.later:
+        later(a.rounds)
+        return
+    if not a.base_python:
+        ap.error("--base-python is needed (or --later)")
     rows: dict[tuple[str, float], list[dict[str, float]]] = {}
     for k in range(a.rounds):
         for t_s in (0.0, 0.9, 1.45):
@@ -78,11 +89,49 @@ def main() -> None:
     text = "\n".join(lines) + "\n"
     (RESULTS / "windshield_warmup.md").write_text(text)
     (RESULTS / "windshield_warmup.json").write_text(json.dumps({f"{k[0]} {k[1]}": v for k, v in rows.items()}, indent=1))
+    write_sweeps()
+    print(text)
+
+
+LATER_TIMES_S = (3.0, 5.0, 5.95)
+"""Frame times in the `rain` preset's epoch (4 periods of 1.5 s) past its first period."""
+
+
+def later(rounds: int) -> None:
+    """This build alone at :data:`LATER_TIMES_S`, ``rounds`` new seeds each."""
+    rows: dict[float, list[dict[str, float]]] = {}
+    for k in range(rounds):
+        for t_s in LATER_TIMES_S:
+            rows.setdefault(t_s, []).append(run(sys.executable, t_s, 2000 + k))
+            print(t_s, rows[t_s][-1], flush=True)
+    lines = [
+        "### Later in the epoch",
+        "",
+        f"The same measurement of this build alone ({time.strftime('%Y-%m-%d')}, `--later`, medians of {rounds} new seeds) at frame times past "
+        "the epoch's first period: a frame in period k steps the glass through the k periods before it once (then keeps their "
+        "starts), 90 steps of 1/60 s a period, from the drawn glass. What the drawn glass does not remove.",
+        "",
+        "| frame time | period of the epoch | first frame, s | seen frame, s | warm-up, s | one step, ms | warm-up / one step |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for t_s, v in rows.items():
+        m = {q: float(np.median([r[q] for r in v])) for q in v[0]}
+        wu = m["first"] - m["seen"]
+        lines.append(f"| {t_s:g} s | {int(t_s // 1.5)} | {m['first']:.2f} | {m['seen']:.2f} | {wu:.2f} | {m['step'] * 1e3:.1f} | {wu / m['step']:.0f} |")
+    text = "\n".join(lines) + "\n"
+    (RESULTS / "windshield_warmup_later.md").write_text(text)
+    write_sweeps()
+    print(text)
+
+
+def write_sweeps() -> None:
+    """sweeps.md's windshield section: windshield_warmup.md, then windshield_warmup_later.md."""
+    parts = [RESULTS / "windshield_warmup.md", RESULTS / "windshield_warmup_later.md"]
+    text = "\n".join(p.read_text() for p in parts if p.exists())
     sweeps = RESULTS / "sweeps.md"
     s = sweeps.read_text()
     head = s.split("## The windshield's warm-up")[0].rstrip("\n")
     sweeps.write_text(head + "\n\n" + text)
-    print(text)
 
 
 if __name__ == "__main__":
