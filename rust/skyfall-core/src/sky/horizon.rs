@@ -27,7 +27,7 @@ use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The most (open node, azimuth) pairs a horizon keeps: 2 bytes of count and 2 per edge each
-/// (the bundled street at 1 m and 64 azimuths: 8.3 M pairs, 0.84 edges each, 32 MB). A larger
+/// (the bundled street at 1 m and 64 azimuths: 7.6 M pairs, about one edge each, 32 MB). A larger
 /// grid's map is built directly ([`AmbientMap::build`]), at its full cost for every sky.
 pub const MAX_PAIRS: usize = 1 << 24;
 

@@ -35,7 +35,7 @@ pub const AZIMUTHS: Range = crate::ranges::SAMPLES.range;
 const STEPS: usize = 512;
 /// Codes per elevation step: a point's visible elevations are kept as u16 codes, the position on
 /// the tables' steps in 1/128 of a step (2.4e-5 rad): a quarter of f64 edges' memory, which a
-/// map under a sky with a sun streams (22 M edges on the bundled street), and the table read at
+/// map under a sky with a sun streams (about 7.5 M edges on the bundled street), and the table read at
 /// a code is an integer split and one interpolation. Rounding an edge moves it by at most
 /// 1.2e-5 rad; the light's error from it is measured in `tests::coded_edges_cost_under_1e_4`.
 pub const CODES_PER_STEP: u32 = 128;
