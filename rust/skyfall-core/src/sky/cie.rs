@@ -125,14 +125,9 @@ impl SkyKind {
         }
     }
 
-    /// L/Lz along unit direction `dir` (0 below the horizon). For many directions of one sky,
-    /// [`SkyKind::shape`] once and [`Shape::relative_to_zenith`] for each (the same values).
-    pub fn relative_to_zenith(&self, dir: Vec3) -> f64 {
-        self.shape().relative_to_zenith(dir)
-    }
-
-    /// The sky's luminance distribution with what does not depend on the direction worked
-    /// out once: the normalisation φ(0)·f(Z_s) and the indicatrix's constant part.
+    /// The sky's luminance distribution, L/Lz along any direction
+    /// ([`Shape::relative_to_zenith`]), with what does not depend on the direction worked out
+    /// once: the normalisation φ(0)·f(Z_s) and the indicatrix's constant part.
     pub fn shape(&self) -> Shape {
         match *self {
             SkyKind::Overcast => Shape::Overcast,

@@ -249,20 +249,6 @@ impl SkyTable {
         }
     }
 
-    /// Its azimuths' rows in order, None for a sky the same at every azimuth (read through
-    /// [`Self::coarse`]).
-    pub fn rows(&self) -> Option<impl Iterator<Item = AzimuthRow<'_>> + '_> {
-        let Columns::Azimuths { cum, top, facing } = &self.columns else {
-            return None;
-        };
-        Some(
-            cum.iter()
-                .zip(top)
-                .zip(facing)
-                .map(|((row, &top), &facing)| AzimuthRow { row, top, facing }),
-        )
-    }
-
     /// The symmetric sky's integrals at a few elevations, if it is one.
     pub fn coarse(&self) -> Option<&profile::Coarse> {
         match &self.columns {
@@ -292,9 +278,9 @@ impl SkyTable {
     }
 }
 
-/// One azimuth of a [`SkyTable`] along every azimuth ([`SkyTable::rows`]).
+/// One azimuth of a [`SkyTable`] along every azimuth.
 #[derive(Debug, Clone, Copy)]
-pub struct AzimuthRow<'a> {
+struct AzimuthRow<'a> {
     /// The cumulative pairs (up, side), times Δφ/π.
     row: &'a Row,
     /// The pair at the zenith.
@@ -307,7 +293,7 @@ impl AzimuthRow<'_> {
     /// Adds to `acc` (the five normals) the light of the visible elevations `edges` along
     /// this azimuth ([`VisibleSky`]'s codes: pairs, and an odd last one open to the zenith).
     #[inline(always)]
-    pub fn add(&self, acc: &mut [f64; CHANNELS], edges: &[u16]) {
+    fn add(&self, acc: &mut [f64; CHANNELS], edges: &[u16]) {
         let (ut, st) = self.top;
         let (up, side) = match edges {
             [] => return, // the azimuth's sky all hidden
@@ -444,17 +430,17 @@ impl VisibleSky {
     /// The illuminance on the five normals relative to E under `table`'s sky, of the point
     /// whose visible elevations are `counts` and `edges` (one count per azimuth of `table`).
     pub fn light_parts(table: &SkyTable, counts: &[u16], edges: &[u16]) -> [f32; CHANNELS] {
-        let Some(rows) = table.rows() else {
-            if let Columns::Symmetric(c) = &table.columns {
+        let (cum, top, facing) = match &table.columns {
+            Columns::Symmetric(c) => {
                 return profile::light(&profile::weights(&table.dirs, counts, edges), c);
             }
-            return [0.0; CHANNELS]; // (a table is one or the other)
+            Columns::Azimuths { cum, top, facing } => (cum, top, facing),
         };
         let mut acc = [0.0f64; CHANNELS];
         let mut at_edge = 0;
-        for (row, &n) in rows.zip(counts) {
+        for (((row, &top), &facing), &n) in cum.iter().zip(top).zip(facing).zip(counts) {
             let n = usize::from(n);
-            row.add(&mut acc, &edges[at_edge..at_edge + n]);
+            AzimuthRow { row, top, facing }.add(&mut acc, &edges[at_edge..at_edge + n]);
             at_edge += n;
         }
         acc.map(|v| v as f32)
